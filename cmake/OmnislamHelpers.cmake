@@ -1,0 +1,28 @@
+# Small helpers shared by the CMake files of omnislam.
+
+# omnislam_add_gtest(NAME SOURCES... LIBS ... [LABELS ...] [TIMEOUT s])
+# One GoogleTest executable per test source file, registered with CTest test by test.
+function(omnislam_add_gtest name)
+  cmake_parse_arguments(T "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  add_executable(${name} ${T_SOURCES})
+  target_link_libraries(${name} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  target_compile_definitions(${name} PRIVATE
+    OMNISLAM_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    OMNISLAM_BIN_DIR="${CMAKE_RUNTIME_OUTPUT_DIRECTORY}"
+    OMNISLAM_BUILD_DIR="${CMAKE_BINARY_DIR}")
+  if(NOT T_TIMEOUT)
+    set(T_TIMEOUT 120)
+  endif()
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
+    PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}")
+endfunction()
+
+# Every test source file in DIR becomes its own test executable linked with LIBS.
+function(omnislam_add_gtests_in_dir dir)
+  cmake_parse_arguments(T "" "TIMEOUT;PREFIX" "LIBS;LABELS" ${ARGN})
+  file(GLOB srcs CONFIGURE_DEPENDS ${dir}/test_*.cpp)
+  foreach(src ${srcs})
+    get_filename_component(stem ${src} NAME_WE)
+    omnislam_add_gtest(${T_PREFIX}${stem} SOURCES ${src} LIBS ${T_LIBS} LABELS ${T_LABELS} TIMEOUT ${T_TIMEOUT})
+  endforeach()
+endfunction()

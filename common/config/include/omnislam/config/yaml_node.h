@@ -1,0 +1,84 @@
+// Checked access to YAML config files: every getter validates type and range and, on failure,
+// throws ConfigError naming the file, the full key path, the accepted range and the line.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <initializer_list>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace omnislam::config {
+
+/// A broken config contract: the message names file, key, accepted range and what was found.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A YAML map node together with where it came from (file name and key path), so that every
+/// error can say exactly which key is wrong.
+class Node {
+ public:
+  /// Parses a file; throws ConfigError if it cannot be read or is not valid YAML.
+  static Node loadFile(const std::string& path);
+  /// Parses text; `source` names it in messages (e.g. the file name).
+  static Node loadString(const std::string& text, const std::string& source);
+
+  const std::string& source() const { return *source_; }
+  /// Dotted path of this node from the document root ("" for the root).
+  const std::string& path() const { return path_; }
+  /// Directory of the source file (for resolving relative paths), "." for strings.
+  std::string sourceDir() const;
+
+  bool has(const std::string& key) const;
+  /// Required map child; throws if missing or not a map.
+  Node child(const std::string& key) const;
+  /// Optional map child.
+  std::optional<Node> optChild(const std::string& key) const;
+  /// Items of a required sequence of maps.
+  std::vector<Node> items(const std::string& key) const;
+
+  double getDouble(const std::string& key, double lo, double hi) const;
+  double getDouble(const std::string& key, double lo, double hi, double def) const;
+  int64_t getInt(const std::string& key, int64_t lo, int64_t hi) const;
+  int64_t getInt(const std::string& key, int64_t lo, int64_t hi, int64_t def) const;
+  bool getBool(const std::string& key) const;
+  bool getBool(const std::string& key, bool def) const;
+  std::string getString(const std::string& key) const;
+  std::string getString(const std::string& key, const std::string& def) const;
+  /// A string that must be one of `allowed`.
+  std::string getEnum(const std::string& key, const std::vector<std::string>& allowed) const;
+  std::string getEnum(const std::string& key, const std::vector<std::string>& allowed,
+                      const std::string& def) const;
+  /// A sequence of exactly `n` numbers, each in [lo, hi].
+  std::vector<double> getDoubles(const std::string& key, size_t n, double lo, double hi) const;
+  /// A non-empty sequence of scalars, as strings.
+  std::vector<std::string> getStrings(const std::string& key) const;
+  /// The keys of this map, in file order.
+  std::vector<std::string> keys() const;
+  /// A path; relative paths are resolved against the source file's directory.
+  std::string getPath(const std::string& key) const;
+
+  /// Throws if the map has a key not in `known` (catches typos such as "sigm_px").
+  void rejectUnknownKeys(std::initializer_list<const char*> known) const;
+
+  /// "file: key 'a.b' " prefix used in messages.
+  std::string where(const std::string& key) const;
+
+ private:
+  Node(YAML::Node node, std::shared_ptr<const std::string> source, std::string path);
+  YAML::Node scalar(const std::string& key) const;
+  std::string keyPath(const std::string& key) const;
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+
+  YAML::Node node_;
+  std::shared_ptr<const std::string> source_;
+  std::string path_;
+};
+
+}  // namespace omnislam::config

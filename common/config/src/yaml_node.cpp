@@ -1,0 +1,218 @@
+// Checked YAML access: see yaml_node.h.
+#include "omnislam/config/yaml_node.h"
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+namespace omnislam::config {
+namespace {
+
+std::string lineOf(const YAML::Node& n) {
+  const YAML::Mark m = n.Mark();
+  if (m.line < 0) return "";
+  return " (line " + std::to_string(m.line + 1) + ")";
+}
+
+std::string fmt(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+Node::Node(YAML::Node node, std::shared_ptr<const std::string> source, std::string path)
+    : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)) {}
+
+Node Node::loadFile(const std::string& path) {
+  if (!std::filesystem::exists(path)) throw ConfigError(path + ": file not found");
+  try {
+    YAML::Node root = YAML::LoadFile(path);
+    if (!root.IsMap()) throw ConfigError(path + ": the top level must be a map of keys");
+    return Node(root, std::make_shared<const std::string>(path), "");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path + ": not valid YAML: " + e.what());
+  }
+}
+
+Node Node::loadString(const std::string& text, const std::string& source) {
+  try {
+    YAML::Node root = YAML::Load(text);
+    if (!root.IsMap()) throw ConfigError(source + ": the top level must be a map of keys");
+    return Node(root, std::make_shared<const std::string>(source), "");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source + ": not valid YAML: " + e.what());
+  }
+}
+
+std::string Node::sourceDir() const {
+  const auto parent = std::filesystem::path(*source_).parent_path();
+  return parent.empty() ? std::string(".") : parent.string();
+}
+
+std::string Node::keyPath(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+std::string Node::where(const std::string& key) const { return *source_ + ": key '" + keyPath(key) + "'"; }
+
+void Node::fail(const std::string& key, const std::string& what) const {
+  const YAML::Node n = node_[key];
+  throw ConfigError(where(key) + " " + what + (n ? lineOf(n) : lineOf(node_)));
+}
+
+bool Node::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined() && !node_[key].IsNull(); }
+
+Node Node::child(const std::string& key) const {
+  if (!has(key)) fail(key, "is missing (a map of keys is required)");
+  const YAML::Node n = node_[key];
+  if (!n.IsMap()) fail(key, "must be a map of keys");
+  return Node(n, source_, keyPath(key));
+}
+
+std::optional<Node> Node::optChild(const std::string& key) const {
+  if (!has(key)) return std::nullopt;
+  return child(key);
+}
+
+std::vector<Node> Node::items(const std::string& key) const {
+  if (!has(key)) fail(key, "is missing (a list is required)");
+  const YAML::Node n = node_[key];
+  if (!n.IsSequence()) fail(key, "must be a list");
+  std::vector<Node> out;
+  for (size_t i = 0; i < n.size(); ++i) {
+    if (!n[i].IsMap()) fail(key, "item " + std::to_string(i) + " must be a map of keys");
+    out.push_back(Node(n[i], source_, keyPath(key) + "[" + std::to_string(i) + "]"));
+  }
+  return out;
+}
+
+YAML::Node Node::scalar(const std::string& key) const {
+  if (!has(key)) fail(key, "is missing");
+  const YAML::Node n = node_[key];
+  if (!n.IsScalar()) fail(key, "must be a single value");
+  return n;
+}
+
+double Node::getDouble(const std::string& key, double lo, double hi) const {
+  const YAML::Node n = scalar(key);
+  const std::string range = "a number in [" + fmt(lo) + ", " + fmt(hi) + "]";
+  double v = 0.0;
+  try {
+    v = n.as<double>();
+  } catch (const YAML::Exception&) {
+    fail(key, "must be " + range + ", got '" + n.Scalar() + "'");
+  }
+  if (!std::isfinite(v) || v < lo || v > hi) fail(key, "must be " + range + ", got " + n.Scalar());
+  return v;
+}
+
+double Node::getDouble(const std::string& key, double lo, double hi, double def) const {
+  return has(key) ? getDouble(key, lo, hi) : def;
+}
+
+int64_t Node::getInt(const std::string& key, int64_t lo, int64_t hi) const {
+  const YAML::Node n = scalar(key);
+  const std::string range = "a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  int64_t v = 0;
+  try {
+    v = n.as<int64_t>();
+  } catch (const YAML::Exception&) {
+    fail(key, "must be " + range + ", got '" + n.Scalar() + "'");
+  }
+  if (v < lo || v > hi) fail(key, "must be " + range + ", got " + n.Scalar());
+  return v;
+}
+
+int64_t Node::getInt(const std::string& key, int64_t lo, int64_t hi, int64_t def) const {
+  return has(key) ? getInt(key, lo, hi) : def;
+}
+
+bool Node::getBool(const std::string& key) const {
+  const YAML::Node n = scalar(key);
+  try {
+    return n.as<bool>();
+  } catch (const YAML::Exception&) {
+    fail(key, "must be true or false, got '" + n.Scalar() + "'");
+  }
+}
+
+bool Node::getBool(const std::string& key, bool def) const { return has(key) ? getBool(key) : def; }
+
+std::string Node::getString(const std::string& key) const { return scalar(key).Scalar(); }
+
+std::string Node::getString(const std::string& key, const std::string& def) const {
+  return has(key) ? getString(key) : def;
+}
+
+std::string Node::getEnum(const std::string& key, const std::vector<std::string>& allowed) const {
+  const std::string v = getString(key);
+  for (const auto& a : allowed)
+    if (a == v) return v;
+  std::string list;
+  for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+  fail(key, "must be one of {" + list + "}, got '" + v + "'");
+}
+
+std::string Node::getEnum(const std::string& key, const std::vector<std::string>& allowed,
+                          const std::string& def) const {
+  return has(key) ? getEnum(key, allowed) : def;
+}
+
+std::vector<double> Node::getDoubles(const std::string& key, size_t n, double lo, double hi) const {
+  if (!has(key)) fail(key, "is missing");
+  const YAML::Node s = node_[key];
+  const std::string what = "a list of " + std::to_string(n) + " numbers in [" + fmt(lo) + ", " + fmt(hi) + "]";
+  if (!s.IsSequence() || s.size() != n) fail(key, "must be " + what);
+  std::vector<double> out;
+  for (size_t i = 0; i < n; ++i) {
+    double v = 0.0;
+    try {
+      v = s[i].as<double>();
+    } catch (const YAML::Exception&) {
+      fail(key, "must be " + what + ", item " + std::to_string(i) + " is '" + s[i].Scalar() + "'");
+    }
+    if (!std::isfinite(v) || v < lo || v > hi)
+      fail(key, "must be " + what + ", item " + std::to_string(i) + " is " + s[i].Scalar());
+    out.push_back(v);
+  }
+  return out;
+}
+
+std::vector<std::string> Node::getStrings(const std::string& key) const {
+  if (!has(key)) fail(key, "is missing");
+  const YAML::Node s = node_[key];
+  if (!s.IsSequence() || s.size() == 0) fail(key, "must be a non-empty list");
+  std::vector<std::string> out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (!s[i].IsScalar()) fail(key, "item " + std::to_string(i) + " must be a single value");
+    out.push_back(s[i].Scalar());
+  }
+  return out;
+}
+
+std::vector<std::string> Node::keys() const {
+  std::vector<std::string> out;
+  for (const auto& kv : node_) out.push_back(kv.first.Scalar());
+  return out;
+}
+
+std::string Node::getPath(const std::string& key) const {
+  const std::filesystem::path p(getString(key));
+  if (p.is_absolute()) return p.string();
+  return (std::filesystem::path(sourceDir()) / p).lexically_normal().string();
+}
+
+void Node::rejectUnknownKeys(std::initializer_list<const char*> known) const {
+  for (const auto& kv : node_) {
+    const std::string k = kv.first.Scalar();
+    bool ok = false;
+    for (const char* c : known) ok = ok || k == c;
+    if (!ok) {
+      std::string list;
+      for (const char* c : known) list += (list.empty() ? "" : ", ") + std::string(c);
+      throw ConfigError(where(k) + " is not a known key (known here: " + list + ")" + lineOf(kv.first));
+    }
+  }
+}
+
+}  // namespace omnislam::config

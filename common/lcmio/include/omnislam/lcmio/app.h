@@ -1,0 +1,20 @@
+// The frame of every process's main(): runs the body, turns a config error into exit code 2
+// with a message naming the key, any other failure into exit code 1, and never lets an
+// exception escape.
+#pragma once
+
+#include <functional>
+#include <string>
+
+namespace omnislam::app {
+
+/// Exit codes shared by all processes.
+enum ExitCode : int { kOk = 0, kFailure = 1, kBadConfig = 2 };
+
+/// Runs body(); prints "<prog>: <message>" on failure.
+int runMain(const std::string& prog, const std::function<int()>& body);
+
+/// LCM URL to use: the flag if given, else LCM_DEFAULT_URL, else LCM's default.
+std::string lcmUrl(const std::string& flag_value);
+
+}  // namespace omnislam::app

@@ -1,0 +1,16 @@
+// Channel names of the message contract (docs/messages.md). Names are part of the contract.
+#pragma once
+
+namespace omnislam::channels {
+
+inline constexpr const char* kOmniImage = "OMNI_IMAGE";
+inline constexpr const char* kOmniFeatures = "OMNI_FEATURES";
+inline constexpr const char* kOdometry = "ODOMETRY";
+inline constexpr const char* kSlamPose = "SLAM_POSE";
+inline constexpr const char* kSlamMap = "SLAM_MAP";
+inline constexpr const char* kSlamParticles = "SLAM_PARTICLES";
+inline constexpr const char* kGroundTruthPose = "GROUND_TRUTH_POSE";
+inline constexpr const char* kGroundTruthMap = "GROUND_TRUTH_MAP";
+inline constexpr const char* kProcessStatus = "PROCESS_STATUS";
+
+}  // namespace omnislam::channels

@@ -1,0 +1,42 @@
+// Reading LCM log files (lcm-logger output) event by event, and decoding an event as a type.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace omnislam::lcmio {
+
+struct LogEvent {
+  int64_t event_number = 0;
+  int64_t log_utime = 0;  ///< when the logger received it (NOT the data's time)
+  std::string channel;
+  std::vector<uint8_t> data;
+};
+
+/// Calls fn for every event of the log in order. Throws std::runtime_error if it cannot be opened.
+void forEachEvent(const std::string& path, const std::function<void(const LogEvent&)>& fn);
+
+/// Decodes an event as Msg; nothing if the bytes are not a Msg.
+template <class Msg>
+std::optional<Msg> decodeAs(const LogEvent& ev) {
+  Msg m;
+  const int n = m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size()));
+  if (n < 0 || static_cast<size_t>(n) != ev.data.size()) return std::nullopt;
+  return m;
+}
+
+/// Every message of type Msg on `channel`, in log order (undecodable events are skipped).
+template <class Msg>
+std::vector<Msg> readChannel(const std::string& path, const std::string& channel) {
+  std::vector<Msg> out;
+  forEachEvent(path, [&](const LogEvent& ev) {
+    if (ev.channel != channel) return;
+    if (auto m = decodeAs<Msg>(ev)) out.push_back(std::move(*m));
+  });
+  return out;
+}
+
+}  // namespace omnislam::lcmio

@@ -1,0 +1,159 @@
+// A process's connection to the bus: typed subscriptions that decode, validate, check time order
+// and sequence numbers, and count every failure; publishing with counters; PROCESS_STATUS about
+// once per second; a loop that stops on SIGINT/SIGTERM. Bad input never reaches a handler.
+#pragma once
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "omnislam/lcmio/validate.h"
+#include "omnislam/process_status_t.hpp"
+
+namespace omnislam::lcmio {
+
+struct InputOptions {
+  /// Refuse a message whose utime is not after the previous accepted one on the channel
+  /// (duplicates and time going backwards).
+  bool require_increasing_utime = true;
+  /// Count gaps and restarts of seq (off for channels with several publishers, e.g. PROCESS_STATUS).
+  bool track_sequence = true;
+  /// LCM's per-subscription queue; arrivals beyond it are dropped by LCM (default 30 is small
+  /// for bursts of images).
+  int queue_capacity = 200;
+  Limits limits;
+};
+
+struct Counters {
+  int64_t messages_in = 0;
+  int64_t messages_out = 0;
+  int64_t decode_errors = 0;
+  int64_t rejected_inputs = 0;
+  int64_t sequence_gaps = 0;
+  int64_t sequence_restarts = 0;
+  std::string last_error;
+};
+
+class Node {
+ public:
+  /// Connects to `url` ("" = LCM_DEFAULT_URL or LCM's default). Throws std::runtime_error if
+  /// LCM cannot start. Installs the SIGINT/SIGTERM handlers.
+  Node(std::string name, const std::string& url);
+  ~Node();
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  lcm::LCM& lcm() { return lcm_; }
+  const std::string& name() const { return name_; }
+
+  /// Subscribes `handler` to `channel` for messages of type Msg. Undecodable, invalid and
+  /// out-of-order messages are counted, reported on one line and skipped.
+  template <class Msg>
+  void subscribe(const std::string& channel, std::function<void(const Msg&)> handler, InputOptions opt = {});
+
+  /// Encodes and publishes; counts messages_out. Returns false (and records the error) on failure.
+  template <class Msg>
+  bool publish(const std::string& channel, const Msg& msg);
+
+  /// Counts and reports a refused input (for checks done by the process itself).
+  void reject(const std::string& channel, const std::string& reason);
+  /// Records an error that is not about one input (e.g. a camera read failure).
+  void error(const std::string& what);
+
+  void setState(int8_t state) { state_ = state; }
+  void setDetail(std::string detail) { detail_ = std::move(detail); }
+  const Counters& counters() const { return counters_; }
+
+  /// Handles messages for up to timeout_s; publishes status when due. Returns false on an LCM error.
+  bool handleFor(double timeout_s);
+  /// Loops until a stop is requested or done() is true; calls tick() after every handle.
+  void spin(const std::function<bool()>& done = {}, const std::function<void()>& tick = {});
+  /// Publishes PROCESS_STATUS now.
+  void publishStatus();
+
+  /// Prefix for log lines: "[name] ".
+  std::string tag() const { return "[" + name_ + "] "; }
+
+ private:
+  struct RawSubscription {
+    Node* node = nullptr;
+    std::string channel;
+    std::function<void(const lcm::ReceiveBuffer*)> fn;
+  };
+  struct ChannelState {
+    bool have_utime = false;
+    int64_t last_utime = 0;
+    bool have_seq = false;
+    int64_t last_seq = 0;
+  };
+  static void dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel, RawSubscription* sub);
+  void noteSequence(const std::string& channel, int64_t seq);
+  void report(const std::string& line);
+
+  std::string name_;
+  lcm::LCM lcm_;
+  std::vector<std::unique_ptr<RawSubscription>> subs_;
+  std::map<std::string, ChannelState> channels_;
+  Counters counters_;
+  int8_t state_ = process_status_t::STATE_STARTING;
+  std::string detail_;
+  int64_t status_seq_ = 0;
+  int64_t reports_ = 0;
+  std::chrono::steady_clock::time_point next_status_;
+};
+
+// ---- template implementation ---------------------------------------------------------------
+
+template <class Msg>
+void Node::subscribe(const std::string& channel, std::function<void(const Msg&)> handler, InputOptions opt) {
+  auto sub = std::make_unique<RawSubscription>();
+  sub->node = this;
+  sub->channel = channel;
+  sub->fn = [this, channel, handler = std::move(handler), opt](const lcm::ReceiveBuffer* rbuf) {
+    ++counters_.messages_in;
+    Msg msg;
+    const int n = msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size));
+    if (n < 0 || static_cast<uint32_t>(n) != rbuf->data_size) {
+      ++counters_.decode_errors;
+      counters_.last_error = channel + ": cannot decode " + std::to_string(rbuf->data_size) +
+                             " bytes as " + Msg::getTypeName() + " (wrong type or corrupt)";
+      report("decode error: " + counters_.last_error);
+      return;
+    }
+    if (auto why = validate(msg, opt.limits)) {
+      reject(channel, *why);
+      return;
+    }
+    ChannelState& cs = channels_[channel];
+    if (opt.require_increasing_utime && cs.have_utime && msg.utime <= cs.last_utime) {
+      reject(channel, "utime " + std::to_string(msg.utime) + " not after previous " +
+                          std::to_string(cs.last_utime) + " (duplicate or out of order)");
+      return;
+    }
+    if (opt.track_sequence) noteSequence(channel, msg.seq);
+    cs.have_utime = true;
+    cs.last_utime = msg.utime;
+    handler(msg);
+  };
+  lcm::Subscription* s = lcm_.subscribeFunction(channel, &Node::dispatch, sub.get());
+  if (s) s->setQueueCapacity(opt.queue_capacity);
+  subs_.push_back(std::move(sub));
+}
+
+template <class Msg>
+bool Node::publish(const std::string& channel, const Msg& msg) {
+  if (lcm_.publish(channel, &msg) != 0) {
+    error("publish on " + channel + " failed");
+    return false;
+  }
+  ++counters_.messages_out;
+  return true;
+}
+
+}  // namespace omnislam::lcmio

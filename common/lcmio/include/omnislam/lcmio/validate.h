@@ -1,0 +1,35 @@
+// Validation of decoded messages: finite numbers, sane sizes and ranges. Each function returns a
+// one-line reason when the message must be refused, or nothing when it is acceptable.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "omnislam/features_t.hpp"
+#include "omnislam/image_t.hpp"
+#include "omnislam/map_t.hpp"
+#include "omnislam/odometry_t.hpp"
+#include "omnislam/particles_t.hpp"
+#include "omnislam/pose_t.hpp"
+#include "omnislam/process_status_t.hpp"
+
+namespace omnislam::lcmio {
+
+/// Limits on what a process accepts (a message beyond them is refused, not truncated).
+struct Limits {
+  int max_image_side_px = 8192;
+  int max_image_bytes = 64 * 1024 * 1024;
+  int max_features = 4096;
+  int max_landmarks = 100000;
+  int max_particles = 100000;
+};
+
+std::optional<std::string> validate(const image_t& m, const Limits& lim = {});
+std::optional<std::string> validate(const features_t& m, const Limits& lim = {});
+std::optional<std::string> validate(const odometry_t& m, const Limits& lim = {});
+std::optional<std::string> validate(const pose_t& m, const Limits& lim = {});
+std::optional<std::string> validate(const map_t& m, const Limits& lim = {});
+std::optional<std::string> validate(const particles_t& m, const Limits& lim = {});
+std::optional<std::string> validate(const process_status_t& m, const Limits& lim = {});
+
+}  // namespace omnislam::lcmio

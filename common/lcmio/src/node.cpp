@@ -1,0 +1,97 @@
+// Bus connection with checked inputs and PROCESS_STATUS: see node.h.
+#include "omnislam/lcmio/node.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <iostream>
+#include <stdexcept>
+
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/signals.h"
+
+namespace omnislam::lcmio {
+
+Node::Node(std::string name, const std::string& url) : name_(std::move(name)), lcm_(url) {
+  if (!lcm_.good()) throw std::runtime_error("cannot start LCM on '" + url + "' (check the URL and multicast routing)");
+  installStopHandlers();
+  next_status_ = std::chrono::steady_clock::now();
+}
+
+Node::~Node() = default;
+
+void Node::dispatch(const lcm::ReceiveBuffer* rbuf, const std::string&, RawSubscription* sub) { sub->fn(rbuf); }
+
+void Node::noteSequence(const std::string& channel, int64_t seq) {
+  ChannelState& cs = channels_[channel];
+  if (cs.have_seq) {
+    if (seq > cs.last_seq + 1) {
+      counters_.sequence_gaps += seq - cs.last_seq - 1;
+    } else if (seq <= cs.last_seq) {
+      ++counters_.sequence_restarts;
+      report(channel + ": sequence restarted at " + std::to_string(seq) + " after " + std::to_string(cs.last_seq));
+    }
+  }
+  cs.have_seq = true;
+  cs.last_seq = seq;
+}
+
+void Node::report(const std::string& line) {
+  // One line per problem; after 20 lines only every 100th, so that a flood cannot drown the log.
+  ++reports_;
+  if (reports_ <= 20 || reports_ % 100 == 0)
+    std::cerr << tag() << line << (reports_ > 20 ? " (" + std::to_string(reports_) + " problems so far)" : "")
+              << std::endl;
+}
+
+void Node::reject(const std::string& channel, const std::string& reason) {
+  ++counters_.rejected_inputs;
+  counters_.last_error = channel + ": " + reason;
+  report("rejected " + counters_.last_error);
+}
+
+void Node::error(const std::string& what) {
+  counters_.last_error = what;
+  report("error: " + what);
+}
+
+void Node::publishStatus() {
+  process_status_t st;
+  st.utime = std::chrono::duration_cast<std::chrono::microseconds>(
+                 std::chrono::system_clock::now().time_since_epoch())
+                 .count();
+  st.seq = status_seq_++;
+  st.name = name_;
+  st.pid = static_cast<int32_t>(getpid());
+  st.state = state_;
+  st.messages_in = counters_.messages_in;
+  st.messages_out = counters_.messages_out;
+  st.decode_errors = counters_.decode_errors;
+  st.rejected_inputs = counters_.rejected_inputs;
+  st.sequence_gaps = counters_.sequence_gaps;
+  st.last_error = counters_.last_error;
+  st.detail = detail_;
+  lcm_.publish(channels::kProcessStatus, &st);
+  next_status_ = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+}
+
+bool Node::handleFor(double timeout_s) {
+  const int ms = std::max(0, static_cast<int>(timeout_s * 1000.0));
+  const int r = lcm_.handleTimeout(ms);
+  if (std::chrono::steady_clock::now() >= next_status_) publishStatus();
+  if (r < 0 && !stopRequested()) {
+    error("LCM handle failed");
+    return false;
+  }
+  return true;
+}
+
+void Node::spin(const std::function<bool()>& done, const std::function<void()>& tick) {
+  if (state_ == process_status_t::STATE_STARTING) state_ = process_status_t::STATE_RUNNING;
+  while (!stopRequested() && !(done && done())) {
+    if (!handleFor(0.1)) break;
+    if (tick) tick();
+  }
+}
+
+}  // namespace omnislam::lcmio

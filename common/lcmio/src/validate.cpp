@@ -1,0 +1,122 @@
+// Validation of decoded messages: see validate.h.
+#include "omnislam/lcmio/validate.h"
+
+#include <cmath>
+
+namespace omnislam::lcmio {
+namespace {
+
+bool finite(double v) { return std::isfinite(v); }
+
+template <size_t N>
+bool allFinite(const double (&a)[N]) {
+  for (double v : a)
+    if (!finite(v)) return false;
+  return true;
+}
+template <size_t N, size_t M>
+bool allFinite(const double (&a)[N][M]) {
+  for (const auto& row : a)
+    if (!allFinite(row)) return false;
+  return true;
+}
+
+std::optional<std::string> checkTime(int64_t utime, int64_t seq) {
+  if (utime < 0) return "negative utime " + std::to_string(utime);
+  if (seq < 0) return "negative seq " + std::to_string(seq);
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::string> validate(const image_t& m, const Limits& lim) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (m.width <= 0 || m.height <= 0 || m.width > lim.max_image_side_px || m.height > lim.max_image_side_px)
+    return "image size " + std::to_string(m.width) + "x" + std::to_string(m.height) + " outside 1.." +
+           std::to_string(lim.max_image_side_px);
+  if (m.size < 0 || m.size > lim.max_image_bytes || static_cast<size_t>(m.size) != m.data.size())
+    return "image data size " + std::to_string(m.size) + " invalid";
+  int channels = 0;
+  switch (m.pixel_format) {
+    case image_t::FORMAT_GRAY8: channels = 1; break;
+    case image_t::FORMAT_RGB8:
+    case image_t::FORMAT_BGR8: channels = 3; break;
+    case image_t::FORMAT_JPEG:
+    case image_t::FORMAT_PNG: channels = 0; break;
+    default: return "unknown pixel_format " + std::to_string(m.pixel_format);
+  }
+  if (channels > 0) {
+    if (m.row_stride < m.width * channels) return "row_stride " + std::to_string(m.row_stride) + " < width * channels";
+    if (static_cast<int64_t>(m.row_stride) * m.height != m.size)
+      return "size " + std::to_string(m.size) + " != row_stride * height";
+  } else if (m.size == 0) {
+    return "empty compressed image";
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> validate(const features_t& m, const Limits& lim) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (m.num_features < 0 || m.num_features > lim.max_features)
+    return "num_features " + std::to_string(m.num_features) + " outside 0.." + std::to_string(lim.max_features);
+  if (!allFinite(m.camera_position_m)) return "non-finite camera_position_m";
+  for (int i = 0; i < m.num_features; ++i) {
+    const feature_t& f = m.features[static_cast<size_t>(i)];
+    const std::string at = "feature " + std::to_string(i) + ": ";
+    if (f.kind != feature_t::KIND_CEILING_LIGHT && f.kind != feature_t::KIND_VERTICAL_LINE)
+      return at + "unknown kind " + std::to_string(f.kind);
+    if (!finite(f.azimuth_rad) || !finite(f.elevation_rad) || !allFinite(f.covariance) || !finite(f.u_px) ||
+        !finite(f.v_px) || !finite(f.size_px) || !finite(f.length_px) || !finite(f.strength))
+      return at + "non-finite value";
+    if (std::abs(f.azimuth_rad) > M_PI + 1e-9) return at + "azimuth outside [-pi, pi]";
+    if (std::abs(f.elevation_rad) > M_PI / 2 + 1e-9) return at + "elevation outside [-pi/2, pi/2]";
+    if (!(f.covariance[0][0] > 0.0)) return at + "azimuth variance must be > 0";
+    if (f.has_elevation) {
+      const double det = f.covariance[0][0] * f.covariance[1][1] - f.covariance[0][1] * f.covariance[1][0];
+      if (!(f.covariance[1][1] > 0.0) || !(det > 0.0)) return at + "covariance not positive definite";
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> validate(const odometry_t& m, const Limits&) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (!finite(m.x_m) || !finite(m.y_m) || !finite(m.theta_rad) || !finite(m.v_mps) || !finite(m.omega_radps))
+    return "non-finite pose or velocity";
+  return std::nullopt;
+}
+
+std::optional<std::string> validate(const pose_t& m, const Limits&) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (!finite(m.x_m) || !finite(m.y_m) || !finite(m.theta_rad)) return "non-finite pose";
+  if (!allFinite(m.covariance)) return "non-finite covariance";
+  if (!finite(m.effective_sample_size)) return "non-finite effective_sample_size";
+  return std::nullopt;
+}
+
+std::optional<std::string> validate(const map_t& m, const Limits& lim) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (m.num_landmarks < 0 || m.num_landmarks > lim.max_landmarks) return "num_landmarks out of range";
+  for (int i = 0; i < m.num_landmarks; ++i) {
+    const landmark_t& l = m.landmarks[static_cast<size_t>(i)];
+    if (!allFinite(l.position_m) || !allFinite(l.covariance))
+      return "landmark " + std::to_string(i) + ": non-finite value";
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> validate(const particles_t& m, const Limits& lim) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (m.num_particles < 0 || m.num_particles > lim.max_particles) return "num_particles out of range";
+  for (size_t i = 0; i < static_cast<size_t>(m.num_particles); ++i)
+    if (!finite(m.x_m[i]) || !finite(m.y_m[i]) || !finite(m.theta_rad[i]) || !finite(m.weight[i]))
+      return "particle " + std::to_string(i) + ": non-finite value";
+  return std::nullopt;
+}
+
+std::optional<std::string> validate(const process_status_t& m, const Limits&) {
+  if (m.seq < 0) return "negative seq";
+  return std::nullopt;
+}
+
+}  // namespace omnislam::lcmio

@@ -1,0 +1,63 @@
+// The description of a simulated world (docs/world-file.md): landmarks, the camera and its
+// mounting, the trajectory, sensor rates, and the nuisances of a real experiment.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "omnislam/core/camera/mounting.h"
+#include "omnislam/core/camera/pajdla_bakstein.h"
+#include "omnislam/sim/odometry_sim.h"
+#include "omnislam/sim/trajectory.h"
+
+namespace omnislam::sim {
+
+/// A ceiling light: a horizontal disc facing down.
+struct Light {
+  int64_t id = 0;
+  Eigen::Vector3d p_LinW_m = Eigen::Vector3d::Zero();  ///< centre in the world frame
+  double radius_m = 0.15;
+  double intensity = 1.0;  ///< relative brightness (1 = nominal)
+};
+
+/// What makes the rendered images imperfect, as in the paper's sports hall.
+struct ImageNuisance {
+  double noise_sigma_grey = 2.0;      ///< additive Gaussian sensor noise, grey levels
+  double blur_sigma_px = 0.8;         ///< Gaussian blur (optics), pixels; 0 = none
+  double background_grey = 12.0;      ///< dark level of the IR-filtered image
+  double light_peak_grey = 200.0;     ///< peak grey level of a nominal light seen overhead
+  int samples_per_light = 1500;       ///< supersamples of the disc when rendering
+  /// Wall of windows: lights whose horizontal distance to the line y = window_wall_y_m is below
+  /// window_band_m are missed with probability window_miss_probability in each frame.
+  bool window_wall_enabled = true;
+  double window_wall_y_m = 10.0;
+  double window_band_m = 2.5;
+  double window_miss_probability = 0.3;
+  /// Sun reflections: expected number of false bright blobs per frame (Poisson) and their size.
+  double false_blobs_per_frame = 0.3;
+  double false_blob_radius_px = 3.0;
+  double false_blob_peak_grey = 160.0;
+};
+
+struct CameraSetup {
+  std::string name = "fisheye";
+  camera::PajdlaBaksteinParams intrinsics;
+  camera::CameraMounting mounting;  ///< optical centre in the robot frame
+};
+
+struct World {
+  std::string name = "world";
+  int64_t start_utime = 1'700'000'000'000'000;  ///< simulated time of t = 0, microseconds
+  double truth_rate_hz = 50.0;                  ///< GROUND_TRUTH_POSE rate (>= 20 Hz)
+  double image_rate_hz = 1.0;                   ///< OMNI_IMAGE rate
+  std::vector<Light> lights;
+  CameraSetup camera;
+  TrajectoryOptions trajectory_options;
+  std::vector<Segment> segments;
+  OdometryNoise odometry_noise;
+  ImageNuisance nuisance;
+};
+
+}  // namespace omnislam::sim

@@ -1,0 +1,173 @@
+// omnislam-capture: publishes OMNI_IMAGE from one of three sources chosen by flag:
+//   sim     renders the fish-eye image of the world's ceiling lights for the true pose at each
+//           image time (driven by GROUND_TRUTH_POSE, so images carry simulated time);
+//   dir     publishes the image files of a directory in name order at a fixed rate;
+//   device  grabs frames from a camera through OpenCV (utime = the grab time).
+#include <CLI/CLI.hpp>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <random>
+#include <thread>
+
+#include "omnislam/config/world_config.h"
+#include "omnislam/core/camera/pajdla_bakstein.h"
+#include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/image_msg.h"
+#include "omnislam/lcmio/node.h"
+#include "omnislam/lcmio/signals.h"
+#include "omnislam/vision/render_lights.h"
+
+using namespace omnislam;
+
+namespace {
+
+struct Publisher {
+  lcmio::Node& node;
+  std::string camera_name;
+  int8_t format;
+  int64_t seq = 0;
+  void publish(const cv::Mat& img, int64_t utime) {
+    image_t msg{};
+    msg.utime = utime;
+    msg.seq = seq++;
+    msg.camera_name = camera_name;
+    lcmio::encodeImage(img, format, msg);
+    node.publish(channels::kOmniImage, msg);
+  }
+};
+
+int64_t wallUtime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uint64_t seed) {
+  const sim::World world = config::loadWorld(world_path);
+  const camera::PajdlaBaksteinCamera cam(world.camera.intrinsics);
+  const vision::CeilingLightRenderer renderer(cam, world.camera.mounting, world.nuisance);
+  std::mt19937_64 rng(seed);
+  const int64_t period_us = std::llround(1e6 / world.image_rate_hz);
+  int64_t next_utime = world.start_utime;
+  int64_t frames = 0;
+  node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
+    if (p.utime < next_utime) return;
+    vision::RenderReport rep;
+    const cv::Mat img = renderer.render(Pose2{p.x_m, p.y_m, p.theta_rad}, world.lights, rng, &rep);
+    pub.publish(img, p.utime);
+    ++frames;
+    // Next image time: the next multiple of the period after this one (skips any gap honestly).
+    while (next_utime <= p.utime) next_utime += period_us;
+    node.setDetail("frame " + std::to_string(frames) + ": " + std::to_string(rep.lights_drawn) + " lights, " +
+                   std::to_string(rep.lights_missed) + " missed, " + std::to_string(rep.false_blobs) + " false blobs");
+  });
+  node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
+  std::cerr << node.tag() << "rendering '" << world.name << "' at " << world.image_rate_hz << " Hz, "
+            << cam.widthPx() << "x" << cam.heightPx() << ", seed " << seed << std::endl;
+  node.spin();
+  return app::kOk;
+}
+
+int runDir(lcmio::Node& node, Publisher& pub, const std::string& dir, double rate_hz, int64_t start_utime,
+           double speedup) {
+  std::vector<std::filesystem::path> files;
+  if (!std::filesystem::is_directory(dir)) throw std::invalid_argument("--dir '" + dir + "' is not a directory");
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    std::string ext = e.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".ppm" || ext == ".bmp")
+      files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw std::invalid_argument("--dir '" + dir + "' holds no image files (png, jpg, pgm, ppm, bmp)");
+  if (start_utime < 0) start_utime = wallUtime();
+  std::cerr << node.tag() << files.size() << " images from " << dir << " at " << rate_hz << " Hz" << std::endl;
+  node.setState(process_status_t::STATE_RUNNING);
+  const auto wall0 = std::chrono::steady_clock::now();
+  const int64_t period_us = std::llround(1e6 / rate_hz);
+  for (size_t i = 0; i < files.size() && !lcmio::stopRequested(); ++i) {
+    if (speedup > 0) {
+      const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(i * period_us / speedup));
+      while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < due) node.handleFor(0.02);
+    }
+    const cv::Mat img = cv::imread(files[i].string(), cv::IMREAD_UNCHANGED);
+    if (img.empty() || img.depth() != CV_8U || (img.channels() != 1 && img.channels() != 3)) {
+      node.error("cannot read an 8-bit grey or colour image from " + files[i].string() + "; skipped");
+      continue;
+    }
+    pub.publish(img, start_utime + static_cast<int64_t>(i) * period_us);
+    node.setDetail(files[i].filename().string());
+  }
+  node.setState(process_status_t::STATE_FINISHED);
+  node.publishStatus();
+  return app::kOk;
+}
+
+int runDevice(lcmio::Node& node, Publisher& pub, int device, double rate_hz) {
+  cv::VideoCapture cap(device);
+  if (!cap.isOpened()) throw std::runtime_error("cannot open camera device " + std::to_string(device));
+  node.setState(process_status_t::STATE_RUNNING);
+  const auto period = std::chrono::duration<double>(1.0 / rate_hz);
+  auto next = std::chrono::steady_clock::now();
+  while (!lcmio::stopRequested()) {
+    cv::Mat frame;
+    if (!cap.grab()) {
+      node.error("camera grab failed");
+      node.handleFor(0.1);
+      continue;
+    }
+    const int64_t utime = wallUtime();  // a live camera: the grab time is the sensing time
+    if (!cap.retrieve(frame) || frame.empty()) {
+      node.error("camera retrieve failed");
+      continue;
+    }
+    pub.publish(frame, utime);
+    next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
+    while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < next) node.handleFor(0.01);
+  }
+  return app::kOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{"omnislam-capture: publishes OMNI_IMAGE from a simulation, an image directory or a camera"};
+  std::string source, world_path, dir, url, name = "capture", format_name = "gray", camera_name;
+  uint64_t seed = 1;
+  double rate_hz = 1.0, speedup = 1.0;
+  int64_t start_utime = -1;
+  int device = 0;
+  cli.add_option("--source", source, "sim | dir | device")->required()->check(CLI::IsMember({"sim", "dir", "device"}));
+  cli.add_option("--world", world_path, "world file (source sim)");
+  cli.add_option("--seed", seed, "seed of the image noise and nuisances (source sim)");
+  cli.add_option("--dir", dir, "directory of images (source dir)");
+  cli.add_option("--rate-hz", rate_hz, "frame rate (sources dir and device)")->check(CLI::Range(0.01, 1000.0));
+  cli.add_option("--speedup", speedup, "source dir: replay speed-up, 0 = as fast as possible")
+      ->check(CLI::Range(0.0, 1000.0));
+  cli.add_option("--start-utime", start_utime, "source dir: utime of the first image (default: now)");
+  cli.add_option("--device", device, "camera index (source device)")->check(CLI::Range(0, 64));
+  cli.add_option("--format", format_name, "published pixel format: gray | bgr | rgb | png | jpeg")
+      ->check(CLI::IsMember({"gray", "grey", "bgr", "rgb", "png", "jpeg", "jpg"}));
+  cli.add_option("--camera-name", camera_name, "camera name in the messages (default: the world's or 'camera')");
+  cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
+  cli.add_option("--name", name, "process name in PROCESS_STATUS");
+  CLI11_PARSE(cli, argc, argv);
+
+  return app::runMain("omnislam-capture", [&]() -> int {
+    if (source == "sim" && world_path.empty()) throw std::invalid_argument("--source sim needs --world FILE");
+    if (source == "dir" && dir.empty()) throw std::invalid_argument("--source dir needs --dir PATH");
+    lcmio::Node node(name, app::lcmUrl(url));
+    Publisher pub{node, camera_name.empty() ? (source == "sim" ? "fisheye" : "camera") : camera_name,
+                  *lcmio::parsePixelFormat(format_name)};
+    if (source == "sim") return runSim(node, pub, world_path, seed);
+    if (source == "dir") return runDir(node, pub, dir, rate_hz, start_utime, speedup);
+    return runDevice(node, pub, device, rate_hz);
+  });
+}

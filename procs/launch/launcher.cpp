@@ -1,0 +1,351 @@
+// Launcher: launch-file parsing and process supervision. See launcher.h.
+#include "launcher.h"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "omnislam/config/yaml_node.h"
+#include "omnislam/lcmio/signals.h"
+
+namespace omnislam::launch {
+namespace fs = std::filesystem;
+
+std::string substitute(const std::string& s, const std::map<std::string, std::string>& vars) {
+  std::string out;
+  size_t i = 0;
+  while (i < s.size()) {
+    if (s.compare(i, 2, "${") == 0) {
+      const size_t end = s.find('}', i + 2);
+      if (end == std::string::npos) throw std::invalid_argument("unterminated ${ in '" + s + "'");
+      const std::string key = s.substr(i + 2, end - i - 2);
+      const auto it = vars.find(key);
+      if (it == vars.end()) throw std::invalid_argument("unknown variable ${" + key + "} in '" + s + "'");
+      out += it->second;
+      i = end + 1;
+    } else {
+      out += s[i++];
+    }
+  }
+  return out;
+}
+
+Plan loadPlan(const std::string& path, const std::map<std::string, std::string>& overrides, const std::string& url,
+              const std::string& log_dir, const std::string& log_file, bool no_log) {
+  const config::Node root = config::Node::loadFile(path);
+  root.rejectUnknownKeys({"name", "lcm_url", "variables", "logger", "processes", "stop_grace_s", "drain_s"});
+  Plan plan;
+  plan.name = root.getString("name", "run");
+  plan.lcm_url = url.empty() ? root.getString("lcm_url", "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304") : url;
+  plan.stop_grace_s = root.getDouble("stop_grace_s", 0.1, 120.0, 5.0);
+  plan.drain_s = root.getDouble("drain_s", 0.0, 60.0, 1.0);
+
+  std::map<std::string, std::string> vars{{"config_dir", fs::absolute(root.sourceDir()).lexically_normal().string()}};
+  if (auto v = root.optChild("variables")) {
+    for (const auto& k : v->keys()) vars[k] = v->getString(k);
+  }
+  for (const auto& [k, val] : overrides) {
+    if (!vars.count(k)) throw config::ConfigError(path + ": --set " + k + ": no such variable in 'variables'");
+    vars[k] = val;
+  }
+  // Variables may refer to ${config_dir} and to each other (one level).
+  for (auto& [k, val] : vars) {
+    try {
+      val = substitute(val, vars);
+    } catch (const std::invalid_argument& e) {
+      throw config::ConfigError(root.where("variables." + k) + ": " + e.what());
+    }
+  }
+
+  bool log_enabled = true;
+  std::string dir = "logs";
+  if (auto lg = root.optChild("logger")) {
+    lg->rejectUnknownKeys({"enabled", "dir"});
+    log_enabled = lg->getBool("enabled", true);
+    if (lg->has("dir")) dir = substitute(lg->getString("dir"), vars);
+  }
+  if (!log_dir.empty()) dir = log_dir;
+  plan.log_enabled = log_enabled && !no_log;
+  if (!log_file.empty()) {
+    plan.log_file = log_file;
+    plan.log_enabled = !no_log;
+  } else {
+    const std::time_t now = std::time(nullptr);
+    std::tm tm{};
+    localtime_r(&now, &tm);
+    std::ostringstream f;
+    f << plan.name << "-" << std::put_time(&tm, "%Y%m%d-%H%M%S") << ".lcm";
+    plan.log_file = (fs::path(dir) / f.str()).string();
+  }
+
+  for (const config::Node& p : root.items("processes")) {
+    p.rejectUnknownKeys({"name", "cmd", "ends_run", "required"});
+    ProcessSpec spec;
+    spec.name = p.getString("name");
+    spec.ends_run = p.getBool("ends_run", false);
+    spec.required = p.getBool("required", true);
+    for (const auto& a : p.getStrings("cmd")) {
+      try {
+        spec.argv.push_back(substitute(a, vars));
+      } catch (const std::invalid_argument& e) {
+        throw config::ConfigError(p.where("cmd") + ": " + e.what());
+      }
+    }
+    for (const auto& other : plan.processes)
+      if (other.name == spec.name) throw config::ConfigError(p.where("name") + " '" + spec.name + "' is used twice");
+    plan.processes.push_back(std::move(spec));
+  }
+  if (plan.processes.empty()) throw config::ConfigError(root.where("processes") + " must list at least one process");
+  return plan;
+}
+
+namespace {
+
+struct Child {
+  std::string name;
+  pid_t pid = -1;
+  int fd = -1;  ///< read end of its stdout+stderr
+  std::string partial;
+  bool ends_run = false;
+  bool required = true;
+  bool is_logger = false;
+  bool exited = false;
+  int status = 0;
+};
+
+std::string resolveProgram(const std::string& prog, const std::string& bin_dir) {
+  if (prog.find('/') != std::string::npos) return prog;
+  const fs::path local = fs::path(bin_dir) / prog;
+  if (fs::exists(local)) return local.string();
+  return prog;  // execvp searches PATH
+}
+
+Child spawn(const std::string& name, const std::vector<std::string>& argv, const std::string& url,
+            const std::string& bin_dir) {
+  int fds[2];
+  if (pipe(fds) != 0) throw std::runtime_error("pipe failed: " + std::string(std::strerror(errno)));
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork failed: " + std::string(std::strerror(errno)));
+  if (pid == 0) {
+    // Child: own process group (so a terminal's Ctrl-C reaches only the launcher, which stops
+    // the children in order), die with the launcher, output into the pipe.
+    setpgid(0, 0);
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    dup2(fds[1], STDOUT_FILENO);
+    dup2(fds[1], STDERR_FILENO);
+    close(fds[0]);
+    close(fds[1]);
+    setenv("LCM_DEFAULT_URL", url.c_str(), 1);
+    std::vector<std::string> args = argv;
+    args[0] = resolveProgram(args[0], bin_dir);
+    std::vector<char*> cargs;
+    for (auto& a : args) cargs.push_back(a.data());
+    cargs.push_back(nullptr);
+    execvp(cargs[0], cargs.data());
+    std::fprintf(stderr, "cannot start '%s': %s\n", cargs[0], std::strerror(errno));
+    _exit(127);
+  }
+  close(fds[1]);
+  fcntl(fds[0], F_SETFL, O_NONBLOCK);
+  Child c;
+  c.name = name;
+  c.pid = pid;
+  c.fd = fds[0];
+  return c;
+}
+
+std::string describe(int status) {
+  if (WIFEXITED(status)) return "exit code " + std::to_string(WEXITSTATUS(status));
+  if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
+  return "status " + std::to_string(status);
+}
+
+class Supervisor {
+ public:
+  explicit Supervisor(size_t width) : width_(width) {}
+  std::vector<Child> children;
+
+  void pump(int timeout_ms) {
+    std::vector<pollfd> pfds;
+    std::vector<Child*> owners;
+    for (auto& c : children)
+      if (c.fd >= 0) {
+        pfds.push_back({c.fd, POLLIN, 0});
+        owners.push_back(&c);
+      }
+    if (pfds.empty()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(timeout_ms));
+    } else if (poll(pfds.data(), pfds.size(), timeout_ms) > 0) {
+      for (size_t i = 0; i < pfds.size(); ++i)
+        if (pfds[i].revents & (POLLIN | POLLHUP | POLLERR)) drain(*owners[i]);
+    }
+    reap();
+  }
+
+  void drain(Child& c) {
+    char buf[4096];
+    while (true) {
+      const ssize_t n = read(c.fd, buf, sizeof buf);
+      if (n > 0) {
+        c.partial.append(buf, static_cast<size_t>(n));
+        size_t nl;
+        while ((nl = c.partial.find('\n')) != std::string::npos) {
+          print(c.name, c.partial.substr(0, nl));
+          c.partial.erase(0, nl + 1);
+        }
+        continue;
+      }
+      if (n == 0) {  // EOF
+        if (!c.partial.empty()) print(c.name, c.partial);
+        c.partial.clear();
+        close(c.fd);
+        c.fd = -1;
+      }
+      break;
+    }
+  }
+
+  void print(const std::string& name, const std::string& line) {
+    std::cout << std::left << std::setw(static_cast<int>(width_)) << name << " | " << line << std::endl;
+  }
+
+  void reap() {
+    for (auto& c : children) {
+      if (c.exited) continue;
+      int st = 0;
+      if (waitpid(c.pid, &st, WNOHANG) == c.pid) {
+        if (c.fd >= 0) drain(c);
+        c.exited = true;
+        c.status = st;
+      }
+    }
+  }
+
+  bool alive(const Child& c) const { return !c.exited; }
+
+  /// SIGINT to the given children, SIGKILL after grace_s. Reports what had to be killed.
+  void stop(bool loggers, double grace_s) {
+    for (auto& c : children)
+      if (!c.exited && c.is_logger == loggers) kill(c.pid, SIGINT);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(grace_s);
+    while (std::chrono::steady_clock::now() < deadline) {
+      bool any = false;
+      for (auto& c : children) any = any || (!c.exited && c.is_logger == loggers);
+      if (!any) return;
+      pump(50);
+    }
+    for (auto& c : children)
+      if (!c.exited && c.is_logger == loggers) {
+        print("launch", c.name + " did not stop within " + std::to_string(grace_s) + " s: killing it");
+        kill(c.pid, SIGKILL);
+      }
+    for (int i = 0; i < 40; ++i) pump(50);
+  }
+
+ private:
+  size_t width_;
+};
+
+}  // namespace
+
+int runPlan(const Plan& plan, const std::string& bin_dir) {
+  lcmio::installStopHandlers();
+  size_t width = 6;
+  for (const auto& p : plan.processes) width = std::max(width, p.name.size());
+  Supervisor sup(width);
+  sup.print("launch", "run '" + plan.name + "' on " + plan.lcm_url);
+
+  if (plan.log_enabled) {
+    const fs::path dir = fs::path(plan.log_file).parent_path();
+    if (!dir.empty()) fs::create_directories(dir);
+    Child lg = spawn("logger", {"lcm-logger", "--lcm-url=" + plan.lcm_url, "-f", plan.log_file}, plan.lcm_url, bin_dir);
+    lg.is_logger = true;
+    sup.children.push_back(lg);
+    sup.print("launch", "recording every channel into " + plan.log_file);
+    // Give the logger time to subscribe before anyone publishes.
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(700);
+    while (std::chrono::steady_clock::now() < until) sup.pump(50);
+  }
+  for (const auto& p : plan.processes) {
+    Child c = spawn(p.name, p.argv, plan.lcm_url, bin_dir);
+    c.ends_run = p.ends_run;
+    c.required = p.required;
+    sup.children.push_back(c);
+    std::string cmd;
+    for (const auto& a : p.argv) cmd += (cmd.empty() ? "" : " ") + a;
+    sup.print("launch", "started " + p.name + " (pid " + std::to_string(c.pid) + "): " + cmd);
+  }
+
+  int rc = 0;
+  std::string reason;
+  std::vector<bool> reported(sup.children.size(), false);
+  while (reason.empty()) {
+    sup.pump(100);
+    if (lcmio::stopRequested()) {
+      reason = "interrupted (signal " + std::to_string(lcmio::stopSignal()) + ")";
+      break;
+    }
+    for (size_t i = 0; i < sup.children.size(); ++i) {
+      Child& c = sup.children[i];
+      if (!c.exited || reported[i]) continue;
+      reported[i] = true;
+      const bool ok = WIFEXITED(c.status) && WEXITSTATUS(c.status) == 0;
+      if (c.is_logger) {
+        sup.print("launch", "lcm-logger died (" + describe(c.status) + "): the run is not being recorded");
+        rc = 1;
+        reason = "logger died";
+      } else if (ok && c.ends_run) {
+        reason = c.name + " finished the scenario";
+      } else if (ok) {
+        sup.print("launch", c.name + " finished (exit code 0)");
+      } else {
+        sup.print("launch", "process " + c.name + " died: " + describe(c.status));
+        if (c.required) {
+          rc = 1;
+          reason = c.name + " died";
+        }
+      }
+      if (!reason.empty()) break;
+    }
+    bool any_running = false;
+    for (const auto& c : sup.children) any_running = any_running || (!c.exited && !c.is_logger);
+    if (reason.empty() && !any_running) reason = "every process has ended";
+  }
+  sup.print("launch", "stopping: " + reason);
+  if (!lcmio::stopRequested() && plan.drain_s > 0) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(plan.drain_s);
+    while (std::chrono::steady_clock::now() < until) sup.pump(50);
+  }
+  sup.stop(false, plan.stop_grace_s);
+  // The logger goes last, after a moment for the final messages (status, last frame) to land.
+  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);
+  while (std::chrono::steady_clock::now() < until) sup.pump(50);
+  sup.stop(true, plan.stop_grace_s);
+
+  for (size_t i = 0; i < sup.children.size(); ++i) {
+    const Child& c = sup.children[i];
+    const bool ok = WIFEXITED(c.status) && WEXITSTATUS(c.status) == 0;
+    const bool stopped_by_us = WIFSIGNALED(c.status) && WTERMSIG(c.status) == SIGINT;
+    if (!ok && !stopped_by_us && !reported[i]) {
+      sup.print("launch", "process " + c.name + " ended badly while stopping: " + describe(c.status));
+      rc = 1;
+    }
+  }
+  if (plan.log_enabled) sup.print("launch", "log: " + plan.log_file);
+  sup.print("launch", rc == 0 ? "done" : "done with errors");
+  return rc;
+}
+
+}  // namespace omnislam::launch

@@ -1,0 +1,40 @@
+// The launcher's model: a launch file (docs/launch-file.md) parsed into a plan, and the
+// supervisor that runs the plan's processes on one LCM URL, prefixes their output, records the
+// bus with lcm-logger, and stops everything in order.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace omnislam::launch {
+
+struct ProcessSpec {
+  std::string name;
+  std::vector<std::string> argv;  ///< after variable substitution
+  bool ends_run = false;          ///< its normal exit ends the scenario
+  bool required = true;           ///< its failure stops the run
+};
+
+struct Plan {
+  std::string name;
+  std::string lcm_url;
+  bool log_enabled = true;
+  std::string log_file;  ///< full path of the lcm-logger output
+  std::vector<ProcessSpec> processes;
+  double stop_grace_s = 5.0;   ///< SIGINT, then SIGKILL after this
+  double drain_s = 1.0;        ///< after the scenario ends, let messages in flight arrive
+};
+
+/// Parses a launch file. `overrides` replace variables (--set k=v); `url`, `log_dir`,
+/// `log_file` override the file's values when not empty. Throws config::ConfigError.
+Plan loadPlan(const std::string& path, const std::map<std::string, std::string>& overrides, const std::string& url,
+              const std::string& log_dir, const std::string& log_file, bool no_log);
+
+/// Replaces ${name} by vars[name]; throws std::invalid_argument naming an unknown variable.
+std::string substitute(const std::string& s, const std::map<std::string, std::string>& vars);
+
+/// Runs the plan; returns the launcher's exit code (0 when every process ended normally).
+int runPlan(const Plan& plan, const std::string& bin_dir);
+
+}  // namespace omnislam::launch

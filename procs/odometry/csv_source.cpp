@@ -1,0 +1,56 @@
+// Wheel-data CSV parsing: see csv_source.h.
+#include "csv_source.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace omnislam::odometry {
+
+std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::string& source) {
+  std::vector<WheelSample> out;
+  std::istringstream in(text);
+  std::string line;
+  int lineno = 0;
+  bool header = false;
+  auto fail = [&](const std::string& why) {
+    throw std::invalid_argument(source + ":" + std::to_string(lineno) + ": " + why);
+  };
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    if (!header) {
+      if (line != "utime,v_mps,omega_radps") fail("expected the header 'utime,v_mps,omega_radps', got '" + line + "'");
+      header = true;
+      continue;
+    }
+    std::istringstream row(line);
+    std::string f[3];
+    for (int i = 0; i < 3; ++i)
+      if (!std::getline(row, f[i], ',')) fail("expected 3 columns (utime,v_mps,omega_radps), got " + std::to_string(i));
+    std::string extra;
+    if (std::getline(row, extra, ',')) fail("expected 3 columns, got more");
+    WheelSample s;
+    try {
+      size_t pos = 0;
+      s.utime = std::stoll(f[0], &pos);
+      if (pos != f[0].size()) throw std::invalid_argument("");
+      s.v_mps = std::stod(f[1], &pos);
+      if (pos != f[1].size()) throw std::invalid_argument("");
+      s.omega_radps = std::stod(f[2], &pos);
+      if (pos != f[2].size()) throw std::invalid_argument("");
+    } catch (const std::exception&) {
+      fail("non-numeric field in '" + line + "'");
+    }
+    if (!std::isfinite(s.v_mps) || !std::isfinite(s.omega_radps)) fail("non-finite value in '" + line + "'");
+    if (!out.empty() && s.utime <= out.back().utime)
+      fail("utime " + std::to_string(s.utime) + " does not increase (previous " + std::to_string(out.back().utime) + ")");
+    out.push_back(s);
+  }
+  if (!header) throw std::invalid_argument(source + ": empty file (no header 'utime,v_mps,omega_radps')");
+  if (out.empty()) throw std::invalid_argument(source + ": no data rows");
+  return out;
+}
+
+}  // namespace omnislam::odometry

@@ -1,0 +1,151 @@
+// omnislam-sim: the simulated world's clock. Publishes GROUND_TRUTH_POSE (the true robot pose at
+// the world's truth rate) and GROUND_TRUTH_MAP (once per simulated second), in simulated time,
+// paced at a speed-up of real time. Capture and odometry derive their sensors from this stream.
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <iostream>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "omnislam/config/world_config.h"
+#include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/node.h"
+#include "omnislam/lcmio/signals.h"
+#include "omnislam/map_t.hpp"
+#include "omnislam/pose_t.hpp"
+#include "omnislam/sim/trajectory.h"
+
+using namespace omnislam;
+
+namespace {
+
+map_t truthMap(const sim::World& w, int64_t utime, int64_t seq) {
+  map_t m{};
+  m.utime = utime;
+  m.seq = seq;
+  m.input_seq = -1;
+  for (const sim::Light& L : w.lights) {
+    landmark_t l{};
+    l.id = L.id;
+    for (int i = 0; i < 3; ++i) l.position_m[i] = L.p_LinW_m[i];
+    l.type = 0;
+    l.times_detected = 0;
+    l.kind = 1;  // feature_t::KIND_CEILING_LIGHT
+    m.landmarks.push_back(l);
+  }
+  m.num_landmarks = static_cast<int32_t>(m.landmarks.size());
+  m.num_candidates = 0;
+  return m;
+}
+
+std::set<std::string> splitNames(const std::string& csv) {
+  std::set<std::string> out;
+  std::stringstream ss(csv);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.insert(item);
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{"omnislam-sim: publishes the simulated world's ground truth in simulated time"};
+  std::string world_path, url, name = "sim", wait_for;
+  double speedup = 10.0, duration_s = 0.0, wait_timeout_s = 15.0;
+  cli.add_option("--world", world_path, "world file (config/worlds/*.yaml)")->required();
+  cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
+  cli.add_option("--name", name, "process name in PROCESS_STATUS");
+  cli.add_option("--speedup", speedup, "simulated seconds per real second; 0 = as fast as possible")
+      ->check(CLI::Range(0.0, 1000.0));
+  cli.add_option("--duration", duration_s, "stop after this many simulated seconds (0 = whole trajectory)")
+      ->check(CLI::Range(0.0, 1e6));
+  cli.add_option("--wait-for", wait_for, "comma-separated process names to wait for (PROCESS_STATUS) before starting");
+  cli.add_option("--wait-timeout", wait_timeout_s, "seconds to wait for them")->check(CLI::Range(0.0, 600.0));
+  CLI11_PARSE(cli, argc, argv);
+
+  return app::runMain("omnislam-sim", [&]() -> int {
+    const sim::World world = config::loadWorld(world_path);
+    const sim::Trajectory traj(world.trajectory_options, world.segments);
+    const double end_s = duration_s > 0 ? std::min(duration_s, traj.duration_s()) : traj.duration_s();
+    lcmio::Node node(name, app::lcmUrl(url));
+    std::cerr << node.tag() << "world '" << world.name << "': " << world.lights.size() << " lights, trajectory "
+              << traj.length_m() << " m in " << traj.duration_s() << " s (running " << end_s << " s at "
+              << speedup << "x), truth at " << world.truth_rate_hz << " Hz" << std::endl;
+
+    // Wait until the named consumers have announced themselves, so nothing is published into the void.
+    const std::set<std::string> wanted = splitNames(wait_for);
+    std::set<std::string> seen;  // outlives the subscription's handler
+    if (!wanted.empty()) {
+      lcmio::InputOptions status_opt;
+      status_opt.require_increasing_utime = false;  // several publishers share the channel
+      status_opt.track_sequence = false;
+      node.subscribe<process_status_t>(channels::kProcessStatus,
+                                       [&seen](const process_status_t& st) { seen.insert(st.name); }, status_opt);
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_timeout_s);
+      auto all_seen = [&] {
+        for (const auto& n : wanted)
+          if (!seen.count(n)) return false;
+        return true;
+      };
+      node.setDetail("waiting for " + wait_for);
+      node.spin([&] { return all_seen() || std::chrono::steady_clock::now() > deadline; });
+      if (!all_seen()) {
+        std::string missing;
+        for (const auto& n : wanted)
+          if (!seen.count(n)) missing += (missing.empty() ? "" : ",") + n;
+        std::cerr << node.tag() << "gave up waiting for: " << missing << " (starting anyway)" << std::endl;
+      }
+    }
+    if (lcmio::stopRequested()) return app::kOk;
+
+    node.setState(process_status_t::STATE_RUNNING);
+    const double dt = 1.0 / world.truth_rate_hz;
+    const int64_t n_steps = static_cast<int64_t>(std::floor(end_s / dt + 1e-9));
+    const auto wall0 = std::chrono::steady_clock::now();
+    int64_t map_seq = 0;
+    const int64_t map_every = std::max<int64_t>(1, std::llround(world.truth_rate_hz));
+    for (int64_t k = 0; k <= n_steps && !lcmio::stopRequested(); ++k) {
+      const double t = k * dt;
+      if (speedup > 0) {
+        const auto due = wall0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                     std::chrono::duration<double>(t / speedup));
+        while (!lcmio::stopRequested()) {
+          const double left = std::chrono::duration<double>(due - std::chrono::steady_clock::now()).count();
+          if (left <= 0) break;
+          node.handleFor(std::min(left, 0.05));
+        }
+      } else {
+        node.handleFor(0.0);
+      }
+      const int64_t utime = world.start_utime + static_cast<int64_t>(std::llround(t * 1e6));
+      const sim::TrajectorySample s = traj.at(t);
+      pose_t p{};
+      p.utime = utime;
+      p.seq = k;
+      p.x_m = s.pose.x_m;
+      p.y_m = s.pose.y_m;
+      p.theta_rad = s.pose.theta_rad;
+      p.num_particles = 0;
+      p.effective_sample_size = 0;
+      p.input_seq = -1;
+      node.publish(channels::kGroundTruthPose, p);
+      if (k % map_every == 0) node.publish(channels::kGroundTruthMap, truthMap(world, utime, map_seq++));
+      if (k % map_every == 0) {
+        std::ostringstream d;
+        d << "t=" << t << " s of " << end_s;
+        node.setDetail(d.str());
+      }
+    }
+    const bool interrupted = lcmio::stopRequested();
+    node.setState(interrupted ? process_status_t::STATE_STOPPING : process_status_t::STATE_FINISHED);
+    node.setDetail(interrupted ? "interrupted" : "scenario finished");
+    node.publishStatus();
+    std::cerr << node.tag() << (interrupted ? "interrupted" : "scenario finished") << " after "
+              << node.counters().messages_out << " messages" << std::endl;
+    return app::kOk;
+  });
+}

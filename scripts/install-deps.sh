@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Installs every Debian package omnislam needs to build, test and run (Debian bookworm).
+# Idempotent: packages already present are skipped quickly. Needs root (or sudo).
+set -euo pipefail
+
+PKGS=(
+  build-essential cmake pkg-config
+  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev   # LCM 1.3.1: library, lcm-gen/logger/spy, Java jar
+  default-jdk-headless libjchart2d-java               # javac for the types jar; lcm-spy's viewer needs jchart2d
+  libeigen3-dev                                       # core maths
+  libopencv-dev                                       # image processing, rendering, image I/O
+  libyaml-cpp-dev                                     # world / config files
+  libcli11-dev                                        # command-line flags
+  libgtest-dev libgmock-dev googletest                # unit and integration tests
+  libbenchmark-dev                                    # bench/
+  xvfb xauth                                          # headless lcm-spy check
+  python3                                             # small test helpers
+)
+
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PKGS[@]} packages present"
+  exit 0
+fi
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"

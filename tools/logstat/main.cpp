@@ -1,0 +1,44 @@
+// omnislam-logstat: prints what an LCM log holds, channel by channel (counts, sequence gaps,
+// undecodable events, span and rate in the messages' own time).
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "logstat.h"
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/image_msg.h"
+#include "omnislam/lcmio/log_reader.h"
+#include "omnislam/lcmio/app.h"
+
+int main(int argc, char** argv) {
+  CLI::App cli{"omnislam-logstat: per-channel statistics of an omnislam LCM log"};
+  std::string path;
+  cli.add_option("log", path, "LCM log file")->required()->check(CLI::ExistingFile);
+  std::string export_dir;
+  cli.add_option("--export-images", export_dir, "also write every OMNI_IMAGE frame as PNG into this folder");
+  CLI11_PARSE(cli, argc, argv);
+  return omnislam::app::runMain("omnislam-logstat", [&]() -> int {
+    const auto stats = omnislam::tools::logStats(path);
+    std::cout << path << "\n" << omnislam::tools::formatStats(stats);
+    if (!export_dir.empty()) {
+      std::filesystem::create_directories(export_dir);
+      int n = 0;
+      omnislam::lcmio::forEachEvent(path, [&](const omnislam::lcmio::LogEvent& ev) {
+        if (ev.channel != omnislam::channels::kOmniImage) return;
+        const auto msg = omnislam::lcmio::decodeAs<omnislam::image_t>(ev);
+        if (!msg) return;
+        if (const auto img = omnislam::lcmio::decodeImage(*msg)) {
+          char name[64];
+          std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(msg->seq));
+          cv::imwrite(export_dir + name, *img);
+          ++n;
+        }
+      });
+      std::cout << n << " images written to " << export_dir << "\n";
+    }
+    return 0;
+  });
+}

@@ -3,9 +3,10 @@
 # omnislam_add_gtest(NAME SOURCES... LIBS ... [LABELS ...] [TIMEOUT s])
 # One GoogleTest executable per test source file, registered with CTest test by test.
 function(omnislam_add_gtest name)
-  cmake_parse_arguments(T "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(T "WHOLE" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${T_SOURCES})
   target_link_libraries(${name} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests/support)
   target_compile_definitions(${name} PRIVATE
     OMNISLAM_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     OMNISLAM_BIN_DIR="${CMAKE_RUNTIME_OUTPUT_DIRECTORY}"
@@ -13,16 +14,27 @@ function(omnislam_add_gtest name)
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 120)
   endif()
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
-    PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}")
+  if(T_WHOLE)
+    # One CTest entry for the whole executable: its suite-level set-up (e.g. launching the
+    # processes once) is shared by all of its tests.
+    add_test(NAME ${name} COMMAND ${name})
+    set_tests_properties(${name} PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}")
+  else()
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
+      PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}")
+  endif()
 endfunction()
 
 # Every test source file in DIR becomes its own test executable linked with LIBS.
 function(omnislam_add_gtests_in_dir dir)
-  cmake_parse_arguments(T "" "TIMEOUT;PREFIX" "LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(T "WHOLE" "TIMEOUT;PREFIX" "LIBS;LABELS" ${ARGN})
+  set(whole "")
+  if(T_WHOLE)
+    set(whole WHOLE)
+  endif()
   file(GLOB srcs CONFIGURE_DEPENDS ${dir}/test_*.cpp)
   foreach(src ${srcs})
     get_filename_component(stem ${src} NAME_WE)
-    omnislam_add_gtest(${T_PREFIX}${stem} SOURCES ${src} LIBS ${T_LIBS} LABELS ${T_LABELS} TIMEOUT ${T_TIMEOUT})
+    omnislam_add_gtest(${T_PREFIX}${stem} SOURCES ${src} LIBS ${T_LIBS} LABELS ${T_LABELS} TIMEOUT ${T_TIMEOUT} ${whole})
   endforeach()
 endfunction()

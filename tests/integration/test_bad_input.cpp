@@ -1,0 +1,242 @@
+// Bad input never crashes a process: garbage, wrong-type, non-finite and out-of-order messages
+// on every input channel are counted in PROCESS_STATUS and skipped; a malformed world file,
+// launch file or flag stops the program at start with a message naming the key.
+#include <gtest/gtest.h>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "omnislam/config/world_config.h"
+#include "omnislam/image_t.hpp"
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/odometry_t.hpp"
+#include "omnislam/pose_t.hpp"
+#include "omnislam/process_status_t.hpp"
+#include "proc_util.h"
+
+using namespace omnislam;
+namespace t = omnislam::testing;
+
+namespace {
+
+std::string readFile(const std::string& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+void writeFile(const std::string& p, const std::string& s) { std::ofstream(p) << s; }
+
+std::string worldWith(const std::string& from, const std::string& to) {
+  std::string w = readFile(t::sourcePath("config/worlds/sports_hall.yaml"));
+  const auto pos = w.find(from);
+  EXPECT_NE(pos, std::string::npos) << "test setup: '" << from << "' not in the world file";
+  if (pos != std::string::npos) w.replace(pos, from.size(), to);
+  return w;
+}
+
+/// Listens on the bus and keeps the latest status and message counts per channel.
+struct Listener {
+  explicit Listener(const std::string& url) : lcm(url) {
+    lcm.subscribeFunction(".*", &Listener::onAny, this);
+  }
+  static void onAny(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Listener* self) {
+    ++self->counts[channel];
+    if (channel == channels::kProcessStatus) {
+      process_status_t st;
+      if (st.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) > 0) self->status[st.name] = st;
+    }
+  }
+  void spinFor(double s) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(s);
+    while (std::chrono::steady_clock::now() < until) lcm.handleTimeout(20);
+  }
+  bool waitFor(const std::function<bool()>& pred, double timeout_s) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < until) {
+      if (pred()) return true;
+      lcm.handleTimeout(20);
+    }
+    return pred();
+  }
+  lcm::LCM lcm;
+  std::map<std::string, int> counts;
+  std::map<std::string, process_status_t> status;
+};
+
+pose_t pose(int64_t utime, int64_t seq, double x = 6.0) {
+  pose_t p{};
+  p.utime = utime;
+  p.seq = seq;
+  p.x_m = x;
+  p.y_m = -3.25;
+  p.input_seq = -1;
+  return p;
+}
+
+TEST(BadInput, CaptureAndOdometryCountAndSkipBadTruthMessages) {
+  const std::string url = t::privateUdpUrl(2);
+  const std::string world = t::sourcePath("config/worlds/sports_hall.yaml");
+  const int64_t t0 = config::loadWorld(world).start_utime;
+  Listener bus(url);
+  t::Child capture({t::binPath("omnislam-capture"), "--source", "sim", "--world", world, "--url", url});
+  t::Child odometry({t::binPath("omnislam-odometry"), "--source", "sim", "--world", world, "--url", url});
+  ASSERT_TRUE(bus.waitFor([&] { return bus.status.count("capture") && bus.status.count("odometry"); }, 15.0))
+      << capture.output() << odometry.output();
+
+  const std::string garbage = "this is not an LCM message";
+  bus.lcm.publish(channels::kGroundTruthPose, garbage.data(), static_cast<unsigned>(garbage.size()));
+  odometry_t wrong{};
+  bus.lcm.publish(channels::kGroundTruthPose, &wrong);  // wrong type: fingerprint mismatch
+  pose_t nan_pose = pose(t0, 0, std::nan(""));
+  bus.lcm.publish(channels::kGroundTruthPose, &nan_pose);
+  pose_t inf_pose = pose(t0, 0);
+  inf_pose.theta_rad = INFINITY;
+  bus.lcm.publish(channels::kGroundTruthPose, &inf_pose);
+  bus.spinFor(0.2);
+  pose_t good = pose(t0, 0);
+  bus.lcm.publish(channels::kGroundTruthPose, &good);
+  bus.spinFor(0.2);
+  pose_t dup = pose(t0, 1);  // same utime again: duplicate / out of order
+  bus.lcm.publish(channels::kGroundTruthPose, &dup);
+  pose_t back = pose(t0 - 20'000, 2);  // time going backwards
+  bus.lcm.publish(channels::kGroundTruthPose, &back);
+  bus.spinFor(0.2);
+  pose_t good2 = pose(t0 + 20'000, 3);
+  bus.lcm.publish(channels::kGroundTruthPose, &good2);
+
+  auto counted = [&](const std::string& name) {
+    if (!bus.status.count(name)) return false;
+    const auto& s = bus.status[name];
+    return s.decode_errors >= 2 && s.rejected_inputs >= 4 && s.messages_in >= 8;
+  };
+  ASSERT_TRUE(bus.waitFor([&] { return counted("capture") && counted("odometry"); }, 5.0))
+      << capture.output() << odometry.output();
+  for (const char* name : {"capture", "odometry"}) {
+    const auto& s = bus.status[name];
+    EXPECT_EQ(s.decode_errors, 2) << name;
+    EXPECT_EQ(s.rejected_inputs, 4) << name << ": " << s.last_error;
+    EXPECT_FALSE(s.last_error.empty()) << name;
+  }
+  EXPECT_TRUE(capture.alive());
+  EXPECT_TRUE(odometry.alive());
+  EXPECT_EQ(bus.counts[channels::kOdometry], 2) << "exactly the two good poses are turned into odometry";
+  EXPECT_EQ(bus.counts[channels::kOmniImage], 1) << "one image for the first good pose (t = 0)";
+  // The reasons are reported on one line each.
+  EXPECT_NE(odometry.output().find("cannot decode"), std::string::npos) << odometry.output();
+  EXPECT_NE(odometry.output().find("non-finite"), std::string::npos) << odometry.output();
+  EXPECT_NE(odometry.output().find("not after previous"), std::string::npos) << odometry.output();
+
+  capture.signal(SIGINT);
+  odometry.signal(SIGINT);
+  EXPECT_EQ(capture.wait(5.0).exit_code, 0);
+  EXPECT_EQ(odometry.wait(5.0).exit_code, 0);
+}
+
+TEST(BadInput, SimulatorCountsGarbageOnItsStatusInput) {
+  const std::string url = t::privateUdpUrl(3);
+  Listener bus(url);
+  t::Child sim({t::binPath("omnislam-sim"), "--world", t::sourcePath("config/worlds/sports_hall.yaml"), "--url", url,
+                "--wait-for", "nobody", "--wait-timeout", "30"});
+  ASSERT_TRUE(bus.waitFor([&] { return bus.status.count("sim") > 0; }, 10.0)) << sim.output();
+  const std::string garbage(100, '\x7f');
+  bus.lcm.publish(channels::kProcessStatus, garbage.data(), static_cast<unsigned>(garbage.size()));
+  ASSERT_TRUE(bus.waitFor([&] { return bus.status["sim"].decode_errors >= 1; }, 5.0)) << sim.output();
+  EXPECT_TRUE(sim.alive());
+  sim.signal(SIGTERM);
+  EXPECT_EQ(sim.wait(5.0).exit_code, 0);
+}
+
+struct BadWorldCase {
+  const char* from;
+  const char* to;
+  const char* must_name;
+};
+
+TEST(BadConfig, MalformedWorldFileStopsEveryProcessNamingTheKey) {
+  const BadWorldCase cases[] = {
+      {"b: 3.0", "b: -1.0", "camera.b"},
+      {"speed_mps: 0.27", "speed_mps: fast", "trajectory.speed_mps"},
+      {"speed_mps: 0.27", "sped_mps: 0.27", "trajectory.sped_mps"},
+      {"truth_rate_hz: 50", "truth_rate_hz: 5", "truth_rate_hz"},
+      {"miss_probability: 0.3", "miss_probability: 1.5", "image.window_wall.miss_probability"},
+      {"    - {straight_m: 18.0}\n", "    - {straight_m: -18.0}\n", "trajectory.segments[0].straight_m"},
+      {"x_m: [4.5, 13.5, 22.5, 31.5]", "x_m: [4.5, 13.5, 22.5, nope]", "lights.grid.x_m"},
+      {"name: sports_hall", "name: [unclosed", "not valid YAML"},
+  };
+  t::TempDir dir;
+  for (const auto& c : cases) {
+    const std::string path = dir.file("world.yaml");
+    writeFile(path, worldWith(c.from, c.to));
+    const std::vector<std::vector<std::string>> cmds = {
+        {t::binPath("omnislam-sim"), "--world", path, "--url", "memq://"},
+        {t::binPath("omnislam-capture"), "--source", "sim", "--world", path, "--url", "memq://"},
+        {t::binPath("omnislam-odometry"), "--source", "sim", "--world", path, "--url", "memq://"},
+    };
+    for (const auto& cmd : cmds) {
+      const auto r = t::run(cmd, 10.0);
+      EXPECT_EQ(r.exit_code, 2) << cmd[0] << " with " << c.to << ":\n" << r.output;
+      EXPECT_NE(r.output.find(c.must_name), std::string::npos)
+          << cmd[0] << " with '" << c.to << "' must name " << c.must_name << ", said:\n" << r.output;
+      EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << "one clear line:\n" << r.output;
+    }
+  }
+}
+
+TEST(BadConfig, BadFlagsStopWithAMessageNamingTheFlag) {
+  const std::string world = t::sourcePath("config/worlds/sports_hall.yaml");
+  struct Case {
+    std::vector<std::string> argv;
+    const char* must_name;
+  };
+  const Case cases[] = {
+      {{t::binPath("omnislam-sim"), "--world", world, "--speedup", "-3"}, "--speedup"},
+      {{t::binPath("omnislam-sim"), "--world", world, "--duration", "abc"}, "--duration"},
+      {{t::binPath("omnislam-sim")}, "--world"},
+      {{t::binPath("omnislam-capture"), "--source", "webcam"}, "--source"},
+      {{t::binPath("omnislam-capture"), "--source", "sim"}, "--world"},
+      {{t::binPath("omnislam-capture"), "--source", "dir", "--dir", "/nonexistent/images"}, "--dir"},
+      {{t::binPath("omnislam-odometry"), "--source", "csv"}, "--csv"},
+      {{t::binPath("omnislam-launch"), t::sourcePath("config/launch/sports_hall.yaml"), "--set", "nosuch=1"}, "nosuch"},
+      {{t::binPath("omnislam-launch"), "/nonexistent/launch.yaml"}, "launch.yaml"},
+  };
+  for (const auto& c : cases) {
+    const auto r = t::run(c.argv, 10.0);
+    EXPECT_NE(r.exit_code, 0) << c.argv[0];
+    EXPECT_FALSE(r.timed_out);
+    EXPECT_NE(r.output.find(c.must_name), std::string::npos) << "must name " << c.must_name << ", said:\n" << r.output;
+  }
+}
+
+TEST(BadConfig, MalformedWheelCsvNamesFileAndLine) {
+  t::TempDir dir;
+  struct Case {
+    std::string text;
+    const char* must_say;
+  };
+  const Case cases[] = {
+      {"", "empty file"},
+      {"utime,v_mps,omega_radps\n", "no data rows"},
+      {"time,v,w\n1,0,0\n", ":1: expected the header"},
+      {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,abc,0.0\n", ":3: non-numeric"},
+      {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1\n", ":3: expected 3 columns"},
+      {"utime,v_mps,omega_radps\n1000,0.1,0.0\n1000,0.1,0.0\n", ":3: utime 1000 does not increase"},
+      {"utime,v_mps,omega_radps\n1000,nan,0.0\n", ":2: non-finite"},
+  };
+  for (const auto& c : cases) {
+    const std::string path = dir.file("wheels.csv");
+    writeFile(path, c.text);
+    const auto r = t::run({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", path, "--url", "memq://"}, 10.0);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(c.must_say), std::string::npos) << "must say '" << c.must_say << "', said:\n" << r.output;
+    EXPECT_NE(r.output.find("wheels.csv"), std::string::npos) << r.output;
+  }
+}
+
+}  // namespace

@@ -13,7 +13,7 @@ PKGS=(
   libcli11-dev                                        # command-line flags
   libgtest-dev libgmock-dev googletest                # unit and integration tests
   libbenchmark-dev                                    # bench/
-  xvfb xauth                                          # headless lcm-spy check
+  xvfb xauth x11-apps imagemagick                     # headless lcm-spy check and its screenshot
   python3                                             # small test helpers
 )
 

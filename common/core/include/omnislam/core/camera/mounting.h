@@ -1,0 +1,66 @@
+// Camera mounting extrinsic: where the optical centre sits in the robot frame R and how the camera
+// axes are yawed, with the direction/point transforms between C and R (docs/conventions.md).
+//
+// C is R translated to p_CinR = (x_m, y_m, z_m) and rotated by yaw_rad about z_R (z_C parallel to z_R,
+// both up). With R_CtoR = Rz(yaw):  d_R = R_CtoR d_C,  p_C = R_CtoR^T (p_R - p_CinR).
+// Hence the elevation is the same in C and R, and azimuth_R = azimuth_C + yaw_rad (wrapped).
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+#include "omnislam/core/angles.h"
+
+namespace omnislam::camera {
+
+struct CameraMounting {
+  double x_m = 0.0;      ///< optical centre, forward of the robot origin [m]
+  double y_m = 0.0;      ///< optical centre, left of the robot origin [m]
+  double z_m = 1.8;      ///< optical centre above the floor [m] (paper 000's camera: 1.8 m)
+  double yaw_rad = 0.0;  ///< angle from x_R to x_C about z_R, counter-clockwise [rad]
+};
+
+/// R_CtoR (3x3): rotation taking camera-axis components to robot-axis components.
+inline Eigen::Matrix3d rotationCameraToRobot(const CameraMounting& m) {
+  const double c = std::cos(m.yaw_rad), s = std::sin(m.yaw_rad);
+  Eigen::Matrix3d R;
+  R << c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0;
+  return R;
+}
+
+/// p_CinR [m]: the optical centre in R.
+inline Eigen::Vector3d cameraPositionInRobot_m(const CameraMounting& m) { return {m.x_m, m.y_m, m.z_m}; }
+
+/// d_R = R_CtoR d_C. J_dR_dC (3x3) = R_CtoR; J_dR_yaw (3x1) = dRz/dyaw d_C.
+inline Eigen::Vector3d directionCameraToRobot(const CameraMounting& m, const Eigen::Vector3d& d_C,
+                                              Eigen::Matrix3d* J_dR_dC = nullptr, Eigen::Vector3d* J_dR_yaw = nullptr) {
+  const Eigen::Matrix3d R = rotationCameraToRobot(m);
+  const Eigen::Vector3d d_R = R * d_C;
+  if (J_dR_dC) *J_dR_dC = R;
+  if (J_dR_yaw) *J_dR_yaw = Eigen::Vector3d(-d_R.y(), d_R.x(), 0.0);  // dRz/dyaw = [e_z]x Rz
+  return d_R;
+}
+
+/// d_C = R_CtoR^T d_R. J_dC_dR (3x3) = R_CtoR^T.
+inline Eigen::Vector3d directionRobotToCamera(const CameraMounting& m, const Eigen::Vector3d& d_R,
+                                              Eigen::Matrix3d* J_dC_dR = nullptr) {
+  const Eigen::Matrix3d Rt = rotationCameraToRobot(m).transpose();
+  if (J_dC_dR) *J_dC_dR = Rt;
+  return Rt * d_R;
+}
+
+/// p_C = R_CtoR^T (p_R - p_CinR) [m]: a point given in R, seen from the optical centre in C axes.
+/// J_pC_pR (3x3) = R_CtoR^T.
+inline Eigen::Vector3d pointRobotToCamera(const CameraMounting& m, const Eigen::Vector3d& p_R_m,
+                                          Eigen::Matrix3d* J_pC_pR = nullptr) {
+  const Eigen::Matrix3d Rt = rotationCameraToRobot(m).transpose();
+  if (J_pC_pR) *J_pC_pR = Rt;
+  return Rt * (p_R_m - cameraPositionInRobot_m(m));
+}
+
+/// Bearing in C -> bearing in R axes: azimuth + yaw (wrapped to (-pi, pi]), elevation unchanged.
+inline Bearing bearingCameraToRobot(const CameraMounting& m, const Bearing& b_C) {
+  return {wrapAngle(b_C.azimuth_rad + m.yaw_rad), b_C.elevation_rad};
+}
+
+}  // namespace omnislam::camera

@@ -1,0 +1,72 @@
+// omnislam-publish-samples: publishes one valid sample message on every channel of the contract,
+// repeatedly, so that a viewer such as lcm-spy can be checked against all types.
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <thread>
+
+#include "omnislam/features_t.hpp"
+#include "omnislam/image_t.hpp"
+#include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/node.h"
+#include "omnislam/lcmio/signals.h"
+#include "omnislam/map_t.hpp"
+#include "omnislam/odometry_t.hpp"
+#include "omnislam/particles_t.hpp"
+#include "omnislam/pose_t.hpp"
+
+using namespace omnislam;
+
+int main(int argc, char** argv) {
+  CLI::App cli{"omnislam-publish-samples: one sample message per channel, every period"};
+  std::string url;
+  double period_s = 0.5, duration_s = 10.0;
+  cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
+  cli.add_option("--period", period_s, "seconds between rounds")->check(CLI::Range(0.01, 60.0));
+  cli.add_option("--duration", duration_s, "seconds to run")->check(CLI::Range(0.0, 3600.0));
+  CLI11_PARSE(cli, argc, argv);
+  return app::runMain("omnislam-publish-samples", [&]() -> int {
+    lcmio::Node node("publish-samples", app::lcmUrl(url));
+    const auto t_end = std::chrono::steady_clock::now() + std::chrono::duration<double>(duration_s);
+    for (int64_t k = 0; std::chrono::steady_clock::now() < t_end && !lcmio::stopRequested(); ++k) {
+      const int64_t utime = 1'700'000'000'000'000 + k * 1'000'000;
+      image_t img{};
+      img.utime = utime, img.seq = k, img.camera_name = "sample", img.width = 4, img.height = 2;
+      img.row_stride = 4, img.pixel_format = image_t::FORMAT_GRAY8, img.size = 8, img.data.assign(8, 128);
+      node.publish(channels::kOmniImage, img);
+      features_t f{};
+      f.utime = utime, f.seq = k, f.image_seq = k, f.detector = "sample", f.camera_position_m[2] = 1.8;
+      feature_t ft{};
+      ft.kind = feature_t::KIND_CEILING_LIGHT, ft.azimuth_rad = 0.5, ft.elevation_rad = 1.0, ft.has_elevation = true;
+      ft.covariance[0][0] = ft.covariance[1][1] = 1e-5;
+      f.features.push_back(ft);
+      f.num_features = 1;
+      node.publish(channels::kOmniFeatures, f);
+      odometry_t o{};
+      o.utime = utime, o.seq = k, o.x_m = 0.1 * k;
+      node.publish(channels::kOdometry, o);
+      pose_t p{};
+      p.utime = utime, p.seq = k, p.x_m = 0.1 * k, p.num_particles = 10, p.effective_sample_size = 5, p.input_seq = k;
+      node.publish(channels::kSlamPose, p);
+      p.num_particles = 0, p.effective_sample_size = 0, p.input_seq = -1;
+      node.publish(channels::kGroundTruthPose, p);
+      map_t m{};
+      m.utime = utime, m.seq = k, m.input_seq = k, m.num_candidates = 2;
+      landmark_t l{};
+      l.id = 1, l.position_m[0] = 4.5, l.position_m[1] = -5.5, l.position_m[2] = 6.5, l.type = 1, l.kind = 1;
+      m.landmarks.push_back(l);
+      m.num_landmarks = 1;
+      node.publish(channels::kSlamMap, m);
+      m.input_seq = -1, m.num_candidates = 0;
+      node.publish(channels::kGroundTruthMap, m);
+      particles_t ps{};
+      ps.utime = utime, ps.seq = k, ps.input_seq = k, ps.num_particles = 2;
+      ps.x_m = {0.0, 0.1}, ps.y_m = {0.0, 0.0}, ps.theta_rad = {0.0, 0.0}, ps.weight = {0.5, 0.5};
+      node.publish(channels::kSlamParticles, ps);
+      node.publishStatus();
+      node.handleFor(period_s);
+    }
+    return 0;
+  });
+}

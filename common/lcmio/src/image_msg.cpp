@@ -14,13 +14,15 @@ void encodeImage(const cv::Mat& img, int8_t format, image_t& msg) {
   msg.width = img.cols;
   msg.height = img.rows;
   msg.pixel_format = format;
-  cv::Mat src = img;
+  cv::Mat src;  // never aliases img: cvtColor into a header sharing img's data would overwrite the input
   switch (format) {
     case image_t::FORMAT_GRAY8:
       if (img.channels() == 3) cv::cvtColor(img, src, cv::COLOR_BGR2GRAY);
+      else src = img;
       break;
     case image_t::FORMAT_BGR8:
       if (img.channels() == 1) cv::cvtColor(img, src, cv::COLOR_GRAY2BGR);
+      else src = img;
       break;
     case image_t::FORMAT_RGB8:
       cv::cvtColor(img, src, img.channels() == 1 ? cv::COLOR_GRAY2RGB : cv::COLOR_BGR2RGB);

@@ -1,0 +1,72 @@
+// lcmio::Node over memq://: decoding, validation, time order and sequence accounting, and the
+// PROCESS_STATUS it publishes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/node.h"
+#include "omnislam/odometry_t.hpp"
+#include "omnislam/pose_t.hpp"
+
+using namespace omnislam;
+
+namespace {
+
+odometry_t odo(int64_t utime, int64_t seq, double x = 0.0) {
+  odometry_t m{};
+  m.utime = utime;
+  m.seq = seq;
+  m.x_m = x;
+  return m;
+}
+
+TEST(LcmioNode, CountsEveryKindOfBadInputAndPassesOnlyGoodOnes) {
+  lcmio::Node node("unit", "memq://");
+  std::vector<int64_t> seen;
+  node.subscribe<odometry_t>(channels::kOdometry, [&](const odometry_t& m) { seen.push_back(m.seq); });
+  lcm::LCM& bus = node.lcm();
+  const std::string garbage = "garbage";
+  bus.publish(channels::kOdometry, garbage.data(), static_cast<unsigned>(garbage.size()));  // decode error
+  pose_t wrong{};
+  bus.publish(channels::kOdometry, &wrong);  // wrong type: decode error
+  auto a = odo(1000, 0);
+  bus.publish(channels::kOdometry, &a);
+  auto nan = odo(2000, 1, std::nan(""));
+  bus.publish(channels::kOdometry, &nan);  // rejected: non-finite
+  auto dup = odo(1000, 2);
+  bus.publish(channels::kOdometry, &dup);  // rejected: not after previous
+  auto b = odo(3000, 5);                   // accepted; seq jumped from 0 to 5: 4 missing
+  bus.publish(channels::kOdometry, &b);
+  auto neg = odo(-5, 6);
+  bus.publish(channels::kOdometry, &neg);  // rejected: negative utime
+  while (node.lcm().handleTimeout(0) > 0) {
+  }
+  EXPECT_EQ(seen, (std::vector<int64_t>{0, 5}));
+  const auto& c = node.counters();
+  EXPECT_EQ(c.messages_in, 7);
+  EXPECT_EQ(c.decode_errors, 2);
+  EXPECT_EQ(c.rejected_inputs, 3);
+  EXPECT_EQ(c.sequence_gaps, 4);
+  EXPECT_NE(c.last_error.find("ODOMETRY"), std::string::npos);
+}
+
+TEST(LcmioNode, PublishesStatusWithItsCounters) {
+  lcmio::Node node("status-unit", "memq://");
+  std::vector<process_status_t> got;
+  lcmio::InputOptions opt;
+  opt.require_increasing_utime = false;
+  opt.track_sequence = false;
+  node.subscribe<process_status_t>(channels::kProcessStatus, [&](const process_status_t& s) { got.push_back(s); }, opt);
+  node.reject("X", "a reason");
+  node.publishStatus();
+  while (node.lcm().handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].name, "status-unit");
+  EXPECT_EQ(got[0].rejected_inputs, 1);
+  EXPECT_EQ(got[0].last_error, "X: a reason");
+  EXPECT_GT(got[0].pid, 0);
+}
+
+}  // namespace

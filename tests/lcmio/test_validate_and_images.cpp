@@ -1,0 +1,98 @@
+// Message validation rules and image_t <-> cv::Mat round trips.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "omnislam/lcmio/image_msg.h"
+#include "omnislam/lcmio/validate.h"
+
+using namespace omnislam;
+
+namespace {
+
+TEST(Validate, ImageSizesAndFormats) {
+  image_t m{};
+  m.width = 4, m.height = 2, m.row_stride = 4, m.pixel_format = image_t::FORMAT_GRAY8;
+  m.data.assign(8, 0), m.size = 8;
+  EXPECT_FALSE(lcmio::validate(m).has_value());
+  m.row_stride = 3;
+  EXPECT_TRUE(lcmio::validate(m).has_value());
+  m.row_stride = 4, m.size = 7, m.data.resize(7);
+  EXPECT_TRUE(lcmio::validate(m).has_value());
+  m.size = 8, m.data.resize(8), m.pixel_format = 9;
+  EXPECT_NE(lcmio::validate(m)->find("pixel_format"), std::string::npos);
+  m.pixel_format = image_t::FORMAT_GRAY8, m.width = 100000;
+  EXPECT_NE(lcmio::validate(m)->find("image size"), std::string::npos);
+}
+
+TEST(Validate, FeaturesNeedFiniteAnglesAndPositiveCovariance) {
+  features_t f{};
+  f.num_features = 1;
+  feature_t ft{};
+  ft.kind = feature_t::KIND_CEILING_LIGHT, ft.has_elevation = true, ft.azimuth_rad = 1.0, ft.elevation_rad = 0.5;
+  ft.covariance[0][0] = ft.covariance[1][1] = 1e-4;
+  f.features = {ft};
+  EXPECT_FALSE(lcmio::validate(f).has_value());
+  f.features[0].azimuth_rad = NAN;
+  EXPECT_TRUE(lcmio::validate(f).has_value());
+  f.features[0].azimuth_rad = 4.0;
+  EXPECT_NE(lcmio::validate(f)->find("azimuth"), std::string::npos);
+  f.features[0].azimuth_rad = 1.0, f.features[0].covariance[1][1] = -1;
+  EXPECT_NE(lcmio::validate(f)->find("positive definite"), std::string::npos);
+  f.features[0].covariance[1][1] = 1e-4, f.features[0].kind = 7;
+  EXPECT_NE(lcmio::validate(f)->find("kind"), std::string::npos);
+  f.features[0].kind = feature_t::KIND_CEILING_LIGHT, f.camera_position_m[0] = INFINITY;
+  EXPECT_NE(lcmio::validate(f)->find("camera_position_m"), std::string::npos);
+}
+
+TEST(Validate, PosesAndOdometryMustBeFinite) {
+  pose_t p{};
+  EXPECT_FALSE(lcmio::validate(p).has_value());
+  p.covariance[2][1] = NAN;
+  EXPECT_TRUE(lcmio::validate(p).has_value());
+  odometry_t o{};
+  o.omega_radps = INFINITY;
+  EXPECT_TRUE(lcmio::validate(o).has_value());
+}
+
+TEST(ImageMsg, RawAndLosslessRoundTripsAreExact) {
+  cv::Mat grey(48, 64, CV_8UC1);
+  cv::randu(grey, 0, 255);
+  cv::Mat bgr(48, 64, CV_8UC3);
+  cv::randu(bgr, 0, 255);
+  for (int8_t fmt : {image_t::FORMAT_GRAY8, image_t::FORMAT_PNG}) {
+    image_t m{};
+    lcmio::encodeImage(grey, fmt, m);
+    ASSERT_FALSE(lcmio::validate(m).has_value());
+    const auto back = lcmio::decodeImage(m);
+    ASSERT_TRUE(back.has_value());
+    EXPECT_EQ(cv::norm(*back, grey, cv::NORM_INF), 0.0) << "format " << int(fmt);
+  }
+  for (int8_t fmt : {image_t::FORMAT_BGR8, image_t::FORMAT_RGB8, image_t::FORMAT_PNG}) {
+    image_t m{};
+    lcmio::encodeImage(bgr, fmt, m);
+    const auto back = lcmio::decodeImage(m);
+    ASSERT_TRUE(back.has_value());
+    EXPECT_EQ(cv::norm(*back, bgr, cv::NORM_INF), 0.0) << "format " << int(fmt);
+  }
+  image_t j{};
+  lcmio::encodeImage(grey, image_t::FORMAT_JPEG, j);
+  const auto jb = lcmio::decodeImage(j);
+  ASSERT_TRUE(jb.has_value());
+  EXPECT_EQ(jb->size(), grey.size());
+}
+
+TEST(ImageMsg, CorruptCompressedImagesAreRefusedWithAReason) {
+  image_t m{};
+  m.width = 64, m.height = 48, m.pixel_format = image_t::FORMAT_PNG, m.data.assign(100, 7), m.size = 100;
+  std::string why;
+  EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
+  EXPECT_NE(why.find("does not decode"), std::string::npos);
+  cv::Mat grey(48, 64, CV_8UC1, cv::Scalar(9));
+  lcmio::encodeImage(grey, image_t::FORMAT_PNG, m);
+  m.width = 65;  // header lies about the size
+  EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
+  EXPECT_NE(why.find("differs"), std::string::npos);
+}
+
+}  // namespace

@@ -1,0 +1,104 @@
+// omnislam-launch: prefixes output, reports a process that dies, ends the run when an ends_run
+// process finishes, stops everything on SIGINT, and records with lcm-logger.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+#include "proc_util.h"
+
+namespace t = omnislam::testing;
+
+namespace {
+
+std::string launchFile(const t::TempDir& dir, const std::string& processes) {
+  const std::string path = dir.file("launch.yaml");
+  std::ofstream(path) << "name: unit\nstop_grace_s: 2\ndrain_s: 0.2\nprocesses:\n" << processes;
+  return path;
+}
+
+double secondsOf(const std::function<void()>& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+TEST(Launcher, ReportsAProcessThatDiesAndStopsTheOthers) {
+  t::TempDir dir;
+  const auto file = launchFile(dir,
+                               "  - {name: sleeper, cmd: [sleep, '60']}\n"
+                               "  - {name: crasher, cmd: [sh, -c, 'echo about to fail; sleep 0.3; exit 3']}\n");
+  t::RunResult r;
+  const double s = secondsOf([&] { r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 30); });
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("crasher | about to fail"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("process crasher died: exit code 3"), std::string::npos) << r.output;
+  EXPECT_LT(s, 10.0) << "the sleeper must be stopped, not waited for";
+}
+
+TEST(Launcher, ReportsAProcessKilledByASignal) {
+  t::TempDir dir;
+  const auto file = launchFile(dir,
+                               "  - {name: sleeper, cmd: [sleep, '60']}\n"
+                               "  - {name: victim, cmd: [sh, -c, 'sleep 0.3; kill -SEGV $$']}\n");
+  const auto r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 30);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("process victim died: killed by signal 11"), std::string::npos) << r.output;
+}
+
+TEST(Launcher, TheScenarioEndsWhenAnEndsRunProcessFinishes) {
+  t::TempDir dir;
+  const auto file = launchFile(dir,
+                               "  - {name: sleeper, cmd: [sleep, '60']}\n"
+                               "  - {name: scenario, cmd: [sh, -c, 'sleep 0.3; echo done'], ends_run: true}\n");
+  const auto r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 30);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("stopping: scenario finished the scenario"), std::string::npos) << r.output;
+}
+
+TEST(Launcher, SigintStopsEveryProcessCleanly) {
+  t::TempDir dir;
+  const auto file = launchFile(dir,
+                               "  - {name: a, cmd: [sleep, '60']}\n"
+                               "  - {name: b, cmd: [sleep, '60']}\n");
+  t::Child launcher({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"});
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  ASSERT_TRUE(launcher.alive()) << launcher.output();
+  launcher.signal(SIGINT);
+  const auto r = launcher.wait(10);
+  EXPECT_FALSE(r.timed_out);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("stopping: interrupted"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("did not stop"), std::string::npos) << r.output;
+}
+
+TEST(Launcher, RecordsTheBusWithLcmLogger) {
+  t::TempDir dir;
+  const auto file = launchFile(dir, "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '1.5', --period, '0.1'], ends_run: true}\n");
+  const std::string log = dir.file("rec.lcm");
+  const auto r = t::run({t::binPath("omnislam-launch"), file, "--log-file", log, "--url", t::privateUdpUrl(4)}, 30);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_TRUE(std::filesystem::exists(log)) << r.output;
+  const auto stat = t::run({t::binPath("omnislam-logstat"), log}, 10);
+  EXPECT_NE(stat.output.find("SLAM_MAP"), std::string::npos) << stat.output;
+  EXPECT_NE(stat.output.find("OMNI_FEATURES"), std::string::npos) << stat.output;
+}
+
+TEST(Launcher, BadLaunchFilesNameTheKey) {
+  t::TempDir dir;
+  const auto dup = launchFile(dir, "  - {name: a, cmd: [sleep, '1']}\n  - {name: a, cmd: [sleep, '1']}\n");
+  auto r = t::run({t::binPath("omnislam-launch"), dup, "--no-log"}, 10);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("processes[1].name"), std::string::npos) << r.output;
+  const auto var = launchFile(dir, "  - {name: a, cmd: [sleep, '${nope}']}\n");
+  r = t::run({t::binPath("omnislam-launch"), var, "--no-log"}, 10);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("unknown variable ${nope}"), std::string::npos) << r.output;
+  const auto typo = launchFile(dir, "  - {name: a, cmdd: [sleep, '1']}\n");
+  r = t::run({t::binPath("omnislam-launch"), typo, "--no-log"}, 10);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("processes[0].cmdd' is not a known key"), std::string::npos) << r.output;
+}
+
+}  // namespace

@@ -57,6 +57,8 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
   const int64_t period_us = std::llround(1e6 / world.image_rate_hz);
   int64_t next_utime = world.start_utime;
   int64_t frames = 0;
+  lcmio::InputOptions truth_opt;
+  truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
   node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
     if (p.utime < next_utime) return;
     vision::RenderReport rep;
@@ -67,7 +69,7 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
     while (next_utime <= p.utime) next_utime += period_us;
     node.setDetail("frame " + std::to_string(frames) + ": " + std::to_string(rep.lights_drawn) + " lights, " +
                    std::to_string(rep.lights_missed) + " missed, " + std::to_string(rep.false_blobs) + " false blobs");
-  });
+  }, truth_opt);
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
   std::cerr << node.tag() << "rendering '" << world.name << "' at " << world.image_rate_hz << " Hz, "
             << cam.widthPx() << "x" << cam.heightPx() << ", seed " << seed << std::endl;

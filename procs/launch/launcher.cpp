@@ -72,8 +72,9 @@ Plan loadPlan(const std::string& path, const std::map<std::string, std::string>&
   bool log_enabled = true;
   std::string dir = "logs";
   if (auto lg = root.optChild("logger")) {
-    lg->rejectUnknownKeys({"enabled", "dir"});
+    lg->rejectUnknownKeys({"enabled", "dir", "tool"});
     log_enabled = lg->getBool("enabled", true);
+    plan.log_tool = lg->getEnum("tool", {"omnislam-record", "lcm-logger"}, plan.log_tool);
     if (lg->has("dir")) dir = substitute(lg->getString("dir"), vars);
   }
   if (!log_dir.empty()) dir = log_dir;
@@ -270,10 +271,14 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
   if (plan.log_enabled) {
     const fs::path dir = fs::path(plan.log_file).parent_path();
     if (!dir.empty()) fs::create_directories(dir);
-    Child lg = spawn("logger", {"lcm-logger", "--lcm-url=" + plan.lcm_url, "-f", plan.log_file}, plan.lcm_url, bin_dir);
+    const std::vector<std::string> argv =
+        plan.log_tool == "lcm-logger"
+            ? std::vector<std::string>{"lcm-logger", "--lcm-url=" + plan.lcm_url, "-f", plan.log_file}
+            : std::vector<std::string>{"omnislam-record", "--url", plan.lcm_url, "-f", plan.log_file};
+    Child lg = spawn("logger", argv, plan.lcm_url, bin_dir);
     lg.is_logger = true;
     sup.children.push_back(lg);
-    sup.print("launch", "recording every channel into " + plan.log_file);
+    sup.print("launch", "recording every channel into " + plan.log_file + " (" + plan.log_tool + ")");
     // Give the logger time to subscribe before anyone publishes.
     const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(700);
     while (std::chrono::steady_clock::now() < until) sup.pump(50);
@@ -303,7 +308,7 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
       reported[i] = true;
       const bool ok = WIFEXITED(c.status) && WEXITSTATUS(c.status) == 0;
       if (c.is_logger) {
-        sup.print("launch", "lcm-logger died (" + describe(c.status) + "): the run is not being recorded");
+        sup.print("launch", plan.log_tool + " died (" + describe(c.status) + "): the run is not being recorded");
         rc = 1;
         reason = "logger died";
       } else if (ok && c.ends_run) {

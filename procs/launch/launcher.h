@@ -20,6 +20,7 @@ struct Plan {
   std::string name;
   std::string lcm_url;
   bool log_enabled = true;
+  std::string log_tool = "omnislam-record";  ///< omnislam-record | lcm-logger
   std::string log_file;  ///< full path of the lcm-logger output
   std::vector<ProcessSpec> processes;
   double stop_grace_s = 5.0;   ///< SIGINT, then SIGKILL after this

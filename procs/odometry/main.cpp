@@ -39,6 +39,8 @@ int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed) {
   sim::OdometrySimulator odo(world.odometry_noise, seed);
   int64_t seq = 0, last_utime = 0;
   Pose2 last;
+  lcmio::InputOptions truth_opt;
+  truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
   node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
     const Pose2 now = odo.step(Pose2{p.x_m, p.y_m, p.theta_rad});
     double v = 0.0, w = 0.0;
@@ -51,7 +53,7 @@ int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed) {
     node.publish(channels::kOdometry, makeMsg(p.utime, seq++, now, v, w));
     last = now;
     last_utime = p.utime;
-  });
+  }, truth_opt);
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
   std::cerr << node.tag() << "simulating odometry of '" << world.name << "', seed " << seed << ": scale error "
             << odo.scaleError() << ", heading drift " << odo.headingDrift_rad_per_m() << " rad/m" << std::endl;

@@ -73,16 +73,21 @@ TEST(Launcher, SigintStopsEveryProcessCleanly) {
   EXPECT_EQ(r.output.find("did not stop"), std::string::npos) << r.output;
 }
 
-TEST(Launcher, RecordsTheBusWithLcmLogger) {
+TEST(Launcher, RecordsTheBusWithLcmLoggerOrOmnislamRecord) {
+  for (const std::string tool : {"lcm-logger", "omnislam-record"}) {
   t::TempDir dir;
-  const auto file = launchFile(dir, "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '1.5', --period, '0.1'], ends_run: true}\n");
+  const std::string path = dir.file("launch.yaml");
+  std::ofstream(path) << "name: unit\nlogger: {tool: " << tool << "}\nprocesses:\n"
+                      << "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '1.5', --period, '0.1'], ends_run: true}\n";
   const std::string log = dir.file("rec.lcm");
-  const auto r = t::run({t::binPath("omnislam-launch"), file, "--log-file", log, "--url", t::privateUdpUrl(4)}, 30);
+  const auto r = t::run({t::binPath("omnislam-launch"), path, "--log-file", log, "--url", t::privateUdpUrl(4)}, 30);
+  EXPECT_NE(r.output.find("(" + tool + ")"), std::string::npos) << r.output;
   EXPECT_EQ(r.exit_code, 0) << r.output;
   ASSERT_TRUE(std::filesystem::exists(log)) << r.output;
   const auto stat = t::run({t::binPath("omnislam-logstat"), log}, 10);
   EXPECT_NE(stat.output.find("SLAM_MAP"), std::string::npos) << stat.output;
   EXPECT_NE(stat.output.find("OMNI_FEATURES"), std::string::npos) << stat.output;
+  }
 }
 
 TEST(Launcher, BadLaunchFilesNameTheKey) {

@@ -1,0 +1,101 @@
+// Candidate landmarks and their delayed initialisation (paper 000, Sec. III-F): stored bearing
+// rays, cross-points of pairs of rays, validity, NZ_min / NCROSS_valid, the initial mean and
+// covariance Sigma_0 and type I/II, and the level-2 association likelihood p(z | x_t, C_j).
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "omnislam/core/pose2.h"
+#include "omnislam/core/slam/bearing_model.h"
+#include "omnislam/core/slam/types.h"
+
+namespace omnislam::slam {
+
+struct CandidateOptions {
+  int nz_min = 3;        ///< NZ_Min: measurements a candidate needs before it can be initialised
+  int ncross_valid = 5;  ///< NCROSS_VALID: valid cross-points needed
+  /// ANG_Min [rad]: least parallax (angle subtended at the cross-point by the two camera centres,
+  /// = angle between the two rays). The paper prints "1.22 rad (7 deg)"; 7 deg = 0.122 rad is the
+  /// value that makes sense for lights 4.7-28 m away seen from 0.27 m steps (docs/slam-core.md).
+  double min_parallax_rad = 0.122;
+  /// Validity b): the cross-point must lie above the optical centres (ceiling lights). Disable for
+  /// cameras whose landmarks may lie below them.
+  bool require_above_camera = true;
+  double min_height_above_camera_m = 0.0;  ///< margin of validity b) [m]
+  /// D_Min [m]: a landmark is type I when initialised from robot poses closer than this (x-y) to it.
+  double d_min_m = 8.0;
+  /// Sigma_0 diagonal [m^2]: the paper's diag(0.0025, 0.0025) extended to z.
+  Eigen::Vector3d initial_cov_diag_m2 = Eigen::Vector3d::Constant(0.0025);
+  /// When true Sigma_0 = (sum_i H_m,i^T Q_i^-1 H_m,i)^-1 + diag(initial_cov_diag_m2): the
+  /// triangulation covariance of the chosen point given the candidate's rays, plus the paper's
+  /// Sigma_0 as a floor. When false, Sigma_0 = diag(initial_cov_diag_m2) (the paper).
+  bool initial_cov_from_triangulation = true;
+  /// Refine the chosen cross-point by Gauss-Newton on all the candidate's rays (the maximum-
+  /// likelihood triangulation) before initialising; kept only if the likelihood improves and the
+  /// point stays above the cameras. The paper uses the cross-point itself (false); a single pair's
+  /// midpoint is biased towards the cameras when ANG_min selects noise-enlarged parallaxes.
+  bool refine_initial_point = true;
+  int refine_iterations = 5;  ///< Gauss-Newton iterations of the refinement
+  /// Rays kept per candidate (the oldest is dropped beyond this; bounds the O(n^3) evaluation).
+  int max_observations = 16;
+
+  /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
+  std::string validate() const;
+};
+
+/// One measurement stored in a candidate, with the particle pose it was taken from.
+struct CandidateObservation {
+  Pose2 T_WtoR;
+  Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();
+  MeasVec z;  ///< measured bearing (robot-parallel axes)
+  MeasMat Q;  ///< its covariance Q_t
+  Eigen::Vector3d p_CinW_m = Eigen::Vector3d::Zero();  ///< optical centre in W (z = 0 for lines)
+  Eigen::Vector3d dir_W = Eigen::Vector3d::UnitX();    ///< unit ray direction in W (horizontal for lines)
+};
+
+CandidateObservation makeObservation(LandmarkKind kind, const Pose2& T_WtoR, const Eigen::Vector3d& p_CinR_m,
+                                     const MeasVec& z, const MeasMat& Q);
+
+/// C_j of paper 000: its rays and counters, plus the current best estimate used for association.
+struct Candidate {
+  LandmarkKind kind = LandmarkKind::kPoint3D;
+  std::vector<CandidateObservation> observations;  ///< oldest first
+  int num_associated = 0;      ///< NZ_j: measurements associated along time (including dropped)
+  int counter = 1;             ///< i_j: +1 per association, -I_not per missed step, deleted at <= 0
+  int consecutive_misses = 0;  ///< I_not
+  bool has_estimate = false;   ///< a valid cross-point exists
+  Eigen::Vector3d estimate_W_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d estimate_cov_m2 = Eigen::Matrix3d::Identity();
+};
+
+struct CandidateEvaluation {
+  int num_cross_points = 0;        ///< pairs with a non-degenerate cross-point in front of both cameras
+  int num_valid = 0;               ///< those meeting validity a), b), c)
+  bool valid_with_latest = false;  ///< a valid cross-point uses the newest observation
+  bool ready = false;              ///< NZ_j >= NZ_min, num_valid >= NCROSS_valid, valid_with_latest
+  bool has_best = false;           ///< a valid cross-point exists
+  Eigen::Vector3d best_p_LinW_m = Eigen::Vector3d::Zero();  ///< valid cross-point of highest likelihood
+  double best_log_likelihood = 0.0;  ///< sum over the observations of log N(z_i; h(X, x_i), Q_i)
+  Eigen::Matrix3d cov_m2 = Eigen::Matrix3d::Identity();  ///< Sigma_0 for best_p_LinW_m
+  LandmarkType type = LandmarkType::kTypeII;
+};
+
+/// Computes every cross-point of pairs of the candidate's rays and their validity:
+/// a) parallax > min_parallax_rad; b) (points, if required) above both optical centres;
+/// c) every observation i has (z_i - h(X, x_i))^T Q_i^-1 (...) < p_new_mahalanobis_sq, i.e. its
+///    probability exceeds its P_New. Type I when both poses of the best pair are within d_min_m (x-y).
+CandidateEvaluation evaluateCandidate(const Candidate& candidate, const CandidateOptions& options,
+                                      double p_new_mahalanobis_sq);
+
+/// log p(z | x_t, C) for the level-2 association. With an estimate X (a valid cross-point):
+/// N(z; h(X, x_t), Q + H_m Sigma_X H_m^T). Without: the ray of the newest observation is
+/// intersected with the measured ray; zhat = h(point on the candidate ray, x_t), covariance
+/// Q + (s_cand / range_now)^2 Q_cand; parallel or diverging rays predict the ray's direction
+/// (point at infinity) with Q + Q_cand. -infinity when undefined.
+double candidateLogLikelihood(const Candidate& candidate, const MeasVec& z, const MeasMat& Q, const Pose2& x_t,
+                              const Eigen::Vector3d& p_CinR_m);
+
+}  // namespace omnislam::slam

@@ -1,0 +1,147 @@
+// Bearing-only FastSLAM 2.0 for omnidirectional cameras (paper 000, Alg. 1-4): per-particle
+// FastSLAM 2.0 proposal, hierarchical Hungarian (or ML) data association against landmarks then
+// candidates, landmark EKFs, delayed initialisation, types I/II, low-variance resampling.
+// Pure library: Eigen and the standard library; deterministic for a given seed.
+//
+// State per particle: robot pose x = (x_m, y_m, theta_rad) of R in W; a copy-on-write map of
+// landmarks (3D mean in W, 3x3 covariance, counter i_j, type); candidate landmarks (their rays).
+// Motion: motion_model.h (R_t from cumulative odometry). Measurement: bearing_model.h, chosen by
+// landmark kind. Glossary: Q_t measurement covariance, Q_{j,l} innovation covariance, P_new the
+// likelihood of a new landmark, ESS effective sample size. Choices: docs/slam-core.md.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "omnislam/core/pose2.h"
+#include "omnislam/core/slam/bearing_model.h"
+#include "omnislam/core/slam/candidate.h"
+#include "omnislam/core/slam/data_association.h"
+#include "omnislam/core/slam/landmark_map.h"
+#include "omnislam/core/slam/motion_model.h"
+#include "omnislam/core/slam/perception.h"
+#include "omnislam/core/slam/random.h"
+#include "omnislam/core/slam/types.h"
+
+namespace omnislam::slam {
+
+struct FastSlamOptions {
+  int num_particles = 10;  ///< M (paper: 10)
+  AssociationMethod association = AssociationMethod::kHungarian;
+  /// P_New = (2 pi)^(-dim/2) |Q_l,t|^(-1/2) exp(-p_new_mahalanobis_sq / 2); the paper uses 64.
+  double p_new_mahalanobis_sq = 64.0;
+  /// Resample when ESS < fraction * M; 1.0 (default, the paper) resamples at every step.
+  double resample_ess_fraction = 1.0;
+  /// Raise the azimuth variance to var(el) / cos^2(el) (isotropic angular noise near the zenith).
+  bool inflate_azimuth_near_zenith = true;
+  /// Alg. 4 line 14 evaluates the weight at the sampled pose x_t (paper, false). true: at the
+  /// predicted pose xhat_t as in FastSLAM 2.0 (Probabilistic Robotics Table 13.3).
+  bool weight_at_predicted_pose = false;
+  /// Multiply the weight by P_new for each measurement not associated with a map landmark
+  /// (FastSLAM's new-landmark likelihood; the paper does not, false).
+  bool weight_unassociated_with_p_new = false;
+  double map_cell_size_m = 4.0;  ///< grid cell of the copy-on-write map [m]
+  /// Benchmark baseline only: resampling deep-copies every map and candidate (no sharing).
+  bool resample_deep_copy = false;
+  MotionNoiseOptions motion;
+  PerceptionOptions perception;
+  CandidateOptions candidates;
+
+  /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
+  std::string validate() const;
+};
+
+/// One particle k of Y_t.
+struct Particle {
+  Pose2 pose;
+  double log_weight = 0.0;  ///< log w^k, up to a common constant
+  LandmarkMap map;
+  std::vector<std::shared_ptr<const Candidate>> candidates;  ///< shared copy-on-write
+};
+
+struct StepResult {
+  int num_measurements = 0;  ///< accepted measurements
+  int num_rejected = 0;      ///< measurements rejected (non-finite values, covariance not PD)
+  double ess = 0.0;          ///< effective sample size of this step's weights (before resampling)
+  bool resampled = false;
+  bool weights_degenerate = false;  ///< no finite weight: reset to uniform
+  int best_particle = 0;            ///< index of the best particle after this step
+  // Of the best particle (highest weight before resampling):
+  std::vector<std::int64_t> landmark_of_measurement;  ///< per input measurement: landmark id, -1 otherwise
+  int num_associated = 0;      ///< measurements associated with map landmarks
+  int num_to_candidates = 0;   ///< measurements associated with existing candidates
+  int num_new_candidates = 0;  ///< candidates created
+  int num_initialised = 0;     ///< candidates turned into landmarks
+  int num_deleted = 0;         ///< landmarks deleted (counter < 0)
+  std::size_t num_landmarks = 0;
+  std::size_t num_candidates = 0;
+};
+
+/// Memory held by the particle set, counting shared storage once.
+struct StorageStats {
+  std::size_t num_particles = 0;
+  std::size_t unique_bytes = 0;       ///< maps + candidates + particle records, shared parts once
+  std::size_t deep_copy_bytes = 0;    ///< what M independent vector-of-landmark maps would hold
+  double bytesPerParticle() const { return num_particles ? double(unique_bytes) / double(num_particles) : 0.0; }
+};
+
+class FastSlam {
+ public:
+  /// Throws std::invalid_argument with options.validate()'s message when the options are invalid.
+  FastSlam(const FastSlamOptions& options, std::uint64_t seed);
+
+  /// All particles at `start` (sampled from N(start, start_cov) when start_cov is non-zero), with an
+  /// optional prior map shared by all particles (ids kept; new ids continue after the largest).
+  void initialise(const Pose2& start, const std::vector<Landmark>& prior_map = {},
+                  const Eigen::Matrix3d& start_cov = Eigen::Matrix3d::Zero());
+  bool initialised() const { return !particles_.empty(); }
+
+  /// One step of Alg. 1 with the odometry poses of the previous and the current frame and the
+  /// current frame's measurements. Throws std::logic_error before initialise().
+  StepResult step(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z);
+
+  /// Odometry-only step (no image): every particle samples the motion model; weights, maps and
+  /// candidates are unchanged.
+  void predictOnly(const Pose2& odom_prev, const Pose2& odom_now);
+
+  // --- Results -------------------------------------------------------------------------------
+  int bestParticleIndex() const { return best_index_; }
+  const Particle& bestParticle() const { return particles_.at(best_index_); }
+  /// The best particle's landmarks, sorted by id.
+  std::vector<Landmark> bestMap() const;
+  std::size_t bestCandidateCount() const { return bestParticle().candidates.size(); }
+  /// Weighted mean of the particle poses (circular mean for theta) and its 3x3 covariance.
+  Pose2 meanPose() const;
+  Eigen::Matrix3d poseCovariance() const;
+  double ess() const { return ess_; }  ///< ESS of the last step's weights
+  std::vector<Pose2> particlePoses() const;
+  const std::vector<double>& particleWeights() const { return weights_; }  ///< normalised
+  const std::vector<Particle>& particles() const { return particles_; }
+  StorageStats storageStats() const;
+  const FastSlamOptions& options() const { return options_; }
+  std::uint64_t numSteps() const { return num_steps_; }
+
+ private:
+  struct Meas;                // a validated measurement (filter internal)
+  struct ParticleStepInfo;    // what one particle did in a step
+  ParticleStepInfo processParticle(Particle& p, const Pose2& u, const std::vector<Meas>& Z,
+                                   const Eigen::Vector3d& p_CinR_vis_m);
+  void updateCandidates(Particle& p, const Pose2& x_t, const std::vector<Meas>& Z, const std::vector<int>& leftover,
+                        std::vector<Landmark>& inserts, ParticleStepInfo& info);
+  void finishStep(StepResult& result, const std::vector<ParticleStepInfo>& infos);
+
+  FastSlamOptions options_;
+  Rng rng_;
+  std::vector<Particle> particles_;
+  std::vector<double> weights_;
+  double ess_ = 0.0;
+  int best_index_ = 0;
+  std::uint64_t next_landmark_id_ = 0;
+  std::uint64_t num_steps_ = 0;
+  Eigen::Vector3d last_p_CinR_m_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace omnislam::slam

@@ -1,0 +1,48 @@
+// Motion model of a differential-drive robot driven by cumulative odometry (paper 000, Alg. 1
+// line 3: xhat_t = g(x_{t-1}, u_t), and the motion noise R_t used by Alg. 2 and Alg. 3).
+//
+// u_t = odom_prev^-1 * odom_now = (dx, dy, dtheta) in the previous robot frame (docs/conventions.md).
+// g(x, u) = x * u  (Pose2 composition).  Noise is added to u in the previous robot frame:
+//   d = hypot(dx, dy), a = |dtheta|, chord direction alpha = atan2(dy, dx)
+//   sigma_long^2  = (trans_sigma_per_m d)^2 + (trans_sigma_per_rad a)^2 + min_sigma_xy_m^2   (along the chord)
+//   sigma_lat^2   = (lateral_sigma_per_m d)^2 + (trans_sigma_per_rad a)^2 + min_sigma_xy_m^2 (across it)
+//   sigma_theta^2 = (rot_sigma_per_rad a)^2 + (rot_sigma_per_m d)^2 + min_sigma_theta_rad^2
+//   Sigma_u = blockdiag(Rz(alpha) diag(sigma_long^2, sigma_lat^2) Rz(alpha)^T, sigma_theta^2)
+//   R_t = J_u Sigma_u J_u^T with J_u = d g / d u = blockdiag(Rz(theta_{t-1}), 1)   (exact: g is linear in u)
+// Standard deviations grow linearly with distance and rotation (as odometry errors from wheel radius
+// and wheel-base errors do over one step); the floors keep R_t invertible when the robot stands still.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+
+#include "omnislam/core/pose2.h"
+
+namespace omnislam::slam {
+
+struct MotionNoiseOptions {
+  double trans_sigma_per_m = 0.05;     ///< along-track std per metre travelled [m/m] (5 %)
+  double lateral_sigma_per_m = 0.02;   ///< cross-track std per metre travelled [m/m]
+  double trans_sigma_per_rad = 0.01;   ///< translation std per radian turned [m/rad]
+  double rot_sigma_per_rad = 0.05;     ///< heading std per radian turned [rad/rad] (5 %)
+  double rot_sigma_per_m = 0.01;       ///< heading std per metre travelled [rad/m] (0.57 deg/m)
+  double min_sigma_xy_m = 0.002;       ///< floor of both translation stds [m], > 0
+  double min_sigma_theta_rad = 0.002;  ///< floor of the heading std [rad], > 0
+
+  /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
+  std::string validate() const;
+};
+
+/// u = odom_prev^-1 * odom_now: the relative motion in the previous robot frame.
+Pose2 odometryIncrement(const Pose2& odom_prev, const Pose2& odom_now);
+
+/// Sigma_u: covariance of the increment (dx, dy, dtheta) in the previous robot frame.
+Eigen::Matrix3d incrementCovariance(const Pose2& u, const MotionNoiseOptions& options);
+
+/// g(x, u) = x * u; J_x_u (3x3, d g / d u) is filled when non-null.
+Pose2 predictPose(const Pose2& x_prev, const Pose2& u, Eigen::Matrix3d* J_x_u = nullptr);
+
+/// R_t = J_u Sigma_u J_u^T: covariance of x_t around g(x_prev, u) in W [m^2, rad^2].
+Eigen::Matrix3d motionCovariance(const Pose2& x_prev, const Pose2& u, const MotionNoiseOptions& options);
+
+}  // namespace omnislam::slam

@@ -1,0 +1,110 @@
+// Bearing measurement model h and its Jacobians (paper 000, Sec. III-A; equations in the header).
+#include "omnislam/core/slam/bearing_model.h"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+#include <limits>
+
+namespace omnislam::slam {
+
+Eigen::Vector3d cameraCentreInWorld(const Pose2& T_WtoR, const Eigen::Vector3d& p_CinR_m) {
+  const double c = std::cos(T_WtoR.theta_rad), s = std::sin(T_WtoR.theta_rad);
+  return {T_WtoR.x_m + c * p_CinR_m.x() - s * p_CinR_m.y(), T_WtoR.y_m + s * p_CinR_m.x() + c * p_CinR_m.y(),
+          p_CinR_m.z()};
+}
+
+Eigen::Vector3d bearingDirectionInWorld(double azimuth_rad, double elevation_rad, double theta_rad) {
+  return unitOf(Bearing{azimuth_rad + theta_rad, elevation_rad});
+}
+
+std::optional<Eigen::Vector2d> predictBearing(const Eigen::Vector3d& p_LinW_m, const Pose2& T_WtoR,
+                                              const Eigen::Vector3d& p_CinR_m, Eigen::Matrix<double, 2, 3>* J_z_pose,
+                                              Eigen::Matrix<double, 2, 3>* J_z_landmark) {
+  const double c = std::cos(T_WtoR.theta_rad), s = std::sin(T_WtoR.theta_rad);
+  // d' = Rz^T (p_LinW - t): landmark in R; d = d' - p_CinR: direction from the optical centre.
+  const double ex = p_LinW_m.x() - T_WtoR.x_m, ey = p_LinW_m.y() - T_WtoR.y_m;
+  const double dpx = c * ex + s * ey, dpy = -s * ex + c * ey;
+  const Eigen::Vector3d d(dpx - p_CinR_m.x(), dpy - p_CinR_m.y(), p_LinW_m.z() - p_CinR_m.z());
+  const double rho2 = d.x() * d.x() + d.y() * d.y();
+  const double rho = std::sqrt(rho2);
+  if (!(rho >= kMinHorizontalRange_m)) return std::nullopt;
+  const Eigen::Vector2d z(std::atan2(d.y(), d.x()), std::atan2(d.z(), rho));
+  if (J_z_pose == nullptr && J_z_landmark == nullptr) return z;
+
+  const double r2 = rho2 + d.z() * d.z();
+  Eigen::Matrix<double, 2, 3> J_z_d;  // d z / d d
+  J_z_d << -d.y() / rho2, d.x() / rho2, 0.0,  //
+      -d.z() * d.x() / (rho * r2), -d.z() * d.y() / (rho * r2), rho / r2;
+  Eigen::Matrix3d RzT;  // d d / d p_LinW
+  RzT << c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0;
+  if (J_z_landmark != nullptr) *J_z_landmark = J_z_d * RzT;  // 2x3 * 3x3
+  if (J_z_pose != nullptr) {
+    Eigen::Matrix3d J_d_pose;  // columns: d/dx, d/dy, d/dtheta
+    J_d_pose.col(0) = -RzT.col(0);
+    J_d_pose.col(1) = -RzT.col(1);
+    J_d_pose.col(2) << dpy, -dpx, 0.0;
+    *J_z_pose = J_z_d * J_d_pose;  // 2x3 * 3x3
+  }
+  return z;
+}
+
+int measurementDim(LandmarkKind kind) { return kind == LandmarkKind::kVerticalLine ? 1 : 2; }
+
+std::optional<MeasVec> predictMeasurement(LandmarkKind kind, const Eigen::Vector3d& p_LinW_m, const Pose2& T_WtoR,
+                                          const Eigen::Vector3d& p_CinR_m, MeasJac* J_z_pose, MeasJac* J_z_landmark) {
+  Eigen::Matrix<double, 2, 3> Jp, Jl;
+  const auto z = predictBearing(p_LinW_m, T_WtoR, p_CinR_m, J_z_pose ? &Jp : nullptr, J_z_landmark ? &Jl : nullptr);
+  if (!z) return std::nullopt;
+  const int dim = measurementDim(kind);
+  MeasVec out = z->head(dim);
+  if (J_z_pose) *J_z_pose = Jp.topRows(dim);
+  if (J_z_landmark) *J_z_landmark = Jl.topRows(dim);  // azimuth row: zero column for z already
+  return out;
+}
+
+MeasVec measurementVector(const BearingMeasurement& m) {
+  const int dim = measurementDim(m.kind);
+  MeasVec z(dim);
+  z(0) = m.azimuth_rad;
+  if (dim == 2) z(1) = m.elevation_rad;
+  return z;
+}
+
+MeasMat measurementCovariance(const BearingMeasurement& m, bool inflate_azimuth_near_zenith) {
+  const int dim = measurementDim(m.kind);
+  MeasMat Q = m.cov_rad2.topLeftCorner(dim, dim);
+  if (dim == 2 && inflate_azimuth_near_zenith) {
+    const double ce = std::cos(m.elevation_rad);
+    const double floor_var = ce * ce * kPi * kPi > m.cov_rad2(1, 1) ? m.cov_rad2(1, 1) / (ce * ce) : kPi * kPi;
+    if (Q(0, 0) < floor_var) {
+      // Keep the correlation coefficient while raising the azimuth variance.
+      const double scale = Q(0, 0) > 0.0 ? std::sqrt(floor_var / Q(0, 0)) : 0.0;
+      Q(0, 1) *= scale;
+      Q(1, 0) *= scale;
+      Q(0, 0) = floor_var;
+    }
+  }
+  return Q;
+}
+
+MeasVec innovation(const MeasVec& z, const MeasVec& zhat) {
+  MeasVec r(z.size());
+  for (Eigen::Index i = 0; i < z.size(); ++i) r(i) = wrapAngle(z(i) - zhat(i));
+  return r;
+}
+
+double logGaussian(const MeasVec& r, const MeasMat& S, double* mahalanobis_sq) {
+  const Eigen::LLT<MeasMat> llt(S);
+  if (llt.info() != Eigen::Success) {
+    if (mahalanobis_sq) *mahalanobis_sq = std::numeric_limits<double>::infinity();
+    return -std::numeric_limits<double>::infinity();
+  }
+  const MeasVec y = llt.matrixL().solve(r);
+  const double m2 = y.squaredNorm();
+  double log_det = 0.0;
+  for (Eigen::Index i = 0; i < S.rows(); ++i) log_det += 2.0 * std::log(llt.matrixL()(i, i));
+  if (mahalanobis_sq) *mahalanobis_sq = m2;
+  return -0.5 * (static_cast<double>(r.size()) * std::log(2.0 * kPi) + log_det + m2);
+}
+
+}  // namespace omnislam::slam

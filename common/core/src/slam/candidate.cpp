@@ -1,0 +1,224 @@
+// Candidate landmarks: cross-points, validity and initialisation (paper 000, Sec. III-F 1), and
+// the level-2 association likelihood. Equations and choices are stated in candidate.h.
+#include "omnislam/core/slam/candidate.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "omnislam/core/slam/triangulation.h"
+#include "omnislam/core/slam/validation.h"
+
+namespace omnislam::slam {
+
+std::string CandidateOptions::validate() const {
+  const double inf = std::numeric_limits<double>::infinity();
+  detail::FieldChecker c;
+  c.inClosed("nz_min", nz_min, 2, 1e6)
+      .inClosed("ncross_valid", ncross_valid, 1, 1e6)
+      .inRightOpen("min_parallax_rad", min_parallax_rad, 0.0, kPi)
+      .inClosed("min_height_above_camera_m", min_height_above_camera_m, -inf, inf)
+      .inLeftOpen("d_min_m", d_min_m, 0.0, inf)
+      .inLeftOpen("initial_cov_diag_m2.x", initial_cov_diag_m2.x(), 0.0, inf)
+      .inLeftOpen("initial_cov_diag_m2.y", initial_cov_diag_m2.y(), 0.0, inf)
+      .inLeftOpen("initial_cov_diag_m2.z", initial_cov_diag_m2.z(), 0.0, inf)
+      .inClosed("refine_iterations", refine_iterations, 0, 100)
+      .inClosed("max_observations", max_observations, 2, 1000);
+  // NCROSS_valid cross-points need enough pairs among the kept rays.
+  c.require(static_cast<long>(max_observations) * (max_observations - 1) / 2 >= ncross_valid, "max_observations",
+            "must give at least ncross_valid pairs: n (n - 1) / 2 >= ncross_valid");
+  return c.message();
+}
+
+CandidateObservation makeObservation(LandmarkKind kind, const Pose2& T_WtoR, const Eigen::Vector3d& p_CinR_m,
+                                     const MeasVec& z, const MeasMat& Q) {
+  CandidateObservation o;
+  o.T_WtoR = T_WtoR;
+  o.p_CinR_m = p_CinR_m;
+  o.z = z;
+  o.Q = Q;
+  o.p_CinW_m = cameraCentreInWorld(T_WtoR, p_CinR_m);
+  if (kind == LandmarkKind::kVerticalLine) {
+    o.p_CinW_m.z() = 0.0;
+    const double a = z(0) + T_WtoR.theta_rad;
+    o.dir_W = Eigen::Vector3d(std::cos(a), std::sin(a), 0.0);
+  } else {
+    o.dir_W = bearingDirectionInWorld(z(0), z(1), T_WtoR.theta_rad);
+  }
+  return o;
+}
+
+namespace {
+
+double xyDistance(const Pose2& T, const Eigen::Vector3d& p) { return std::hypot(p.x() - T.x_m, p.y() - T.y_m); }
+
+// Sigma_0 for the point X given the candidate's rays.
+Eigen::Matrix3d initialCovariance(const Candidate& c, const Eigen::Vector3d& X, const CandidateOptions& o) {
+  Eigen::Matrix3d cov = o.initial_cov_diag_m2.asDiagonal();
+  if (!o.initial_cov_from_triangulation) return cov;
+  Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
+  for (const auto& ob : c.observations) {
+    MeasJac Hm;
+    if (!predictMeasurement(c.kind, X, ob.T_WtoR, ob.p_CinR_m, nullptr, &Hm)) continue;
+    const Eigen::LLT<MeasMat> llt(ob.Q);
+    if (llt.info() != Eigen::Success) continue;
+    const MeasJac W = llt.matrixL().solve(Hm);  // L^-1 H_m: info += H_m^T Q^-1 H_m = W^T W
+    info += W.transpose() * W;
+  }
+  if (c.kind == LandmarkKind::kVerticalLine) {
+    const Eigen::LLT<Eigen::Matrix2d> llt(info.topLeftCorner<2, 2>());
+    if (llt.info() == Eigen::Success) cov.topLeftCorner<2, 2>() += llt.solve(Eigen::Matrix2d::Identity());
+    return cov;
+  }
+  const Eigen::LLT<Eigen::Matrix3d> llt(info);
+  if (llt.info() != Eigen::Success) return cov;
+  const Eigen::Matrix3d tri = llt.solve(Eigen::Matrix3d::Identity());
+  if (!tri.allFinite()) return cov;
+  cov += 0.5 * (tri + tri.transpose());
+  return cov;
+}
+
+double totalLogLikelihood(const Candidate& c, const Eigen::Vector3d& X) {
+  double sum = 0.0;
+  for (const auto& oi : c.observations) {
+    const auto zhat = predictMeasurement(c.kind, X, oi.T_WtoR, oi.p_CinR_m);
+    if (!zhat) return -std::numeric_limits<double>::infinity();
+    sum += logGaussian(innovation(oi.z, *zhat), oi.Q);
+  }
+  return sum;
+}
+
+// Gauss-Newton on sum_i |z_i - h(X, x_i)|^2_{Q_i^-1}, starting from X0; returns the improved point
+// or X0. Vertical lines move in x-y only.
+Eigen::Vector3d refinePoint(const Candidate& c, const Eigen::Vector3d& X0, double ll0, const CandidateOptions& o) {
+  Eigen::Vector3d X = X0;
+  double ll = ll0;
+  const bool line = c.kind == LandmarkKind::kVerticalLine;
+  double min_cam_z = -std::numeric_limits<double>::infinity();
+  for (const auto& oi : c.observations) min_cam_z = std::max(min_cam_z, oi.p_CinW_m.z());
+  for (int it = 0; it < o.refine_iterations; ++it) {
+    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (const auto& oi : c.observations) {
+      MeasJac Hm;
+      const auto zhat = predictMeasurement(c.kind, X, oi.T_WtoR, oi.p_CinR_m, nullptr, &Hm);
+      if (!zhat) return ll > ll0 ? X : X0;
+      const Eigen::LLT<MeasMat> llt(oi.Q);
+      const MeasJac QinvH = llt.solve(Hm);
+      A += Hm.transpose() * QinvH;
+      g += QinvH.transpose() * innovation(oi.z, *zhat);
+    }
+    Eigen::Vector3d dx = Eigen::Vector3d::Zero();
+    if (line) {
+      const Eigen::LLT<Eigen::Matrix2d> llt(A.topLeftCorner<2, 2>());
+      if (llt.info() != Eigen::Success) break;
+      dx.head<2>() = llt.solve(g.head<2>());
+    } else {
+      const Eigen::LLT<Eigen::Matrix3d> llt(A);
+      if (llt.info() != Eigen::Success) break;
+      dx = llt.solve(g);
+    }
+    const Eigen::Vector3d Xn = X + dx;
+    if (!line && o.require_above_camera && !(Xn.z() > min_cam_z + o.min_height_above_camera_m)) break;
+    const double lln = totalLogLikelihood(c, Xn);
+    if (!(lln > ll)) break;
+    X = Xn;
+    ll = lln;
+    if (dx.norm() < 1e-6) break;
+  }
+  return X;
+}
+
+}  // namespace
+
+CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions& o, double p_new_mahalanobis_sq) {
+  CandidateEvaluation ev;
+  const int n = static_cast<int>(c.observations.size());
+  if (n < 2) return ev;
+  const bool point = c.kind == LandmarkKind::kPoint3D;
+  int best_a = -1, best_b = -1;
+  for (int a = 0; a < n; ++a) {
+    const auto& oa = c.observations[a];
+    for (int b = a + 1; b < n; ++b) {
+      const auto& ob = c.observations[b];
+      const auto x = crossPointOfRays(oa.p_CinW_m, oa.dir_W, ob.p_CinW_m, ob.dir_W);
+      if (!x || !(x->depth1_m > 0.0) || !(x->depth2_m > 0.0)) continue;
+      ++ev.num_cross_points;
+      if (!(x->parallax_rad > o.min_parallax_rad)) continue;  // a)
+      if (point && o.require_above_camera &&
+          !(x->p_XinW_m.z() > std::max(oa.p_CinW_m.z(), ob.p_CinW_m.z()) + o.min_height_above_camera_m)) {
+        continue;  // b)
+      }
+      double sum_ll = 0.0;
+      bool ok = true;
+      for (const auto& oi : c.observations) {  // c)
+        const auto zhat = predictMeasurement(c.kind, x->p_XinW_m, oi.T_WtoR, oi.p_CinR_m);
+        double m2 = 0.0;
+        if (!zhat) {
+          ok = false;
+          break;
+        }
+        const double ll = logGaussian(innovation(oi.z, *zhat), oi.Q, &m2);
+        if (!(m2 < p_new_mahalanobis_sq)) {
+          ok = false;
+          break;
+        }
+        sum_ll += ll;
+      }
+      if (!ok) continue;
+      ++ev.num_valid;
+      if (b == n - 1) ev.valid_with_latest = true;
+      if (!ev.has_best || sum_ll > ev.best_log_likelihood) {
+        ev.has_best = true;
+        ev.best_log_likelihood = sum_ll;
+        ev.best_p_LinW_m = x->p_XinW_m;
+        best_a = a;
+        best_b = b;
+      }
+    }
+  }
+  ev.ready = c.num_associated >= o.nz_min && ev.num_valid >= o.ncross_valid && ev.valid_with_latest;
+  if (ev.ready && o.refine_initial_point) {
+    ev.best_p_LinW_m = refinePoint(c, ev.best_p_LinW_m, ev.best_log_likelihood, o);
+  }
+  if (ev.has_best) {
+    ev.cov_m2 = initialCovariance(c, ev.best_p_LinW_m, o);
+    const bool near = xyDistance(c.observations[best_a].T_WtoR, ev.best_p_LinW_m) < o.d_min_m &&
+                      xyDistance(c.observations[best_b].T_WtoR, ev.best_p_LinW_m) < o.d_min_m;
+    ev.type = near ? LandmarkType::kTypeI : LandmarkType::kTypeII;
+  }
+  return ev;
+}
+
+double candidateLogLikelihood(const Candidate& c, const MeasVec& z, const MeasMat& Q, const Pose2& x_t,
+                              const Eigen::Vector3d& p_CinR_m) {
+  const double ninf = -std::numeric_limits<double>::infinity();
+  if (c.observations.empty() || z.size() != measurementDim(c.kind)) return ninf;
+  if (c.has_estimate) {
+    MeasJac Hm;
+    const auto zhat = predictMeasurement(c.kind, c.estimate_W_m, x_t, p_CinR_m, nullptr, &Hm);
+    if (!zhat) return ninf;
+    const MeasMat S = Q + Hm * c.estimate_cov_m2 * Hm.transpose();  // dim x 3 * 3x3 * 3 x dim
+    return logGaussian(innovation(z, *zhat), S);
+  }
+  const CandidateObservation& o = c.observations.back();
+  const CandidateObservation now = makeObservation(c.kind, x_t, p_CinR_m, z, Q);
+  const auto x = crossPointOfRays(o.p_CinW_m, o.dir_W, now.p_CinW_m, now.dir_W, 1e-6);
+  if (x && x->depth1_m > 0.0 && x->depth2_m > 0.0) {
+    const Eigen::Vector3d P = o.p_CinW_m + x->depth1_m * o.dir_W;  // on the candidate's ray
+    const auto zhat = predictMeasurement(c.kind, P, x_t, p_CinR_m);
+    const double range_now = (P - now.p_CinW_m).norm();
+    if (zhat && range_now > 0.0) {
+      const double scale = x->depth1_m / range_now;
+      return logGaussian(innovation(z, *zhat), MeasMat(Q + scale * scale * o.Q));
+    }
+  }
+  // Point at infinity along the candidate's ray: its direction seen in the current robot axes.
+  MeasVec zhat(z.size());
+  zhat(0) = wrapAngle(std::atan2(o.dir_W.y(), o.dir_W.x()) - x_t.theta_rad);
+  if (zhat.size() == 2) zhat(1) = std::asin(std::clamp(o.dir_W.z(), -1.0, 1.0));
+  return logGaussian(innovation(z, zhat), MeasMat(Q + o.Q));
+}
+
+}  // namespace omnislam::slam

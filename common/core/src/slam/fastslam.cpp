@@ -1,0 +1,519 @@
+// FastSLAM 2.0 filter for bearing-only omnidirectional SLAM (paper 000, Alg. 1-4); see fastslam.h.
+#include "omnislam/core/slam/fastslam.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <unordered_set>
+
+#include "omnislam/core/slam/resampling.h"
+#include "omnislam/core/slam/validation.h"
+
+namespace omnislam::slam {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+Pose2 poseFromVec(const Eigen::Vector3d& v) { return Pose2::fromVec(v); }
+
+double xyDistance(const Pose2& T, const Eigen::Vector3d& p) { return std::hypot(p.x() - T.x_m, p.y() - T.y_m); }
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+std::string FastSlamOptions::validate() const {
+  detail::FieldChecker c;
+  c.inClosed("num_particles", num_particles, 1, 1e6)
+      .require(association == AssociationMethod::kHungarian || association == AssociationMethod::kMaximumLikelihood,
+               "association", "must be kHungarian or kMaximumLikelihood")
+      .inLeftOpen("p_new_mahalanobis_sq", p_new_mahalanobis_sq, 0.0, kInf)
+      .inClosed("resample_ess_fraction", resample_ess_fraction, 0.0, 1.0)
+      .inLeftOpen("map_cell_size_m", map_cell_size_m, 0.0, kInf)
+      .nested("motion", motion.validate())
+      .nested("perception", perception.validate())
+      .nested("candidates", candidates.validate());
+  return c.message();
+}
+
+struct FastSlam::Meas {
+  std::size_t input_index = 0;
+  LandmarkKind kind = LandmarkKind::kPoint3D;
+  MeasVec z;
+  MeasMat Q;
+  Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();
+  double neg_log_p_new = 0.0;  ///< -log P_new,l
+};
+
+struct FastSlam::ParticleStepInfo {
+  double log_w = 0.0;
+  std::vector<std::int64_t> landmark_of_measurement;  // per accepted measurement
+  int num_associated = 0, num_to_candidates = 0, num_new_candidates = 0, num_initialised = 0, num_deleted = 0;
+};
+
+FastSlam::FastSlam(const FastSlamOptions& options, std::uint64_t seed) : options_(options), rng_(seed) {
+  const std::string msg = options_.validate();
+  if (!msg.empty()) throw std::invalid_argument("FastSlamOptions: " + msg);
+  last_p_CinR_m_ = options_.perception.default_p_CinR_m;
+}
+
+void FastSlam::initialise(const Pose2& start, const std::vector<Landmark>& prior_map, const Eigen::Matrix3d& start_cov) {
+  LandmarkMap map(options_.map_cell_size_m);
+  map.apply({}, prior_map);
+  next_landmark_id_ = 0;
+  for (const auto& l : prior_map) next_landmark_id_ = std::max(next_landmark_id_, l.id + 1);
+  const bool sample = !start_cov.isZero(0.0);
+  particles_.assign(options_.num_particles, Particle{start, 0.0, map, {}});
+  for (auto& p : particles_) {
+    if (sample) p.pose = poseFromVec(rng_.gaussian3(start.vec(), start_cov));
+  }
+  weights_.assign(particles_.size(), 1.0 / static_cast<double>(particles_.size()));
+  ess_ = static_cast<double>(particles_.size());
+  best_index_ = 0;
+  num_steps_ = 0;
+}
+
+void FastSlam::predictOnly(const Pose2& odom_prev, const Pose2& odom_now) {
+  if (!initialised()) throw std::logic_error("FastSlam::predictOnly before initialise()");
+  const Pose2 u = odometryIncrement(odom_prev, odom_now);
+  for (auto& p : particles_) {
+    const Pose2 x_hat = predictPose(p.pose, u);
+    p.pose = poseFromVec(rng_.gaussian3(x_hat.vec(), motionCovariance(p.pose, u, options_.motion)));
+  }
+  ++num_steps_;
+}
+
+StepResult FastSlam::step(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z) {
+  if (!initialised()) throw std::logic_error("FastSlam::step before initialise()");
+  StepResult result;
+  const Pose2 u = odometryIncrement(odom_prev, odom_now);
+
+  // Validate and prepare the measurements (a bad one is skipped and counted, never thrown).
+  std::vector<Meas> Z;
+  Z.reserve(z.size());
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    const BearingMeasurement& m = z[i];
+    Meas q;
+    q.input_index = i;
+    q.kind = m.kind;
+    q.p_CinR_m = m.p_CinR_m;
+    q.z = measurementVector(m);
+    q.Q = measurementCovariance(m, options_.inflate_azimuth_near_zenith);
+    const bool kind_ok = m.kind == LandmarkKind::kPoint3D || m.kind == LandmarkKind::kVerticalLine;
+    const bool finite = std::isfinite(m.azimuth_rad) && q.z.allFinite() && q.Q.allFinite() && m.p_CinR_m.allFinite();
+    const bool el_ok = m.kind == LandmarkKind::kVerticalLine || std::abs(m.elevation_rad) <= kPi / 2;
+    const Eigen::LLT<MeasMat> llt(q.Q);
+    if (!kind_ok || !finite || !el_ok || llt.info() != Eigen::Success) {
+      ++result.num_rejected;
+      continue;
+    }
+    q.z(0) = wrapAngle(q.z(0));
+    double log_det = 0.0;
+    for (Eigen::Index d = 0; d < q.Q.rows(); ++d) log_det += 2.0 * std::log(llt.matrixL()(d, d));
+    q.neg_log_p_new =
+        0.5 * (static_cast<double>(q.z.size()) * std::log(2.0 * kPi) + log_det + options_.p_new_mahalanobis_sq);
+    Z.push_back(q);
+  }
+  result.num_measurements = static_cast<int>(Z.size());
+  if (!Z.empty()) last_p_CinR_m_ = Z.front().p_CinR_m;
+
+  std::vector<ParticleStepInfo> infos;
+  infos.reserve(particles_.size());
+  for (auto& p : particles_) infos.push_back(processParticle(p, u, Z, last_p_CinR_m_));
+
+  finishStep(result, infos);
+  // Per input measurement of the best particle.
+  const ParticleStepInfo& best = infos[result.best_particle];
+  result.landmark_of_measurement.assign(z.size(), -1);
+  for (std::size_t l = 0; l < Z.size(); ++l) result.landmark_of_measurement[Z[l].input_index] = best.landmark_of_measurement[l];
+  result.best_particle = best_index_;
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u, const std::vector<Meas>& Z,
+                                                     const Eigen::Vector3d& p_CinR_vis_m) {
+  const FastSlamOptions& o = options_;
+  const PerceptionOptions& per = o.perception;
+  ParticleStepInfo info;
+  const int nz = static_cast<int>(Z.size());
+  info.landmark_of_measurement.assign(nz, -1);
+
+  // Alg. 1 line 3: xhat_t = g(x_{t-1}, u_t) and R_t.
+  const Pose2 x_prev = p.pose;
+  const Pose2 x_hat = predictPose(x_prev, u);
+  const Eigen::Matrix3d R = motionCovariance(x_prev, u, o.motion);
+  const Eigen::Matrix3d R_inv = R.llt().solve(Eigen::Matrix3d::Identity());
+
+  // Landmarks that can be seen from xhat_t (widened window) enter the association matrix.
+  std::vector<LandmarkMap::Ref> near, vis;
+  {
+    const Eigen::Vector3d c = cameraCentreInWorld(x_hat, p_CinR_vis_m);
+    p.map.collectNear(c.x(), c.y(), horizontalReach_m(per, per.association_margin_m), near);
+    for (const auto& r : near) {
+      if (insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, x_hat, p_CinR_vis_m, per,
+                                per.association_margin_rad, per.association_margin_m)) {
+        vis.push_back(r);
+      }
+    }
+  }
+  const int nv = static_cast<int>(vis.size());
+
+  // Alg. 2: phi_{l,j} for every landmark-measurement pair, each with its own pose correction.
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nz, nv, kInf);
+  for (int j = 0; j < nv && nz > 0; ++j) {
+    const Landmark& L = *vis[j].landmark;
+    MeasJac Hx, Hm;
+    std::optional<MeasVec> zbar;
+    const Eigen::Vector3d* cached_cam = nullptr;
+    for (int l = 0; l < nz; ++l) {
+      const Meas& m = Z[l];
+      if (m.kind != L.kind) continue;
+      if (cached_cam == nullptr || *cached_cam != m.p_CinR_m) {  // Alg. 2 lines 2-4
+        zbar = predictMeasurement(L.kind, L.p_LinW_m, x_hat, m.p_CinR_m, &Hx, &Hm);
+        cached_cam = &m.p_CinR_m;
+      }
+      if (!zbar) continue;
+      const MeasMat Qjl = m.Q + Hm * L.cov_LinW_m2 * Hm.transpose();  // line 6
+      const Eigen::LLT<MeasMat> llt(Qjl);
+      if (llt.info() != Eigen::Success) continue;
+      const MeasJac QinvHx = llt.solve(Hx);
+      const Eigen::Matrix3d Sx = (Hx.transpose() * QinvHx + R_inv).llt().solve(Eigen::Matrix3d::Identity());  // 7
+      const MeasVec nu = innovation(m.z, *zbar);
+      const Eigen::Vector3d dmu = Sx * (QinvHx.transpose() * nu);  // line 8: Sx H^T Q^-1 (z - zbar)
+      const Pose2 mu_x{x_hat.x_m + dmu(0), x_hat.y_m + dmu(1), wrapAngle(x_hat.theta_rad + dmu(2))};
+      const auto zhat = predictMeasurement(L.kind, L.p_LinW_m, mu_x, m.p_CinR_m);  // line 10
+      if (!zhat) continue;
+      cost(l, j) = -logGaussian(innovation(m.z, *zhat), Qjl);  // line 11: -log phi_{l,j}
+    }
+  }
+  std::vector<double> cost_new(nz);
+  for (int l = 0; l < nz; ++l) cost_new[l] = Z[l].neg_log_p_new;
+
+  // Alg. 1 line 5, first level: measurements against map landmarks.
+  const std::vector<int> lm_of_meas = associate(cost, cost_new, o.association);
+
+  // Alg. 3: FastSLAM 2.0 proposal from the type I landmarks, ordered by covariance then azimuth.
+  struct ProposalTerm {
+    int l, j;
+    double trace, azimuth;
+    std::uint64_t id;
+  };
+  std::vector<ProposalTerm> terms;
+  bool any_assoc = false;
+  for (int l = 0; l < nz; ++l) {
+    const int j = lm_of_meas[l];
+    if (j < 0) continue;
+    any_assoc = true;
+    const Landmark& L = *vis[j].landmark;
+    info.landmark_of_measurement[l] = static_cast<std::int64_t>(L.id);
+    ++info.num_associated;
+    if (L.type == LandmarkType::kTypeI) terms.push_back({l, j, L.cov_LinW_m2.trace(), Z[l].z(0), L.id});
+  }
+  Pose2 x_t;
+  if (!any_assoc) {
+    x_t = poseFromVec(rng_.gaussian3(x_hat.vec(), R));  // line 2
+  } else {
+    std::sort(terms.begin(), terms.end(), [](const ProposalTerm& a, const ProposalTerm& b) {
+      if (a.trace != b.trace) return a.trace < b.trace;
+      if (a.azimuth != b.azimuth) return a.azimuth < b.azimuth;
+      return a.id < b.id;
+    });
+    Eigen::Matrix3d info_x = R_inv;  // Sigma_{x,0}^-1 = R_t^-1
+    Eigen::Matrix3d Sx = R;
+    Eigen::Vector3d mu = x_hat.vec();  // mu_{x,0} = xhat_t
+    for (const auto& t : terms) {
+      const Landmark& L = *vis[t.j].landmark;
+      const Meas& m = Z[t.l];
+      MeasJac Hx, Hm;
+      // Relinearised at mu_{x,j-1}: the sequential form of the information update is then exact
+      // for a linear model (lines 8-9 with zhat = h(mu_j, mu_{x,j-1})).
+      const auto zj = predictMeasurement(L.kind, L.p_LinW_m, poseFromVec(mu), m.p_CinR_m, &Hx, &Hm);
+      if (!zj) continue;
+      const MeasMat Qj = m.Q + Hm * L.cov_LinW_m2 * Hm.transpose();
+      const Eigen::LLT<MeasMat> llt(Qj);
+      if (llt.info() != Eigen::Success) continue;
+      const MeasJac QinvHx = llt.solve(Hx);
+      info_x += Hx.transpose() * QinvHx;                                   // line 8
+      Sx = info_x.llt().solve(Eigen::Matrix3d::Identity());
+      mu += Sx * (QinvHx.transpose() * innovation(m.z, *zj));              // line 9
+      mu(2) = wrapAngle(mu(2));
+    }
+    x_t = poseFromVec(rng_.gaussian3(mu, 0.5 * (Sx + Sx.transpose())));  // line 14
+  }
+
+  // Alg. 4: landmark EKFs and the weight, in log space.
+  double log_w = 0.0;
+  std::vector<LandmarkMap::Edit> edits;
+  std::vector<const Landmark*> updated;
+  for (int l = 0; l < nz; ++l) {
+    const int j = lm_of_meas[l];
+    if (j < 0) continue;
+    const Landmark& L = *vis[j].landmark;
+    const Meas& m = Z[l];
+    updated.push_back(&L);
+    LandmarkMap::Edit e;
+    e.ref = vis[j];
+    e.value = L;
+    ++e.value.counter;  // i_j + 1
+    MeasJac Hx, Hm;
+    const auto zt = predictMeasurement(L.kind, L.p_LinW_m, x_t, m.p_CinR_m, &Hx, &Hm);  // lines 5-6
+    if (zt) {
+      const MeasMat Qt = m.Q + Hm * L.cov_LinW_m2 * Hm.transpose();  // line 7
+      const Eigen::LLT<MeasMat> llt(Qt);
+      if (llt.info() == Eigen::Success) {
+        const Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, 2> K =
+            llt.solve(Hm * L.cov_LinW_m2).transpose();  // line 8: Sigma H^T Qt^-1 (3 x dim)
+        const MeasVec nu = innovation(m.z, *zt);
+        e.value.p_LinW_m = L.p_LinW_m + K * nu;  // line 9
+        // Line 10 in Joseph form (same value, stays symmetric positive definite).
+        const Eigen::Matrix3d IKH = Eigen::Matrix3d::Identity() - K * Hm;
+        const Eigen::Matrix3d P = IKH * L.cov_LinW_m2 * IKH.transpose() + K * m.Q * K.transpose();
+        e.value.cov_LinW_m2 = 0.5 * (P + P.transpose());
+        if (L.type == LandmarkType::kTypeI) {  // lines 11-14
+          if (o.weight_at_predicted_pose) {
+            MeasJac Hxp, Hmp;
+            const auto zp = predictMeasurement(L.kind, L.p_LinW_m, x_hat, m.p_CinR_m, &Hxp, &Hmp);
+            if (zp) {
+              const MeasMat Lp = Hxp * R * Hxp.transpose() + m.Q + Hmp * L.cov_LinW_m2 * Hmp.transpose();
+              log_w += logGaussian(innovation(m.z, *zp), Lp);
+            }
+          } else {
+            const MeasMat Lw = Hx * R * Hx.transpose() + Qt;  // line 13
+            log_w += logGaussian(nu, Lw);
+          }
+        }
+      }
+    }
+    // updateLandmarksType(): a type II landmark becomes type I when observed from within D_min.
+    if (e.value.type == LandmarkType::kTypeII && xyDistance(x_t, e.value.p_LinW_m) < o.candidates.d_min_m) {
+      e.value.type = LandmarkType::kTypeI;
+    }
+    edits.push_back(e);
+  }
+  // Lines 18-24: unseen landmarks inside the perceptual range of x_t.
+  std::sort(updated.begin(), updated.end());
+  {
+    near.clear();
+    const Eigen::Vector3d c = cameraCentreInWorld(x_t, p_CinR_vis_m);
+    p.map.collectNear(c.x(), c.y(), horizontalReach_m(per), near);
+    const double log_miss = std::log1p(-per.detection_probability);
+    for (const auto& r : near) {
+      if (std::binary_search(updated.begin(), updated.end(), r.landmark)) continue;
+      if (!insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, x_t, p_CinR_vis_m, per)) continue;
+      log_w += log_miss;  // w_hat = 1 - p_in
+      LandmarkMap::Edit e;
+      e.ref = r;
+      e.value = *r.landmark;
+      --e.value.counter;
+      e.erase = e.value.counter < 0;  // deleted when i_j goes negative
+      if (e.erase) ++info.num_deleted;
+      edits.push_back(e);
+    }
+  }
+
+  // Second level and updateCandidateLandmarks() (Alg. 4 line 28).
+  std::vector<int> leftover;
+  for (int l = 0; l < nz; ++l) {
+    if (lm_of_meas[l] < 0) {
+      leftover.push_back(l);
+      if (o.weight_unassociated_with_p_new) log_w -= Z[l].neg_log_p_new;
+    }
+  }
+  std::vector<Landmark> inserts;
+  updateCandidates(p, x_t, Z, leftover, inserts, info);
+
+  p.map.apply(edits, inserts);
+  p.pose = x_t;
+  info.log_w = log_w;
+  return info;
+}
+
+void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector<Meas>& Z,
+                                const std::vector<int>& leftover, std::vector<Landmark>& inserts,
+                                ParticleStepInfo& info) {
+  const FastSlamOptions& o = options_;
+  const int nl = static_cast<int>(leftover.size());
+  const int nc = static_cast<int>(p.candidates.size());
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nl, nc, kInf);
+  std::vector<double> cost_new(nl);
+  for (int r = 0; r < nl; ++r) {
+    const Meas& m = Z[leftover[r]];
+    cost_new[r] = m.neg_log_p_new;
+    for (int c = 0; c < nc; ++c) {
+      const Candidate& cand = *p.candidates[c];
+      if (cand.kind != m.kind) continue;
+      cost(r, c) = -candidateLogLikelihood(cand, m.z, m.Q, x_t, m.p_CinR_m);
+    }
+  }
+  const std::vector<int> cand_of_meas = associate(cost, cost_new, o.association);
+  std::vector<int> meas_of_cand(nc, -1);
+  for (int r = 0; r < nl; ++r) {
+    if (cand_of_meas[r] >= 0) meas_of_cand[cand_of_meas[r]] = leftover[r];
+  }
+
+  std::vector<std::shared_ptr<const Candidate>> next;
+  next.reserve(nc + nl);
+  for (int c = 0; c < nc; ++c) {
+    const Candidate& old = *p.candidates[c];
+    auto nc_ptr = std::make_shared<Candidate>(old);
+    Candidate& cand = *nc_ptr;
+    const int l = meas_of_cand[c];
+    if (l < 0) {
+      // Not observed: i_j -= I_not (I_not consecutive misses); deleted when not above 0.
+      ++cand.consecutive_misses;
+      cand.counter -= cand.consecutive_misses;
+      if (cand.counter > 0) next.push_back(std::move(nc_ptr));
+      continue;
+    }
+    const Meas& m = Z[l];
+    ++info.num_to_candidates;
+    cand.observations.push_back(makeObservation(cand.kind, x_t, m.p_CinR_m, m.z, m.Q));
+    if (static_cast<int>(cand.observations.size()) > o.candidates.max_observations) {
+      cand.observations.erase(cand.observations.begin());
+    }
+    ++cand.num_associated;
+    ++cand.counter;
+    cand.consecutive_misses = 0;
+    const CandidateEvaluation ev = evaluateCandidate(cand, o.candidates, o.p_new_mahalanobis_sq);
+    if (ev.ready) {
+      Landmark lm;
+      lm.id = next_landmark_id_++;
+      lm.kind = cand.kind;
+      lm.p_LinW_m = ev.best_p_LinW_m;
+      lm.cov_LinW_m2 = ev.cov_m2;
+      lm.counter = cand.num_associated;
+      lm.type = ev.type;
+      inserts.push_back(lm);
+      ++info.num_initialised;
+      continue;
+    }
+    cand.has_estimate = ev.has_best;
+    if (ev.has_best) {
+      cand.estimate_W_m = ev.best_p_LinW_m;
+      cand.estimate_cov_m2 = ev.cov_m2;
+    }
+    next.push_back(std::move(nc_ptr));
+  }
+  for (int r = 0; r < nl; ++r) {
+    if (cand_of_meas[r] >= 0) continue;
+    const Meas& m = Z[leftover[r]];
+    auto cand = std::make_shared<Candidate>();
+    cand->kind = m.kind;
+    cand->observations.push_back(makeObservation(m.kind, x_t, m.p_CinR_m, m.z, m.Q));
+    cand->num_associated = 1;
+    cand->counter = 1;
+    next.push_back(std::move(cand));
+    ++info.num_new_candidates;
+  }
+  p.candidates = std::move(next);
+}
+
+void FastSlam::finishStep(StepResult& result, const std::vector<ParticleStepInfo>& infos) {
+  const int m = static_cast<int>(particles_.size());
+  std::vector<double> log_w(m);
+  for (int k = 0; k < m; ++k) log_w[k] = particles_[k].log_weight + infos[k].log_w;
+  result.weights_degenerate = !normaliseLogWeights(log_w, weights_);
+  ess_ = effectiveSampleSize(weights_);
+  result.ess = ess_;
+  const int best_before = static_cast<int>(std::max_element(weights_.begin(), weights_.end()) - weights_.begin());
+  const ParticleStepInfo& bi = infos[best_before];
+  result.num_associated = bi.num_associated;
+  result.num_to_candidates = bi.num_to_candidates;
+  result.num_new_candidates = bi.num_new_candidates;
+  result.num_initialised = bi.num_initialised;
+  result.num_deleted = bi.num_deleted;
+  result.best_particle = best_before;  // index into infos until the end of step()
+
+  const bool resample =
+      options_.resample_ess_fraction >= 1.0 || ess_ < options_.resample_ess_fraction * static_cast<double>(m);
+  if (resample) {
+    const std::vector<int> idx = lowVarianceResample(weights_, rng_.uniform01());
+    std::vector<Particle> next;
+    next.reserve(m);
+    best_index_ = -1;
+    for (int k = 0; k < m; ++k) {
+      next.push_back(particles_[idx[k]]);  // shares map and candidates (copy-on-write)
+      Particle& np = next.back();
+      if (options_.resample_deep_copy) {
+        np.map = np.map.deepCopy();
+        for (auto& c : np.candidates) c = std::make_shared<Candidate>(*c);
+      }
+      np.log_weight = 0.0;
+      if (idx[k] == best_before && best_index_ < 0) best_index_ = k;
+    }
+    if (best_index_ < 0) best_index_ = 0;  // cannot happen: the heaviest particle is always drawn
+    particles_ = std::move(next);
+    weights_.assign(m, 1.0 / static_cast<double>(m));
+    result.resampled = true;
+  } else {
+    for (int k = 0; k < m; ++k) particles_[k].log_weight = std::log(weights_[k]);
+    best_index_ = best_before;
+  }
+  ++num_steps_;
+  result.num_landmarks = particles_[best_index_].map.size();
+  result.num_candidates = particles_[best_index_].candidates.size();
+  // step() reads infos[result.best_particle] and then reports the index after resampling.
+  result.best_particle = best_before;
+}
+
+// ---------------------------------------------------------------------------------------------
+std::vector<Landmark> FastSlam::bestMap() const {
+  std::vector<Landmark> out = bestParticle().map.landmarks();
+  std::sort(out.begin(), out.end(), [](const Landmark& a, const Landmark& b) { return a.id < b.id; });
+  return out;
+}
+
+Pose2 FastSlam::meanPose() const {
+  double x = 0, y = 0, s = 0, c = 0;
+  for (std::size_t k = 0; k < particles_.size(); ++k) {
+    const double w = weights_[k];
+    x += w * particles_[k].pose.x_m;
+    y += w * particles_[k].pose.y_m;
+    s += w * std::sin(particles_[k].pose.theta_rad);
+    c += w * std::cos(particles_[k].pose.theta_rad);
+  }
+  return {x, y, std::atan2(s, c)};
+}
+
+Eigen::Matrix3d FastSlam::poseCovariance() const {
+  const Pose2 mean = meanPose();
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (std::size_t k = 0; k < particles_.size(); ++k) {
+    const Pose2& p = particles_[k].pose;
+    const Eigen::Vector3d d(p.x_m - mean.x_m, p.y_m - mean.y_m, wrapAngle(p.theta_rad - mean.theta_rad));
+    cov += weights_[k] * d * d.transpose();
+  }
+  return cov;
+}
+
+std::vector<Pose2> FastSlam::particlePoses() const {
+  std::vector<Pose2> out;
+  out.reserve(particles_.size());
+  for (const auto& p : particles_) out.push_back(p.pose);
+  return out;
+}
+
+StorageStats FastSlam::storageStats() const {
+  StorageStats s;
+  s.num_particles = particles_.size();
+  std::unordered_set<const void*> seen;
+  for (const auto& p : particles_) {
+    s.unique_bytes += sizeof(Particle) + p.candidates.capacity() * sizeof(std::shared_ptr<const Candidate>);
+    p.map.accumulateStorage(seen, s.unique_bytes);
+    for (const auto& c : p.candidates) {
+      if (seen.insert(c.get()).second) {
+        s.unique_bytes += sizeof(Candidate) + c->observations.capacity() * sizeof(CandidateObservation);
+      }
+    }
+    s.deep_copy_bytes += sizeof(Particle) + p.map.size() * sizeof(Landmark);
+    for (const auto& c : p.candidates) {
+      s.deep_copy_bytes += sizeof(Candidate) + c->observations.size() * sizeof(CandidateObservation);
+    }
+  }
+  return s;
+}
+
+}  // namespace omnislam::slam

@@ -1,0 +1,58 @@
+// Odometry-driven motion model of a differential-drive robot (equations in motion_model.h).
+#include "omnislam/core/slam/motion_model.h"
+
+#include <cmath>
+#include <limits>
+
+#include "omnislam/core/slam/validation.h"
+
+namespace omnislam::slam {
+
+std::string MotionNoiseOptions::validate() const {
+  const double inf = std::numeric_limits<double>::infinity();
+  detail::FieldChecker c;
+  c.inClosed("trans_sigma_per_m", trans_sigma_per_m, 0.0, inf)
+      .inClosed("lateral_sigma_per_m", lateral_sigma_per_m, 0.0, inf)
+      .inClosed("trans_sigma_per_rad", trans_sigma_per_rad, 0.0, inf)
+      .inClosed("rot_sigma_per_rad", rot_sigma_per_rad, 0.0, inf)
+      .inClosed("rot_sigma_per_m", rot_sigma_per_m, 0.0, inf)
+      .inLeftOpen("min_sigma_xy_m", min_sigma_xy_m, 0.0, inf)
+      .inLeftOpen("min_sigma_theta_rad", min_sigma_theta_rad, 0.0, inf);
+  return c.message();
+}
+
+Pose2 odometryIncrement(const Pose2& odom_prev, const Pose2& odom_now) { return odom_prev.between(odom_now); }
+
+Eigen::Matrix3d incrementCovariance(const Pose2& u, const MotionNoiseOptions& o) {
+  const double d = std::hypot(u.x_m, u.y_m);
+  const double a = std::abs(wrapAngle(u.theta_rad));
+  const auto sq = [](double v) { return v * v; };
+  const double var_long = sq(o.trans_sigma_per_m * d) + sq(o.trans_sigma_per_rad * a) + sq(o.min_sigma_xy_m);
+  const double var_lat = sq(o.lateral_sigma_per_m * d) + sq(o.trans_sigma_per_rad * a) + sq(o.min_sigma_xy_m);
+  const double var_th = sq(o.rot_sigma_per_rad * a) + sq(o.rot_sigma_per_m * d) + sq(o.min_sigma_theta_rad);
+  const double alpha = d > 0.0 ? std::atan2(u.y_m, u.x_m) : 0.0;
+  const double c = std::cos(alpha), s = std::sin(alpha);
+  Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+  S(0, 0) = c * c * var_long + s * s * var_lat;
+  S(1, 1) = s * s * var_long + c * c * var_lat;
+  S(0, 1) = S(1, 0) = c * s * (var_long - var_lat);
+  S(2, 2) = var_th;
+  return S;
+}
+
+Pose2 predictPose(const Pose2& x_prev, const Pose2& u, Eigen::Matrix3d* J_x_u) {
+  if (J_x_u != nullptr) {
+    const double c = std::cos(x_prev.theta_rad), s = std::sin(x_prev.theta_rad);
+    *J_x_u << c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0;
+  }
+  return x_prev.compose(u);
+}
+
+Eigen::Matrix3d motionCovariance(const Pose2& x_prev, const Pose2& u, const MotionNoiseOptions& options) {
+  Eigen::Matrix3d J;
+  predictPose(x_prev, u, &J);
+  const Eigen::Matrix3d R = J * incrementCovariance(u, options) * J.transpose();  // 3x3 * 3x3 * 3x3
+  return 0.5 * (R + R.transpose());
+}
+
+}  // namespace omnislam::slam

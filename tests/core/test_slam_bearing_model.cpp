@@ -1,0 +1,204 @@
+// Tests of the bearing measurement model h: geometry, Jacobians against central differences
+// (ordinary, near the zenith, at the edge of the field of view, close to the camera), helpers.
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+#include <random>
+
+#include "omnislam/core/slam/bearing_model.h"
+
+namespace {
+
+using namespace omnislam;
+using namespace omnislam::slam;
+
+struct Case {
+  Eigen::Vector3d p_LinW;
+  Pose2 pose;
+  Eigen::Vector3d p_CinR;
+};
+
+void checkJacobians(const Case& k, double rel_tol) {
+  Eigen::Matrix<double, 2, 3> Jp, Jl;
+  const auto z0 = predictBearing(k.p_LinW, k.pose, k.p_CinR, &Jp, &Jl);
+  ASSERT_TRUE(z0.has_value());
+  const double h = 1e-7;
+  Eigen::Matrix<double, 2, 3> Np, Nl;
+  for (int i = 0; i < 3; ++i) {
+    Eigen::Vector3d dp = Eigen::Vector3d::Zero();
+    dp(i) = h;
+    const auto zp = predictBearing(k.p_LinW + dp, k.pose, k.p_CinR);
+    const auto zm = predictBearing(k.p_LinW - dp, k.pose, k.p_CinR);
+    ASSERT_TRUE(zp && zm);
+    Nl.col(i) << wrapAngle((*zp)(0) - (*zm)(0)) / (2 * h), ((*zp)(1) - (*zm)(1)) / (2 * h);
+    Eigen::Vector3d v = k.pose.vec();
+    Eigen::Vector3d vp = v, vm = v;
+    vp(i) += h;
+    vm(i) -= h;
+    const auto zpp = predictBearing(k.p_LinW, Pose2{vp.x(), vp.y(), vp.z()}, k.p_CinR);
+    const auto zpm = predictBearing(k.p_LinW, Pose2{vm.x(), vm.y(), vm.z()}, k.p_CinR);
+    ASSERT_TRUE(zpp && zpm);
+    Np.col(i) << wrapAngle((*zpp)(0) - (*zpm)(0)) / (2 * h), ((*zpp)(1) - (*zpm)(1)) / (2 * h);
+  }
+  const double scale_p = std::max(1.0, Jp.cwiseAbs().maxCoeff());
+  const double scale_l = std::max(1.0, Jl.cwiseAbs().maxCoeff());
+  EXPECT_LT((Jp - Np).cwiseAbs().maxCoeff(), rel_tol * scale_p) << "J_z_pose\n" << Jp << "\nnum\n" << Np;
+  EXPECT_LT((Jl - Nl).cwiseAbs().maxCoeff(), rel_tol * scale_l) << "J_z_landmark\n" << Jl << "\nnum\n" << Nl;
+}
+
+TEST(slam_BearingModel, GeometryOfKnownPoints) {
+  const Eigen::Vector3d cam(0.1, 0.0, 1.8);
+  // Robot at (2, 1) heading +y: a light 3 m ahead (+y in W) and 4.7 m above the camera.
+  const Pose2 pose{2.0, 1.0, kPi / 2};
+  const Eigen::Vector3d p_CinW = cameraCentreInWorld(pose, cam);
+  EXPECT_NEAR(p_CinW.x(), 2.0, 1e-12);
+  EXPECT_NEAR(p_CinW.y(), 1.1, 1e-12);
+  EXPECT_NEAR(p_CinW.z(), 1.8, 1e-12);
+  const auto z = predictBearing(Eigen::Vector3d(2.0, 4.1, 6.5), pose, cam);
+  ASSERT_TRUE(z);
+  EXPECT_NEAR((*z)(0), 0.0, 1e-12);  // straight ahead in R
+  EXPECT_NEAR((*z)(1), std::atan2(4.7, 3.0), 1e-12);
+  // To the left of the robot and below the camera.
+  const auto z2 = predictBearing(Eigen::Vector3d(0.0, 1.1, 1.8 - 2.0 * std::tan(deg2rad(5.0))), pose, cam);
+  ASSERT_TRUE(z2);
+  EXPECT_NEAR((*z2)(0), kPi / 2, 1e-12);
+  EXPECT_NEAR((*z2)(1), -deg2rad(5.0), 1e-12);
+}
+
+TEST(slam_BearingModel, RoundTripWithUnitVector) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-10.0, 10.0);
+  for (int i = 0; i < 100; ++i) {
+    const Pose2 pose{u(rng), u(rng), wrapAngle(u(rng))};
+    const Eigen::Vector3d cam(0.2 * u(rng) / 10, 0.2 * u(rng) / 10, 1.8);
+    const Eigen::Vector3d p(u(rng), u(rng), 1.8 + std::abs(u(rng)));
+    const auto z = predictBearing(p, pose, cam);
+    ASSERT_TRUE(z);
+    const Eigen::Vector3d b = bearingDirectionInWorld((*z)(0), (*z)(1), pose.theta_rad);
+    const Eigen::Vector3d d = p - cameraCentreInWorld(pose, cam);
+    EXPECT_NEAR((b - d.normalized()).norm(), 0.0, 1e-12);
+  }
+}
+
+TEST(slam_BearingModel, JacobiansOrdinary) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < 50; ++i) {
+    Case k{Eigen::Vector3d(10 * u(rng), 10 * u(rng), 6.5 + u(rng)), Pose2{5 * u(rng), 5 * u(rng), kPi * u(rng)},
+           Eigen::Vector3d(0.1 * u(rng), 0.1 * u(rng), 1.8)};
+    checkJacobians(k, 1e-6);
+  }
+}
+
+TEST(slam_BearingModel, JacobiansNearZenith) {
+  // 1 mm, 1 cm and 10 cm of horizontal range under a light 4.7 m above the camera.
+  for (double rho : {1e-3, 1e-2, 1e-1}) {
+    for (double th : {0.0, 1.0, -2.5}) {
+      const Pose2 pose{3.0, -2.0, th};
+      const Eigen::Vector3d cam(0.05, -0.02, 1.8);
+      const Eigen::Vector3d c = cameraCentreInWorld(pose, cam);
+      const Eigen::Vector3d p = c + Eigen::Vector3d(rho * std::cos(0.7), rho * std::sin(0.7), 4.7);
+      checkJacobians({p, pose, cam}, rho < 5e-3 ? 1e-4 : 1e-6);
+    }
+  }
+  // Exactly overhead: azimuth undefined, reported as a value, not an exception.
+  const Pose2 pose{1.0, 1.0, 0.3};
+  const Eigen::Vector3d cam(0.0, 0.0, 1.8);
+  EXPECT_FALSE(predictBearing(Eigen::Vector3d(1.0, 1.0, 6.5), pose, cam).has_value());
+}
+
+TEST(slam_BearingModel, JacobiansAtFieldOfViewEdgeAndClose) {
+  const Pose2 pose{-1.0, 2.0, -0.4};
+  const Eigen::Vector3d cam(0.1, 0.0, 1.8);
+  const Eigen::Vector3d c = cameraCentreInWorld(pose, cam);
+  for (double az : {-3.0, -1.0, 0.5, 3.1}) {
+    for (double el : {deg2rad(-5.0), deg2rad(-4.9), deg2rad(89.0)}) {
+      for (double range : {0.05, 1.0, 30.0}) {
+        const Eigen::Vector3d p = c + range * bearingDirectionInWorld(az, el, pose.theta_rad);
+        const auto z = predictBearing(p, pose, cam);
+        ASSERT_TRUE(z);
+        EXPECT_NEAR(wrapAngle((*z)(0) - az), 0.0, 1e-9);
+        EXPECT_NEAR((*z)(1), el, 1e-9);
+        checkJacobians({p, pose, cam}, range < 0.1 ? 1e-5 : 1e-6);
+      }
+    }
+  }
+}
+
+TEST(slam_BearingModel, AzimuthAcrossPiIsWrapped) {
+  // A landmark behind the robot, straddling +-pi: Jacobians stay finite, innovation is wrapped.
+  const Pose2 pose{0.0, 0.0, 0.0};
+  const Eigen::Vector3d cam = Eigen::Vector3d::Zero();
+  checkJacobians({Eigen::Vector3d(-5.0, 1e-9, 3.0), pose, cam}, 1e-6);
+  MeasVec z(2), zh(2);
+  z << kPi - 0.01, 0.2;
+  zh << -kPi + 0.01, 0.1;
+  const MeasVec r = innovation(z, zh);
+  EXPECT_NEAR(r(0), -0.02, 1e-12);
+  EXPECT_NEAR(r(1), 0.1, 1e-12);
+}
+
+TEST(slam_BearingModel, KindDispatch) {
+  const Pose2 pose{1.0, 2.0, 0.3};
+  const Eigen::Vector3d cam(0.1, 0.0, 0.5);
+  const Eigen::Vector3d p(4.0, 5.0, 2.0);
+  MeasJac Jp, Jl;
+  const auto zp = predictMeasurement(LandmarkKind::kPoint3D, p, pose, cam, &Jp, &Jl);
+  ASSERT_TRUE(zp);
+  EXPECT_EQ(zp->size(), 2);
+  EXPECT_EQ(Jp.rows(), 2);
+  const auto zl = predictMeasurement(LandmarkKind::kVerticalLine, p, pose, cam, &Jp, &Jl);
+  ASSERT_TRUE(zl);
+  ASSERT_EQ(zl->size(), 1);
+  EXPECT_EQ(Jp.rows(), 1);
+  EXPECT_DOUBLE_EQ((*zl)(0), (*zp)(0));
+  EXPECT_EQ(Jl(0, 2), 0.0);  // a vertical line's height is not observed
+  // Numerical check of the line's Jacobians (azimuth of the point (x, y)).
+  const double h = 1e-7;
+  for (int i = 0; i < 2; ++i) {
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    d(i) = h;
+    const double num = ((*predictMeasurement(LandmarkKind::kVerticalLine, p + d, pose, cam))(0) -
+                        (*predictMeasurement(LandmarkKind::kVerticalLine, p - d, pose, cam))(0)) /
+                       (2 * h);
+    EXPECT_NEAR(Jl(0, i), num, 1e-6);
+  }
+  BearingMeasurement m;
+  m.kind = LandmarkKind::kVerticalLine;
+  m.azimuth_rad = 0.4;
+  EXPECT_EQ(measurementVector(m).size(), 1);
+  EXPECT_EQ(measurementCovariance(m, true).rows(), 1);
+}
+
+TEST(slam_BearingModel, ZenithInflationOfAzimuthVariance) {
+  BearingMeasurement m;
+  m.cov_rad2 = Eigen::Matrix2d::Identity() * 1e-4;
+  m.elevation_rad = deg2rad(80.0);
+  const MeasMat q = measurementCovariance(m, true);
+  EXPECT_NEAR(q(0, 0), 1e-4 / std::pow(std::cos(deg2rad(80.0)), 2), 1e-12);
+  EXPECT_DOUBLE_EQ(q(1, 1), 1e-4);
+  EXPECT_DOUBLE_EQ(measurementCovariance(m, false)(0, 0), 1e-4);
+  m.elevation_rad = kPi / 2;
+  EXPECT_NEAR(measurementCovariance(m, true)(0, 0), kPi * kPi, 1e-12);
+  m.elevation_rad = 0.0;  // at the horizon nothing changes
+  EXPECT_DOUBLE_EQ(measurementCovariance(m, true)(0, 0), 1e-4);
+}
+
+TEST(slam_BearingModel, LogGaussian) {
+  MeasVec r(2);
+  r << 0.1, -0.2;
+  MeasMat S(2, 2);
+  S << 0.04, 0.01, 0.01, 0.09;
+  double m2 = 0.0;
+  const double lg = logGaussian(r, S, &m2);
+  const Eigen::Matrix2d Sf = S;
+  const Eigen::Vector2d rf = r;
+  const double m2_ref = rf.dot(Sf.inverse() * rf);
+  EXPECT_NEAR(m2, m2_ref, 1e-12);
+  EXPECT_NEAR(lg, -std::log(2 * kPi) - 0.5 * std::log(Sf.determinant()) - 0.5 * m2_ref, 1e-12);
+  MeasMat bad(2, 2);
+  bad << 1.0, 2.0, 2.0, 1.0;
+  EXPECT_EQ(logGaussian(r, bad), -std::numeric_limits<double>::infinity());
+}
+
+}  // namespace

@@ -1,0 +1,104 @@
+// Tests of the odometry motion model: increments, composition, noise growth, R_t by sampling.
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+
+#include "omnislam/core/slam/motion_model.h"
+#include "omnislam/core/slam/random.h"
+
+namespace {
+
+using namespace omnislam;
+using namespace omnislam::slam;
+
+TEST(slam_MotionModel, IncrementRoundTrip) {
+  const Pose2 a{1.0, 2.0, 0.5}, b{1.5, 2.7, 1.2};
+  const Pose2 u = odometryIncrement(a, b);
+  const Pose2 b2 = predictPose(a, u);
+  EXPECT_NEAR(b2.x_m, b.x_m, 1e-12);
+  EXPECT_NEAR(b2.y_m, b.y_m, 1e-12);
+  EXPECT_NEAR(b2.theta_rad, b.theta_rad, 1e-12);
+  // Applied to another particle: the same relative motion in its own frame.
+  const Pose2 p{-3.0, 0.0, -kPi / 2};
+  const Pose2 q = predictPose(p, u);
+  const Pose2 u2 = p.between(q);
+  EXPECT_NEAR(u2.x_m, u.x_m, 1e-12);
+  EXPECT_NEAR(u2.y_m, u.y_m, 1e-12);
+  EXPECT_NEAR(u2.theta_rad, u.theta_rad, 1e-12);
+}
+
+TEST(slam_MotionModel, JacobianWrtIncrement) {
+  const Pose2 x{1.0, -2.0, 2.9};
+  const Pose2 u{0.3, 0.05, 0.4};
+  Eigen::Matrix3d J;
+  predictPose(x, u, &J);
+  const double h = 1e-7;
+  for (int i = 0; i < 3; ++i) {
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    d(i) = h;
+    const Pose2 p = predictPose(x, Pose2{u.x_m + d(0), u.y_m + d(1), u.theta_rad + d(2)});
+    const Pose2 m = predictPose(x, Pose2{u.x_m - d(0), u.y_m - d(1), u.theta_rad - d(2)});
+    const Eigen::Vector3d num((p.x_m - m.x_m) / (2 * h), (p.y_m - m.y_m) / (2 * h),
+                              wrapAngle(p.theta_rad - m.theta_rad) / (2 * h));
+    EXPECT_NEAR((J.col(i) - num).norm(), 0.0, 1e-7);
+  }
+}
+
+TEST(slam_MotionModel, NoiseGrowsWithDistanceAndRotation) {
+  MotionNoiseOptions o;
+  EXPECT_EQ(o.validate(), "");
+  const Eigen::Matrix3d s0 = incrementCovariance(Pose2{0, 0, 0}, o);
+  EXPECT_NEAR(s0(0, 0), o.min_sigma_xy_m * o.min_sigma_xy_m, 1e-15);
+  EXPECT_NEAR(s0(2, 2), o.min_sigma_theta_rad * o.min_sigma_theta_rad, 1e-15);
+  const Eigen::Matrix3d s1 = incrementCovariance(Pose2{1.0, 0, 0}, o);
+  const Eigen::Matrix3d s2 = incrementCovariance(Pose2{2.0, 0, 0}, o);
+  EXPECT_GT(s2(0, 0), s1(0, 0));
+  EXPECT_NEAR(std::sqrt(s1(0, 0) - s0(0, 0)), 0.05, 1e-12);  // 5 % of the distance along-track
+  EXPECT_NEAR(std::sqrt(s1(1, 1) - s0(1, 1)), 0.02, 1e-12);
+  const Eigen::Matrix3d sr = incrementCovariance(Pose2{0, 0, 1.0}, o);
+  EXPECT_NEAR(std::sqrt(sr(2, 2) - s0(2, 2)), 0.05, 1e-12);
+  // Along/across track follow the chord: moving along +y swaps the axes.
+  const Eigen::Matrix3d sy = incrementCovariance(Pose2{0, 1.0, 0}, o);
+  EXPECT_NEAR(sy(1, 1), s1(0, 0), 1e-15);
+  EXPECT_NEAR(sy(0, 0), s1(1, 1), 1e-15);
+  // R_t is rotated into W by the particle's heading and stays symmetric positive definite.
+  const Eigen::Matrix3d R = motionCovariance(Pose2{0, 0, kPi / 2}, Pose2{1.0, 0, 0}, o);
+  EXPECT_NEAR(R(1, 1), s1(0, 0), 1e-15);
+  EXPECT_NEAR((R - R.transpose()).norm(), 0.0, 1e-18);
+  EXPECT_EQ(Eigen::LLT<Eigen::Matrix3d>(R).info(), Eigen::Success);
+}
+
+TEST(slam_MotionModel, SampleCovarianceMatchesRt) {
+  MotionNoiseOptions o;
+  const Pose2 x{2.0, 1.0, 0.7};
+  const Pose2 u{0.27, 0.01, 0.2};
+  const Pose2 mean = predictPose(x, u);
+  const Eigen::Matrix3d R = motionCovariance(x, u, o);
+  Rng rng(42);
+  const int n = 40000;
+  Eigen::Matrix3d acc = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    // Noise added to the increment in the robot frame, then composed.
+    const Eigen::Vector3d e = rng.gaussian3(Eigen::Vector3d::Zero(), incrementCovariance(u, o));
+    const Pose2 s = predictPose(x, Pose2{u.x_m + e(0), u.y_m + e(1), u.theta_rad + e(2)});
+    const Eigen::Vector3d d(s.x_m - mean.x_m, s.y_m - mean.y_m, wrapAngle(s.theta_rad - mean.theta_rad));
+    acc += d * d.transpose();
+  }
+  acc /= n;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      EXPECT_NEAR(acc(i, j), R(i, j), 0.05 * std::sqrt(R(i, i) * R(j, j)));
+    }
+  }
+}
+
+TEST(slam_MotionModel, ValidateNamesField) {
+  MotionNoiseOptions o;
+  o.min_sigma_xy_m = 0.0;
+  EXPECT_NE(o.validate().find("min_sigma_xy_m"), std::string::npos);
+  o = MotionNoiseOptions{};
+  o.rot_sigma_per_m = -1.0;
+  EXPECT_NE(o.validate().find("rot_sigma_per_m must be in [0, inf]"), std::string::npos) << o.validate();
+}
+
+}  // namespace

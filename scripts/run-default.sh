@@ -1,14 +1,12 @@
 #!/usr/bin/env bash
 # The main job: installs what is missing, builds, and runs the default scenario end to end
 # (simulated sports hall of paper 000: simulator, capture and odometry processes on one LCM URL,
-# recorded by lcm-logger into logs/), then prints what the recording holds.
+# recorded into logs/), then prints what the recording holds.
 # Extra arguments go to omnislam-launch, e.g. --set speedup=20 --set seed=3.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
-bash scripts/install-deps.sh
-bash scripts/check-multicast.sh
-bash scripts/build.sh
+bash scripts/prepare.sh
 build="${OMNISLAM_BUILD_DIR:-$root/build}"
 log="$root/logs/sports_hall-$(date +%Y%m%d-%H%M%S).lcm"
 "$build/bin/omnislam-launch" config/launch/sports_hall.yaml --log-file "$log" "$@"

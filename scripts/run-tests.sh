@@ -4,9 +4,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
-bash scripts/install-deps.sh
-bash scripts/check-multicast.sh
-bash scripts/build.sh
+bash scripts/prepare.sh
 build="${OMNISLAM_BUILD_DIR:-$root/build}"
 exclude=()
 if [ "${OMNISLAM_SOAK:-0}" != "1" ]; then

@@ -1,0 +1,84 @@
+// Vertical-line detector (paper 002, sec. III-B): a vertical line of the world is a radial line of
+// the omnidirectional image and a column of its panorama.
+//
+// Pipeline: (grey) -> panorama (panorama.h, one cv::remap) -> horizontal-gradient Sobel 3x3 (the
+// paper's two kernels of eq. 7 are the two signs of one Sobel response) -> threshold |gx| per
+// sign -> vertical runs per column (gaps <= max_gap_rows bridged, runs < min_run_rows dropped) ->
+// merge runs of the same sign within merge_columns columns whose row spans overlap or lie within
+// merge_gap_rows -> keep lines of >= min_length_rows (length) inside the panorama's radial band
+// r_min..r_max (position) -> sub-column refinement: per row a parabola through the peak of the
+// response and its neighbours, then a straight-line fit of column against row weighted by
+// response x rho^2 (the inner rows, where one column is a fraction of a pixel, count less); lines
+// drifting more than max_drift_columns end to end are slanted edges, not radial lines, and are
+// refused -> azimuth (the fit at the mid row), length, strength, colour on each side.
+// Azimuth: with a camera model, the azimuth of camera.unproject(pixel of the line's mid point);
+// without one ("centre only"), the image angle alpha. Then + mounting yaw (robot-parallel axes).
+// Variance: bearingCovarianceFromPixel(camera, mid point, pixel_sigma_px)(0, 0), or without a
+// camera (pixel_sigma_px / rho_mid)^2 (tangential pixel noise at the mid radius).
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "omnislam/core/camera/camera_model.h"
+#include "omnislam/core/camera/mounting.h"
+#include "omnislam/vision/panorama.h"
+
+namespace omnislam::vision {
+
+struct VerticalLineOptions {
+  PanoramaOptions panorama;
+  int edge_threshold = 80;     ///< |Sobel gx| on 8-bit grey (range 0..1020); in [1, 1020]
+  int min_run_rows = 5;        ///< shorter runs are noise; >= 1
+  int max_gap_rows = 2;        ///< gaps bridged inside a run; >= 0
+  int merge_columns = 2;       ///< runs this many columns apart may be one line; >= 0
+  int merge_gap_rows = 20;     ///< runs of one line may be this far apart along it; >= 0
+  int min_length_rows = 40;    ///< shortest line kept (panorama rows); >= 1
+  double max_drift_columns = 6.0;  ///< a line may drift this many columns end to end (else slanted); > 0
+  int colour_offset_columns = 3;  ///< colour strips start this far from the line; >= 1
+  int colour_width_columns = 6;   ///< and are this wide; >= 1
+  double pixel_sigma_px = 1.0;    ///< tangential pixel noise of a line for its azimuth variance; > 0
+};
+
+std::optional<std::string> validate(const VerticalLineOptions& o);
+
+struct VerticalLine {
+  double azimuth_rad = 0.0;     ///< robot-parallel axes, wrapped to (-pi, pi]
+  double variance_rad2 = 0.0;   ///< of the azimuth
+  double image_angle_rad = 0.0; ///< alpha of the refined column, wrapped
+  double column = 0.0;          ///< refined panorama column (padded coordinates)
+  int row_begin = 0, row_end = 0;  ///< panorama rows covered (inclusive)
+  double length_px = 0.0;       ///< length along the radius in image pixels
+  double strength = 0.0;        ///< mean |gx| along the line at its peak column
+  int sign = 0;                 ///< +1: brighter at larger alpha (counter-clockwise side), -1: darker
+  Eigen::Vector2d px_inner = Eigen::Vector2d::Zero();  ///< line point nearest the centre (image px)
+  Eigen::Vector2d px_outer = Eigen::Vector2d::Zero();
+  std::array<float, 3> colour_ccw{};  ///< mean R, G, B on the counter-clockwise side (larger alpha)
+  std::array<float, 3> colour_cw{};   ///< and on the clockwise side
+};
+
+class VerticalLineDetector {
+ public:
+  /// `camera` may be null (centre-only geometry); if given it must outlive the detector and its
+  /// size is the image size. Throws std::invalid_argument on invalid options.
+  VerticalLineDetector(const VerticalLineOptions& options, int width_px, int height_px,
+                       const camera::CameraModel* camera = nullptr, const camera::CameraMounting& mounting = {});
+  /// Lines of an 8-bit grey or BGR image of the configured size (std::invalid_argument otherwise),
+  /// in order of increasing azimuth.
+  std::vector<VerticalLine> detect(const cv::Mat& image) const;
+  const Panorama& panorama() const { return pano_; }
+  const VerticalLineOptions& options() const { return opt_; }
+
+ private:
+  VerticalLineOptions opt_;
+  Panorama pano_;
+  const camera::CameraModel* camera_;
+  camera::CameraMounting mounting_;
+};
+
+}  // namespace omnislam::vision

@@ -1,0 +1,72 @@
+// Ceiling-light detector: see ceiling_lights.h.
+#include "omnislam/vision/ceiling_lights.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "omnislam/core/angles.h"
+#include "omnislam/core/camera/bearing_jacobians.h"
+
+namespace omnislam::vision {
+
+std::optional<std::string> validate(const CeilingLightOptions& o) {
+  const auto& b = o.blobs;
+  if (b.threshold_grey < 0 || b.threshold_grey > 254) return "threshold_grey must be in [0, 254]";
+  if (!(b.background_grey >= 0 && b.background_grey < 255)) return "background_grey must be in [0, 255)";
+  if (b.min_area_px < 1) return "min_area_px must be >= 1";
+  if (b.max_area_px < b.min_area_px) return "max_area_px must be >= min_area_px";
+  if (b.connectivity != 4 && b.connectivity != 8) return "connectivity must be 4 or 8";
+  if (!(o.max_elongation >= 1.0)) return "max_elongation must be >= 1";
+  if (!(o.noise_sigma_grey >= 0.0 && std::isfinite(o.noise_sigma_grey))) return "noise_sigma_grey must be >= 0";
+  if (!(o.pixel_sigma_floor_px > 0.0 && std::isfinite(o.pixel_sigma_floor_px)))
+    return "pixel_sigma_floor_px must be > 0";
+  return std::nullopt;
+}
+
+CeilingLightDetector::CeilingLightDetector(const camera::CameraModel& camera, const camera::CameraMounting& mounting,
+                                           const CeilingLightOptions& options)
+    : camera_(camera), mounting_(mounting), opt_(options) {
+  if (auto why = validate(opt_)) throw std::invalid_argument("ceiling lights: " + *why);
+}
+
+std::vector<CeilingLight> CeilingLightDetector::detect(const cv::Mat& grey) const {
+  if (grey.type() != CV_8UC1) throw std::invalid_argument("ceiling lights: needs an 8-bit grey image");
+  if (grey.cols != camera_.widthPx() || grey.rows != camera_.heightPx())
+    throw std::invalid_argument("ceiling lights: image " + std::to_string(grey.cols) + "x" + std::to_string(grey.rows) +
+                                " does not match the camera's " + std::to_string(camera_.widthPx()) + "x" +
+                                std::to_string(camera_.heightPx()));
+  std::vector<CeilingLight> out;
+  for (const BrightBlob& b : detectBrightBlobs(grey, opt_.blobs)) {
+    const double eq_diam = 2.0 * std::sqrt(b.area_px / kPi);
+    const double elong = eq_diam > 0 ? std::max(1.0, b.major_axis_px / eq_diam) : 1.0;
+    if (elong > opt_.max_elongation) continue;
+    const Eigen::Vector2d px(b.u_px, b.v_px);
+    Eigen::Matrix<double, 3, 2> J_d_px;
+    const auto d_C = camera_.unproject(px, &J_d_px);
+    if (!d_C) continue;
+    CeilingLight L;
+    L.blob = b;
+    L.elongation = elong;
+    const double lmax = 0.0625 * b.major_axis_px * b.major_axis_px;  // major = 4 sqrt(lambda_max)
+    const double s_noise2 = b.mass > 0 ? opt_.noise_sigma_grey * opt_.noise_sigma_grey * b.area_px * lmax /
+                                             (b.mass * b.mass)
+                                       : 0.0;
+    L.sigma_px = std::sqrt(s_noise2 + opt_.pixel_sigma_floor_px * opt_.pixel_sigma_floor_px);
+    const Eigen::Vector3d d_R = camera::directionCameraToRobot(mounting_, *d_C);
+    const Eigen::Vector2d ae = camera::azimuthElevation(d_R);
+    L.azimuth_rad = ae.x();
+    L.elevation_rad = ae.y();
+    if (auto cov = camera::bearingCovarianceFromPixel(camera_, px, L.sigma_px)) {
+      L.covariance = *cov;
+    } else {
+      // On the optical axis the azimuth is undefined: say so (variance pi^2), and the elevation
+      // varies by the direction's change per pixel.
+      const double s = L.sigma_px * J_d_px.norm() / std::sqrt(2.0);
+      L.covariance << kPi * kPi, 0.0, 0.0, s * s;
+    }
+    out.push_back(L);
+  }
+  return out;
+}
+
+}  // namespace omnislam::vision

@@ -1,0 +1,40 @@
+// The detectors of omnislam-features behind one interface, built from the config file
+// (docs/detectors.md). The config is validated when it is loaded: errors name the key.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "omnislam/config/yaml_node.h"
+#include "omnislam/core/camera/camera_model.h"
+#include "omnislam/core/camera/mounting.h"
+#include "omnislam/feature_t.hpp"
+
+namespace omnislam::features {
+
+class Detector {
+ public:
+  virtual ~Detector() = default;
+  /// "ceiling_lights" or "vertical_lines" (features_t.detector).
+  virtual std::string name() const = 0;
+  /// Why the image cannot be processed (size, format), or nothing when it can.
+  virtual std::optional<std::string> check(const cv::Mat& image) const = 0;
+  /// Features of a checked image, at most max_features (the strongest).
+  virtual std::vector<feature_t> detect(const cv::Mat& image) const = 0;
+  /// The image with the features of the last detect() call on it drawn (for review).
+  virtual cv::Mat annotate(const cv::Mat& image, const std::vector<feature_t>& features) const = 0;
+  /// Position of the optical centre in the robot frame [m].
+  virtual camera::CameraMounting mounting() const = 0;
+  /// One line describing the detector and its camera, for the log.
+  virtual std::string describe() const = 0;
+};
+
+/// Builds the detector a features config file describes; throws config::ConfigError naming the
+/// key on any invalid or unknown setting.
+std::unique_ptr<Detector> makeDetector(const config::Node& root);
+
+}  // namespace omnislam::features

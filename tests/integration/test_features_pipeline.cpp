@@ -5,6 +5,8 @@
 // stops the process with exit code 2 and a message naming the key.
 #include <gtest/gtest.h>
 
+#include <memory>
+
 #include <Eigen/LU>
 #include <lcm/lcm-cpp.hpp>
 #include <opencv2/imgproc.hpp>
@@ -40,41 +42,30 @@ constexpr double kDurationS = 60.0;
 class FeaturesPipeline : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new t::TempDir();
-    log_ = dir_->file("run.lcm");
-    auto r = t::run({t::binPath("omnislam-launch"), t::sourcePath("config/launch/sports_hall_features.yaml"), "--url",
-                     t::privateUdpUrl(11), "--log-file", log_, "--set", "duration=" + std::to_string(kDurationS),
-                     "--set", "speedup=20", "--set", "seed=5"},
-                    120.0);
-    output_ = new std::string(r.output);
-    rc_ = r.exit_code;
+    run_ = std::make_unique<t::LaunchedRun>("config/launch/sports_hall_features.yaml", 11,
+                                            std::vector<std::string>{"duration=" + std::to_string(kDurationS),
+                                                                     "speedup=20", "seed=5"});
+    log_ = run_->log;
   }
-  static void TearDownTestSuite() {
-    delete dir_;
-    delete output_;
-  }
-  static t::TempDir* dir_;
+  static void TearDownTestSuite() { run_.reset(); }
+  static std::unique_ptr<t::LaunchedRun> run_;
   static std::string log_;
-  static std::string* output_;
-  static int rc_;
 };
-t::TempDir* FeaturesPipeline::dir_ = nullptr;
+std::unique_ptr<t::LaunchedRun> FeaturesPipeline::run_;
 std::string FeaturesPipeline::log_;
-std::string* FeaturesPipeline::output_ = nullptr;
-int FeaturesPipeline::rc_ = -1;
 
 TEST_F(FeaturesPipeline, LauncherRunsTheScenarioWithTheFeaturesProcess) {
-  EXPECT_EQ(rc_, 0) << *output_;
-  EXPECT_NE(output_->find("sim finished the scenario"), std::string::npos) << *output_;
-  EXPECT_EQ(output_->find("died"), std::string::npos) << *output_;
+  EXPECT_EQ(run_->result.exit_code, 0) << run_->result.output;
+  EXPECT_NE(run_->result.output.find("sim finished the scenario"), std::string::npos) << run_->result.output;
+  EXPECT_EQ(run_->result.output.find("died"), std::string::npos) << run_->result.output;
 }
 
 TEST_F(FeaturesPipeline, OneFeaturesMessagePerImageWithItsUtimeAndSeq) {
   const auto images = lcmio::readChannel<image_t>(log_, channels::kOmniImage);
   const auto feats = lcmio::readChannel<features_t>(log_, channels::kOmniFeatures);
   const sim::World world = config::loadWorld(t::sourcePath("config/worlds/sports_hall.yaml"));
-  ASSERT_EQ(images.size(), static_cast<size_t>(kDurationS) + 1) << *output_;
-  ASSERT_EQ(feats.size(), images.size()) << *output_;
+  ASSERT_EQ(images.size(), static_cast<size_t>(kDurationS) + 1) << run_->result.output;
+  ASSERT_EQ(feats.size(), images.size()) << run_->result.output;
   for (size_t i = 0; i < feats.size(); ++i) {
     EXPECT_EQ(feats[i].seq, static_cast<int64_t>(i));
     EXPECT_EQ(feats[i].image_seq, images[i].seq);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <map>
+#include <memory>
 #include <numeric>
 
 #include "omnislam/config/world_config.h"
@@ -29,39 +30,28 @@ constexpr double kDurationS = 100.0;  // covers the first 18 m straight and the 
 class SimPipeline : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new t::TempDir();
-    log_ = dir_->file("run.lcm");
-    auto r = t::run({t::binPath("omnislam-launch"), t::sourcePath("config/launch/sports_hall.yaml"), "--url",
-                     t::privateUdpUrl(1), "--log-file", log_, "--set", "duration=" + std::to_string(kDurationS),
-                     "--set", "speedup=25", "--set", "seed=7"},
-                    120.0);
-    launch_output_ = new std::string(r.output);
-    launch_rc_ = r.exit_code;
+    run_ = std::make_unique<t::LaunchedRun>("config/launch/sports_hall.yaml", 1,
+                                            std::vector<std::string>{"duration=" + std::to_string(kDurationS),
+                                                                     "speedup=25", "seed=7"});
+    log_ = run_->log;
   }
-  static void TearDownTestSuite() {
-    delete dir_;
-    delete launch_output_;
-  }
-  static t::TempDir* dir_;
+  static void TearDownTestSuite() { run_.reset(); }
+  static std::unique_ptr<t::LaunchedRun> run_;
   static std::string log_;
-  static std::string* launch_output_;
-  static int launch_rc_;
 };
-t::TempDir* SimPipeline::dir_ = nullptr;
+std::unique_ptr<t::LaunchedRun> SimPipeline::run_;
 std::string SimPipeline::log_;
-std::string* SimPipeline::launch_output_ = nullptr;
-int SimPipeline::launch_rc_ = -1;
 
 TEST_F(SimPipeline, LauncherRunsTheScenarioToItsEnd) {
-  EXPECT_EQ(launch_rc_, 0) << *launch_output_;
-  EXPECT_NE(launch_output_->find("sim finished the scenario"), std::string::npos) << *launch_output_;
-  EXPECT_EQ(launch_output_->find("died"), std::string::npos) << *launch_output_;
+  EXPECT_EQ(run_->result.exit_code, 0) << run_->result.output;
+  EXPECT_NE(run_->result.output.find("sim finished the scenario"), std::string::npos) << run_->result.output;
+  EXPECT_EQ(run_->result.output.find("died"), std::string::npos) << run_->result.output;
 }
 
 TEST_F(SimPipeline, ImagesArriveAtOneHertzInSimulatedTimeNoneLost) {
   const auto images = lcmio::readChannel<image_t>(log_, channels::kOmniImage);
   const sim::World world = config::loadWorld(t::sourcePath("config/worlds/sports_hall.yaml"));
-  ASSERT_EQ(images.size(), static_cast<size_t>(kDurationS) + 1) << *launch_output_;
+  ASSERT_EQ(images.size(), static_cast<size_t>(kDurationS) + 1) << run_->result.output;
   for (size_t i = 0; i < images.size(); ++i) {
     EXPECT_EQ(images[i].seq, static_cast<int64_t>(i)) << "sequence gap at frame " << i;
     EXPECT_EQ(images[i].utime, world.start_utime + static_cast<int64_t>(i) * 1'000'000) << "frame " << i;

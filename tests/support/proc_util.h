@@ -144,3 +144,26 @@ inline RunResult run(const std::vector<std::string>& argv, double timeout_s, con
 }
 
 }  // namespace omnislam::testing
+
+namespace omnislam::testing {
+
+/// One run of omnislam-launch shared by a test suite: a launch file from the source tree, a
+/// private LCM URL, a temporary log file, and `--set` overrides. Keeps exit code and output.
+struct LaunchedRun {
+  LaunchedRun(const std::string& launch_file_rel, int url_salt, const std::vector<std::string>& sets,
+              double timeout_s = 120.0)
+      : log(dir.file("run.lcm")) {
+    std::vector<std::string> argv{binPath("omnislam-launch"), sourcePath(launch_file_rel), "--url",
+                                  privateUdpUrl(url_salt), "--log-file", log};
+    for (const auto& s : sets) {
+      argv.push_back("--set");
+      argv.push_back(s);
+    }
+    result = run(argv, timeout_s);
+  }
+  TempDir dir;
+  std::string log;
+  RunResult result;
+};
+
+}  // namespace omnislam::testing

@@ -1,0 +1,147 @@
+// omnislam-eval on logs with known answers: a SLAM trajectory offset from the truth by a fixed
+// translation, a map with one displaced landmark, a duplicate and a ghost; raw, --align, --truth
+// from a second log, the TUM files, and bad input.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <lcm/lcm-cpp.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "omnislam/features_t.hpp"
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/map_t.hpp"
+#include "omnislam/pose_t.hpp"
+#include "proc_util.h"
+
+using namespace omnislam;
+namespace t = omnislam::testing;
+
+namespace {
+
+template <class Msg>
+void write(lcm::LogFile& log, const std::string& channel, const Msg& m, int64_t utime) {
+  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  lcm::LogEvent ev;
+  ev.eventnum = 0;
+  ev.timestamp = utime;
+  ev.channel = channel;
+  ev.datalen = static_cast<int32_t>(buf.size());
+  ev.data = buf.data();
+  log.writeEvent(&ev);
+}
+
+pose_t pose(int64_t utime, double x, double y, double th) {
+  pose_t p{};
+  p.utime = utime, p.x_m = x, p.y_m = y, p.theta_rad = th, p.input_seq = -1;
+  return p;
+}
+
+map_t mapOf(const std::vector<Eigen::Vector3d>& pts) {
+  map_t m{};
+  for (size_t i = 0; i < pts.size(); ++i) {
+    landmark_t l{};
+    l.id = static_cast<int64_t>(i);
+    for (int k = 0; k < 3; ++k) l.position_m[k] = pts[i][k];
+    m.landmarks.push_back(l);
+  }
+  m.num_landmarks = static_cast<int32_t>(pts.size());
+  return m;
+}
+
+double jsonNumber(const std::string& json, const std::string& key) {
+  std::smatch m;
+  const std::regex re("\"" + key + "\": ([-0-9.eE+]+)");
+  if (!std::regex_search(json, m, re)) return NAN;
+  return std::stod(m[1]);
+}
+
+// Truth: a circle of radius 5 m; SLAM: the same rotated by 0.2 rad about the origin and shifted.
+void makeLogs(const std::string& slam_path, const std::string& truth_path, bool one_log) {
+  lcm::LogFile slam(slam_path, "w");
+  lcm::LogFile truth_file(truth_path, "w");
+  lcm::LogFile& truth = one_log ? slam : truth_file;
+  const std::vector<Eigen::Vector3d> lights{{4.5, -5.5, 6.5}, {13.5, -5.5, 6.5}, {4.5, 3.5, 6.5}};
+  for (int k = 0; k <= 500; ++k) {
+    const int64_t u = 1'000'000 + k * 20'000;
+    const double a = 0.01 * k;
+    write(truth, channels::kGroundTruthPose, pose(u, 5 * std::cos(a), 5 * std::sin(a), a + M_PI / 2), u);
+    if (k % 50 == 0) {
+      const double c = std::cos(0.2), s = std::sin(0.2);
+      const double x = 5 * std::cos(a), y = 5 * std::sin(a);
+      write(slam, channels::kSlamPose, pose(u, c * x - s * y + 0.3, s * x + c * y - 0.4, a + M_PI / 2 + 0.2), u);
+      features_t f{};
+      f.utime = u;
+      write(slam, channels::kOmniFeatures, f, u);
+    }
+  }
+  write(truth, channels::kGroundTruthMap, mapOf(lights), 1);
+  // Estimated map (in the SLAM frame, unaligned): light 0 exact, light 1 off by 0.5 m, a duplicate
+  // of light 0 at 0.3 m, a ghost far away, light 2 missing.
+  auto toSlam = [](const Eigen::Vector3d& p) {
+    const double c = std::cos(0.2), s = std::sin(0.2);
+    return Eigen::Vector3d(c * p.x() - s * p.y() + 0.3, s * p.x() + c * p.y() - 0.4, p.z());
+  };
+  write(slam, channels::kSlamMap,
+        mapOf({toSlam(lights[0]), toSlam(lights[1] + Eigen::Vector3d(0.5, 0, 0)), toSlam(lights[0] + Eigen::Vector3d(0, 0.3, 0)),
+               toSlam({40, 40, 6.5})}),
+        2);
+}
+
+TEST(Eval, AlignedFiguresAreExactAndRawOnesShowTheOffset) {
+  t::TempDir dir;
+  makeLogs(dir.file("run.lcm"), dir.file("unused.lcm"), true);
+  const auto raw = t::run({t::binPath("omnislam-eval"), dir.file("run.lcm"), "--json"}, 30);
+  ASSERT_EQ(raw.exit_code, 0) << raw.output;
+  EXPECT_GT(jsonNumber(raw.output, "ate_rmse_m"), 0.5) << raw.output;
+  EXPECT_EQ(jsonNumber(raw.output, "frames"), 11);
+  EXPECT_EQ(jsonNumber(raw.output, "frames_with_pose"), 11);
+  const auto al = t::run({t::binPath("omnislam-eval"), dir.file("run.lcm"), "--json", "--align"}, 30);
+  ASSERT_EQ(al.exit_code, 0) << al.output;
+  EXPECT_NEAR(jsonNumber(al.output, "ate_rmse_m"), 0.0, 1e-6) << al.output;
+  EXPECT_NEAR(jsonNumber(al.output, "heading_rmse_rad"), 0.0, 1e-6);
+  EXPECT_NEAR(jsonNumber(al.output, "align_theta_rad"), -0.2, 1e-6);
+  EXPECT_EQ(jsonNumber(al.output, "landmarks_truth"), 3);
+  EXPECT_EQ(jsonNumber(al.output, "landmarks_matched"), 2);
+  EXPECT_EQ(jsonNumber(al.output, "landmarks_spurious"), 2) << "the duplicate and the ghost";
+  EXPECT_NEAR(jsonNumber(al.output, "landmark_mean_err_m"), 0.25, 1e-6);
+  EXPECT_NEAR(jsonNumber(al.output, "landmark_max_err_m"), 0.5, 1e-6);
+  // TUM files for evo: one line per pose after the header.
+  std::ifstream tum(dir.file("run.lcm") + ".slam.tum");
+  ASSERT_TRUE(tum.good());
+  int lines = 0;
+  for (std::string l; std::getline(tum, l);) lines += l.empty() || l[0] == '#' ? 0 : 1;
+  EXPECT_EQ(lines, 11);
+  // The table names the figures.
+  const auto table = t::run({t::binPath("omnislam-eval"), dir.file("run.lcm"), "--align", "--no-tum"}, 30);
+  EXPECT_NE(table.output.find("ATE RMSE"), std::string::npos) << table.output;
+  EXPECT_NE(table.output.find("2 spurious"), std::string::npos) << table.output;
+}
+
+TEST(Eval, TruthFromASecondLog) {
+  t::TempDir dir;
+  makeLogs(dir.file("slam.lcm"), dir.file("truth.lcm"), false);
+  const auto r = t::run({t::binPath("omnislam-eval"), dir.file("slam.lcm"), "--truth", dir.file("truth.lcm"), "--json",
+                         "--align", "--no-tum"},
+                        30);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NEAR(jsonNumber(r.output, "ate_rmse_m"), 0.0, 1e-6) << r.output;
+  EXPECT_EQ(jsonNumber(r.output, "landmarks_matched"), 2);
+}
+
+TEST(Eval, ALogWithoutSlamOutputIsAClearError) {
+  t::TempDir dir;
+  {
+    lcm::LogFile log(dir.file("empty.lcm"), "w");
+    write(log, channels::kGroundTruthPose, pose(1, 0, 0, 0), 1);
+  }
+  const auto r = t::run({t::binPath("omnislam-eval"), dir.file("empty.lcm"), "--no-tum"}, 30);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("no SLAM_POSE message"), std::string::npos) << r.output;
+}
+
+}  // namespace

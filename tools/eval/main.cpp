@@ -1,0 +1,153 @@
+// omnislam-eval: compares SLAM_POSE / SLAM_MAP of a log with GROUND_TRUTH_POSE / GROUND_TRUTH_MAP
+// (from the same log or --truth) and prints a table, or one JSON object with --json. Landmarks are
+// matched one-to-one by optimal assignment within --gate; unmatched estimates are spurious. No
+// alignment unless --align (best rigid 2D transform of the trajectory onto the truth, applied to
+// trajectory and map). Writes both trajectories in TUM format for evo.
+#include <CLI/CLI.hpp>
+
+#include <Eigen/Geometry>
+
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include "omnislam/core/eval/metrics.h"
+#include "omnislam/features_t.hpp"
+#include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/log_reader.h"
+#include "omnislam/map_t.hpp"
+#include "omnislam/pose_t.hpp"
+
+using namespace omnislam;
+
+namespace {
+
+struct LogContent {
+  std::vector<eval::TimedPose> slam, truth;
+  std::vector<Eigen::Vector3d> slam_map, truth_map;
+  int64_t feature_frames = 0;
+  bool have_slam_map = false, have_truth_map = false;
+};
+
+/// Poses by utime (a later message with the same utime replaces the earlier one), sorted.
+std::vector<eval::TimedPose> posesOf(const std::map<int64_t, Pose2>& m) {
+  std::vector<eval::TimedPose> out;
+  for (const auto& [u, p] : m) out.push_back({u, p});
+  return out;
+}
+
+void read(const std::string& path, bool want_slam, bool want_truth, LogContent& c) {
+  std::map<int64_t, Pose2> slam, truth;
+  lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
+    if (want_slam && ev.channel == channels::kSlamPose) {
+      if (auto m = lcmio::decodeAs<pose_t>(ev)) slam[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+    } else if (want_truth && ev.channel == channels::kGroundTruthPose) {
+      if (auto m = lcmio::decodeAs<pose_t>(ev)) truth[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+    } else if (want_slam && ev.channel == channels::kSlamMap) {
+      if (auto m = lcmio::decodeAs<map_t>(ev)) {
+        c.slam_map.clear();
+        for (const auto& l : m->landmarks) c.slam_map.emplace_back(l.position_m[0], l.position_m[1], l.position_m[2]);
+        c.have_slam_map = true;
+      }
+    } else if (want_truth && ev.channel == channels::kGroundTruthMap) {
+      if (auto m = lcmio::decodeAs<map_t>(ev)) {
+        c.truth_map.clear();
+        for (const auto& l : m->landmarks) c.truth_map.emplace_back(l.position_m[0], l.position_m[1], l.position_m[2]);
+        c.have_truth_map = true;
+      }
+    } else if (want_slam && ev.channel == channels::kOmniFeatures) {
+      ++c.feature_frames;
+    }
+  });
+  if (want_slam) c.slam = posesOf(slam);
+  if (want_truth) c.truth = posesOf(truth);
+}
+
+void writeTum(const std::string& path, const std::vector<eval::TimedPose>& poses) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write '" + path + "'");
+  f << "# timestamp_s x_m y_m z_m qx qy qz qw\n" << std::setprecision(17);
+  for (const auto& p : poses)
+    f << p.utime * 1e-6 << " " << p.pose.x_m << " " << p.pose.y_m << " 0 0 0 " << std::sin(0.5 * p.pose.theta_rad)
+      << " " << std::cos(0.5 * p.pose.theta_rad) << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{"omnislam-eval: SLAM estimate vs ground truth (ATE, heading, landmark errors)"};
+  std::string log, truth_log, tum_prefix;
+  bool json = false, align = false, no_tum = false, planar = false;
+  double gate_m = 2.0;
+  cli.add_option("log", log, "log with SLAM_POSE and SLAM_MAP")->required()->check(CLI::ExistingFile);
+  cli.add_option("--truth", truth_log, "log with GROUND_TRUTH_POSE and GROUND_TRUTH_MAP (default: the same log)")
+      ->check(CLI::ExistingFile);
+  cli.add_flag("--json", json, "print one JSON object instead of a table");
+  cli.add_flag("--align", align, "fit the best rigid 2D transform of the trajectory onto the truth first");
+  cli.add_option("--gate", gate_m, "landmark matching gate, metres")->check(CLI::Range(0.01, 100.0));
+  cli.add_flag("--planar", planar, "landmark distances in x, y only (2D landmarks)");
+  cli.add_option("--tum-out", tum_prefix, "prefix of the TUM trajectory files (default: the log's path)");
+  cli.add_flag("--no-tum", no_tum, "do not write TUM files");
+  CLI11_PARSE(cli, argc, argv);
+  return app::runMain("omnislam-eval", [&]() -> int {
+    LogContent c;
+    if (truth_log.empty()) {
+      read(log, true, true, c);
+    } else {
+      read(log, true, false, c);
+      read(truth_log, false, true, c);
+    }
+    if (c.slam.empty()) throw std::invalid_argument(log + ": no SLAM_POSE message");
+    if (c.truth.empty()) throw std::invalid_argument((truth_log.empty() ? log : truth_log) + ": no GROUND_TRUTH_POSE message");
+    auto pairs = eval::pairByTime(c.slam, c.truth);
+    std::optional<eval::Rigid2D> T;
+    if (align) {
+      std::vector<Eigen::Vector2d> from, to;
+      for (const auto& p : pairs) {
+        from.emplace_back(p.estimate.x_m, p.estimate.y_m);
+        to.emplace_back(p.truth.x_m, p.truth.y_m);
+      }
+      T = eval::fitRigid2D(from, to);
+      if (!T) throw std::invalid_argument("--align: trajectory too short or degenerate to align");
+      for (auto& p : pairs) p.estimate = T->apply(p.estimate);
+      for (auto& l : c.slam_map) l = T->apply(l);
+      for (auto& p : c.slam) p.pose = T->apply(p.pose);
+    }
+    const auto te = eval::trajectoryErrors(pairs);
+    const auto me = eval::mapErrors(c.slam_map, c.truth_map, gate_m, planar);
+    const int64_t frames = c.feature_frames > 0 ? c.feature_frames : static_cast<int64_t>(c.slam.size());
+    if (!no_tum) {
+      const std::string prefix = tum_prefix.empty() ? log : tum_prefix;
+      writeTum(prefix + ".slam.tum", c.slam);
+      writeTum(prefix + ".truth.tum", c.truth);
+    }
+    std::ostringstream o;
+    o << std::setprecision(6);
+    if (json) {
+      o << "{\"ate_rmse_m\": " << te.ate_rmse_m << ", \"ate_max_m\": " << te.ate_max_m
+        << ", \"heading_rmse_rad\": " << te.heading_rmse_rad << ", \"heading_max_rad\": " << te.heading_max_rad
+        << ", \"landmark_mean_err_m\": " << me.mean_err_m << ", \"landmark_max_err_m\": " << me.max_err_m
+        << ", \"landmarks_matched\": " << me.matched << ", \"landmarks_truth\": " << me.truth
+        << ", \"landmarks_estimated\": " << me.estimated << ", \"landmarks_spurious\": " << me.spurious
+        << ", \"frames\": " << frames << ", \"frames_with_pose\": " << c.slam.size()
+        << ", \"poses_compared\": " << te.pairs << ", \"aligned\": " << (T ? "true" : "false");
+      if (T) o << ", \"align_theta_rad\": " << T->theta_rad << ", \"align_tx_m\": " << T->t_m.x() << ", \"align_ty_m\": " << T->t_m.y();
+      o << ", \"map_available\": " << (c.have_slam_map && c.have_truth_map ? "true" : "false") << "}\n";
+    } else {
+      o << "omnislam-eval " << log << (T ? "  (aligned)" : "") << "\n";
+      o << "  trajectory: " << te.pairs << " poses compared of " << c.slam.size() << " (" << frames << " frames)\n";
+      o << "    ATE RMSE " << te.ate_rmse_m << " m, max " << te.ate_max_m << " m\n";
+      o << "    heading RMSE " << te.heading_rmse_rad << " rad, max " << te.heading_max_rad << " rad\n";
+      o << "  map: " << me.estimated << " estimated, " << me.truth << " true, " << me.matched << " matched within "
+        << gate_m << " m, " << me.spurious << " spurious\n";
+      o << "    landmark error mean " << me.mean_err_m << " m, max " << me.max_err_m << " m\n";
+      if (T) o << "  alignment: rotation " << T->theta_rad << " rad, translation (" << T->t_m.x() << ", " << T->t_m.y() << ") m\n";
+    }
+    std::cout << o.str();
+    return 0;
+  });
+}

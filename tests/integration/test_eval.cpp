@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <lcm/lcm-cpp.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
 #include <fstream>
@@ -117,9 +118,20 @@ TEST(Eval, AlignedFiguresAreExactAndRawOnesShowTheOffset) {
   for (std::string l; std::getline(tum, l);) lines += l.empty() || l[0] == '#' ? 0 : 1;
   EXPECT_EQ(lines, 11);
   // The table names the figures.
-  const auto table = t::run({t::binPath("omnislam-eval"), dir.file("run.lcm"), "--align", "--no-tum"}, 30);
+  const auto table =
+      t::run({t::binPath("omnislam-eval"), dir.file("run.lcm"), "--align", "--no-tum", "--plot", dir.file("plot")}, 30);
   EXPECT_NE(table.output.find("ATE RMSE"), std::string::npos) << table.output;
   EXPECT_NE(table.output.find("2 spurious"), std::string::npos) << table.output;
+  // Headless plots for people: both PNGs decode at their documented sizes.
+  const cv::Mat map_png = cv::imread(dir.file("plot") + ".map.png");
+  const cv::Mat err_png = cv::imread(dir.file("plot") + ".errors.png");
+  EXPECT_EQ(map_png.cols, 1000);
+  EXPECT_EQ(map_png.rows, 700);
+  EXPECT_EQ(err_png.rows, 520);
+  if (const char* keep = std::getenv("OMNISLAM_TEST_ARTIFACTS")) {
+    cv::imwrite(std::string(keep) + "/eval.map.png", map_png);
+    cv::imwrite(std::string(keep) + "/eval.errors.png", err_png);
+  }
 }
 
 TEST(Eval, TruthFromASecondLog) {

@@ -21,6 +21,9 @@
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "omnislam/vision/plots.h"
+
+#include <opencv2/imgcodecs.hpp>
 
 using namespace omnislam;
 
@@ -29,6 +32,7 @@ namespace {
 struct LogContent {
   std::vector<eval::TimedPose> slam, truth;
   std::vector<Eigen::Vector3d> slam_map, truth_map;
+  std::vector<Eigen::Matrix2d> slam_map_cov_xy;
   int64_t feature_frames = 0;
   bool have_slam_map = false, have_truth_map = false;
 };
@@ -50,7 +54,13 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
     } else if (want_slam && ev.channel == channels::kSlamMap) {
       if (auto m = lcmio::decodeAs<map_t>(ev)) {
         c.slam_map.clear();
-        for (const auto& l : m->landmarks) c.slam_map.emplace_back(l.position_m[0], l.position_m[1], l.position_m[2]);
+        c.slam_map_cov_xy.clear();
+        for (const auto& l : m->landmarks) {
+          c.slam_map.emplace_back(l.position_m[0], l.position_m[1], l.position_m[2]);
+          Eigen::Matrix2d cov;
+          cov << l.covariance[0][0], l.covariance[0][1], l.covariance[1][0], l.covariance[1][1];
+          c.slam_map_cov_xy.push_back(cov);
+        }
         c.have_slam_map = true;
       }
     } else if (want_truth && ev.channel == channels::kGroundTruthMap) {
@@ -80,7 +90,7 @@ void writeTum(const std::string& path, const std::vector<eval::TimedPose>& poses
 
 int main(int argc, char** argv) {
   CLI::App cli{"omnislam-eval: SLAM estimate vs ground truth (ATE, heading, landmark errors)"};
-  std::string log, truth_log, tum_prefix;
+  std::string log, truth_log, tum_prefix, plot_prefix;
   bool json = false, align = false, no_tum = false, planar = false;
   double gate_m = 2.0;
   cli.add_option("log", log, "log with SLAM_POSE and SLAM_MAP")->required()->check(CLI::ExistingFile);
@@ -92,6 +102,7 @@ int main(int argc, char** argv) {
   cli.add_flag("--planar", planar, "landmark distances in x, y only (2D landmarks)");
   cli.add_option("--tum-out", tum_prefix, "prefix of the TUM trajectory files (default: the log's path)");
   cli.add_flag("--no-tum", no_tum, "do not write TUM files");
+  cli.add_option("--plot", plot_prefix, "write PREFIX.map.png (map and trajectories) and PREFIX.errors.png");
   CLI11_PARSE(cli, argc, argv);
   return app::runMain("omnislam-eval", [&]() -> int {
     LogContent c;
@@ -124,6 +135,36 @@ int main(int argc, char** argv) {
       const std::string prefix = tum_prefix.empty() ? log : tum_prefix;
       writeTum(prefix + ".slam.tum", c.slam);
       writeTum(prefix + ".truth.tum", c.truth);
+    }
+    if (!plot_prefix.empty()) {
+      vision::MapPlot mp;
+      mp.title = log + (T ? "  (aligned)" : "");
+      for (const auto& p : c.slam) mp.estimate.push_back(p.pose);
+      for (const auto& p : c.truth) mp.truth.push_back(p.pose);
+      for (size_t i = 0; i < c.slam_map.size(); ++i) {
+        vision::PlotLandmark l;
+        l.p_m = c.slam_map[i];
+        if (i < c.slam_map_cov_xy.size()) {
+          Eigen::Matrix2d cov = c.slam_map_cov_xy[i];
+          if (T) {  // rotate the covariance with the alignment
+            const Eigen::Matrix2d R = Eigen::Rotation2Dd(T->theta_rad).toRotationMatrix();
+            cov = R * cov * R.transpose();
+          }
+          l.cov_xy_m2 = cov;
+        }
+        mp.estimated_landmarks.push_back(l);
+      }
+      mp.true_landmarks = c.truth_map;
+      vision::ErrorPlot ep;
+      ep.title = "errors over time";
+      for (size_t i = 0; i < pairs.size(); ++i) {
+        ep.t_s.push_back((pairs[i].utime - pairs.front().utime) * 1e-6);
+        ep.position_err_m.push_back(te.position_error_m[i]);
+        ep.heading_err_rad.push_back(te.heading_error_rad[i]);
+      }
+      if (!cv::imwrite(plot_prefix + ".map.png", vision::renderMapPlot(mp)) ||
+          !cv::imwrite(plot_prefix + ".errors.png", vision::renderErrorPlot(ep)))
+        throw std::runtime_error("--plot: cannot write PNG files with prefix '" + plot_prefix + "'");
     }
     std::ostringstream o;
     o << std::setprecision(6);

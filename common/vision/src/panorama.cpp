@@ -3,6 +3,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "omnislam/core/angles.h"
+
 #include <Eigen/Dense>
 
 #include <algorithm>
@@ -67,6 +69,215 @@ double Panorama::radiusOfRow(double row) const { return opt_.r_min_px + row * ra
 Eigen::Vector2d Panorama::pixelAt(double col, double row) const {
   const double a = angleOfColumn(col), rho = radiusOfRow(row);
   return {opt_.centre_u_px + rho * std::cos(a), opt_.centre_v_px + rho * std::sin(a)};
+}
+
+cv::Mat Panorama::validMask() const {
+  cv::Mat m(rows_, totalColumns(), CV_8U);
+  for (int r = 0; r < rows_; ++r) {
+    uint8_t* p = m.ptr<uint8_t>(r);
+    for (int c = 0; c < m.cols; ++c) {
+      const Eigen::Vector2d px = pixelAt(c, r);
+      p[c] = (px.x() >= 0.0 && px.y() >= 0.0 && px.x() <= w_ - 1.0 && px.y() <= h_ - 1.0) ? 255 : 0;
+    }
+  }
+  return m;
+}
+
+namespace {
+
+// Horizontal gradient of the panorama's N = cols - 2 pad central columns with circular wrap,
+// zeroed where the (eroded) mask is 0. CV_32F, rows x N.
+cv::Mat rotationFeature(const cv::Mat& pano, const cv::Mat& mask, int pad) {
+  cv::Mat grey;
+  if (pano.channels() == 3)
+    cv::cvtColor(pano, grey, cv::COLOR_BGR2GRAY);
+  else
+    grey = pano;
+  cv::Mat f;
+  grey.convertTo(f, CV_32F);
+  const int n = f.cols - 2 * pad;
+  cv::Mat wrapped, g;
+  cv::copyMakeBorder(f.colRange(pad, pad + n), wrapped, 0, 0, 1, 1, cv::BORDER_WRAP);
+  cv::Sobel(wrapped, g, CV_32F, 1, 0, 3, 1.0, 0.0, cv::BORDER_REPLICATE);
+  cv::Mat out = g.colRange(1, 1 + n).clone();
+  if (!mask.empty()) {
+    cv::Mat mw, me;
+    cv::copyMakeBorder(mask.colRange(pad, pad + n), mw, 0, 0, 2, 2, cv::BORDER_WRAP);
+    cv::erode(mw, me, cv::Mat(), cv::Point(-1, -1), 2, cv::BORDER_REPLICATE);
+    out.setTo(0.0f, me.colRange(2, 2 + n) == 0);
+  }
+  return out;
+}
+
+// Vertex offset of the parabola through (-1, l), (0, m), (1, r), in [-0.5, 0.5].
+double parabolaOffset(double l, double m, double r) {
+  const double den = l - 2.0 * m + r;
+  return den < 0.0 ? std::clamp(0.5 * (l - r) / den, -0.5, 0.5) : 0.0;
+}
+
+}  // namespace
+
+std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref, const cv::Mat& pano,
+                                                         const PanoramaRotationOptions& o, const cv::Mat& valid_ref,
+                                                         const cv::Mat& valid) {
+  if (pano_ref.empty() || pano.empty() || pano_ref.size() != pano.size()) return std::nullopt;
+  if (o.pad_columns < 0 || pano.cols - 2 * o.pad_columns < 16)
+    throw std::invalid_argument("panorama rotation: pad_columns must be in [0, (cols - 16) / 2]");
+  const int n = pano.cols - 2 * o.pad_columns;
+  if (o.sectors < 2 || o.sectors > n / 4) throw std::invalid_argument("panorama rotation: sectors must be in [2, columns / 4]");
+  if (!(o.inlier_gate_rad > 0.0)) throw std::invalid_argument("panorama rotation: inlier_gate_rad must be > 0");
+  if (!(o.min_sector_energy_fraction >= 0.0)) throw std::invalid_argument("panorama rotation: min_sector_energy_fraction must be >= 0");
+  for (const cv::Mat* m : {&valid_ref, &valid})
+    if (!m->empty() && (m->type() != CV_8UC1 || m->size() != pano.size()))
+      throw std::invalid_argument("panorama rotation: a mask must be CV_8U of the panoramas' size");
+
+  const cv::Mat a = rotationFeature(pano_ref, valid_ref, o.pad_columns);
+  const cv::Mat b = rotationFeature(pano, valid, o.pad_columns);
+  cv::Mat B;
+  cv::dft(b, B, cv::DFT_ROWS | cv::DFT_COMPLEX_OUTPUT);
+  // Column energy of b, prefix-summed over two turns for circular window sums.
+  cv::Mat b2;
+  cv::multiply(b, b, b2);
+  cv::Mat eb;
+  cv::reduce(b2, eb, 0, cv::REDUCE_SUM, CV_64F);
+  std::vector<double> cum(2 * static_cast<size_t>(n) + 1, 0.0);
+  for (int i = 0; i < 2 * n; ++i) cum[static_cast<size_t>(i) + 1] = cum[static_cast<size_t>(i)] + eb.at<double>(0, i % n);
+
+  struct Curve {
+    std::vector<double> ncc;
+    double energy = 0.0, centre = 0.0, row = 0.0;
+  };
+  std::vector<Curve> curves;
+  std::vector<double> energies;
+  cv::Mat aj(a.size(), CV_32F), A, P, S, c;  // reused across sectors (no reallocation)
+  for (int j = 0; j < o.sectors; ++j) {
+    const int x0 = static_cast<int>(static_cast<long long>(j) * n / o.sectors);
+    const int x1 = static_cast<int>(static_cast<long long>(j + 1) * n / o.sectors);
+    aj.setTo(0.0f);
+    a.colRange(x0, x1).copyTo(aj.colRange(x0, x1));
+    const double ea = cv::norm(aj, cv::NORM_L2SQR);
+    energies.push_back(ea);
+    Curve cu;
+    cu.energy = ea;
+    if (ea > 0.0) {  // gradient-energy-weighted mean row of the sector
+      cv::Mat a2, er;
+      cv::multiply(a.colRange(x0, x1), a.colRange(x0, x1), a2);
+      cv::reduce(a2, er, 1, cv::REDUCE_SUM, CV_64F);
+      double sr = 0.0;
+      for (int r = 0; r < er.rows; ++r) sr += r * er.at<double>(r, 0);
+      cu.row = sr / ea;
+    }
+    cu.centre = 0.5 * (x0 + x1);
+    if (ea <= 0.0) {
+      curves.push_back(cu);
+      continue;
+    }
+    cv::dft(aj, A, cv::DFT_ROWS | cv::DFT_COMPLEX_OUTPUT);
+    cv::mulSpectrums(B, A, P, cv::DFT_ROWS, true);  // B conj(A): c(s) = sum_x a(x) b(x + s)
+    cv::reduce(P, S, 0, cv::REDUCE_SUM, CV_32F);
+    cv::idft(S, c, cv::DFT_REAL_OUTPUT | cv::DFT_SCALE);
+    cu.ncc.resize(static_cast<size_t>(n));
+    for (int s = 0; s < n; ++s) {
+      const double e1 = cum[static_cast<size_t>(x1 + s)] - cum[static_cast<size_t>(x0 + s)];
+      cu.ncc[static_cast<size_t>(s)] = e1 > 0.0 ? c.at<float>(0, s) / std::sqrt(ea * e1) : 0.0;
+    }
+    curves.push_back(std::move(cu));
+  }
+  std::vector<double> sorted = energies;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double min_energy = std::max(1e-12, o.min_sector_energy_fraction * sorted[sorted.size() / 2]);
+  std::vector<const Curve*> used;
+  for (const Curve& cu : curves)
+    if (cu.energy >= min_energy && !cu.ncc.empty()) used.push_back(&cu);
+  if (used.size() < 2) return std::nullopt;
+
+  auto at = [n](const std::vector<double>& v, int s) { return v[static_cast<size_t>(((s % n) + n) % n)]; };
+  auto wrapShift = [n](double s) {
+    s = std::fmod(s, static_cast<double>(n));
+    if (s > 0.5 * n) s -= n;
+    if (s <= -0.5 * n) s += n;
+    return s;
+  };
+  std::vector<double> sum(static_cast<size_t>(n), 0.0);
+  for (const Curve* cu : used)
+    for (int s = 0; s < n; ++s) sum[static_cast<size_t>(s)] += cu->ncc[static_cast<size_t>(s)];
+  const int peak = static_cast<int>(std::max_element(sum.begin(), sum.end()) - sum.begin());
+  const double gate_cols = o.inlier_gate_rad * n / (2.0 * kPiD);
+
+  PanoramaRotation res;
+  res.sectors_used = static_cast<int>(used.size());
+  std::vector<double> inlier_sum(static_cast<size_t>(n), 0.0);
+  for (const Curve* cu : used) {
+    const int pj = static_cast<int>(std::max_element(cu->ncc.begin(), cu->ncc.end()) - cu->ncc.begin());
+    const double sj = pj + parabolaOffset(at(cu->ncc, pj - 1), at(cu->ncc, pj), at(cu->ncc, pj + 1));
+    res.sector_centre_rad.push_back(wrapAngle(-kPiD + cu->centre * 2.0 * kPiD / n));
+    res.sector_rotation_rad.push_back(wrapShift(sj) * 2.0 * kPiD / n);
+    res.sector_row.push_back(cu->row);
+    if (std::abs(wrapShift(sj - peak)) <= gate_cols) {
+      ++res.inliers;
+      for (int s = 0; s < n; ++s) inlier_sum[static_cast<size_t>(s)] += cu->ncc[static_cast<size_t>(s)];
+    }
+  }
+  const std::vector<double>& fin = res.inliers > 0 ? inlier_sum : sum;
+  // The inliers' peak near the combined one.
+  const int g = std::max(1, static_cast<int>(std::ceil(gate_cols)));
+  int best = peak;
+  for (int s = peak - g; s <= peak + g; ++s)
+    if (at(fin, s) > at(fin, best)) best = s;
+  const double shift = best + parabolaOffset(at(fin, best - 1), at(fin, best), at(fin, best + 1));
+  res.rotation_rad = wrapAngle(wrapShift(shift) * 2.0 * kPiD / n);
+  res.score = at(fin, best) / std::max(1, res.inliers > 0 ? res.inliers : res.sectors_used);
+  return res;
+}
+
+std::optional<PanoramaMotion> fitPanoramaMotion(const PanoramaRotation& r, const Panorama& pano, double outlier_floor_rad) {
+  const size_t m = r.sector_centre_rad.size();
+  if (m != r.sector_rotation_rad.size() || m != r.sector_row.size()) return std::nullopt;
+  std::vector<char> use(m, 0);
+  for (size_t j = 0; j < m; ++j) use[j] = std::abs(wrapAngle(r.sector_rotation_rad[j] - r.rotation_rad)) <= 0.1;
+  PanoramaMotion out;
+  out.rotation_rad = r.rotation_rad;
+  for (int iter = 0; iter < 5; ++iter) {
+    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    int k = 0;
+    for (size_t j = 0; j < m; ++j) {
+      if (!use[j]) continue;
+      const double beta = r.sector_centre_rad[j] + r.rotation_rad, rho = pano.radiusOfRow(r.sector_row[j]);
+      const Eigen::Vector3d g(1.0, -std::sin(beta) / rho, std::cos(beta) / rho);
+      A += g * g.transpose();
+      b += g * wrapAngle(r.sector_rotation_rad[j] - r.rotation_rad);
+      ++k;
+    }
+    if (k < 4) return std::nullopt;
+    const Eigen::Vector3d x = A.ldlt().solve(b);
+    out.rotation_rad = wrapAngle(r.rotation_rad + x(0));
+    out.shift_px = Eigen::Vector2d(x(1), x(2));
+    std::vector<double> res(m);
+    std::vector<double> in;
+    for (size_t j = 0; j < m; ++j) {
+      const double beta = r.sector_centre_rad[j] + r.rotation_rad, rho = pano.radiusOfRow(r.sector_row[j]);
+      res[j] = wrapAngle(r.sector_rotation_rad[j] - r.rotation_rad) - x(0) - (-std::sin(beta) * x(1) + std::cos(beta) * x(2)) / rho;
+      if (use[j]) in.push_back(std::abs(res[j]));
+    }
+    std::nth_element(in.begin(), in.begin() + in.size() / 2, in.end());
+    const double gate = std::max(outlier_floor_rad, 3.0 * 1.4826 * in[in.size() / 2]);
+    double ss = 0;
+    out.sectors = 0;
+    for (size_t j = 0; j < m; ++j) {
+      use[j] = std::abs(res[j]) <= gate;
+      if (use[j]) ss += res[j] * res[j], ++out.sectors;
+    }
+    out.rms_rad = out.sectors ? std::sqrt(ss / out.sectors) : 0.0;
+  }
+  return out;
+}
+
+Eigen::Vector2d PanoramaMotion::toReference(const Eigen::Vector2d& px, const Eigen::Vector2d& centre) const {
+  // x' = R x + t (about the centre)  ->  x = R^T (x' - t)
+  const double c = std::cos(rotation_rad), s = std::sin(rotation_rad);
+  const Eigen::Vector2d d = px - centre - shift_px;
+  return centre + Eigen::Vector2d(c * d.x() + s * d.y(), -s * d.x() + c * d.y());
 }
 
 std::optional<ImageCircle> estimateImageCircle(const cv::Mat& grey, int thr) {

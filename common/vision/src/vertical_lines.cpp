@@ -36,6 +36,7 @@ std::optional<std::string> validate(const VerticalLineOptions& o) {
   if (o.merge_gap_rows < 0) return "merge_gap_rows must be >= 0";
   if (o.min_length_rows < 1) return "min_length_rows must be >= 1";
   if (!(o.max_drift_columns > 0.0)) return "max_drift_columns must be > 0";
+  if (!(o.max_rms_columns > 0.0)) return "max_rms_columns must be > 0";
   if (o.colour_offset_columns < 1) return "colour_offset_columns must be >= 1";
   if (o.colour_width_columns < 1) return "colour_width_columns must be >= 1";
   if (!(o.pixel_sigma_px > 0.0) || !std::isfinite(o.pixel_sigma_px)) return "pixel_sigma_px must be > 0";
@@ -142,10 +143,13 @@ std::vector<VerticalLine> VerticalLineDetector::detect(const cv::Mat& image) con
     // Sub-column position: per row, parabola through the peak of sign * gx and its neighbours;
     // then a straight-line fit (weights: response x rho^2) column = a + b (row - mid): a radial line is a column
     // (b ~ 0), a slanted edge drifts across columns and is refused.
-    double sw = 0, swr = 0, swc = 0, swrr = 0, swrc = 0, sstr = 0;
-    int nrows = 0;
+    struct Sample {
+      int r;
+      double c, w, m;
+    };
+    std::vector<Sample> samples;
     const int ca = std::max(1, g.c0 - 1), cb = std::min(C - 2, g.c1 + 1);
-    const double mid = 0.5 * (g.r0 + g.r1);
+    const double mid0 = 0.5 * (g.r0 + g.r1);
     for (int r = g.r0; r <= g.r1; ++r) {
       const int16_t* row = gx.ptr<int16_t>(r);
       int best = -1, bv = 0;
@@ -160,36 +164,87 @@ std::vector<VerticalLine> VerticalLineDetector::detect(const cv::Mat& image) con
       const double off = den < 0 ? std::clamp(0.5 * (l - rr) / den, -0.5, 0.5) : 0.0;
       // Weight: response times rho^2. A column spans rho * 2 pi / columns image pixels, so the
       // same blur covers many columns near the centre, where the peak is flat and uncertain.
-      const double x = r - mid, c = best + off;
-      const double rho = pano_.radiusOfRow(r), w = m * rho * rho;
-      sw += w;
-      swr += w * x;
-      swc += w * c;
-      swrr += w * x * x;
-      swrc += w * x * c;
-      sstr += m;
-      ++nrows;
+      const double rho = pano_.radiusOfRow(r);
+      samples.push_back({r, best + off, m * rho * rho, m});
     }
-    if (nrows < opt_.min_length_rows / 2 || sw <= 0) continue;
-    const double xm = swr / sw, cm = swc / sw;
-    const double vxx = swrr / sw - xm * xm, vxc = swrc / sw - xm * cm;
-    const double slope = vxx > 1e-9 ? vxc / vxx : 0.0;
-    if (std::abs(slope) * (g.r1 - g.r0) > opt_.max_drift_columns) continue;
-    const double column_mid = cm - slope * xm;  // the fit at the mid row
+    // Weighted straight-line fit, then robust rounds: rows whose peak lies off the fit by more
+    // than max(0.75, 3 x 1.4826 x median |residual|) columns (another edge merged into the group,
+    // a kink) are dropped and the fit repeated; the line spans its remaining rows.
+    std::vector<char> use(samples.size(), 1);
+    double a0 = 0.0, slope = 0.0, sstr = 0.0;
+    int nrows = 0, r_lo = g.r1, r_hi = g.r0;
+    bool ok = true;
+    for (int round = 0; round < 4 && ok; ++round) {
+      double sw = 0, swr = 0, swc = 0, swrr = 0, swrc = 0;
+      sstr = 0.0;
+      nrows = 0;
+      r_lo = g.r1;
+      r_hi = g.r0;
+      for (size_t i = 0; i < samples.size(); ++i) {
+        if (!use[i]) continue;
+        const Sample& q = samples[i];
+        const double x = q.r - mid0;
+        sw += q.w;
+        swr += q.w * x;
+        swc += q.w * q.c;
+        swrr += q.w * x * x;
+        swrc += q.w * x * q.c;
+        sstr += q.m;
+        ++nrows;
+        r_lo = std::min(r_lo, q.r);
+        r_hi = std::max(r_hi, q.r);
+      }
+      if (nrows < opt_.min_length_rows / 2 || sw <= 0) {
+        ok = false;
+        break;
+      }
+      const double xm = swr / sw, cm = swc / sw;
+      const double vxx = swrr / sw - xm * xm, vxc = swrc / sw - xm * cm;
+      slope = vxx > 1e-9 ? vxc / vxx : 0.0;
+      a0 = cm - slope * xm;  // the fit at mid0
+      if (round == 3) break;
+      std::vector<double> res;
+      for (size_t i = 0; i < samples.size(); ++i)
+        if (use[i]) res.push_back(std::abs(samples[i].c - a0 - slope * (samples[i].r - mid0)));
+      std::nth_element(res.begin(), res.begin() + res.size() / 2, res.end());
+      const double gate = std::max(0.75, 3.0 * 1.4826 * res[res.size() / 2]);
+      bool changed = false;
+      for (size_t i = 0; i < samples.size(); ++i) {
+        const bool in = std::abs(samples[i].c - a0 - slope * (samples[i].r - mid0)) <= gate;
+        changed |= (in != static_cast<bool>(use[i]));
+        use[i] = in;
+      }
+      if (!changed) break;
+    }
+    if (!ok || r_hi - r_lo + 1 < opt_.min_length_rows) continue;
+    // A line is one column: rows scattered about the fit (a chain of runs along a curved or
+    // slanted edge, merged with others) are not a radial line.
+    {
+      double sw = 0, ss = 0;
+      for (size_t i = 0; i < samples.size(); ++i)
+        if (use[i]) {
+          const double e = samples[i].c - a0 - slope * (samples[i].r - mid0);
+          sw += samples[i].m;
+          ss += samples[i].m * e * e;
+        }
+      if (std::sqrt(ss / sw) > opt_.max_rms_columns) continue;
+    }
+    if (std::abs(slope) * (r_hi - r_lo) > opt_.max_drift_columns) continue;
+    const double column_mid = a0 + slope * (0.5 * (r_lo + r_hi) - mid0);  // the fit at the mid row
     VerticalLine L;
     L.sign = g.sign;
     L.column = column_mid;
     if (L.column < pad - 0.5 || L.column >= pad + columns - 0.5) continue;  // its twin is inside
-    L.row_begin = g.r0;
-    L.row_end = g.r1;
+    L.row_begin = r_lo;
+    L.row_end = r_hi;
     L.strength = sstr / nrows;
-    L.length_px = (g.r1 - g.r0) * pano_.radialStepPx();
+    L.length_px = (r_hi - r_lo) * pano_.radialStepPx();
     L.image_angle_rad = wrapAngle(pano_.angleOfColumn(L.column));
-    L.px_inner = pano_.pixelAt(L.column, g.r0);
-    L.px_outer = pano_.pixelAt(L.column, g.r1);
-    const Eigen::Vector2d px_mid = pano_.pixelAt(L.column, 0.5 * (g.r0 + g.r1));
+    L.px_inner = pano_.pixelAt(L.column, r_lo);
+    L.px_outer = pano_.pixelAt(L.column, r_hi);
+    const Eigen::Vector2d px_mid = pano_.pixelAt(L.column, 0.5 * (r_lo + r_hi));
     double az_C = L.image_angle_rad;
-    const double rho_mid = pano_.radiusOfRow(0.5 * (g.r0 + g.r1));
+    const double rho_mid = pano_.radiusOfRow(0.5 * (r_lo + r_hi));
     L.variance_rad2 = std::pow(opt_.pixel_sigma_px / std::max(1.0, rho_mid), 2);
     if (camera_) {
       if (const auto d = camera_->unproject(px_mid)) {
@@ -208,7 +263,7 @@ std::vector<VerticalLine> VerticalLineDetector::detect(const cv::Mat& image) con
       for (int k = 0; k < opt_.colour_width_columns; ++k) {
         const double a = pano_.angleOfColumn(L.column + dir * (opt_.colour_offset_columns + k));
         const double ca = std::cos(a), sa = std::sin(a);
-        for (int r = g.r0; r <= g.r1; r += 2) {
+        for (int r = r_lo; r <= r_hi; r += 2) {
           const double rho = pano_.radiusOfRow(r);
           const int u = static_cast<int>(std::lround(po.centre_u_px + rho * ca));
           const int v = static_cast<int>(std::lround(po.centre_v_px + rho * sa));

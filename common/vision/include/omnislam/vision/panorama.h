@@ -17,6 +17,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace omnislam::vision {
 
@@ -52,6 +53,9 @@ class Panorama {
   int imageWidth() const { return w_; }
   int imageHeight() const { return h_; }
   const PanoramaOptions& options() const { return opt_; }
+  /// 255 where the panorama pixel samples inside the image (all four bilinear neighbours), else 0;
+  /// rows x totalColumns(), CV_8U. Pixels outside are 0 in unwarp() and do not turn with the scene.
+  cv::Mat validMask() const;
 
  private:
   PanoramaOptions opt_;
@@ -68,5 +72,60 @@ struct ImageCircle {
   int inliers = 0;
 };
 std::optional<ImageCircle> estimateImageCircle(const cv::Mat& grey, int threshold_grey = 40);
+
+/// Rotation of the camera about its axis between two panoramas of the same geometry, estimated
+/// from the images alone (no features): the scene at image angle a in `pano_ref` is at
+/// a + rotation_rad in `pano`, i.e. `pano` is `pano_ref` shifted circularly by
+/// rotation_rad * columns / (2 pi) columns.
+///
+/// Method: both panoramas (8-bit or float, grey or BGR; `pad_columns` wrapped columns on each side
+/// are dropped) -> horizontal Sobel gradient with circular wrap, zeroed where a mask (if given)
+/// is 0 or next to it -> the reference's columns are split into `sectors` azimuth sectors; for
+/// each sector the circular cross-correlation with the whole other panorama, summed over rows
+/// (row-wise DFTs), normalised by both windows' gradient energy (a normalised correlation in
+/// [-1, 1] per sector and shift) -> sectors with less than `min_sector_energy_fraction` of the
+/// median sector energy are dropped -> the sum of the sector curves, each at most 1, so no single
+/// strongly textured region (a checkerboard that moved) decides -> the peak; then sectors whose own
+/// peak lies more than `inlier_gate_rad` from it are outliers (a moved object, a person) and the
+/// peak of the inliers' sum is refined by a parabola through it and its neighbours (sub-column).
+struct PanoramaRotationOptions {
+  int pad_columns = 0;   ///< wrapped columns on each side of both inputs (Panorama: options().pad_columns)
+  int sectors = 24;      ///< azimuth sectors of the reference; in [2, columns / 4]
+  double inlier_gate_rad = 0.035;  ///< a sector's own peak within this of the combined one (~2 deg)
+  double min_sector_energy_fraction = 0.05;  ///< of the median sector energy; less = no texture
+};
+struct PanoramaRotation {
+  double rotation_rad = 0.0;  ///< wrapped to (-pi, pi]
+  double score = 0.0;         ///< mean normalised correlation of the inlier sectors at the peak
+  int sectors_used = 0;       ///< sectors with texture
+  int inliers = 0;            ///< of those, agreeing with the peak
+  std::vector<double> sector_centre_rad;  ///< per used sector: its centre angle in pano_ref
+  std::vector<double> sector_rotation_rad;  ///< and its own (sub-column) peak, wrapped
+  std::vector<double> sector_row;  ///< and its gradient-energy-weighted mean panorama row in pano_ref
+};
+/// nullopt when the inputs differ in size, are empty or have no texture. Masks (optional): CV_8U of
+/// the panoramas' size (e.g. Panorama::validMask()); an empty Mat = all valid. Throws
+/// std::invalid_argument on invalid options.
+std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref, const cv::Mat& pano,
+                                                         const PanoramaRotationOptions& options = {},
+                                                         const cv::Mat& valid_ref = cv::Mat(),
+                                                         const cv::Mat& valid = cv::Mat());
+
+/// Image motion between the two panoramas of a PanoramaRotation beyond a rotation about the
+/// panorama's centre c: x' - c = R(rotation) (x - c) + shift (image pixels), i.e. a rotation about
+/// another point, which is what a small tilt or shift of the camera between the images looks like
+/// to first order. Fitted by least squares to the sectors' own peaks (a sector at angle a and mean
+/// radius rho turns by rotation + (-sin b, cos b) . shift / rho, b = a + rotation), sectors beyond
+/// max(outlier_floor_rad, 3 x 1.4826 x median |residual|) rejected, 5 rounds.
+struct PanoramaMotion {
+  double rotation_rad = 0.0;
+  Eigen::Vector2d shift_px = Eigen::Vector2d::Zero();
+  double rms_rad = 0.0;  ///< of the inlier sectors' residuals
+  int sectors = 0;       ///< inlier sectors
+  /// The reference image's pixel that moved to `px` (centre = the panorama's centre).
+  Eigen::Vector2d toReference(const Eigen::Vector2d& px, const Eigen::Vector2d& centre) const;
+};
+std::optional<PanoramaMotion> fitPanoramaMotion(const PanoramaRotation& rotation, const Panorama& pano,
+                                                double outlier_floor_rad = 0.0035);
 
 }  // namespace omnislam::vision

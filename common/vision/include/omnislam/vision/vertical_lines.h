@@ -8,9 +8,11 @@
 // merge_gap_rows -> keep lines of >= min_length_rows (length) inside the panorama's radial band
 // r_min..r_max (position) -> sub-column refinement: per row a parabola through the peak of the
 // response and its neighbours, then a straight-line fit of column against row weighted by
-// response x rho^2 (the inner rows, where one column is a fraction of a pixel, count less); lines
-// drifting more than max_drift_columns end to end are slanted edges, not radial lines, and are
-// refused -> azimuth (the fit at the mid row), length, strength, colour on each side.
+// response x rho^2 (the inner rows, where one column is a fraction of a pixel, count less), with
+// robust rounds (rows off the fit by more than max(0.75, 3 x 1.4826 x MAD) columns dropped, the line
+// spans the rest); lines drifting more than max_drift_columns end to end are slanted edges, and
+// lines whose rows scatter about the fit by more than max_rms_columns are not one radial edge (runs
+// chained along a curved edge, several edges merged): both are refused -> azimuth (the fit at the mid row), length, strength, colour on each side.
 // Azimuth: with a camera model, the azimuth of camera.unproject(pixel of the line's mid point);
 // without one ("centre only"), the image angle alpha. Then + mounting yaw (robot-parallel axes).
 // Variance: bearingCovarianceFromPixel(camera, mid point, pixel_sigma_px)(0, 0), or without a
@@ -40,6 +42,7 @@ struct VerticalLineOptions {
   int merge_gap_rows = 20;     ///< runs of one line may be this far apart along it; >= 0
   int min_length_rows = 40;    ///< shortest line kept (panorama rows); >= 1
   double max_drift_columns = 6.0;  ///< a line may drift this many columns end to end (else slanted); > 0
+  double max_rms_columns = 2.0;    ///< rms of the rows' peaks about the line's fit (else not one edge); > 0
   int colour_offset_columns = 3;  ///< colour strips start this far from the line; >= 1
   int colour_width_columns = 6;   ///< and are this wide; >= 1
   double pixel_sigma_px = 1.0;    ///< tangential pixel noise of a line for its azimuth variance; > 0

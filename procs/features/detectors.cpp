@@ -225,7 +225,8 @@ vision::CeilingLightOptions parseLights(const Node& n) {
 vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
   n.rejectUnknownKeys({"centre_u_px", "centre_v_px", "r_min_px", "r_max_px", "columns", "rows", "pad_columns",
                        "edge_threshold", "min_run_rows", "max_gap_rows", "merge_columns", "merge_gap_rows",
-                       "min_length_rows", "max_drift_columns", "colour_offset_columns", "colour_width_columns", "pixel_sigma_px"});
+                       "min_length_rows", "max_drift_columns", "max_rms_columns", "colour_offset_columns",
+                       "colour_width_columns", "pixel_sigma_px"});
   vision::VerticalLineOptions o;
   auto& p = o.panorama;
   if (cam.centre_px && !n.has("centre_u_px") && !n.has("centre_v_px")) {
@@ -249,6 +250,7 @@ vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
   o.merge_gap_rows = static_cast<int>(n.getInt("merge_gap_rows", 0, 100000, o.merge_gap_rows));
   o.min_length_rows = static_cast<int>(n.getInt("min_length_rows", 1, 100000, o.min_length_rows));
   o.max_drift_columns = n.getDouble("max_drift_columns", 0.01, 1000.0, o.max_drift_columns);
+  o.max_rms_columns = n.getDouble("max_rms_columns", 0.01, 1000.0, o.max_rms_columns);
   o.colour_offset_columns = static_cast<int>(n.getInt("colour_offset_columns", 1, 1000, o.colour_offset_columns));
   o.colour_width_columns = static_cast<int>(n.getInt("colour_width_columns", 1, 1000, o.colour_width_columns));
   o.pixel_sigma_px = n.getDouble("pixel_sigma_px", 1e-3, 100.0, o.pixel_sigma_px);

@@ -1,0 +1,198 @@
+// omnislam-slam: bearing-only FastSLAM (paper 000) on the bus. Subscribes OMNI_FEATURES and
+// ODOMETRY, pairs each frame with the odometry interpolated at its utime, runs one filter step and
+// publishes SLAM_POSE, SLAM_MAP and SLAM_PARTICLES stamped with the frame's utime.
+//   live    on an LCM URL, with PROCESS_STATUS;
+//   replay  --replay IN.lcm --out OUT.lcm: the same driver fed with the log's events in order;
+//           OUT.lcm holds every input event and the outputs, each output logged with the timestamp
+//           of the input event that produced it (byte-identical for the same input and seed).
+#include <CLI/CLI.hpp>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <iostream>
+#include <map>
+#include <stdexcept>
+
+#include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/node.h"
+#include "omnislam/lcmio/validate.h"
+#include "slam_config.h"
+#include "slam_driver.h"
+
+using namespace omnislam;
+using slamproc::DriverResult;
+using slamproc::SlamDriver;
+
+namespace {
+
+// ---- live -----------------------------------------------------------------------------------
+
+void publishAll(lcmio::Node& node, const DriverResult& r) {
+  for (const auto& x : r.refused) node.reject(x.channel, x.reason);
+  for (const auto& d : r.dropped) node.reject(channels::kOmniFeatures, d);
+  for (const auto& n : r.notes) std::cerr << node.tag() << n << std::endl;
+  for (const auto& out : r.outputs) {
+    node.publish(channels::kSlamPose, out.pose);
+    if (out.map) node.publish(channels::kSlamMap, *out.map);
+    node.publish(channels::kSlamParticles, out.particles);
+  }
+}
+
+int runLive(const slamproc::SlamProcessOptions& opt, const std::string& url, const std::string& name) {
+  lcmio::Node node(name, url);
+  SlamDriver driver(opt);
+  // The driver checks time order itself (duplicates and small steps back are refused, a large step
+  // back restarts), so the node's own utime check is off; decoding, validation and seq stay.
+  lcmio::InputOptions odo_opt;
+  odo_opt.require_increasing_utime = false;
+  odo_opt.queue_capacity = 5000;  // 50 Hz: a slow filter step must not lose odometry
+  lcmio::InputOptions feat_opt;
+  feat_opt.require_increasing_utime = false;
+  feat_opt.queue_capacity = 200;
+  node.subscribe<odometry_t>(channels::kOdometry, [&](const odometry_t& m) {
+    publishAll(node, driver.onOdometry(m));
+  }, odo_opt);
+  node.subscribe<features_t>(channels::kOmniFeatures, [&](const features_t& m) {
+    publishAll(node, driver.onFeatures(m));
+  }, feat_opt);
+  node.setDetail(driver.summary());
+  node.publishStatus();
+  node.spin({}, [&] { node.setDetail(driver.summary()); });
+  node.setState(process_status_t::STATE_STOPPING);
+  node.setDetail(driver.summary());
+  node.publishStatus();
+  std::cerr << node.tag() << "stopped: " << driver.summary() << std::endl;
+  return app::kOk;
+}
+
+// ---- replay ---------------------------------------------------------------------------------
+
+/// Counts and prints refusals like lcmio::Node (one line each; after 20 only every 100th).
+struct ReplayReport {
+  int64_t decode_errors = 0, rejected = 0, sequence_gaps = 0, sequence_restarts = 0, reports = 0;
+  std::map<std::string, int64_t> last_seq;
+  void line(const std::string& s) {
+    ++reports;
+    if (reports <= 20 || reports % 100 == 0) std::cerr << "[slam] " << s << std::endl;
+  }
+  void reject(const std::string& channel, const std::string& why) {
+    ++rejected;
+    line("rejected " + channel + ": " + why);
+  }
+  void seq(const std::string& channel, int64_t s) {
+    auto it = last_seq.find(channel);
+    if (it != last_seq.end()) {
+      if (s > it->second + 1) sequence_gaps += s - it->second - 1;
+      if (s <= it->second) ++sequence_restarts;
+    }
+    last_seq[channel] = s;
+  }
+};
+
+class LogWriter {
+ public:
+  explicit LogWriter(const std::string& path) : log_(path, "w") {
+    if (!log_.good()) throw std::runtime_error("--out: cannot write LCM log '" + path + "'");
+  }
+  void write(int64_t timestamp, const std::string& channel, const void* data, int32_t size) {
+    lcm::LogEvent ev;
+    ev.eventnum = n_++;
+    ev.timestamp = timestamp;
+    ev.channel = channel;
+    ev.datalen = size;
+    ev.data = const_cast<void*>(data);
+    if (log_.writeEvent(&ev) != 0) throw std::runtime_error("writing the output log failed");
+  }
+  template <class Msg>
+  void write(int64_t timestamp, const std::string& channel, const Msg& m) {
+    std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+    m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    write(timestamp, channel, buf.data(), static_cast<int32_t>(buf.size()));
+  }
+  int64_t events() const { return n_; }
+
+ private:
+  lcm::LogFile log_;
+  int64_t n_ = 0;
+};
+
+template <class Msg>
+std::optional<Msg> decodeChecked(const lcm::LogEvent& ev, ReplayReport& rep) {
+  Msg m;
+  const int n = m.decode(ev.data, 0, ev.datalen);
+  if (n < 0 || n != ev.datalen) {
+    ++rep.decode_errors;
+    rep.line("decode error: " + ev.channel + ": cannot decode " + std::to_string(ev.datalen) + " bytes as " +
+             Msg::getTypeName() + " (wrong type or corrupt)");
+    return std::nullopt;
+  }
+  if (auto why = lcmio::validate(m)) {
+    rep.reject(ev.channel, *why);
+    return std::nullopt;
+  }
+  rep.seq(ev.channel, m.seq);
+  return m;
+}
+
+int runReplay(const slamproc::SlamProcessOptions& opt, const std::string& in_path, const std::string& out_path) {
+  lcm::LogFile in(in_path, "r");
+  if (!in.good()) throw std::runtime_error("--replay: cannot read LCM log '" + in_path + "'");
+  LogWriter out(out_path);
+  SlamDriver driver(opt);
+  ReplayReport rep;
+  int64_t last_timestamp = 0, outputs = 0;
+  auto handle = [&](const DriverResult& r, int64_t ts) {
+    for (const auto& x : r.refused) rep.reject(x.channel, x.reason);
+    for (const auto& d : r.dropped) rep.reject(channels::kOmniFeatures, d);
+    for (const auto& n : r.notes) rep.line(n);
+    for (const auto& o : r.outputs) {
+      out.write(ts, channels::kSlamPose, o.pose);
+      if (o.map) out.write(ts, channels::kSlamMap, *o.map);
+      out.write(ts, channels::kSlamParticles, o.particles);
+      ++outputs;
+    }
+  };
+  while (const lcm::LogEvent* ev = in.readNextEvent()) {
+    last_timestamp = ev->timestamp;
+    // Outputs of an earlier run in the input are replaced by this run's.
+    if (ev->channel == channels::kSlamPose || ev->channel == channels::kSlamMap ||
+        ev->channel == channels::kSlamParticles)
+      continue;
+    out.write(ev->timestamp, ev->channel, ev->data, ev->datalen);
+    if (ev->channel == channels::kOdometry) {
+      if (auto m = decodeChecked<odometry_t>(*ev, rep)) handle(driver.onOdometry(*m), ev->timestamp);
+    } else if (ev->channel == channels::kOmniFeatures) {
+      if (auto m = decodeChecked<features_t>(*ev, rep)) handle(driver.onFeatures(*m), ev->timestamp);
+    }
+  }
+  handle(driver.finish(), last_timestamp);
+  std::cerr << "[slam] replay done: " << outputs << " frames answered, " << out.events() << " events written to "
+            << out_path << "; decode_errors " << rep.decode_errors << " rejected " << rep.rejected
+            << " sequence_gaps " << rep.sequence_gaps << " sequence_restarts " << rep.sequence_restarts << "; "
+            << driver.summary() << std::endl;
+  return app::kOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{"omnislam-slam: bearing-only FastSLAM on OMNI_FEATURES + ODOMETRY (live, or --replay of a log)"};
+  std::string config_path, url, name = "slam", replay, out;
+  uint64_t seed = 0;
+  cli.add_option("--config", config_path, "SLAM config (YAML, e.g. config/slam/sports_hall.yaml); default: built-in");
+  auto* seed_opt = cli.add_option("--seed", seed, "filter seed (overrides the config's seed)");
+  cli.add_option("--replay", replay, "offline: read this LCM log instead of the bus");
+  cli.add_option("--out", out, "offline: write the input events and the outputs to this LCM log");
+  cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
+  cli.add_option("--name", name, "process name in PROCESS_STATUS");
+  CLI11_PARSE(cli, argc, argv);
+  return app::runMain("omnislam-slam", [&]() -> int {
+    if (replay.empty() != out.empty()) throw std::invalid_argument("--replay IN.lcm and --out OUT.lcm go together");
+    slamproc::SlamProcessOptions opt;
+    if (!config_path.empty()) opt = slamproc::loadSlamOptions(config_path);
+    if (*seed_opt) opt.seed = seed;
+    std::cerr << "[" << name << "] " << slamproc::describe(opt) << std::endl;
+    return replay.empty() ? runLive(opt, app::lcmUrl(url), name) : runReplay(opt, replay, out);
+  });
+}

@@ -1,0 +1,184 @@
+// SLAM process config parsing: see slam_config.h and docs/slam-process.md.
+#include "slam_config.h"
+
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+
+#include "omnislam/core/angles.h"
+
+namespace omnislam::slamproc {
+
+namespace {
+
+using config::ConfigError;
+using config::Node;
+
+int64_t seconds_us(const Node& n, const std::string& key, double lo, double hi, int64_t def_us) {
+  return static_cast<int64_t>(std::llround(n.getDouble(key, lo, hi, static_cast<double>(def_us) * 1e-6) * 1e6));
+}
+
+void parseMotion(const Node& n, slam::MotionNoiseOptions& m) {
+  n.rejectUnknownKeys({"trans_sigma_per_m", "lateral_sigma_per_m", "trans_sigma_per_rad", "rot_sigma_per_rad",
+                       "rot_sigma_per_m", "min_sigma_xy_m", "min_sigma_theta_rad"});
+  m.trans_sigma_per_m = n.getDouble("trans_sigma_per_m", 0.0, 10.0, m.trans_sigma_per_m);
+  m.lateral_sigma_per_m = n.getDouble("lateral_sigma_per_m", 0.0, 10.0, m.lateral_sigma_per_m);
+  m.trans_sigma_per_rad = n.getDouble("trans_sigma_per_rad", 0.0, 10.0, m.trans_sigma_per_rad);
+  m.rot_sigma_per_rad = n.getDouble("rot_sigma_per_rad", 0.0, 10.0, m.rot_sigma_per_rad);
+  m.rot_sigma_per_m = n.getDouble("rot_sigma_per_m", 0.0, 10.0, m.rot_sigma_per_m);
+  m.min_sigma_xy_m = n.getDouble("min_sigma_xy_m", 1e-9, 10.0, m.min_sigma_xy_m);
+  m.min_sigma_theta_rad = n.getDouble("min_sigma_theta_rad", 1e-9, 10.0, m.min_sigma_theta_rad);
+}
+
+void parsePerception(const Node& n, slam::PerceptionOptions& p) {
+  n.rejectUnknownKeys({"min_elevation_deg", "max_elevation_deg", "azimuth_centre_deg", "azimuth_half_width_deg",
+                       "min_range_m", "max_range_m", "detection_probability", "association_margin_deg",
+                       "association_margin_m", "default_camera_position_m"});
+  p.min_elevation_rad = deg2rad(n.getDouble("min_elevation_deg", -90.0, 90.0, rad2deg(p.min_elevation_rad)));
+  p.max_elevation_rad = deg2rad(n.getDouble("max_elevation_deg", -90.0, 90.0, rad2deg(p.max_elevation_rad)));
+  if (p.max_elevation_rad < p.min_elevation_rad)
+    throw ConfigError(n.where("max_elevation_deg") + "must be >= min_elevation_deg");
+  p.azimuth_centre_rad = deg2rad(n.getDouble("azimuth_centre_deg", -180.0, 180.0, rad2deg(p.azimuth_centre_rad)));
+  p.azimuth_half_width_rad =
+      deg2rad(n.getDouble("azimuth_half_width_deg", 0.0, 180.0, rad2deg(p.azimuth_half_width_rad)));
+  p.min_range_m = n.getDouble("min_range_m", 0.0, 1e6, p.min_range_m);
+  if (n.has("max_range_m")) {  // absent: unlimited
+    p.max_range_m = n.getDouble("max_range_m", 0.0, 1e6);
+    if (p.max_range_m <= p.min_range_m) throw ConfigError(n.where("max_range_m") + "must be > min_range_m");
+  }
+  p.detection_probability = n.getDouble("detection_probability", 0.0, 1.0, p.detection_probability);
+  p.association_margin_rad =
+      deg2rad(n.getDouble("association_margin_deg", 0.0, 90.0, rad2deg(p.association_margin_rad)));
+  p.association_margin_m = n.getDouble("association_margin_m", 0.0, 1e3, p.association_margin_m);
+  if (n.has("default_camera_position_m")) {
+    const auto v = n.getDoubles("default_camera_position_m", 3, -10.0, 10.0);
+    p.default_p_CinR_m = Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+}
+
+void parseCandidates(const Node& n, slam::CandidateOptions& c) {
+  n.rejectUnknownKeys({"nz_min", "ncross_valid", "min_parallax_deg", "require_above_camera",
+                       "min_height_above_camera_m", "d_min_m", "initial_cov_diag_m2", "initial_cov_from_triangulation",
+                       "refine_initial_point", "refine_iterations", "max_observations"});
+  c.nz_min = static_cast<int>(n.getInt("nz_min", 2, 1000, c.nz_min));
+  c.ncross_valid = static_cast<int>(n.getInt("ncross_valid", 1, 100000, c.ncross_valid));
+  c.min_parallax_rad = deg2rad(n.getDouble("min_parallax_deg", 0.0, 90.0, rad2deg(c.min_parallax_rad)));
+  c.require_above_camera = n.getBool("require_above_camera", c.require_above_camera);
+  c.min_height_above_camera_m = n.getDouble("min_height_above_camera_m", 0.0, 100.0, c.min_height_above_camera_m);
+  c.d_min_m = n.getDouble("d_min_m", 0.0, 1e4, c.d_min_m);
+  if (n.has("initial_cov_diag_m2")) {
+    const auto v = n.getDoubles("initial_cov_diag_m2", 3, 1e-12, 1e4);
+    c.initial_cov_diag_m2 = Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+  c.initial_cov_from_triangulation = n.getBool("initial_cov_from_triangulation", c.initial_cov_from_triangulation);
+  c.refine_initial_point = n.getBool("refine_initial_point", c.refine_initial_point);
+  c.refine_iterations = static_cast<int>(n.getInt("refine_iterations", 0, 100, c.refine_iterations));
+  c.max_observations = static_cast<int>(n.getInt("max_observations", 2, 1000, c.max_observations));
+}
+
+void parseFilter(const Node& n, slam::FastSlamOptions& f) {
+  n.rejectUnknownKeys({"particles", "association", "p_new_mahalanobis_sq", "resample_ess_fraction",
+                       "inflate_azimuth_near_zenith", "weight_at_predicted_pose", "weight_unassociated_with_p_new",
+                       "map_cell_size_m", "motion", "perception", "candidates"});
+  f.num_particles = static_cast<int>(n.getInt("particles", 1, 100000, f.num_particles));
+  const std::string assoc = n.getEnum("association", {"hungarian", "ml"}, "hungarian");
+  f.association = assoc == "ml" ? slam::AssociationMethod::kMaximumLikelihood : slam::AssociationMethod::kHungarian;
+  f.p_new_mahalanobis_sq = n.getDouble("p_new_mahalanobis_sq", 1e-6, 1e6, f.p_new_mahalanobis_sq);
+  f.resample_ess_fraction = n.getDouble("resample_ess_fraction", 0.0, 1.0, f.resample_ess_fraction);
+  f.inflate_azimuth_near_zenith = n.getBool("inflate_azimuth_near_zenith", f.inflate_azimuth_near_zenith);
+  f.weight_at_predicted_pose = n.getBool("weight_at_predicted_pose", f.weight_at_predicted_pose);
+  f.weight_unassociated_with_p_new = n.getBool("weight_unassociated_with_p_new", f.weight_unassociated_with_p_new);
+  f.map_cell_size_m = n.getDouble("map_cell_size_m", 0.01, 1e4, f.map_cell_size_m);
+  if (auto m = n.optChild("motion")) parseMotion(*m, f.motion);
+  if (auto p = n.optChild("perception")) parsePerception(*p, f.perception);
+  if (auto c = n.optChild("candidates")) parseCandidates(*c, f.candidates);
+  const std::string err = f.validate();
+  if (!err.empty()) throw ConfigError(n.where("") + "invalid filter options: " + err);
+}
+
+void parsePairing(const Node& n, PairingOptions& p) {
+  n.rejectUnknownKeys({"max_wait_s", "max_odometry_gap_s", "odometry_buffer_s", "max_pending_frames",
+                       "restart_jump_s", "restart_confirm_messages", "max_odometry_speed_mps",
+                       "max_odometry_yaw_rate_degps"});
+  p.max_wait_us = seconds_us(n, "max_wait_s", 0.0, 3600.0, p.max_wait_us);
+  p.max_odometry_gap_us = seconds_us(n, "max_odometry_gap_s", 1e-6, 3600.0, p.max_odometry_gap_us);
+  p.odometry_buffer_us = seconds_us(n, "odometry_buffer_s", 0.0, 36000.0, p.odometry_buffer_us);
+  p.max_pending_frames = static_cast<int>(n.getInt("max_pending_frames", 1, 10000, p.max_pending_frames));
+  p.restart_jump_us = seconds_us(n, "restart_jump_s", 1e-6, 1e6, p.restart_jump_us);
+  p.restart_confirm_messages =
+      static_cast<int>(n.getInt("restart_confirm_messages", 1, 1000, p.restart_confirm_messages));
+  p.max_odometry_speed_mps = n.getDouble("max_odometry_speed_mps", 1e-3, 1e3, p.max_odometry_speed_mps);
+  p.max_odometry_yaw_rate_radps =
+      deg2rad(n.getDouble("max_odometry_yaw_rate_degps", 1e-3, 1e5, rad2deg(p.max_odometry_yaw_rate_radps)));
+  const std::string err = p.validate();
+  if (!err.empty()) throw ConfigError(n.where("") + "invalid pairing options: " + err);
+}
+
+}  // namespace
+
+std::string SlamProcessOptions::validate() const {
+  const std::string f = filter.validate();
+  if (!f.empty()) return "filter: " + f;
+  const std::string p = pairing.validate();
+  if (!p.empty()) return "pairing: " + p;
+  if (map_every_n_frames < 1) return "map_every_n_frames must be >= 1";
+  if (!use_ceiling_lights && !use_vertical_lines) return "at least one feature kind must be used";
+  return "";
+}
+
+SlamProcessOptions parseSlamOptions(const Node& root) {
+  root.rejectUnknownKeys({"seed", "start_pose", "features", "output", "pairing", "filter"});
+  SlamProcessOptions o;
+  o.seed = static_cast<std::uint64_t>(root.getInt("seed", 0, INT64_MAX, 1));
+  if (auto s = root.optChild("start_pose")) {
+    s->rejectUnknownKeys({"source", "x_m", "y_m", "theta_deg"});
+    const std::string src = s->getEnum("source", {"odometry", "fixed"});
+    if (src == "fixed") {
+      o.start_source = SlamProcessOptions::StartSource::kFixed;
+      o.start_pose_W = Pose2{s->getDouble("x_m", -1e6, 1e6), s->getDouble("y_m", -1e6, 1e6),
+                             wrapAngle(deg2rad(s->getDouble("theta_deg", -360.0, 360.0)))};
+    }
+  }
+  if (auto f = root.optChild("features")) {
+    f->rejectUnknownKeys({"use_ceiling_lights", "use_vertical_lines", "min_sigma_deg"});
+    o.min_sigma_rad = deg2rad(f->getDouble("min_sigma_deg", 0.0, 90.0, 0.0));
+    o.use_ceiling_lights = f->getBool("use_ceiling_lights", o.use_ceiling_lights);
+    o.use_vertical_lines = f->getBool("use_vertical_lines", o.use_vertical_lines);
+    if (!o.use_ceiling_lights && !o.use_vertical_lines)
+      throw ConfigError(f->where("use_ceiling_lights") + "and use_vertical_lines cannot both be false");
+  }
+  if (auto out = root.optChild("output")) {
+    out->rejectUnknownKeys({"map_every_n_frames"});
+    o.map_every_n_frames = static_cast<int>(out->getInt("map_every_n_frames", 1, 1000000, 1));
+  }
+  if (auto p = root.optChild("pairing")) parsePairing(*p, o.pairing);
+  if (auto f = root.optChild("filter")) parseFilter(*f, o.filter);
+  return o;
+}
+
+SlamProcessOptions loadSlamOptions(const std::string& path) { return parseSlamOptions(Node::loadFile(path)); }
+
+std::string describe(const SlamProcessOptions& o) {
+  std::ostringstream s;
+  const auto& f = o.filter;
+  s << "filter: " << f.num_particles << " particles, association "
+    << (f.association == slam::AssociationMethod::kHungarian ? "hungarian" : "ml") << ", P_new at Mahalanobis^2 "
+    << f.p_new_mahalanobis_sq << ", NZ_min " << f.candidates.nz_min << ", NCROSS_valid " << f.candidates.ncross_valid
+    << ", ANG_min " << rad2deg(f.candidates.min_parallax_rad) << " deg, D_min " << f.candidates.d_min_m
+    << " m, p_in " << f.perception.detection_probability << ", seed " << o.seed << "\n";
+  s << "pairing: max_wait " << o.pairing.max_wait_us * 1e-6 << " s, max odometry gap "
+    << o.pairing.max_odometry_gap_us * 1e-6 << " s, buffer " << o.pairing.odometry_buffer_us * 1e-6
+    << " s, max pending " << o.pairing.max_pending_frames << ", restart jump " << o.pairing.restart_jump_us * 1e-6
+    << " s\n";
+  s << "start: " << (o.start_source == SlamProcessOptions::StartSource::kOdometry ? "odometry frame" : "fixed (")
+    << (o.start_source == SlamProcessOptions::StartSource::kFixed
+            ? std::to_string(o.start_pose_W.x_m) + ", " + std::to_string(o.start_pose_W.y_m) + ", " +
+                  std::to_string(o.start_pose_W.theta_rad) + " rad)"
+            : "")
+    << "; features: ceiling lights " << (o.use_ceiling_lights ? "on" : "off") << ", vertical lines "
+    << (o.use_vertical_lines ? "on" : "off") << ", sigma floor " << rad2deg(o.min_sigma_rad) << " deg; SLAM_MAP every "
+    << o.map_every_n_frames << " frame(s)";
+  return s.str();
+}
+
+}  // namespace omnislam::slamproc

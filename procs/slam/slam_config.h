@@ -1,0 +1,44 @@
+// Options of the SLAM process (filter, pairing, start pose, outputs) and their YAML form
+// (config/slam/*.yaml, keys in docs/slam-process.md). Parsed with config::Node: every error names
+// the file and the key.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "omnislam/config/yaml_node.h"
+#include "omnislam/core/pose2.h"
+#include "omnislam/core/slam/fastslam.h"
+#include "pairing.h"
+
+namespace omnislam::slamproc {
+
+struct SlamProcessOptions {
+  slam::FastSlamOptions filter;
+  std::uint64_t seed = 1;
+  PairingOptions pairing;
+  /// Where the map frame W is: kOdometry = the odometry frame O (the robot's pose at the first
+  /// frame is its odometry pose); kFixed = `start_pose_W` is the robot's pose at the first frame.
+  enum class StartSource { kOdometry, kFixed };
+  StartSource start_source = StartSource::kOdometry;
+  Pose2 start_pose_W;
+  bool use_ceiling_lights = true;
+  bool use_vertical_lines = true;
+  /// Floor on the standard deviation of each measured angle [rad]: the variances of a feature's
+  /// covariance are raised to at least min_sigma_rad^2 (0: the covariance as published).
+  double min_sigma_rad = 0.0;
+  int map_every_n_frames = 1;  ///< SLAM_MAP on every n-th processed frame (SLAM_POSE, SLAM_PARTICLES on every one)
+
+  /// Empty when valid, otherwise a message naming the first bad field.
+  std::string validate() const;
+};
+
+/// Parses a SLAM config (the root of a config/slam/*.yaml file). Unknown keys, wrong types and
+/// values out of range throw config::ConfigError naming the key.
+SlamProcessOptions parseSlamOptions(const config::Node& root);
+SlamProcessOptions loadSlamOptions(const std::string& path);
+
+/// One line per option group, for the start-up echo.
+std::string describe(const SlamProcessOptions& o);
+
+}  // namespace omnislam::slamproc

@@ -1,0 +1,192 @@
+// The SLAM process's shared code path: see slam_driver.h and docs/slam-process.md.
+#include "slam_driver.h"
+
+#include <sstream>
+#include <stdexcept>
+
+namespace omnislam::slamproc {
+
+std::optional<slam::BearingMeasurement> toMeasurement(const feature_t& f, const double camera_position_m[3],
+                                                      const SlamProcessOptions& options) {
+  slam::BearingMeasurement m;
+  if (f.kind == feature_t::KIND_CEILING_LIGHT) {
+    if (!options.use_ceiling_lights || !f.has_elevation) return std::nullopt;
+    m.kind = slam::LandmarkKind::kPoint3D;
+    m.elevation_rad = f.elevation_rad;
+  } else if (f.kind == feature_t::KIND_VERTICAL_LINE) {
+    if (!options.use_vertical_lines) return std::nullopt;
+    m.kind = slam::LandmarkKind::kVerticalLine;
+    m.elevation_rad = 0.0;
+  } else {
+    return std::nullopt;
+  }
+  m.azimuth_rad = f.azimuth_rad;
+  m.cov_rad2 << f.covariance[0][0], f.covariance[0][1], f.covariance[1][0], f.covariance[1][1];
+  const double floor = options.min_sigma_rad * options.min_sigma_rad;
+  for (int i = 0; i < 2; ++i)
+    if (m.cov_rad2(i, i) < floor) m.cov_rad2(i, i) = floor;
+  m.p_CinR_m = Eigen::Vector3d(camera_position_m[0], camera_position_m[1], camera_position_m[2]);
+  return m;
+}
+
+Frame toFrame(const features_t& msg, const SlamProcessOptions& options, int64_t* skipped) {
+  Frame fr;
+  fr.utime = msg.utime;
+  fr.seq = msg.seq;
+  fr.z.reserve(msg.features.size());
+  for (const feature_t& f : msg.features) {
+    if (auto m = toMeasurement(f, msg.camera_position_m, options)) {
+      fr.z.push_back(*m);
+    } else if (skipped) {
+      ++*skipped;
+    }
+  }
+  return fr;
+}
+
+SlamDriver::SlamDriver(const SlamProcessOptions& options) : opt_(options), pairer_(options.pairing) {
+  const std::string err = opt_.validate();
+  if (!err.empty()) throw std::invalid_argument("SLAM options: " + err);
+}
+
+const DriverStats& SlamDriver::stats() const {
+  stats_.pairing = pairer_.stats();
+  return stats_;
+}
+
+void SlamDriver::note(const InputResult& in, const char* channel, DriverResult& r) {
+  for (const auto& [is_frame, why] : in.refused_held)
+    r.refused.push_back({is_frame ? "OMNI_FEATURES" : "ODOMETRY", why});
+  if (!in.accepted() && in.verdict != Verdict::kDeferred) {
+    r.refused.push_back({channel, in.reason});
+  } else if (!in.reason.empty()) {  // held for a restart, a restart, an odometry jump re-based
+    r.notes.push_back(std::string(channel) + " " + in.reason);
+  }
+}
+
+DriverResult SlamDriver::onOdometry(const odometry_t& msg) {
+  DriverResult r;
+  std::vector<PairEvent> events;
+  note(pairer_.addOdometry(msg.utime, Pose2{msg.x_m, msg.y_m, msg.theta_rad}, events), "ODOMETRY", r);
+  apply(events, r);
+  return r;
+}
+
+DriverResult SlamDriver::onFeatures(const features_t& msg) {
+  DriverResult r;
+  stats_.features_in += msg.num_features;
+  std::vector<PairEvent> events;
+  note(pairer_.addFrame(toFrame(msg, opt_, &stats_.features_skipped_kind), events), "OMNI_FEATURES", r);
+  apply(events, r);
+  return r;
+}
+
+DriverResult SlamDriver::finish() {
+  DriverResult r;
+  std::vector<PairEvent> events;
+  note(pairer_.finish(events), "", r);
+  apply(events, r);
+  return r;
+}
+
+void SlamDriver::apply(std::vector<PairEvent>& events, DriverResult& r) {
+  for (PairEvent& ev : events) {
+    switch (ev.kind) {
+      case PairEvent::Kind::kReset:
+        if (filter_) ++stats_.filter_resets;
+        filter_.reset();  // the next frame initialises a new filter (new epoch)
+        ++epoch_;
+        break;
+      case PairEvent::Kind::kDropped:
+        r.dropped.push_back(ev.reason);
+        break;
+      case PairEvent::Kind::kPaired:
+        r.outputs.push_back(process(ev.frame, ev.odom_O));
+        break;
+    }
+  }
+}
+
+FrameOutput SlamDriver::process(const Frame& frame, const Pose2& odom_O) {
+  if (!filter_) {
+    // First frame of an epoch: the start pose is known (paper 000), all particles at it.
+    filter_ = std::make_unique<slam::FastSlam>(opt_.filter, opt_.seed + static_cast<std::uint64_t>(epoch_));
+    const Pose2 start_W = opt_.start_source == SlamProcessOptions::StartSource::kFixed ? opt_.start_pose_W : odom_O;
+    filter_->initialise(start_W);
+    odom_prev_O_ = odom_O;
+  }
+  const slam::StepResult sr = filter_->step(odom_prev_O_, odom_O, frame.z);
+  odom_prev_O_ = odom_O;
+  ++stats_.frames_processed;
+  stats_.measurements_rejected += sr.num_rejected;
+  if (sr.weights_degenerate) ++stats_.degenerate_weights;
+
+  FrameOutput out;
+  const Pose2 mean = filter_->meanPose();
+  const Eigen::Matrix3d cov = filter_->poseCovariance();
+  pose_t& p = out.pose;
+  p.utime = frame.utime;
+  p.seq = pose_seq_++;
+  p.x_m = mean.x_m;
+  p.y_m = mean.y_m;
+  p.theta_rad = mean.theta_rad;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) p.covariance[i][j] = cov(i, j);
+  p.num_particles = static_cast<int32_t>(filter_->particles().size());
+  p.effective_sample_size = sr.ess;
+  p.input_seq = frame.seq;
+
+  if ((stats_.frames_processed - 1) % opt_.map_every_n_frames == 0) {  // the first frame has a map
+    map_t m{};
+    m.utime = frame.utime;
+    m.seq = map_seq_++;
+    m.input_seq = frame.seq;
+    for (const slam::Landmark& L : filter_->bestMap()) {
+      landmark_t l{};
+      l.id = static_cast<int64_t>(L.id);
+      for (int i = 0; i < 3; ++i) {
+        l.position_m[i] = L.p_LinW_m(i);
+        for (int j = 0; j < 3; ++j) l.covariance[i][j] = L.cov_LinW_m2(i, j);
+      }
+      l.type = static_cast<int8_t>(L.type == slam::LandmarkType::kTypeI ? 1 : 2);
+      l.times_detected = L.counter;
+      l.kind = L.kind == slam::LandmarkKind::kVerticalLine ? feature_t::KIND_VERTICAL_LINE
+                                                           : feature_t::KIND_CEILING_LIGHT;
+      m.landmarks.push_back(l);
+    }
+    m.num_landmarks = static_cast<int32_t>(m.landmarks.size());
+    m.num_candidates = static_cast<int32_t>(filter_->bestCandidateCount());
+    out.map = std::move(m);
+  }
+
+  particles_t& q = out.particles;
+  q.utime = frame.utime;
+  q.seq = particles_seq_++;
+  q.input_seq = frame.seq;
+  const std::vector<Pose2> poses = filter_->particlePoses();
+  const std::vector<double>& w = filter_->particleWeights();
+  q.num_particles = static_cast<int32_t>(poses.size());
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    q.x_m.push_back(poses[k].x_m);
+    q.y_m.push_back(poses[k].y_m);
+    q.theta_rad.push_back(poses[k].theta_rad);
+    q.weight.push_back(k < w.size() ? w[k] : 1.0 / static_cast<double>(poses.size()));
+  }
+  return out;
+}
+
+std::string SlamDriver::summary() const {
+  const DriverStats& s = stats();
+  const PairingStats& p = s.pairing;
+  std::ostringstream o;
+  o << "frames " << p.frames_in << " processed " << s.frames_processed << " dropped: no_odometry "
+    << p.dropped_no_odometry << " odometry_gap " << p.dropped_odometry_gap << " too_old " << p.dropped_too_old
+    << " restart " << p.dropped_restart << "; odometry " << p.odometry_in << "; refused: duplicates "
+    << p.duplicates << " out_of_order " << p.out_of_order << " stale " << p.stale_after_restart << "; restarts "
+    << p.restarts << "; odometry_jumps " << p.odometry_jumps << "; features " << s.features_in << " skipped " << s.features_skipped_kind
+    << " rejected_by_filter " << s.measurements_rejected;
+  if (filter_) o << "; landmarks " << filter_->bestParticle().map.size() << " candidates " << filter_->bestCandidateCount();
+  return o.str();
+}
+
+}  // namespace omnislam::slamproc

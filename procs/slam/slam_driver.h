@@ -1,0 +1,93 @@
+// The SLAM process's one code path, shared by the live process and --replay: takes decoded and
+// validated OMNI_FEATURES / ODOMETRY messages in arrival order, pairs frames with odometry
+// (pairing.h), runs one FastSLAM step per paired frame and returns the SLAM_POSE, SLAM_MAP and
+// SLAM_PARTICLES messages that answer it, stamped with the frame's utime. No I/O, no clock.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "omnislam/core/slam/fastslam.h"
+#include "omnislam/features_t.hpp"
+#include "omnislam/map_t.hpp"
+#include "omnislam/odometry_t.hpp"
+#include "omnislam/particles_t.hpp"
+#include "omnislam/pose_t.hpp"
+#include "pairing.h"
+#include "slam_config.h"
+
+namespace omnislam::slamproc {
+
+/// What answers one processed frame, in publishing order: pose, map (every n-th frame), particles.
+struct FrameOutput {
+  pose_t pose;
+  std::optional<map_t> map;
+  particles_t particles;
+};
+
+/// Everything one input produced: the outputs, the refusal of the input itself, the frames
+/// dropped by rule (the adapter reports both as rejected inputs in PROCESS_STATUS).
+struct DriverResult {
+  struct Refusal {
+    std::string channel;
+    std::string reason;
+  };
+  /// Inputs refused (duplicate, out of order, stale after a restart): this one, or messages held
+  /// earlier for a restart that did not come.
+  std::vector<Refusal> refused;
+  std::vector<FrameOutput> outputs;
+  std::vector<std::string> dropped;     ///< OMNI_FEATURES frames dropped by rule, one line each
+  std::vector<std::string> notes;       ///< restarts and held messages (accepted, but worth a line)
+};
+
+struct DriverStats {
+  PairingStats pairing;
+  int64_t frames_processed = 0;
+  int64_t features_in = 0;
+  int64_t features_skipped_kind = 0;     ///< of a kind turned off in the config, or a light without elevation
+  int64_t measurements_rejected = 0;     ///< refused by the filter (non-finite, covariance not PD)
+  int64_t filter_resets = 0;             ///< restarts that re-initialised the filter
+  int64_t degenerate_weights = 0;        ///< steps whose weights were all zero (reset to uniform)
+};
+
+/// Converts one feature to a filter measurement; nothing for a kind that is off in `options` or a
+/// ceiling light without elevation.
+std::optional<slam::BearingMeasurement> toMeasurement(const feature_t& f, const double camera_position_m[3],
+                                                      const SlamProcessOptions& options);
+/// All usable features of a frame; `skipped` counts the others.
+Frame toFrame(const features_t& msg, const SlamProcessOptions& options, int64_t* skipped = nullptr);
+
+class SlamDriver {
+ public:
+  /// Throws std::invalid_argument when the options are invalid.
+  explicit SlamDriver(const SlamProcessOptions& options);
+
+  DriverResult onOdometry(const odometry_t& msg);
+  DriverResult onFeatures(const features_t& msg);
+  /// End of input (replay): pending frames are decided (processed if odometry covers them).
+  DriverResult finish();
+
+  const DriverStats& stats() const;
+  /// One line of counts for PROCESS_STATUS.detail and the end-of-replay summary.
+  std::string summary() const;
+  /// The filter of the current epoch (nothing before the first processed frame).
+  const slam::FastSlam* filter() const { return filter_.get(); }
+
+ private:
+  void apply(std::vector<PairEvent>& events, DriverResult& r);
+  static void note(const InputResult& in, const char* channel, DriverResult& r);
+  FrameOutput process(const Frame& frame, const Pose2& odom_O);
+
+  SlamProcessOptions opt_;
+  Pairer pairer_;
+  std::unique_ptr<slam::FastSlam> filter_;  ///< created at the first frame of each epoch
+  Pose2 odom_prev_O_;
+  int64_t epoch_ = 0;
+  int64_t pose_seq_ = 0, map_seq_ = 0, particles_seq_ = 0;
+  mutable DriverStats stats_;
+};
+
+}  // namespace omnislam::slamproc

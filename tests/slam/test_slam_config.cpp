@@ -1,0 +1,112 @@
+// The SLAM process config (config/slam/*.yaml, procs/slam/slam_config.h): the shipped file loads
+// with the paper's values, and every mistake names its key.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "omnislam/core/angles.h"
+#include "slam_config.h"
+
+using namespace omnislam;
+using namespace omnislam::slamproc;
+
+namespace {
+
+const std::string kHall = std::string(OMNISLAM_SOURCE_DIR) + "/config/slam/sports_hall.yaml";
+
+std::string readFile(const std::string& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+std::string errorOf(const std::string& text) {
+  try {
+    parseSlamOptions(config::Node::loadString(text, "slam.yaml"));
+  } catch (const config::ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SlamConfig, ShippedSportsHallFileHasThePapersValues) {
+  const SlamProcessOptions o = loadSlamOptions(kHall);
+  EXPECT_EQ(o.validate(), "");
+  EXPECT_EQ(o.filter.num_particles, 10);
+  EXPECT_EQ(o.filter.association, slam::AssociationMethod::kHungarian);
+  EXPECT_EQ(o.filter.p_new_mahalanobis_sq, 64.0);
+  EXPECT_EQ(o.filter.candidates.nz_min, 3);
+  EXPECT_EQ(o.filter.candidates.ncross_valid, 5);
+  EXPECT_NEAR(o.filter.candidates.min_parallax_rad, deg2rad(7.0), 1e-12);
+  EXPECT_EQ(o.filter.candidates.d_min_m, 8.0);
+  EXPECT_EQ(o.filter.perception.detection_probability, 0.9);
+  EXPECT_EQ(o.filter.perception.default_p_CinR_m, Eigen::Vector3d(0, 0, 1.8));
+  EXPECT_EQ(o.pairing.max_wait_us, 2'000'000);
+  EXPECT_EQ(o.pairing.max_odometry_gap_us, 500'000);
+  EXPECT_EQ(o.pairing.restart_jump_us, 5'000'000);
+  EXPECT_EQ(o.pairing.restart_confirm_messages, 2);
+  EXPECT_EQ(o.pairing.max_odometry_speed_mps, 3.0);
+  EXPECT_NEAR(o.pairing.max_odometry_yaw_rate_radps, deg2rad(344.0), 1e-12);
+  EXPECT_EQ(o.start_source, SlamProcessOptions::StartSource::kFixed);
+  EXPECT_EQ(o.start_pose_W.x_m, 6.0);  // the world file's trajectory start
+  EXPECT_EQ(o.start_pose_W.y_m, -3.25);
+  EXPECT_EQ(o.start_pose_W.theta_rad, 0.0);
+  EXPECT_FALSE(o.use_vertical_lines);
+  EXPECT_NEAR(o.min_sigma_rad, deg2rad(0.3), 1e-15);
+  EXPECT_EQ(o.seed, 1u);
+}
+
+TEST(SlamConfig, EmptyFileGivesTheDefaults) {
+  const SlamProcessOptions o = parseSlamOptions(config::Node::loadString("{}", "x"));
+  EXPECT_EQ(o.validate(), "");
+  EXPECT_EQ(o.filter.num_particles, slam::FastSlamOptions{}.num_particles);
+}
+
+TEST(SlamConfig, MlAssociationFixedStartAndSeed) {
+  const SlamProcessOptions o = parseSlamOptions(config::Node::loadString(
+      "seed: 7\nstart_pose: {source: fixed, x_m: 6.0, y_m: -3.25, theta_deg: 90}\nfilter: {association: ml, "
+      "particles: 50}\n",
+      "x"));
+  EXPECT_EQ(o.seed, 7u);
+  EXPECT_EQ(o.filter.association, slam::AssociationMethod::kMaximumLikelihood);
+  EXPECT_EQ(o.filter.num_particles, 50);
+  EXPECT_EQ(o.start_source, SlamProcessOptions::StartSource::kFixed);
+  EXPECT_NEAR(o.start_pose_W.theta_rad, kPi / 2, 1e-12);
+}
+
+TEST(SlamConfig, MistakesNameTheKey) {
+  const std::string hall = readFile(kHall);
+  struct Case {
+    std::string from, to, key;
+  };
+  const Case cases[] = {
+      {"particles: 10", "particles: 0", "filter.particles"},
+      {"association: hungarian", "association: greedy", "filter.association"},
+      {"nz_min: 3", "nz_min: three", "filter.candidates.nz_min"},
+      {"min_parallax_deg: 7.0", "min_parallax_deg: 120", "filter.candidates.min_parallax_deg"},
+      {"detection_probability: 0.9", "detection_probability: 1.5", "filter.perception.detection_probability"},
+      {"max_wait_s: 2.0", "max_wait_s: -1", "pairing.max_wait_s"},
+      {"restart_confirm_messages: 2", "restart_confirm_messages: 0", "pairing.restart_confirm_messages"},
+      {"odometry_buffer_s: 10.0", "odometry_buffer_s: 1.0", "odometry_buffer_us"},
+      {"trans_sigma_per_m: 0.05", "trans_sigm_per_m: 0.05", "trans_sigm_per_m"},
+      {"source: fixed", "source: gps", "start_pose.source"},
+      {"y_m: -3.25", "y_m: south", "start_pose.y_m"},
+      {"map_every_n_frames: 1", "map_every_n_frames: 0", "output.map_every_n_frames"},
+      {"min_sigma_deg: 0.3", "min_sigma_deg: -0.3", "features.min_sigma_deg"},
+      {"default_camera_position_m: [0.0, 0.0, 1.8]", "default_camera_position_m: [0.0, 1.8]",
+       "default_camera_position_m"},
+  };
+  for (const auto& c : cases) {
+    std::string text = hall;
+    const auto pos = text.find(c.from);
+    ASSERT_NE(pos, std::string::npos) << c.from;
+    text.replace(pos, c.from.size(), c.to);
+    const std::string err = errorOf(text);
+    EXPECT_NE(err.find(c.key), std::string::npos) << c.to << " -> '" << err << "'";
+    EXPECT_NE(err.find("slam.yaml"), std::string::npos) << err;
+  }
+}
+
+}  // namespace

@@ -1,0 +1,317 @@
+// The SLAM process's shared code path (procs/slam/slam_driver.h): message conversion, outputs
+// stamped with the frame's utime and answering its seq, determinism, and degraded input that
+// never corrupts the filter.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "omnislam/core/angles.h"
+#include "slam_driver.h"
+
+using namespace omnislam;
+using namespace omnislam::slamproc;
+
+namespace {
+
+constexpr int64_t kT0 = 1'700'000'000'000'000;
+
+const Eigen::Vector3d kCam_m(0.0, 0.0, 1.8);
+
+std::vector<Eigen::Vector3d> hallLights() {
+  std::vector<Eigen::Vector3d> out;
+  for (double x : {4.5, 13.5, 22.5, 31.5})
+    for (double y : {-5.5, -1.0, 3.5, 8.0}) out.emplace_back(x, y, 6.5);
+  return out;
+}
+
+/// Straight line along x at 0.27 m/s from (6, -3.25).
+Pose2 truthAt(int64_t utime) {
+  const double t = static_cast<double>(utime - kT0) * 1e-6;
+  return Pose2{6.0 + 0.27 * t, -3.25, 0.0};
+}
+
+odometry_t odo(int64_t utime, int64_t seq) {
+  odometry_t m{};
+  m.utime = utime;
+  m.seq = seq;
+  const Pose2 p = truthAt(utime);
+  m.x_m = p.x_m;
+  m.y_m = p.y_m;
+  m.theta_rad = p.theta_rad;
+  m.v_mps = 0.27;
+  return m;
+}
+
+features_t feats(int64_t utime, int64_t seq) {
+  features_t m{};
+  m.utime = utime;
+  m.seq = seq;
+  m.image_seq = seq;
+  m.detector = "test";
+  m.camera_position_m[0] = kCam_m.x();
+  m.camera_position_m[1] = kCam_m.y();
+  m.camera_position_m[2] = kCam_m.z();
+  const Pose2 x = truthAt(utime);
+  for (const auto& L : hallLights()) {
+    const Eigen::Vector2d c = x.transformFrom(kCam_m.head<2>());
+    const Eigen::Vector3d d_W(L.x() - c.x(), L.y() - c.y(), L.z() - kCam_m.z());
+    const double az_W = std::atan2(d_W.y(), d_W.x());
+    feature_t f{};
+    f.kind = feature_t::KIND_CEILING_LIGHT;
+    f.azimuth_rad = wrapAngle(az_W - x.theta_rad);
+    f.elevation_rad = std::atan2(d_W.z(), d_W.head<2>().norm());
+    f.has_elevation = true;
+    f.covariance[0][0] = f.covariance[1][1] = 2.7e-5;
+    m.features.push_back(f);
+  }
+  m.num_features = static_cast<int32_t>(m.features.size());
+  return m;
+}
+
+/// Feeds `seconds` of 50 Hz odometry and 1 Hz frames, frames arriving 100 ms late.
+std::vector<FrameOutput> run(SlamDriver& d, int seconds, int64_t t0 = kT0) {
+  std::vector<FrameOutput> outs;
+  int64_t oseq = 0, fseq = 0;
+  for (int64_t t = t0; t <= t0 + seconds * 1'000'000LL; t += 20'000) {
+    for (auto& o : d.onOdometry(odo(t, oseq++)).outputs) outs.push_back(std::move(o));
+    if (t - 100'000 >= t0 && (t - 100'000 - t0) % 1'000'000 == 0)
+      for (auto& o : d.onFeatures(feats(t - 100'000, fseq++)).outputs) outs.push_back(std::move(o));
+  }
+  return outs;
+}
+
+template <class Msg>
+std::vector<uint8_t> bytes(const Msg& m) {
+  std::vector<uint8_t> b(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  return b;
+}
+
+TEST(ToMeasurement, ConvertsKindsAndSkipsWhatIsOffOrIncomplete) {
+  SlamProcessOptions o;
+  const double cam[3] = {0.1, -0.2, 1.8};
+  feature_t f{};
+  f.kind = feature_t::KIND_CEILING_LIGHT;
+  f.azimuth_rad = 0.5;
+  f.elevation_rad = 1.0;
+  f.has_elevation = true;
+  f.covariance[0][0] = 1e-4;
+  f.covariance[0][1] = f.covariance[1][0] = 1e-6;
+  f.covariance[1][1] = 2e-4;
+  auto m = toMeasurement(f, cam, o);
+  ASSERT_TRUE(m);
+  EXPECT_EQ(m->kind, slam::LandmarkKind::kPoint3D);
+  EXPECT_EQ(m->azimuth_rad, 0.5);
+  EXPECT_EQ(m->elevation_rad, 1.0);
+  EXPECT_EQ(m->cov_rad2(0, 1), 1e-6);
+  EXPECT_EQ(m->cov_rad2(1, 1), 2e-4);
+  EXPECT_EQ(m->p_CinR_m, Eigen::Vector3d(0.1, -0.2, 1.8));
+  f.has_elevation = false;
+  EXPECT_FALSE(toMeasurement(f, cam, o)) << "a light without elevation is not a light measurement";
+  f.kind = feature_t::KIND_VERTICAL_LINE;
+  m = toMeasurement(f, cam, o);
+  ASSERT_TRUE(m);
+  EXPECT_EQ(m->kind, slam::LandmarkKind::kVerticalLine);
+  o.use_vertical_lines = false;
+  EXPECT_FALSE(toMeasurement(f, cam, o));
+  f.kind = 7;
+  EXPECT_FALSE(toMeasurement(f, cam, SlamProcessOptions{}));
+  // The sigma floor raises small variances only.
+  SlamProcessOptions floor;
+  floor.min_sigma_rad = 0.01;
+  f.kind = feature_t::KIND_CEILING_LIGHT;
+  f.has_elevation = true;
+  m = toMeasurement(f, cam, floor);
+  ASSERT_TRUE(m);
+  EXPECT_DOUBLE_EQ(m->cov_rad2(0, 0), 1e-4);
+  EXPECT_DOUBLE_EQ(m->cov_rad2(1, 1), 2e-4);
+  f.covariance[0][0] = 1e-6;
+  EXPECT_DOUBLE_EQ(toMeasurement(f, cam, floor)->cov_rad2(0, 0), 1e-4);
+  EXPECT_EQ(toMeasurement(f, cam, floor)->cov_rad2(0, 1), 1e-6) << "off-diagonal unchanged";
+}
+
+TEST(SlamDriver, AnswersEveryFrameStampedWithItsUtimeAndSeq) {
+  SlamProcessOptions o;
+  o.map_every_n_frames = 3;
+  SlamDriver d(o);
+  const auto outs = run(d, 20);
+  ASSERT_EQ(outs.size(), 20u);  // frames at 0..19 s (the one at 20 s arrives after the loop)
+  int maps = 0;
+  for (size_t i = 0; i < outs.size(); ++i) {
+    const auto& f = outs[i];
+    EXPECT_EQ(f.pose.utime, kT0 + static_cast<int64_t>(i) * 1'000'000);
+    EXPECT_EQ(f.pose.input_seq, static_cast<int64_t>(i));
+    EXPECT_EQ(f.pose.seq, static_cast<int64_t>(i));
+    EXPECT_EQ(f.particles.utime, f.pose.utime);
+    EXPECT_EQ(f.particles.input_seq, f.pose.input_seq);
+    EXPECT_EQ(f.particles.num_particles, o.filter.num_particles);
+    EXPECT_EQ(f.pose.num_particles, o.filter.num_particles);
+    EXPECT_EQ(f.map.has_value(), i % 3 == 0) << i;
+    if (f.map) {
+      EXPECT_EQ(f.map->seq, maps++);
+      EXPECT_EQ(f.map->utime, f.pose.utime);
+      EXPECT_EQ(f.map->num_landmarks, static_cast<int32_t>(f.map->landmarks.size()));
+    }
+    double wsum = 0;
+    for (double w : f.particles.weight) wsum += w;
+    EXPECT_NEAR(wsum, 1.0, 1e-9);
+  }
+  // Perfect odometry and bearings: the pose follows the truth and lights get mapped.
+  const Pose2 truth = truthAt(outs.back().pose.utime);
+  EXPECT_LT(std::hypot(outs.back().pose.x_m - truth.x_m, outs.back().pose.y_m - truth.y_m), 0.1);
+  EXPECT_GT(d.stats().frames_processed, 0);
+  ASSERT_NE(d.filter(), nullptr);
+  EXPECT_GT(d.filter()->bestMap().size(), 4u);
+  EXPECT_EQ(d.stats().pairing.dropped_no_odometry, 0);
+}
+
+TEST(SlamDriver, SameInputsAndSeedGiveIdenticalBytes) {
+  SlamProcessOptions o;
+  o.seed = 42;
+  SlamDriver a(o), b(o);
+  const auto oa = run(a, 15), ob = run(b, 15);
+  ASSERT_EQ(oa.size(), ob.size());
+  for (size_t i = 0; i < oa.size(); ++i) {
+    EXPECT_EQ(bytes(oa[i].pose), bytes(ob[i].pose));
+    EXPECT_EQ(bytes(*oa[i].map), bytes(*ob[i].map));
+    EXPECT_EQ(bytes(oa[i].particles), bytes(ob[i].particles));
+  }
+  o.seed = 43;
+  SlamDriver c(o);
+  const auto oc = run(c, 15);
+  EXPECT_NE(bytes(oa.back().particles), bytes(oc.back().particles)) << "the seed matters";
+}
+
+TEST(SlamDriver, FixedStartPoseSetsTheMapFrame) {
+  SlamProcessOptions o;
+  o.start_source = SlamProcessOptions::StartSource::kFixed;
+  o.start_pose_W = Pose2{100.0, 50.0, kPi / 2};
+  SlamDriver d(o);
+  std::vector<FrameOutput> outs;
+  for (int i = 0; i < 3; ++i) {
+    d.onOdometry(odo(kT0 + i * 20'000, i));
+  }
+  auto r = d.onFeatures(feats(kT0, 0));
+  ASSERT_EQ(r.outputs.size(), 1u);
+  EXPECT_NEAR(r.outputs[0].pose.x_m, 100.0, 0.05);
+  EXPECT_NEAR(r.outputs[0].pose.y_m, 50.0, 0.05);
+  EXPECT_NEAR(r.outputs[0].pose.theta_rad, kPi / 2, 0.02);
+}
+
+TEST(SlamDriver, DegradedInputIsRefusedOrDroppedAndTheFilterCarriesOn) {
+  SlamDriver d{SlamProcessOptions{}};
+  run(d, 10);
+  const Pose2 before = d.filter()->meanPose();
+  // Duplicate and out-of-order odometry and frames: refused with a reason, no output.
+  auto r = d.onOdometry(odo(kT0 + 10'000'000, 999));
+  ASSERT_EQ(r.refused.size(), 1u);
+  EXPECT_EQ(r.refused[0].channel, "ODOMETRY");
+  r = d.onOdometry(odo(kT0 + 9'000'000, 999));
+  ASSERT_EQ(r.refused.size(), 1u);
+  EXPECT_NE(r.refused[0].reason.find("out of order"), std::string::npos);
+  r = d.onFeatures(feats(kT0 + 9'000'000, 999));  // the frame at 9 s was already processed
+  ASSERT_EQ(r.refused.size(), 1u);
+  EXPECT_EQ(r.refused[0].channel, "OMNI_FEATURES");
+  EXPECT_NE(r.refused[0].reason.find("duplicate"), std::string::npos);
+  EXPECT_TRUE(r.outputs.empty());
+  // A frame with broken measurements (bypassing validation): the filter rejects them, no crash.
+  features_t bad = feats(kT0 + 9'950'000, 10);
+  bad.features[0].azimuth_rad = std::numeric_limits<double>::quiet_NaN();
+  bad.features[1].covariance[1][1] = -1.0;  // not positive definite
+  r = d.onFeatures(bad);
+  ASSERT_EQ(r.outputs.size(), 1u);
+  EXPECT_EQ(d.stats().measurements_rejected, 2);
+  EXPECT_TRUE(std::isfinite(r.outputs[0].pose.x_m));
+  EXPECT_NEAR(r.outputs[0].pose.x_m, before.x_m + 0.27 * 0.95, 0.1);
+  EXPECT_EQ(d.stats().pairing.duplicates, 2);
+  EXPECT_EQ(d.stats().pairing.out_of_order, 1);
+}
+
+TEST(SlamDriver, OdometryGapDropsFramesButTheNextStepSpansTheGap) {
+  SlamDriver d{SlamProcessOptions{}};
+  run(d, 5);  // frames 0..4 s processed, odometry to 5 s
+  // Odometry silent from 5 s to 8 s (cumulative: nothing is lost), frames at 5..7 s in the gap.
+  for (int i = 5; i <= 7; ++i) d.onFeatures(feats(kT0 + i * 1'000'000 + 10'000, 100 + i));
+  auto r = d.onOdometry(odo(kT0 + 8'000'000, 1000));
+  EXPECT_EQ(r.dropped.size(), 3u);
+  EXPECT_EQ(d.stats().pairing.dropped_odometry_gap, 3);
+  d.onOdometry(odo(kT0 + 8'020'000, 1001));
+  r = d.onFeatures(feats(kT0 + 8'010'000, 108));
+  ASSERT_EQ(r.outputs.size(), 1u);
+  const Pose2 truth = truthAt(kT0 + 8'010'000);
+  EXPECT_NEAR(r.outputs[0].pose.x_m, truth.x_m, 0.1) << "the increment over the gap is applied whole";
+}
+
+TEST(SlamDriver, OdometryRestartingAtTheOriginIsReBasedAndTheFilterCarriesOn) {
+  SlamDriver d{SlamProcessOptions{}};
+  run(d, 10);  // odometry up to 10 s
+  // From 10.02 s the odometry process starts again: its frame is the robot's pose at 10.02 s.
+  const Pose2 origin = truthAt(kT0 + 10'020'000);
+  std::vector<std::string> notes;
+  std::vector<FrameOutput> outs;
+  int64_t seq = 0;
+  for (int64_t t = kT0 + 10'020'000; t <= kT0 + 15'000'000; t += 20'000) {
+    odometry_t m = odo(t, seq++);
+    const Pose2 p = origin.between(truthAt(t));
+    m.x_m = p.x_m;
+    m.y_m = p.y_m;
+    m.theta_rad = p.theta_rad;
+    auto r = d.onOdometry(m);
+    notes.insert(notes.end(), r.notes.begin(), r.notes.end());
+    if ((t - kT0 - 100'000) % 1'000'000 == 0)
+      for (auto& o : d.onFeatures(feats(t - 100'000, 100 + seq)).outputs) outs.push_back(std::move(o));
+  }
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("re-based"), std::string::npos) << notes[0];
+  EXPECT_EQ(d.stats().pairing.odometry_jumps, 1);
+  ASSERT_EQ(outs.size(), 5u);  // frames at 10..14 s
+  const Pose2 truth = truthAt(outs.back().pose.utime);
+  // 20 ms of motion (5 mm) is lost over the jump, nothing else.
+  EXPECT_LT(std::hypot(outs.back().pose.x_m - truth.x_m, outs.back().pose.y_m - truth.y_m), 0.1);
+}
+
+TEST(SlamDriver, RestartReinitialisesTheFilterAndKeepsOutputSequences) {
+  SlamDriver d{SlamProcessOptions{}};
+  const auto first = run(d, 10);
+  ASSERT_FALSE(first.empty());
+  const int64_t last_seq = first.back().pose.seq;
+  std::vector<FrameOutput> second;
+  int64_t oseq = 0, fseq = 0;
+  std::vector<std::string> notes;
+  for (int64_t t = kT0; t <= kT0 + 3'000'000; t += 20'000) {
+    auto r = d.onOdometry(odo(t, oseq++));
+    notes.insert(notes.end(), r.notes.begin(), r.notes.end());
+    for (auto& o : r.outputs) second.push_back(std::move(o));
+    if (t - 100'000 >= kT0 && (t - 100'000 - kT0) % 1'000'000 == 0)
+      for (auto& o : d.onFeatures(feats(t - 100'000, fseq++)).outputs) second.push_back(std::move(o));
+  }
+  ASSERT_EQ(notes.size(), 2u);  // held, then confirmed
+  EXPECT_NE(notes[0].find("held"), std::string::npos);
+  EXPECT_NE(notes[1].find("restart"), std::string::npos);
+  EXPECT_EQ(d.stats().pairing.restarts, 1);
+  EXPECT_EQ(d.stats().filter_resets, 1);
+  ASSERT_GE(second.size(), 2u);
+  EXPECT_EQ(second.front().pose.seq, last_seq + 1) << "output seq continues across a restart";
+  EXPECT_EQ(second.front().pose.utime, kT0);
+  EXPECT_NEAR(second.front().pose.x_m, 6.0, 0.02) << "a new filter at the start pose";
+  EXPECT_EQ(second.front().map->num_landmarks, 0);
+}
+
+TEST(SlamDriver, FramesWithoutOdometryAreDroppedAndCounted) {
+  SlamDriver d{SlamProcessOptions{}};
+  std::vector<std::string> dropped;
+  for (int i = 0; i < 6; ++i) {
+    auto r = d.onFeatures(feats(kT0 + i * 1'000'000, i));
+    EXPECT_TRUE(r.outputs.empty());
+    dropped.insert(dropped.end(), r.dropped.begin(), r.dropped.end());
+  }
+  EXPECT_EQ(dropped.size(), 3u);  // frames 0..2 waited more than 2 s of frame time
+  auto r = d.finish();
+  EXPECT_EQ(r.dropped.size(), 3u);
+  EXPECT_EQ(d.stats().pairing.dropped_no_odometry, 6);
+  EXPECT_EQ(d.filter(), nullptr);
+  EXPECT_NE(d.summary().find("no_odometry 6"), std::string::npos) << d.summary();
+}
+
+}  // namespace

@@ -92,6 +92,34 @@ TEST(slam_MotionModel, SampleCovarianceMatchesRt) {
   }
 }
 
+TEST(slam_MotionModel, RandomWalkTermsGrowWithSqrtOfDistanceAndRotation) {
+  MotionNoiseOptions o;
+  o.trans_sigma_per_m = o.lateral_sigma_per_m = o.trans_sigma_per_rad = o.rot_sigma_per_rad = o.rot_sigma_per_m = 0.0;
+  o.trans_sigma_per_sqrt_m = 0.05;
+  o.lateral_sigma_per_sqrt_m = 0.02;
+  o.rot_sigma_per_sqrt_rad = 0.05;
+  o.rot_sigma_per_sqrt_m = 0.01;
+  const double f2 = o.min_sigma_xy_m * o.min_sigma_xy_m, t2 = o.min_sigma_theta_rad * o.min_sigma_theta_rad;
+  // Straight along x: variances linear in the distance (a random walk), independent of the step size.
+  for (double d : {0.27, 1.0, 4.0}) {
+    const Eigen::Matrix3d S = incrementCovariance(Pose2{d, 0.0, 0.0}, o);
+    EXPECT_NEAR(S(0, 0), 0.05 * 0.05 * d + f2, 1e-15);
+    EXPECT_NEAR(S(1, 1), 0.02 * 0.02 * d + f2, 1e-15);
+    EXPECT_NEAR(S(2, 2), 0.01 * 0.01 * d + t2, 1e-15);
+  }
+  // Ten steps of 0.1 m accumulate (without the floors) the variance of one step of 1 m.
+  const Eigen::Matrix3d S1 = incrementCovariance(Pose2{1.0, 0.0, 0.0}, o);
+  const Eigen::Matrix3d S01 = incrementCovariance(Pose2{0.1, 0.0, 0.0}, o);
+  EXPECT_NEAR(10.0 * (S01(0, 0) - f2), S1(0, 0) - f2, 1e-15);
+  EXPECT_NEAR(10.0 * (S01(2, 2) - t2), S1(2, 2) - t2, 1e-15);
+  // Turning on the spot by 0.5 rad.
+  const Eigen::Matrix3d R = incrementCovariance(Pose2{0.0, 0.0, -0.5}, o);
+  EXPECT_NEAR(R(2, 2), 0.05 * 0.05 * 0.5 + t2, 1e-15);
+  EXPECT_NEAR(R(0, 0), f2, 1e-15);
+  o.rot_sigma_per_sqrt_m = -0.1;
+  EXPECT_NE(o.validate().find("rot_sigma_per_sqrt_m"), std::string::npos) << o.validate();
+}
+
 TEST(slam_MotionModel, ValidateNamesField) {
   MotionNoiseOptions o;
   o.min_sigma_xy_m = 0.0;

@@ -31,6 +31,7 @@ std::string FastSlamOptions::validate() const {
                "association", "must be kHungarian or kMaximumLikelihood")
       .inLeftOpen("p_new_mahalanobis_sq", p_new_mahalanobis_sq, 0.0, kInf)
       .inClosed("resample_ess_fraction", resample_ess_fraction, 0.0, 1.0)
+      .inLeftOpen("scale_correction_max_step", scale_correction_max_step, 0.0, 1.0)
       .inLeftOpen("map_cell_size_m", map_cell_size_m, 0.0, kInf)
       .nested("motion", motion.validate())
       .nested("perception", perception.validate())
@@ -73,6 +74,9 @@ void FastSlam::initialise(const Pose2& start, const std::vector<Landmark>& prior
   ess_ = static_cast<double>(particles_.size());
   best_index_ = 0;
   num_steps_ = 0;
+  // A prior map fixes the scale; otherwise only the odometry does, anchored at the start.
+  scale_anchor_xy_ = Eigen::Vector2d(start.x_m, start.y_m);
+  scale_anchored_ = options_.odometry_scale_correction && prior_map.empty();
 }
 
 void FastSlam::predictOnly(const Pose2& odom_prev, const Pose2& odom_now) {
@@ -327,8 +331,65 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
 
   p.map.apply(edits, inserts);
   p.pose = x_t;
+  if (scale_anchored_) anchorScale(p, x_prev, u, p_CinR_vis_m);
   info.log_w = log_w;
   return info;
+}
+
+// Bearings are invariant under a scaling of poses and landmarks about any point of the camera plane
+// (the optical centre moves with the robot), so only the odometry holds the scale of map + path. With
+// a random-walk odometry error (variance proportional to distance) the maximum-likelihood factor
+// between the particle's path and the odometry is the ratio of their lengths along the direction of
+// travel, s = sum(u_k) / sum(a_k); both sums are linear in the sampled and odometry noises, which
+// telescope, so s is not biased by them (a least-squares ratio sum(a u) / sum(a^2) is: the sampled
+// noise in a^2 shrinks it by about var / d^2, 1 % here). The particle's pose, landmarks (means about
+// the anchor, covariances by s^2) and candidate rays are rescaled by s, after which the factor is 1
+// again (the path length is rescaled with the path). Exact when the camera sits above the robot
+// origin (p_CinR x-y = 0); otherwise its x-y offset is not scaled (second order).
+void FastSlam::anchorScale(Particle& p, const Pose2& x_prev, const Pose2& u, const Eigen::Vector3d& p_CinR_m) const {
+  const double d_u = std::hypot(u.x_m, u.y_m);
+  if (d_u < 1e-3) return;  // turning on the spot or standing: no along-track information
+  const Pose2 a = x_prev.between(p.pose);
+  p.scale_path_m += (a.x_m * u.x_m + a.y_m * u.y_m) / d_u;  // along the odometry's direction
+  p.scale_odometry_m += d_u;
+  if (!(p.scale_path_m > 0.0)) return;
+  const double lim = options_.scale_correction_max_step;
+  const double s = std::clamp(p.scale_odometry_m / p.scale_path_m, 1.0 - lim, 1.0 + lim);
+  if (std::abs(s - 1.0) < 1e-6) return;
+  p.scale_path_m *= s;
+  const Eigen::Vector2d c = scale_anchor_xy_;
+  const double cz = p_CinR_m.z();  // camera plane (landmarks of kind line: z unused)
+  const auto scalePose = [&](const Pose2& T) {
+    return Pose2{c.x() + s * (T.x_m - c.x()), c.y() + s * (T.y_m - c.y()), T.theta_rad};
+  };
+  p.pose = scalePose(p.pose);
+  std::vector<LandmarkMap::Ref> all;
+  p.map.collectAll(all);
+  std::vector<LandmarkMap::Edit> edits;
+  edits.reserve(all.size());
+  for (const auto& r : all) {
+    LandmarkMap::Edit ed;
+    ed.ref = r;
+    ed.value = *r.landmark;
+    Eigen::Vector3d& m = ed.value.p_LinW_m;
+    m.x() = c.x() + s * (m.x() - c.x());
+    m.y() = c.y() + s * (m.y() - c.y());
+    if (ed.value.kind == LandmarkKind::kPoint3D) m.z() = cz + s * (m.z() - cz);
+    ed.value.cov_LinW_m2 *= s * s;
+    edits.push_back(ed);
+  }
+  p.map.apply(edits, {});
+  for (auto& cp : p.candidates) {
+    auto nc = std::make_shared<Candidate>(*cp);
+    for (auto& ob : nc->observations) ob = makeObservation(nc->kind, scalePose(ob.T_WtoR), ob.p_CinR_m, ob.z, ob.Q);
+    if (nc->has_estimate) {
+      nc->estimate_W_m.x() = c.x() + s * (nc->estimate_W_m.x() - c.x());
+      nc->estimate_W_m.y() = c.y() + s * (nc->estimate_W_m.y() - c.y());
+      if (nc->kind == LandmarkKind::kPoint3D) nc->estimate_W_m.z() = cz + s * (nc->estimate_W_m.z() - cz);
+      nc->estimate_cov_m2 *= s * s;
+    }
+    cp = std::move(nc);
+  }
 }
 
 void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector<Meas>& Z,

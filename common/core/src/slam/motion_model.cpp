@@ -16,6 +16,10 @@ std::string MotionNoiseOptions::validate() const {
       .inClosed("trans_sigma_per_rad", trans_sigma_per_rad, 0.0, inf)
       .inClosed("rot_sigma_per_rad", rot_sigma_per_rad, 0.0, inf)
       .inClosed("rot_sigma_per_m", rot_sigma_per_m, 0.0, inf)
+      .inClosed("trans_sigma_per_sqrt_m", trans_sigma_per_sqrt_m, 0.0, inf)
+      .inClosed("lateral_sigma_per_sqrt_m", lateral_sigma_per_sqrt_m, 0.0, inf)
+      .inClosed("rot_sigma_per_sqrt_rad", rot_sigma_per_sqrt_rad, 0.0, inf)
+      .inClosed("rot_sigma_per_sqrt_m", rot_sigma_per_sqrt_m, 0.0, inf)
       .inLeftOpen("min_sigma_xy_m", min_sigma_xy_m, 0.0, inf)
       .inLeftOpen("min_sigma_theta_rad", min_sigma_theta_rad, 0.0, inf);
   return c.message();
@@ -27,9 +31,12 @@ Eigen::Matrix3d incrementCovariance(const Pose2& u, const MotionNoiseOptions& o)
   const double d = std::hypot(u.x_m, u.y_m);
   const double a = std::abs(wrapAngle(u.theta_rad));
   const auto sq = [](double v) { return v * v; };
-  const double var_long = sq(o.trans_sigma_per_m * d) + sq(o.trans_sigma_per_rad * a) + sq(o.min_sigma_xy_m);
-  const double var_lat = sq(o.lateral_sigma_per_m * d) + sq(o.trans_sigma_per_rad * a) + sq(o.min_sigma_xy_m);
-  const double var_th = sq(o.rot_sigma_per_rad * a) + sq(o.rot_sigma_per_m * d) + sq(o.min_sigma_theta_rad);
+  const double var_long = sq(o.trans_sigma_per_m * d) + sq(o.trans_sigma_per_rad * a) + sq(o.min_sigma_xy_m) +
+                          sq(o.trans_sigma_per_sqrt_m) * d;
+  const double var_lat = sq(o.lateral_sigma_per_m * d) + sq(o.trans_sigma_per_rad * a) + sq(o.min_sigma_xy_m) +
+                         sq(o.lateral_sigma_per_sqrt_m) * d;
+  const double var_th = sq(o.rot_sigma_per_rad * a) + sq(o.rot_sigma_per_m * d) + sq(o.min_sigma_theta_rad) +
+                        sq(o.rot_sigma_per_sqrt_rad) * a + sq(o.rot_sigma_per_sqrt_m) * d;
   const double alpha = d > 0.0 ? std::atan2(u.y_m, u.x_m) : 0.0;
   const double c = std::cos(alpha), s = std::sin(alpha);
   Eigen::Matrix3d S = Eigen::Matrix3d::Zero();

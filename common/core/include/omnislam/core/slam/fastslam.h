@@ -43,6 +43,14 @@ struct FastSlamOptions {
   /// Multiply the weight by P_new for each measurement not associated with a map landmark
   /// (FastSLAM's new-landmark likelihood; the paper does not, false).
   bool weight_unassociated_with_p_new = false;
+  /// Odometry scale anchoring (deviation, off by default = the paper): bearings do not observe the
+  /// scale of map + path, so each particle keeps the maximum-likelihood factor s between its path and
+  /// the odometry (ratio of their lengths along the direction of travel, for a random-walk odometry
+  /// error) and rescales its pose, map and candidates about the start position and the camera height
+  /// by s at every step. Inactive with a prior map. See docs/slam-core.md, "Map scale".
+  bool odometry_scale_correction = false;
+  /// Largest relative rescaling applied in one step (guards the first, least informed steps).
+  double scale_correction_max_step = 0.05;
   double map_cell_size_m = 4.0;  ///< grid cell of the copy-on-write map [m]
   /// Benchmark baseline only: resampling deep-copies every map and candidate (no sharing).
   bool resample_deep_copy = false;
@@ -60,6 +68,9 @@ struct Particle {
   double log_weight = 0.0;  ///< log w^k, up to a common constant
   LandmarkMap map;
   std::vector<std::shared_ptr<const Candidate>> candidates;  ///< shared copy-on-write
+  /// Odometry scale anchoring: the particle's path length and the odometry's, along the odometry's
+  /// direction of travel, summed over the steps [m]; unused when off.
+  double scale_path_m = 0.0, scale_odometry_m = 0.0;
 };
 
 struct StepResult {
@@ -142,6 +153,9 @@ class FastSlam {
   std::uint64_t next_landmark_id_ = 0;
   std::uint64_t num_steps_ = 0;
   Eigen::Vector3d last_p_CinR_m_ = Eigen::Vector3d::Zero();
+  Eigen::Vector2d scale_anchor_xy_ = Eigen::Vector2d::Zero();  ///< start position (x, y) in W
+  bool scale_anchored_ = false;                                ///< odometry scale anchoring active
+  void anchorScale(Particle& p, const Pose2& x_prev, const Pose2& u, const Eigen::Vector3d& p_CinR_m) const;
 };
 
 }  // namespace omnislam::slam

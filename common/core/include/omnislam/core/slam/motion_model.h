@@ -7,6 +7,8 @@
 //   sigma_long^2  = (trans_sigma_per_m d)^2 + (trans_sigma_per_rad a)^2 + min_sigma_xy_m^2   (along the chord)
 //   sigma_lat^2   = (lateral_sigma_per_m d)^2 + (trans_sigma_per_rad a)^2 + min_sigma_xy_m^2 (across it)
 //   sigma_theta^2 = (rot_sigma_per_rad a)^2 + (rot_sigma_per_m d)^2 + min_sigma_theta_rad^2
+//   plus the random-walk terms: sigma_long^2 += trans_sigma_per_sqrt_m^2 d, sigma_lat^2 +=
+//   lateral_sigma_per_sqrt_m^2 d, sigma_theta^2 += rot_sigma_per_sqrt_rad^2 a + rot_sigma_per_sqrt_m^2 d
 //   Sigma_u = blockdiag(Rz(alpha) diag(sigma_long^2, sigma_lat^2) Rz(alpha)^T, sigma_theta^2)
 //   R_t = J_u Sigma_u J_u^T with J_u = d g / d u = blockdiag(Rz(theta_{t-1}), 1)   (exact: g is linear in u)
 // Standard deviations grow linearly with distance and rotation (as odometry errors from wheel radius
@@ -26,6 +28,13 @@ struct MotionNoiseOptions {
   double trans_sigma_per_rad = 0.01;   ///< translation std per radian turned [m/rad]
   double rot_sigma_per_rad = 0.05;     ///< heading std per radian turned [rad/rad] (5 %)
   double rot_sigma_per_m = 0.01;       ///< heading std per metre travelled [rad/m] (0.57 deg/m)
+  // Random-walk terms (variance proportional to distance / rotation, as the wheel-encoder noise of
+  // docs/world-file.md): add (k^2 d) or (k^2 a) to the variances above. 0 by default (the paper's
+  // model is per metre); with them R_t does not depend on the frame rate.
+  double trans_sigma_per_sqrt_m = 0.0;    ///< along-track std after 1 m [m/sqrt(m)]
+  double lateral_sigma_per_sqrt_m = 0.0;  ///< cross-track std after 1 m [m/sqrt(m)]
+  double rot_sigma_per_sqrt_rad = 0.0;    ///< heading std after 1 rad turned [rad/sqrt(rad)]
+  double rot_sigma_per_sqrt_m = 0.0;      ///< heading std after 1 m travelled [rad/sqrt(m)]
   double min_sigma_xy_m = 0.002;       ///< floor of both translation stds [m], > 0
   double min_sigma_theta_rad = 0.002;  ///< floor of the heading std [rad], > 0
 

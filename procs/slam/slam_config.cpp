@@ -20,12 +20,17 @@ int64_t seconds_us(const Node& n, const std::string& key, double lo, double hi, 
 
 void parseMotion(const Node& n, slam::MotionNoiseOptions& m) {
   n.rejectUnknownKeys({"trans_sigma_per_m", "lateral_sigma_per_m", "trans_sigma_per_rad", "rot_sigma_per_rad",
-                       "rot_sigma_per_m", "min_sigma_xy_m", "min_sigma_theta_rad"});
+                       "rot_sigma_per_m", "trans_sigma_per_sqrt_m", "lateral_sigma_per_sqrt_m", "rot_sigma_per_sqrt_rad",
+                       "rot_sigma_per_sqrt_m", "min_sigma_xy_m", "min_sigma_theta_rad"});
   m.trans_sigma_per_m = n.getDouble("trans_sigma_per_m", 0.0, 10.0, m.trans_sigma_per_m);
   m.lateral_sigma_per_m = n.getDouble("lateral_sigma_per_m", 0.0, 10.0, m.lateral_sigma_per_m);
   m.trans_sigma_per_rad = n.getDouble("trans_sigma_per_rad", 0.0, 10.0, m.trans_sigma_per_rad);
   m.rot_sigma_per_rad = n.getDouble("rot_sigma_per_rad", 0.0, 10.0, m.rot_sigma_per_rad);
   m.rot_sigma_per_m = n.getDouble("rot_sigma_per_m", 0.0, 10.0, m.rot_sigma_per_m);
+  m.trans_sigma_per_sqrt_m = n.getDouble("trans_sigma_per_sqrt_m", 0.0, 10.0, m.trans_sigma_per_sqrt_m);
+  m.lateral_sigma_per_sqrt_m = n.getDouble("lateral_sigma_per_sqrt_m", 0.0, 10.0, m.lateral_sigma_per_sqrt_m);
+  m.rot_sigma_per_sqrt_rad = n.getDouble("rot_sigma_per_sqrt_rad", 0.0, 10.0, m.rot_sigma_per_sqrt_rad);
+  m.rot_sigma_per_sqrt_m = n.getDouble("rot_sigma_per_sqrt_m", 0.0, 10.0, m.rot_sigma_per_sqrt_m);
   m.min_sigma_xy_m = n.getDouble("min_sigma_xy_m", 1e-9, 10.0, m.min_sigma_xy_m);
   m.min_sigma_theta_rad = n.getDouble("min_sigma_theta_rad", 1e-9, 10.0, m.min_sigma_theta_rad);
 }
@@ -79,7 +84,8 @@ void parseCandidates(const Node& n, slam::CandidateOptions& c) {
 void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   n.rejectUnknownKeys({"particles", "association", "p_new_mahalanobis_sq", "resample_ess_fraction",
                        "inflate_azimuth_near_zenith", "weight_at_predicted_pose", "weight_unassociated_with_p_new",
-                       "map_cell_size_m", "motion", "perception", "candidates"});
+                       "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
+                       "perception", "candidates"});
   f.num_particles = static_cast<int>(n.getInt("particles", 1, 100000, f.num_particles));
   const std::string assoc = n.getEnum("association", {"hungarian", "ml"}, "hungarian");
   f.association = assoc == "ml" ? slam::AssociationMethod::kMaximumLikelihood : slam::AssociationMethod::kHungarian;
@@ -89,6 +95,8 @@ void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   f.weight_at_predicted_pose = n.getBool("weight_at_predicted_pose", f.weight_at_predicted_pose);
   f.weight_unassociated_with_p_new = n.getBool("weight_unassociated_with_p_new", f.weight_unassociated_with_p_new);
   f.map_cell_size_m = n.getDouble("map_cell_size_m", 0.01, 1e4, f.map_cell_size_m);
+  f.odometry_scale_correction = n.getBool("odometry_scale_correction", f.odometry_scale_correction);
+  f.scale_correction_max_step = n.getDouble("scale_correction_max_step", 1e-6, 1.0, f.scale_correction_max_step);
   if (auto m = n.optChild("motion")) parseMotion(*m, f.motion);
   if (auto p = n.optChild("perception")) parsePerception(*p, f.perception);
   if (auto c = n.optChild("candidates")) parseCandidates(*c, f.candidates);

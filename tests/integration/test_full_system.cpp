@@ -1,0 +1,61 @@
+// The whole system on the sports hall, live: simulator, capture, odometry, ceiling-light features
+// and SLAM processes on a private LCM URL, recorded, then scored with omnislam-eval against the
+// truth. Bounds are paper 000's (table I: landmark mean <= 0.48 m, max <= 1.05 m; heading under
+// 5 deg), plus every light mapped once and every frame answered. The paper gives no figure for
+// the position error, so the trajectory must beat dead reckoning (the odometry alone from the
+// known start) by at least a factor of two in ATE RMSE.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <regex>
+
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/log_reader.h"
+#include "omnislam/features_t.hpp"
+#include "omnislam/core/eval/metrics.h"
+#include "omnislam/odometry_t.hpp"
+#include "omnislam/pose_t.hpp"
+#include "proc_util.h"
+
+using namespace omnislam;
+namespace t = omnislam::testing;
+
+namespace {
+
+double jsonNumber(const std::string& json, const std::string& key) {
+  std::smatch m;
+  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([-0-9.eE+]+)"))) return NAN;
+  return std::stod(m[1]);
+}
+
+TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
+  t::LaunchedRun run("config/launch/sports_hall_slam.yaml", 13, {"speedup=25", "seed=2", "slam_seed=2"}, 180.0);
+  ASSERT_EQ(run.result.exit_code, 0) << run.result.output;
+  EXPECT_EQ(run.result.output.find("died"), std::string::npos) << run.result.output;
+  const auto frames = lcmio::readChannel<features_t>(run.log, channels::kOmniFeatures);
+  const auto poses = lcmio::readChannel<pose_t>(run.log, channels::kSlamPose);
+  ASSERT_EQ(frames.size(), 321u);
+  ASSERT_EQ(poses.size(), frames.size()) << "every feature frame answered";
+  for (size_t i = 0; i < poses.size(); ++i) EXPECT_EQ(poses[i].input_seq, frames[i].seq);
+  const auto ev = t::run({t::binPath("omnislam-eval"), run.log, "--json", "--no-tum"}, 60);
+  ASSERT_EQ(ev.exit_code, 0) << ev.output;
+  std::cout << ev.output;
+  EXPECT_EQ(jsonNumber(ev.output, "landmarks_matched"), 16) << ev.output;
+  EXPECT_EQ(jsonNumber(ev.output, "landmarks_spurious"), 0) << ev.output;
+  EXPECT_LE(jsonNumber(ev.output, "landmark_mean_err_m"), 0.48) << ev.output;
+  EXPECT_LE(jsonNumber(ev.output, "landmark_max_err_m"), 1.05) << ev.output;
+  EXPECT_LE(jsonNumber(ev.output, "heading_max_rad"), 0.087) << ev.output;
+  // Dead reckoning in the world frame: the known start pose composed with the cumulative odometry.
+  std::vector<eval::TimedPose> dr, truth;
+  const Pose2 start{6.0, -3.25, 0.0};  // config/worlds/sports_hall.yaml trajectory.start
+  for (const auto& o : lcmio::readChannel<odometry_t>(run.log, channels::kOdometry))
+    dr.push_back({o.utime, start.compose(Pose2{o.x_m, o.y_m, o.theta_rad})});
+  for (const auto& p : lcmio::readChannel<pose_t>(run.log, channels::kGroundTruthPose))
+    truth.push_back({p.utime, Pose2{p.x_m, p.y_m, p.theta_rad}});
+  const double dr_rmse = eval::trajectoryErrors(eval::pairByTime(dr, truth)).ate_rmse_m;
+  const double slam_rmse = jsonNumber(ev.output, "ate_rmse_m");
+  std::cout << "ATE RMSE: SLAM " << slam_rmse << " m, dead reckoning " << dr_rmse << " m\n";
+  EXPECT_LT(slam_rmse, 0.5 * dr_rmse);
+}
+
+}  // namespace

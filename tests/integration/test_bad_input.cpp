@@ -17,6 +17,7 @@
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
+#include "bus_util.h"
 #include "proc_util.h"
 
 using namespace omnislam;
@@ -53,18 +54,8 @@ struct Listener {
       if (st.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) > 0) self->status[st.name] = st;
     }
   }
-  void spinFor(double s) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(s);
-    while (std::chrono::steady_clock::now() < until) lcm.handleTimeout(20);
-  }
-  bool waitFor(const std::function<bool()>& pred, double timeout_s) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (std::chrono::steady_clock::now() < until) {
-      if (pred()) return true;
-      lcm.handleTimeout(20);
-    }
-    return pred();
-  }
+  void spinFor(double s) { t::handleFor(lcm, s); }
+  bool waitFor(const std::function<bool()>& pred, double timeout_s) { return t::handleUntil(lcm, pred, timeout_s); }
   lcm::LCM lcm;
   std::map<std::string, int> counts;
   std::map<std::string, process_status_t> status;

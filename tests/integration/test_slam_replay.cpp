@@ -31,6 +31,7 @@
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
 #include "omnislam/sim/trajectory.h"
+#include "bus_util.h"
 #include "proc_util.h"
 
 using namespace omnislam;
@@ -377,15 +378,8 @@ struct Listener {
       if (p.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) > 0) self->poses.push_back(p);
     }
   }
-  bool waitFor(const std::function<bool()>& pred, double timeout_s) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (std::chrono::steady_clock::now() < until) {
-      if (pred()) return true;
-      lcm.handleTimeout(20);
-    }
-    return pred();
-  }
-  void drain(double s) { waitFor([] { return false; }, s); }
+  bool waitFor(const std::function<bool()>& pred, double timeout_s) { return t::handleUntil(lcm, pred, timeout_s); }
+  void drain(double s) { t::handleFor(lcm, s); }
   lcm::LCM lcm;
   std::map<std::string, int> counts;
   std::map<std::string, process_status_t> status;

@@ -12,6 +12,7 @@
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/odometry_t.hpp"
+#include "bus_util.h"
 #include "proc_util.h"
 
 using namespace omnislam;
@@ -28,10 +29,6 @@ struct Collector {
   std::vector<Msg> got;
 };
 
-void spinUntil(lcm::LCM& lcm, const std::function<bool()>& done, double timeout_s) {
-  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (!done() && std::chrono::steady_clock::now() < until) lcm.handleTimeout(20);
-}
 
 TEST(CaptureDir, PublishesTheFolderInNameOrderAndSkipsUnreadableFiles) {
   t::TempDir dir;
@@ -45,7 +42,7 @@ TEST(CaptureDir, PublishesTheFolderInNameOrderAndSkipsUnreadableFiles) {
   Collector<image_t> images(lcm, channels::kOmniImage);
   t::Child cap({t::binPath("omnislam-capture"), "--source", "dir", "--dir", dir.path(), "--rate-hz", "2",
                 "--speedup", "0", "--start-utime", "5000000", "--url", url, "--format", "png"});
-  spinUntil(lcm, [&] { return images.got.size() >= 3; }, 10.0);
+  t::handleUntil(lcm, [&] { return images.got.size() >= 3; }, 10.0);
   const auto r = cap.wait(10.0);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   ASSERT_EQ(images.got.size(), 3u) << r.output;
@@ -79,7 +76,7 @@ TEST(OdometryCsv, IntegratesRecordedWheelData) {
   Collector<odometry_t> odo(lcm, channels::kOdometry);
   t::Child p({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", dir.file("wheels.csv"), "--speedup", "20",
               "--url", url});
-  spinUntil(lcm, [&] { return static_cast<int>(odo.got.size()) >= n; }, 10.0);
+  t::handleUntil(lcm, [&] { return static_cast<int>(odo.got.size()) >= n; }, 10.0);
   const auto r = p.wait(10.0);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   ASSERT_EQ(static_cast<int>(odo.got.size()), n) << r.output;

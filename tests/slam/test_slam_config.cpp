@@ -90,7 +90,7 @@ TEST(SlamConfig, MistakesNameTheKey) {
       {"max_wait_s: 2.0", "max_wait_s: -1", "pairing.max_wait_s"},
       {"restart_confirm_messages: 2", "restart_confirm_messages: 0", "pairing.restart_confirm_messages"},
       {"odometry_buffer_s: 10.0", "odometry_buffer_s: 1.0", "odometry_buffer_us"},
-      {"trans_sigma_per_m: 0.05", "trans_sigm_per_m: 0.05", "trans_sigm_per_m"},
+      {"trans_sigma_per_sqrt_m: 0.05", "trans_sigm_per_sqrt_m: 0.05", "trans_sigm_per_sqrt_m"},
       {"source: fixed", "source: gps", "start_pose.source"},
       {"y_m: -3.25", "y_m: south", "start_pose.y_m"},
       {"map_every_n_frames: 1", "map_every_n_frames: 0", "output.map_every_n_frames"},

@@ -2,6 +2,8 @@
 // mapping against OCamCalib's own cam2world / world2cam, round trips, Jacobians, valid region.
 #include <gtest/gtest.h>
 
+#include "datasets.h"
+
 #include <Eigen/LU>
 
 #include <cmath>
@@ -17,7 +19,7 @@ namespace {
 using namespace omnislam;
 using namespace omnislam::camera;
 
-const char* const kCalibPath = "/work/shared/datasets/omni-images/ocamcalib-calib_results.txt";
+const std::string kCalibPath = omnislam::testing::datasetPath("omni-images/ocamcalib-calib_results.txt");
 
 // Same layout as OCamCalib's calib_results.txt (values of the VMR sample calibration).
 const char* const kGoodText =

@@ -30,6 +30,7 @@
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
 #include "omnislam/vision/render_lights.h"
+#include "datasets.h"
 #include "proc_util.h"
 
 using namespace omnislam;
@@ -206,7 +207,7 @@ TEST(FeaturesProcess, BadImagesAreCountedAndSkipped) {
 // The shipped line config, offline on the real catadioptric images: one annotated image per frame
 // and a CSV of the features.
 TEST(FeaturesProcess, OfflineRunOnTheVmrImagesWritesAnnotatedImages) {
-  const std::string vmr = "/work/shared/datasets/omni-images/ocamcalib-vmr";
+  const std::string vmr = t::datasetPath("omni-images/ocamcalib-vmr");
   if (!std::filesystem::exists(vmr + "/VMRImage0.jpg")) GTEST_SKIP() << "VMR images not found in " << vmr << "; skipped";
   t::TempDir out;
   const auto r = t::run({t::binPath("omnislam-features"), "--config", t::sourcePath("config/features/vertical_lines.yaml"),

@@ -1,5 +1,5 @@
 // The vertical-line detector on real catadioptric images: OCamCalib's sample set
-// /work/shared/datasets/omni-images/ocamcalib-vmr/VMRImage0..9.jpg (1024 x 768, grey JPEG), with
+// ../shared/datasets/omni-images/ocamcalib-vmr/VMRImage0..9.jpg (1024 x 768, grey JPEG), with
 // the settings of config/features/vertical_lines.yaml. Skipped when the images are absent.
 //
 // The camera is NOT static in this set: between images it is turned about its axis by up to 175 deg
@@ -13,6 +13,9 @@
 // of the ten azimuths after that rotation must be <= 0.5 deg for every line found in all ten images.
 // The max - min after the single global rotation is printed too (it is > 0.5 deg: parallax).
 #include <gtest/gtest.h>
+
+#include "datasets.h"
+#include "detectors.h"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -33,7 +36,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::string kDir = "/work/shared/datasets/omni-images/ocamcalib-vmr";
+const std::string kDir = omnislam::testing::datasetPath("omni-images/ocamcalib-vmr");
 
 double median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
@@ -41,22 +44,9 @@ double median(std::vector<double> v) {
 }
 
 vision::VerticalLineOptions optionsFromConfig() {
-  const auto root = config::Node::loadFile(std::string(OMNISLAM_SOURCE_DIR) + "/config/features/vertical_lines.yaml");
-  const auto n = root.child("vertical_lines");
-  vision::VerticalLineOptions o;
-  o.panorama.centre_u_px = n.getDouble("centre_u_px", 0, 1024);
-  o.panorama.centre_v_px = n.getDouble("centre_v_px", 0, 768);
-  o.panorama.r_min_px = n.getDouble("r_min_px", 0, 1000);
-  o.panorama.r_max_px = n.getDouble("r_max_px", 0, 1000);
-  o.panorama.columns = static_cast<int>(n.getInt("columns", 36, 20000, o.panorama.columns));
-  o.edge_threshold = static_cast<int>(n.getInt("edge_threshold", 1, 1020, o.edge_threshold));
-  o.min_run_rows = static_cast<int>(n.getInt("min_run_rows", 1, 10000, o.min_run_rows));
-  o.max_gap_rows = static_cast<int>(n.getInt("max_gap_rows", 0, 10000, o.max_gap_rows));
-  o.merge_columns = static_cast<int>(n.getInt("merge_columns", 0, 20, o.merge_columns));
-  o.merge_gap_rows = static_cast<int>(n.getInt("merge_gap_rows", 0, 10000, o.merge_gap_rows));
-  o.min_length_rows = static_cast<int>(n.getInt("min_length_rows", 1, 10000, o.min_length_rows));
-  o.max_drift_columns = n.getDouble("max_drift_columns", 0.01, 1000, o.max_drift_columns);
-  return o;
+  // The features process's own parser: the test runs the detector exactly as configured.
+  return features::verticalLineOptions(
+      config::Node::loadFile(std::string(OMNISLAM_SOURCE_DIR) + "/config/features/vertical_lines.yaml"));
 }
 
 }  // namespace

@@ -275,4 +275,8 @@ std::unique_ptr<Detector> makeDetector(const Node& root) {
   return std::make_unique<LinesDetector>(std::move(cam), opt, max_features);
 }
 
+vision::VerticalLineOptions verticalLineOptions(const Node& root) {
+  return parseLines(root.child("vertical_lines"), parseCamera(root.child("camera")));
+}
+
 }  // namespace omnislam::features

@@ -13,6 +13,7 @@
 #include "omnislam/core/camera/camera_model.h"
 #include "omnislam/core/camera/mounting.h"
 #include "omnislam/feature_t.hpp"
+#include "omnislam/vision/vertical_lines.h"
 
 namespace omnislam::features {
 
@@ -36,5 +37,10 @@ class Detector {
 /// Builds the detector a features config file describes; throws config::ConfigError naming the
 /// key on any invalid or unknown setting.
 std::unique_ptr<Detector> makeDetector(const config::Node& root);
+
+/// The vertical-line detector options of a features config file (its camera and vertical_lines
+/// sections), validated exactly as makeDetector() does; for tools and tests that run the
+/// library detector directly.
+vision::VerticalLineOptions verticalLineOptions(const config::Node& root);
 
 }  // namespace omnislam::features

@@ -23,6 +23,7 @@
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
+#include "omnislam/vision/image_files.h"
 #include "omnislam/vision/render_lights.h"
 
 using namespace omnislam;
@@ -80,14 +81,11 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
 int runDir(lcmio::Node& node, Publisher& pub, const std::string& dir, double rate_hz, int64_t start_utime,
            double speedup) {
   std::vector<std::filesystem::path> files;
-  if (!std::filesystem::is_directory(dir)) throw std::invalid_argument("--dir '" + dir + "' is not a directory");
-  for (const auto& e : std::filesystem::directory_iterator(dir)) {
-    std::string ext = e.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".ppm" || ext == ".bmp")
-      files.push_back(e.path());
+  try {
+    files = vision::listImageFiles(dir);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--dir ") + e.what());
   }
-  std::sort(files.begin(), files.end());
   if (files.empty()) throw std::invalid_argument("--dir '" + dir + "' holds no image files (png, jpg, pgm, ppm, bmp)");
   if (start_utime < 0) start_utime = wallUtime();
   std::cerr << node.tag() << files.size() << " images from " << dir << " at " << rate_hz << " Hz" << std::endl;

@@ -24,6 +24,7 @@
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/node.h"
+#include "omnislam/vision/image_files.h"
 
 using namespace omnislam;
 namespace fs = std::filesystem;
@@ -74,15 +75,12 @@ int runBus(const features::Detector& det, const std::string& url, const std::str
 }
 
 int runImages(const features::Detector& det, const std::string& dir, const std::string& outdir) {
-  if (!fs::is_directory(dir)) throw std::invalid_argument("--images '" + dir + "' is not a directory");
   std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    std::string ext = e.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".ppm" || ext == ".bmp")
-      files.push_back(e.path());
+  try {
+    files = vision::listImageFiles(dir);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--images ") + e.what());
   }
-  std::sort(files.begin(), files.end());
   if (files.empty()) throw std::invalid_argument("--images '" + dir + "' holds no image files");
   std::ofstream csv;
   if (!outdir.empty()) {

@@ -413,3 +413,159 @@ TEST(slam_FastSlam, VerticalLinesAndPointsInOneFilter) {
 }
 
 }  // namespace
+
+namespace {
+
+/// Runs the prior-map localisation scenario of LocalisesWithPriorMapAndAssociatesById with the
+/// given options, plus one light (id 200) that is in the prior map but never measured, and one
+/// unknown light measured at every step (it would become a candidate, then a landmark, when
+/// mapping). Returns the filter after 30 steps; `truth_out` the final true pose.
+FastSlam runPriorMapScenario(const FastSlamOptions& o, Pose2* truth_out, std::vector<Landmark>* prior_out) {
+  std::vector<Landmark> prior;
+  std::vector<Eigen::Vector3d> lights;
+  for (double x : {0.0, 5.0, 10.0}) {
+    for (double y : {-3.0, 3.0}) {
+      lights.emplace_back(x, y, 6.5);
+      prior.push_back(priorLandmark(100 + prior.size(), lights.back()));
+    }
+  }
+  prior.push_back(priorLandmark(200, Eigen::Vector3d(4.0, 0.5, 6.5), 3));  // never measured: counts down
+  const Eigen::Vector3d unknown(7.0, 0.0, 6.0);
+  FastSlam f(o, 3);
+  f.initialise(Pose2{0.0, 0.0, 0.0}, prior);
+  std::mt19937_64 rng(5);
+  Pose2 truth{0, 0, 0}, odom{0, 0, 0};
+  for (int k = 0; k < 30; ++k) {
+    const Pose2 truth_next = truth.compose(Pose2{0.3, 0.0, 0.02});
+    const Pose2 odom_next = odom.compose(Pose2{0.3 * 1.05, 0.0, 0.02});  // 5 % odometry bias
+    std::vector<BearingMeasurement> z;
+    for (const auto& L : lights) z.push_back(measure(L, truth_next, &rng));
+    z.push_back(measure(unknown, truth_next, &rng));
+    f.step(odom, odom_next, z);
+    truth = truth_next;
+    odom = odom_next;
+  }
+  *truth_out = truth;
+  *prior_out = prior;
+  return f;
+}
+
+}  // namespace
+
+// Localisation only: the prior map is used (the pose is corrected) but never changed: no EKF
+// update, no counter change, no deletion of the unseen landmark, no candidate, no new landmark.
+TEST(slam_FastSlam, LocalisationOnlyKeepsThePriorMapFixed) {
+  FastSlamOptions o;
+  o.update_map = false;
+  Pose2 truth;
+  std::vector<Landmark> prior;
+  const FastSlam f = runPriorMapScenario(o, &truth, &prior);
+  const Pose2 m = f.meanPose();
+  EXPECT_LT(std::hypot(m.x_m - truth.x_m, m.y_m - truth.y_m), 0.05);  // odometry alone: 0.45 m off
+  for (const Particle& p : f.particles()) {
+    EXPECT_TRUE(p.candidates.empty());
+    const std::vector<Landmark> lm = p.map.landmarks();
+    ASSERT_EQ(lm.size(), prior.size());
+    for (const Landmark& L : lm) {
+      const auto it = std::find_if(prior.begin(), prior.end(), [&](const Landmark& q) { return q.id == L.id; });
+      ASSERT_NE(it, prior.end());
+      EXPECT_EQ(L.p_LinW_m, it->p_LinW_m);
+      EXPECT_EQ(L.cov_LinW_m2, it->cov_LinW_m2);
+      EXPECT_EQ(L.counter, it->counter);
+    }
+  }
+  // The same run with mapping on changes the map: the check above is not vacuous.
+  FastSlamOptions mapping;
+  Pose2 truth2;
+  std::vector<Landmark> prior2;
+  const FastSlam g = runPriorMapScenario(mapping, &truth2, &prior2);
+  const auto map2 = g.bestMap();
+  EXPECT_FALSE(std::any_of(map2.begin(), map2.end(), [](const Landmark& L) { return L.id == 200; }))
+      << "the unseen landmark is deleted when mapping";
+  EXPECT_TRUE(std::any_of(map2.begin(), map2.end(), [](const Landmark& L) { return L.id > 200; }))
+      << "the unknown light is initialised when mapping";
+}
+
+// FastSLAM 1.0 (paper 002): poses from the motion model, association and weight at the sampled
+// pose. With the prior map it still localises (more particles: the proposal is not corrected).
+TEST(slam_FastSlam, FastSlam1LocalisesAndAssociates) {
+  FastSlamOptions o;
+  o.proposal = ProposalKind::kFastSlam1;
+  o.association = AssociationMethod::kMaximumLikelihood;
+  o.num_particles = 200;
+  Pose2 truth;
+  std::vector<Landmark> prior;
+  const FastSlam f = runPriorMapScenario(o, &truth, &prior);
+  const Pose2 m = f.meanPose();
+  EXPECT_LT(std::hypot(m.x_m - truth.x_m, m.y_m - truth.y_m), 0.15);  // odometry alone: 0.45 m off
+  EXPECT_LT(std::abs(wrapAngle(m.theta_rad - truth.theta_rad)), 0.02);
+  const auto map = f.bestMap();
+  for (std::uint64_t id = 100; id < 106; ++id)
+    EXPECT_TRUE(std::any_of(map.begin(), map.end(), [&](const Landmark& L) { return L.id == id; })) << id;
+}
+
+// FastSLAM 1.0's weight is N(z; h(L, x_t), Q + H_m Sigma H_m^T) at the sampled pose: two particles
+// at different (reported) poses, a deterministic motion; the ratio of their weights before
+// resampling equals the ratio of the closed-form likelihoods.
+TEST(slam_FastSlam, FastSlam1WeightIsTheMeasurementLikelihoodAtTheSampledPose) {
+  FastSlamOptions o;
+  o.proposal = ProposalKind::kFastSlam1;
+  o.num_particles = 2;
+  o.motion.min_sigma_xy_m = 1e-12;
+  o.motion.min_sigma_theta_rad = 1e-12;
+  o.motion.trans_sigma_per_m = o.motion.lateral_sigma_per_m = o.motion.trans_sigma_per_rad = 0.0;
+  o.motion.rot_sigma_per_rad = o.motion.rot_sigma_per_m = 0.0;  // x_t = x_hat up to 1e-12
+  FastSlam f(o, 1);
+  Landmark L = priorLandmark(7, Eigen::Vector3d(3.0, 1.0, 6.5));
+  L.cov_LinW_m2 = Eigen::Vector3d(0.04, 0.02, 0.01).asDiagonal();
+  f.initialise(Pose2{0, 0, 0}, {L}, Eigen::Vector3d(0.05, 0.05, 0.01).asDiagonal());
+  std::vector<Pose2> start;
+  for (const Particle& p : f.particles()) start.push_back(p.pose);
+  ASSERT_NE(start[0].x_m, start[1].x_m);
+  const Pose2 u{0.2, 0.0, 0.05};
+  const BearingMeasurement z = measure(L.p_LinW_m, Pose2{0.2, 0.05, 0.06});
+  f.step(Pose2{0, 0, 0}, u, {z});
+  std::vector<double> log_lik;
+  for (const Pose2& x0 : start) {
+    const Pose2 x_t = x0.compose(u);
+    MeasJac Hx, Hm;
+    const auto zhat = predictMeasurement(LandmarkKind::kPoint3D, L.p_LinW_m, x_t, kCam, &Hx, &Hm);
+    ASSERT_TRUE(zhat.has_value());
+    const MeasMat Qt = measurementCovariance(z, o.inflate_azimuth_near_zenith) + Hm * L.cov_LinW_m2 * Hm.transpose();
+    log_lik.push_back(logGaussian(innovation(measurementVector(z), *zhat), Qt));
+  }
+  const auto& w = f.weightsBeforeResampling();
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_NEAR(std::log(w[0] / w[1]), log_lik[0] - log_lik[1], 1e-6);
+  EXPECT_GT(std::abs(log_lik[0] - log_lik[1]), 0.1) << "the two poses must be distinguishable";
+  // The sampled poses are reported before resampling.
+  for (int k = 0; k < 2; ++k) {
+    const Pose2 x_t = start[k].compose(u);
+    EXPECT_NEAR(f.posesBeforeResampling()[k].x_m, x_t.x_m, 1e-9);
+    EXPECT_NEAR(f.posesBeforeResampling()[k].y_m, x_t.y_m, 1e-9);
+  }
+}
+
+// posesBeforeResampling / weightsBeforeResampling: the set that was resampled (weights sum to 1, and
+// resampling then draws only poses from it).
+TEST(slam_FastSlam, ParticleSetBeforeResamplingIsReported) {
+  FastSlamOptions o;
+  o.num_particles = 50;
+  Pose2 truth;
+  std::vector<Landmark> prior;
+  const FastSlam f = runPriorMapScenario(o, &truth, &prior);
+  const auto& w = f.weightsBeforeResampling();
+  const auto& poses = f.posesBeforeResampling();
+  ASSERT_EQ(w.size(), 50u);
+  ASSERT_EQ(poses.size(), 50u);
+  double sum = 0.0;
+  for (double v : w) sum += v;
+  EXPECT_NEAR(sum, 1.0, 1e-12);
+  EXPECT_GT(*std::max_element(w.begin(), w.end()) - *std::min_element(w.begin(), w.end()), 1e-6)
+      << "weights before resampling differ (after resampling they are uniform)";
+  for (const Particle& p : f.particles()) {
+    EXPECT_TRUE(std::any_of(poses.begin(), poses.end(), [&](const Pose2& q) {
+      return q.x_m == p.pose.x_m && q.y_m == p.pose.y_m && q.theta_rad == p.pose.theta_rad;
+    }));
+  }
+}

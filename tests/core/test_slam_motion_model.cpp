@@ -130,3 +130,78 @@ TEST(slam_MotionModel, ValidateNamesField) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace omnislam;
+using namespace omnislam::slam;
+
+// Paper 002's translate-then-rotate model: sampling (d, delta, rho) with the model's stds and
+// composing the step gives increments whose covariance matches incrementCovariance (linearised at
+// delta = 0; the drift is small, so within sampling error).
+TEST(slam_MotionModel, TranslateThenRotateCovarianceMatchesSampling) {
+  MotionNoiseOptions o;
+  o.model = MotionNoiseModel::kTranslateThenRotate;
+  o.err_tran_per_m = 0.05;
+  o.err_rot_per_rad = 0.08;
+  o.err_drift_rad_per_m = 0.02;
+  o.min_sigma_xy_m = 1e-6;
+  o.min_sigma_theta_rad = 1e-6;
+  for (const Pose2 u : {Pose2{0.4, 0.0, 0.3}, Pose2{0.3, 0.1, -0.5}, Pose2{0.0, 0.0, 1.0}}) {
+    const double d = std::hypot(u.x_m, u.y_m);
+    const double alpha = d > 0 ? std::atan2(u.y_m, u.x_m) : 0.0;
+    const double rho = u.theta_rad;
+    Rng rng(11);
+    const int n = 200000;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    std::vector<Eigen::Vector3d> s(n);
+    for (int i = 0; i < n; ++i) {
+      const double dd = d + rng.normal() * o.err_tran_per_m * d;
+      const double delta = rng.normal() * o.err_drift_rad_per_m * d;
+      const double rr = rho + rng.normal() * o.err_rot_per_rad * std::abs(rho);
+      s[i] = Eigen::Vector3d(dd * std::cos(alpha + delta / 2), dd * std::sin(alpha + delta / 2), delta + rr);
+      mean += s[i] / n;
+    }
+    for (const auto& v : s) cov += (v - mean) * (v - mean).transpose() / (n - 1);
+    const Eigen::Matrix3d S = incrementCovariance(u, o);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        const double tol = 0.02 * std::sqrt(S(r, r) * S(c, c)) + 1e-10;  // ~ sampling error at n = 2e5
+        EXPECT_NEAR(cov(r, c), S(r, c), tol) << "u = (" << u.x_m << ", " << u.y_m << ", " << u.theta_rad
+                                             << ") entry " << r << c;
+      }
+    }
+    EXPECT_NEAR(mean.x(), u.x_m, 1e-3);
+    EXPECT_NEAR(mean.y(), u.y_m, 1e-3);
+    EXPECT_NEAR(mean.z(), u.theta_rad, 1e-3);
+  }
+}
+
+// Closed form: a pure translation d along x has var(x) = (err_tran d)^2, var(y) = (d/2)^2 var(delta),
+// var(theta) = var(delta), cov(y, theta) = (d/2) var(delta).
+TEST(slam_MotionModel, TranslateThenRotateClosedFormStraight) {
+  MotionNoiseOptions o;
+  o.model = MotionNoiseModel::kTranslateThenRotate;
+  o.err_tran_per_m = 0.1;
+  o.err_drift_rad_per_m = 0.05;
+  o.err_rot_per_rad = 0.2;
+  o.min_sigma_xy_m = 1e-9;
+  o.min_sigma_theta_rad = 1e-9;
+  const double d = 2.0;
+  const Eigen::Matrix3d S = incrementCovariance(Pose2{d, 0.0, 0.0}, o);
+  const double vd = std::pow(0.05 * d, 2);
+  EXPECT_NEAR(S(0, 0), std::pow(0.1 * d, 2), 1e-12);
+  EXPECT_NEAR(S(1, 1), 0.25 * d * d * vd, 1e-12);
+  EXPECT_NEAR(S(2, 2), vd, 1e-12);
+  EXPECT_NEAR(S(1, 2), 0.5 * d * vd, 1e-12);
+  EXPECT_NEAR(S(0, 1), 0.0, 1e-15);
+  // A pure rotation: only theta, (err_rot a)^2.
+  const Eigen::Matrix3d R = incrementCovariance(Pose2{0.0, 0.0, -0.5}, o);
+  EXPECT_NEAR(R(2, 2), std::pow(0.2 * 0.5, 2), 1e-12);
+  EXPECT_NEAR(R(0, 0), 1e-18, 1e-15);
+  o.err_rot_per_rad = -1;
+  EXPECT_NE(o.validate().find("err_rot_per_rad"), std::string::npos) << o.validate();
+}
+
+}  // namespace

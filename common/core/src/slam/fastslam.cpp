@@ -29,6 +29,8 @@ std::string FastSlamOptions::validate() const {
   c.inClosed("num_particles", num_particles, 1, 1e6)
       .require(association == AssociationMethod::kHungarian || association == AssociationMethod::kMaximumLikelihood,
                "association", "must be kHungarian or kMaximumLikelihood")
+      .require(proposal == ProposalKind::kFastSlam2 || proposal == ProposalKind::kFastSlam1, "proposal",
+               "must be kFastSlam2 or kFastSlam1")
       .inLeftOpen("p_new_mahalanobis_sq", p_new_mahalanobis_sq, 0.0, kInf)
       .inClosed("resample_ess_fraction", resample_ess_fraction, 0.0, 1.0)
       .inLeftOpen("scale_correction_max_step", scale_correction_max_step, 0.0, 1.0)
@@ -71,6 +73,8 @@ void FastSlam::initialise(const Pose2& start, const std::vector<Landmark>& prior
     if (sample) p.pose = poseFromVec(rng_.gaussian3(start.vec(), start_cov));
   }
   weights_.assign(particles_.size(), 1.0 / static_cast<double>(particles_.size()));
+  poses_before_resampling_ = particlePoses();
+  weights_before_resampling_ = weights_;
   ess_ = static_cast<double>(particles_.size());
   best_index_ = 0;
   num_steps_ = 0;
@@ -86,6 +90,8 @@ void FastSlam::predictOnly(const Pose2& odom_prev, const Pose2& odom_now) {
     const Pose2 x_hat = predictPose(p.pose, u);
     p.pose = poseFromVec(rng_.gaussian3(x_hat.vec(), motionCovariance(p.pose, u, options_.motion)));
   }
+  poses_before_resampling_ = particlePoses();
+  weights_before_resampling_ = weights_;
   ++num_steps_;
 }
 
@@ -164,10 +170,27 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
     }
   }
   const int nv = static_cast<int>(vis.size());
+  const bool fs1 = o.proposal == ProposalKind::kFastSlam1;
+  Pose2 x_t;
+  if (fs1) x_t = poseFromVec(rng_.gaussian3(x_hat.vec(), R));  // FastSLAM 1.0: x_t ~ p(x_t | x_t-1, u_t)
 
   // Alg. 2: phi_{l,j} for every landmark-measurement pair, each with its own pose correction.
+  // FastSLAM 1.0: N(z; h(L, x_t), Q + H_m Sigma H_m^T) at the sampled pose.
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nz, nv, kInf);
-  for (int j = 0; j < nv && nz > 0; ++j) {
+  for (int j = 0; j < nv && nz > 0 && fs1; ++j) {
+    const Landmark& L = *vis[j].landmark;
+    for (int l = 0; l < nz; ++l) {
+      const Meas& m = Z[l];
+      if (m.kind != L.kind) continue;
+      MeasJac Hx, Hm;
+      const auto zt = predictMeasurement(L.kind, L.p_LinW_m, x_t, m.p_CinR_m, &Hx, &Hm);
+      if (!zt) continue;
+      const MeasMat Qt = m.Q + Hm * L.cov_LinW_m2 * Hm.transpose();
+      if (Eigen::LLT<MeasMat>(Qt).info() != Eigen::Success) continue;
+      cost(l, j) = -logGaussian(innovation(m.z, *zt), Qt);
+    }
+  }
+  for (int j = 0; j < nv && nz > 0 && !fs1; ++j) {
     const Landmark& L = *vis[j].landmark;
     MeasJac Hx, Hm;
     std::optional<MeasVec> zbar;
@@ -216,8 +239,9 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
     ++info.num_associated;
     if (L.type == LandmarkType::kTypeI) terms.push_back({l, j, L.cov_LinW_m2.trace(), Z[l].z(0), L.id});
   }
-  Pose2 x_t;
-  if (!any_assoc) {
+  if (fs1) {
+    // already sampled from the motion model
+  } else if (!any_assoc) {
     x_t = poseFromVec(rng_.gaussian3(x_hat.vec(), R));  // line 2
   } else {
     std::sort(terms.begin(), terms.end(), [](const ProposalTerm& a, const ProposalTerm& b) {
@@ -277,7 +301,9 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
         const Eigen::Matrix3d P = IKH * L.cov_LinW_m2 * IKH.transpose() + K * m.Q * K.transpose();
         e.value.cov_LinW_m2 = 0.5 * (P + P.transpose());
         if (L.type == LandmarkType::kTypeI) {  // lines 11-14
-          if (o.weight_at_predicted_pose) {
+          if (fs1) {
+            log_w += logGaussian(nu, Qt);  // FastSLAM 1.0: w = N(z; h(L, x_t), Qt)
+          } else if (o.weight_at_predicted_pose) {
             MeasJac Hxp, Hmp;
             const auto zp = predictMeasurement(L.kind, L.p_LinW_m, x_hat, m.p_CinR_m, &Hxp, &Hmp);
             if (zp) {
@@ -295,7 +321,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
     if (e.value.type == LandmarkType::kTypeII && xyDistance(x_t, e.value.p_LinW_m) < o.candidates.d_min_m) {
       e.value.type = LandmarkType::kTypeI;
     }
-    edits.push_back(e);
+    if (o.update_map) edits.push_back(e);
   }
   // Lines 18-24: unseen landmarks inside the perceptual range of x_t.
   std::sort(updated.begin(), updated.end());
@@ -313,6 +339,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
       e.value = *r.landmark;
       --e.value.counter;
       e.erase = e.value.counter < 0;  // deleted when i_j goes negative
+      if (!o.update_map) continue;  // localisation only: the weight counts the miss, the map stays
       if (e.erase) ++info.num_deleted;
       edits.push_back(e);
     }
@@ -327,7 +354,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
     }
   }
   std::vector<Landmark> inserts;
-  updateCandidates(p, x_t, Z, leftover, inserts, info);
+  if (o.update_map) updateCandidates(p, x_t, Z, leftover, inserts, info);
 
   p.map.apply(edits, inserts);
   p.pose = x_t;
@@ -479,6 +506,8 @@ void FastSlam::finishStep(StepResult& result, const std::vector<ParticleStepInfo
   result.weights_degenerate = !normaliseLogWeights(log_w, weights_);
   ess_ = effectiveSampleSize(weights_);
   result.ess = ess_;
+  poses_before_resampling_ = particlePoses();
+  weights_before_resampling_ = weights_;
   const int best_before = static_cast<int>(std::max_element(weights_.begin(), weights_.end()) - weights_.begin());
   const ParticleStepInfo& bi = infos[best_before];
   result.num_associated = bi.num_associated;

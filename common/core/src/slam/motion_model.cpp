@@ -20,6 +20,11 @@ std::string MotionNoiseOptions::validate() const {
       .inClosed("lateral_sigma_per_sqrt_m", lateral_sigma_per_sqrt_m, 0.0, inf)
       .inClosed("rot_sigma_per_sqrt_rad", rot_sigma_per_sqrt_rad, 0.0, inf)
       .inClosed("rot_sigma_per_sqrt_m", rot_sigma_per_sqrt_m, 0.0, inf)
+      .require(model == MotionNoiseModel::kChord || model == MotionNoiseModel::kTranslateThenRotate, "model",
+               "must be kChord or kTranslateThenRotate")
+      .inClosed("err_tran_per_m", err_tran_per_m, 0.0, inf)
+      .inClosed("err_rot_per_rad", err_rot_per_rad, 0.0, inf)
+      .inClosed("err_drift_rad_per_m", err_drift_rad_per_m, 0.0, inf)
       .inLeftOpen("min_sigma_xy_m", min_sigma_xy_m, 0.0, inf)
       .inLeftOpen("min_sigma_theta_rad", min_sigma_theta_rad, 0.0, inf);
   return c.message();
@@ -31,6 +36,22 @@ Eigen::Matrix3d incrementCovariance(const Pose2& u, const MotionNoiseOptions& o)
   const double d = std::hypot(u.x_m, u.y_m);
   const double a = std::abs(wrapAngle(u.theta_rad));
   const auto sq = [](double v) { return v * v; };
+  if (o.model == MotionNoiseModel::kTranslateThenRotate) {
+    // Chord direction alpha; the drift delta happens during the translation and turns the chord by
+    // delta / 2; the rotation rho = dtheta - delta follows (delta = 0 at the linearisation point).
+    const double alpha = d > 0.0 ? std::atan2(u.y_m, u.x_m) : 0.0;
+    const double c = std::cos(alpha), s = std::sin(alpha);
+    Eigen::Matrix3d J;
+    J << c, -0.5 * d * s, 0.0,  //
+        s, 0.5 * d * c, 0.0,    //
+        0.0, 1.0, 1.0;
+    const Eigen::Vector3d var(sq(o.err_tran_per_m * d), sq(o.err_drift_rad_per_m * d), sq(o.err_rot_per_rad * a));
+    Eigen::Matrix3d S = J * var.asDiagonal() * J.transpose();
+    S(0, 0) += sq(o.min_sigma_xy_m);
+    S(1, 1) += sq(o.min_sigma_xy_m);
+    S(2, 2) += sq(o.min_sigma_theta_rad);
+    return 0.5 * (S + S.transpose());
+  }
   const double var_long = sq(o.trans_sigma_per_m * d) + sq(o.trans_sigma_per_rad * a) + sq(o.min_sigma_xy_m) +
                           sq(o.trans_sigma_per_sqrt_m) * d;
   const double var_lat = sq(o.lateral_sigma_per_m * d) + sq(o.trans_sigma_per_rad * a) + sq(o.min_sigma_xy_m) +

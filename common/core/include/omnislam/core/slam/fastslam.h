@@ -28,9 +28,23 @@
 
 namespace omnislam::slam {
 
+/// How a particle's new pose is drawn.
+enum class ProposalKind : std::uint8_t {
+  /// FastSLAM 2.0 (paper 000, Alg. 3): from the motion model corrected by the associated type I
+  /// landmarks; association uses each pair's own pose correction (Alg. 2).
+  kFastSlam2 = 0,
+  /// FastSLAM 1.0 (paper 002): from the motion model alone; association and weight are evaluated at
+  /// the sampled pose, the weight with the innovation covariance Q + H_m Sigma H_m^T (no R_t term).
+  kFastSlam1 = 1,
+};
+
 struct FastSlamOptions {
   int num_particles = 10;  ///< M (paper: 10)
   AssociationMethod association = AssociationMethod::kHungarian;
+  ProposalKind proposal = ProposalKind::kFastSlam2;
+  /// false = localisation only: the map given to initialise() is fixed. Landmarks are associated
+  /// and weigh the particles but are neither updated, counted, deleted nor created; no candidates.
+  bool update_map = true;
   /// P_New = (2 pi)^(-dim/2) |Q_l,t|^(-1/2) exp(-p_new_mahalanobis_sq / 2); the paper uses 64.
   double p_new_mahalanobis_sq = 64.0;
   /// Resample when ESS < fraction * M; 1.0 (default, the paper) resamples at every step.
@@ -130,6 +144,10 @@ class FastSlam {
   double ess() const { return ess_; }  ///< ESS of the last step's weights
   std::vector<Pose2> particlePoses() const;
   const std::vector<double>& particleWeights() const { return weights_; }  ///< normalised
+  /// The particle set of the last step before resampling: sampled poses and their normalised weights
+  /// (after initialise(): the initial poses, uniform weights).
+  const std::vector<Pose2>& posesBeforeResampling() const { return poses_before_resampling_; }
+  const std::vector<double>& weightsBeforeResampling() const { return weights_before_resampling_; }
   const std::vector<Particle>& particles() const { return particles_; }
   StorageStats storageStats() const;
   const FastSlamOptions& options() const { return options_; }
@@ -148,6 +166,8 @@ class FastSlam {
   Rng rng_;
   std::vector<Particle> particles_;
   std::vector<double> weights_;
+  std::vector<Pose2> poses_before_resampling_;
+  std::vector<double> weights_before_resampling_;
   double ess_ = 0.0;
   int best_index_ = 0;
   std::uint64_t next_landmark_id_ = 0;

@@ -13,16 +13,34 @@
 //   R_t = J_u Sigma_u J_u^T with J_u = d g / d u = blockdiag(Rz(theta_{t-1}), 1)   (exact: g is linear in u)
 // Standard deviations grow linearly with distance and rotation (as odometry errors from wheel radius
 // and wheel-base errors do over one step); the floors keep R_t invertible when the robot stands still.
+//
+// Alternative noise model kTranslateThenRotate (paper 002, Sec. III-C, after Probabilistic Robotics'
+// odometry model): the step is a translation by d along the chord direction alpha followed by a
+// rotation; the errors are err_tran (std of d per metre), err_drift (heading drift during the
+// translation, rad per metre; it also turns the chord by half of itself) and err_rot (std of the
+// rotation per radian turned):
+//   (dx, dy, dtheta) = (d cos(alpha + delta / 2), d sin(alpha + delta / 2), delta + rho)
+//   Sigma_(d, delta, rho) = diag((err_tran d)^2, (err_drift d)^2, (err_rot |rho|)^2)
+//   Sigma_u = J Sigma_(d, delta, rho) J^T + diag(min_sigma_xy_m^2, min_sigma_xy_m^2, min_sigma_theta_rad^2),
+//   J = d(dx, dy, dtheta) / d(d, delta, rho) at delta = 0 (the chord-model fields are then unused).
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <string>
 
 #include "omnislam/core/pose2.h"
 
 namespace omnislam::slam {
 
+/// Which parameterisation of the odometry error the filter assumes (see the file header).
+enum class MotionNoiseModel : std::uint8_t {
+  kChord = 0,                ///< along/across the chord, per metre, per radian and random walks (default)
+  kTranslateThenRotate = 1,  ///< paper 002: err_tran, err_rot, err_drift
+};
+
 struct MotionNoiseOptions {
+  MotionNoiseModel model = MotionNoiseModel::kChord;
   double trans_sigma_per_m = 0.05;     ///< along-track std per metre travelled [m/m] (5 %)
   double lateral_sigma_per_m = 0.02;   ///< cross-track std per metre travelled [m/m]
   double trans_sigma_per_rad = 0.01;   ///< translation std per radian turned [m/rad]
@@ -35,6 +53,10 @@ struct MotionNoiseOptions {
   double lateral_sigma_per_sqrt_m = 0.0;  ///< cross-track std after 1 m [m/sqrt(m)]
   double rot_sigma_per_sqrt_rad = 0.0;    ///< heading std after 1 rad turned [rad/sqrt(rad)]
   double rot_sigma_per_sqrt_m = 0.0;      ///< heading std after 1 m travelled [rad/sqrt(m)]
+  // kTranslateThenRotate (paper 002):
+  double err_tran_per_m = 0.05;      ///< std of the translated distance per metre [m/m]
+  double err_rot_per_rad = 0.05;     ///< std of the rotation per radian turned [rad/rad]
+  double err_drift_rad_per_m = 0.01; ///< std of the heading drift per metre translated [rad/m]
   double min_sigma_xy_m = 0.002;       ///< floor of both translation stds [m], > 0
   double min_sigma_theta_rad = 0.002;  ///< floor of the heading std [rad], > 0
 

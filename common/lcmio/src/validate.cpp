@@ -119,4 +119,23 @@ std::optional<std::string> validate(const process_status_t& m, const Limits&) {
   return std::nullopt;
 }
 
+std::optional<std::string> validate(const associations_t& m, const Limits& lim) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (m.num_features < 0 || m.num_features > lim.max_features) return "num_features out of range";
+  for (size_t i = 0; i < static_cast<size_t>(m.num_features); ++i)
+    if (m.landmark_id[i] < +associations_t::NOT_ASSOCIATED)
+      return "feature " + std::to_string(i) + ": landmark_id " + std::to_string(m.landmark_id[i]) + " below -2";
+  return std::nullopt;
+}
+
+std::optional<std::string> validate(const feature_labels_t& m, const Limits& lim) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (m.features_seq < 0) return "negative features_seq " + std::to_string(m.features_seq);
+  if (m.num_features < 0 || m.num_features > lim.max_features) return "num_features out of range";
+  for (size_t i = 0; i < static_cast<size_t>(m.num_features); ++i)
+    if (m.landmark_id[i] < +feature_labels_t::UNKNOWN)
+      return "feature " + std::to_string(i) + ": landmark_id " + std::to_string(m.landmark_id[i]) + " below -2";
+  return std::nullopt;
+}
+
 }  // namespace omnislam::lcmio

@@ -9,8 +9,10 @@ inline constexpr const char* kOdometry = "ODOMETRY";
 inline constexpr const char* kSlamPose = "SLAM_POSE";
 inline constexpr const char* kSlamMap = "SLAM_MAP";
 inline constexpr const char* kSlamParticles = "SLAM_PARTICLES";
+inline constexpr const char* kSlamAssociations = "SLAM_ASSOCIATIONS";  ///< since 0.2
 inline constexpr const char* kGroundTruthPose = "GROUND_TRUTH_POSE";
 inline constexpr const char* kGroundTruthMap = "GROUND_TRUTH_MAP";
 inline constexpr const char* kProcessStatus = "PROCESS_STATUS";
+inline constexpr const char* kGroundTruthFeatureLabels = "GROUND_TRUTH_FEATURE_LABELS";  ///< since 0.2
 
 }  // namespace omnislam::channels

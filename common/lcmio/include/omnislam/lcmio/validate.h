@@ -5,6 +5,8 @@
 #include <optional>
 #include <string>
 
+#include "omnislam/associations_t.hpp"
+#include "omnislam/feature_labels_t.hpp"
 #include "omnislam/features_t.hpp"
 #include "omnislam/image_t.hpp"
 #include "omnislam/map_t.hpp"
@@ -31,5 +33,7 @@ std::optional<std::string> validate(const pose_t& m, const Limits& lim = {});
 std::optional<std::string> validate(const map_t& m, const Limits& lim = {});
 std::optional<std::string> validate(const particles_t& m, const Limits& lim = {});
 std::optional<std::string> validate(const process_status_t& m, const Limits& lim = {});
+std::optional<std::string> validate(const associations_t& m, const Limits& lim = {});
+std::optional<std::string> validate(const feature_labels_t& m, const Limits& lim = {});
 
 }  // namespace omnislam::lcmio

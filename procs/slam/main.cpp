@@ -9,6 +9,11 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
 #include <iostream>
 #include <map>
 #include <stdexcept>
@@ -16,7 +21,9 @@
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
+#include "omnislam/lcmio/signals.h"
 #include "omnislam/lcmio/validate.h"
+#include "map_file.h"
 #include "slam_config.h"
 #include "slam_driver.h"
 
@@ -25,6 +32,60 @@ using slamproc::DriverResult;
 using slamproc::SlamDriver;
 
 namespace {
+
+/// Writes the best particle's map when a save path is configured (atomic; see map_file.h).
+void saveMap(const slamproc::SlamProcessOptions& opt, const SlamDriver& driver, const std::string& tag) {
+  if (opt.save_map_path.empty()) return;
+  const slam::FastSlam* f = driver.filter();
+  if (f == nullptr) {
+    std::cerr << tag << "map not saved: no frame was processed" << std::endl;
+    return;
+  }
+  slamproc::SavedMap m;
+  m.utime = driver.lastStepUtime();
+  m.landmarks = f->bestMap();
+  try {
+    slamproc::saveMapAtomically(m, opt.save_map_path);
+    std::cerr << tag << "map saved: " << m.landmarks.size() << " landmarks to " << opt.save_map_path << std::endl;
+  } catch (const std::exception& e) {
+    std::cerr << tag << "error: " << e.what() << std::endl;
+    throw;
+  }
+}
+
+/// Progress of a long offline run on stderr, at most every 2 s of wall time (a display only: the
+/// results never depend on it).
+class Progress {
+ public:
+  Progress(const std::string& path, bool enabled) : enabled_(enabled), start_(Clock::now()), last_(start_) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0) total_bytes_ = static_cast<double>(st.st_size);
+  }
+  void update(FILE* f, int64_t frames, bool final = false) {
+    if (!enabled_) return;
+    const auto now = Clock::now();
+    if (!final && now - last_ < std::chrono::seconds(2)) return;
+    last_ = now;
+    const double t = std::chrono::duration<double>(now - start_).count();
+    const double done = (f != nullptr && total_bytes_ > 0) ? static_cast<double>(std::ftell(f)) / total_bytes_ : 1.0;
+    char buf[200];
+    if (final) {
+      std::snprintf(buf, sizeof buf, "[slam] progress: %lld frames in %.1f s (%.1f frames/s)",
+                    static_cast<long long>(frames), t, t > 0 ? frames / t : 0.0);
+    } else {
+      const double left = done > 0.0 ? t * (1.0 - done) / done : 0.0;
+      std::snprintf(buf, sizeof buf, "[slam] progress: %lld frames, %.0f%% of the log, %.1f frames/s, ~%.0f s left",
+                    static_cast<long long>(frames), 100.0 * done, t > 0 ? frames / t : 0.0, left);
+    }
+    std::cerr << buf << std::endl;
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  bool enabled_;
+  double total_bytes_ = 0.0;
+  Clock::time_point start_, last_;
+};
 
 // ---- live -----------------------------------------------------------------------------------
 
@@ -36,12 +97,14 @@ void publishAll(lcmio::Node& node, const DriverResult& r) {
     node.publish(channels::kSlamPose, out.pose);
     if (out.map) node.publish(channels::kSlamMap, *out.map);
     node.publish(channels::kSlamParticles, out.particles);
+    if (out.associations) node.publish(channels::kSlamAssociations, *out.associations);
   }
 }
 
-int runLive(const slamproc::SlamProcessOptions& opt, const std::string& url, const std::string& name) {
+int runLive(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark> prior, const std::string& url,
+            const std::string& name) {
   lcmio::Node node(name, url);
-  SlamDriver driver(opt);
+  SlamDriver driver(opt, std::move(prior));
   // The driver checks time order itself (duplicates and small steps back are refused, a large step
   // back restarts), so the node's own utime check is off; decoding, validation and seq stay.
   lcmio::InputOptions odo_opt;
@@ -63,6 +126,7 @@ int runLive(const slamproc::SlamProcessOptions& opt, const std::string& url, con
   node.setDetail(driver.summary());
   node.publishStatus();
   std::cerr << node.tag() << "stopped: " << driver.summary() << std::endl;
+  saveMap(opt, driver, node.tag());
   return app::kOk;
 }
 
@@ -135,11 +199,14 @@ std::optional<Msg> decodeChecked(const lcm::LogEvent& ev, ReplayReport& rep) {
   return m;
 }
 
-int runReplay(const slamproc::SlamProcessOptions& opt, const std::string& in_path, const std::string& out_path) {
+int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark> prior, const std::string& in_path,
+              const std::string& out_path, bool show_progress) {
   lcm::LogFile in(in_path, "r");
   if (!in.good()) throw std::runtime_error("--replay: cannot read LCM log '" + in_path + "'");
   LogWriter out(out_path);
-  SlamDriver driver(opt);
+  SlamDriver driver(opt, std::move(prior));
+  Progress progress(in_path, show_progress);
+  lcmio::installStopHandlers();  // SIGINT / SIGTERM: stop reading, write what was computed
   ReplayReport rep;
   int64_t last_timestamp = 0, outputs = 0;
   auto handle = [&](const DriverResult& r, int64_t ts) {
@@ -150,14 +217,21 @@ int runReplay(const slamproc::SlamProcessOptions& opt, const std::string& in_pat
       out.write(ts, channels::kSlamPose, o.pose);
       if (o.map) out.write(ts, channels::kSlamMap, *o.map);
       out.write(ts, channels::kSlamParticles, o.particles);
+      if (o.associations) out.write(ts, channels::kSlamAssociations, *o.associations);
       ++outputs;
     }
   };
+  bool interrupted = false;
   while (const lcm::LogEvent* ev = in.readNextEvent()) {
+    if (lcmio::stopRequested()) {
+      interrupted = true;
+      break;
+    }
+    progress.update(in.getFilePtr(), driver.stats().frames_processed);
     last_timestamp = ev->timestamp;
     // Outputs of an earlier run in the input are replaced by this run's.
     if (ev->channel == channels::kSlamPose || ev->channel == channels::kSlamMap ||
-        ev->channel == channels::kSlamParticles)
+        ev->channel == channels::kSlamParticles || ev->channel == channels::kSlamAssociations)
       continue;
     out.write(ev->timestamp, ev->channel, ev->data, ev->datalen);
     if (ev->channel == channels::kOdometry) {
@@ -167,6 +241,9 @@ int runReplay(const slamproc::SlamProcessOptions& opt, const std::string& in_pat
     }
   }
   handle(driver.finish(), last_timestamp);
+  progress.update(nullptr, driver.stats().frames_processed, true);
+  if (interrupted) std::cerr << "[slam] replay interrupted by signal " << lcmio::stopSignal() << ": outputs so far kept" << std::endl;
+  saveMap(opt, driver, "[slam] ");
   std::cerr << "[slam] replay done: " << outputs << " frames answered, " << out.events() << " events written to "
             << out_path << "; decode_errors " << rep.decode_errors << " rejected " << rep.rejected
             << " sequence_gaps " << rep.sequence_gaps << " sequence_restarts " << rep.sequence_restarts << "; "
@@ -178,12 +255,21 @@ int runReplay(const slamproc::SlamProcessOptions& opt, const std::string& in_pat
 
 int main(int argc, char** argv) {
   CLI::App cli{"omnislam-slam: bearing-only FastSLAM on OMNI_FEATURES + ODOMETRY (live, or --replay of a log)"};
-  std::string config_path, url, name = "slam", replay, out;
+  std::string config_path, url, name = "slam", replay, out, save_map, load_map, association;
   uint64_t seed = 0;
+  int particles = 0;
+  bool localise = false, progress = false, no_progress = false;
   cli.add_option("--config", config_path, "SLAM config (YAML, e.g. config/slam/sports_hall.yaml); default: built-in");
   auto* seed_opt = cli.add_option("--seed", seed, "filter seed (overrides the config's seed)");
   cli.add_option("--replay", replay, "offline: read this LCM log instead of the bus");
   cli.add_option("--out", out, "offline: write the input events and the outputs to this LCM log");
+  cli.add_option("--save-map", save_map, "write the best particle's map here on exit (atomic; overrides map.save_path)");
+  cli.add_option("--load-map", load_map, "start from this saved map (overrides map.load_path)");
+  cli.add_flag("--localise", localise, "localisation only: keep the loaded map fixed (needs a map to load)");
+  cli.add_option("--association", association, "override filter.association")->check(CLI::IsMember({"hungarian", "ml"}));
+  cli.add_option("--particles", particles, "override filter.particles")->check(CLI::Range(1, 100000));
+  cli.add_flag("--progress", progress, "offline: print progress (frames, rate, time left) every 2 s (default when stderr is a terminal)");
+  cli.add_flag("--no-progress", no_progress, "offline: no progress lines");
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", name, "process name in PROCESS_STATUS");
   CLI11_PARSE(cli, argc, argv);
@@ -192,7 +278,24 @@ int main(int argc, char** argv) {
     slamproc::SlamProcessOptions opt;
     if (!config_path.empty()) opt = slamproc::loadSlamOptions(config_path);
     if (*seed_opt) opt.seed = seed;
+    if (!save_map.empty()) opt.save_map_path = save_map;
+    if (!load_map.empty()) opt.load_map_path = load_map;
+    if (localise) opt.localisation_only = true;
+    if (!association.empty())
+      opt.filter.association = association == "ml" ? slam::AssociationMethod::kMaximumLikelihood
+                                                    : slam::AssociationMethod::kHungarian;
+    if (particles > 0) opt.filter.num_particles = particles;
+    if (const std::string err = opt.validate(); !err.empty()) throw std::invalid_argument(err);
+    std::vector<slam::Landmark> prior;
+    if (!opt.load_map_path.empty()) {
+      prior = slamproc::loadMap(opt.load_map_path).landmarks;
+      if (opt.localisation_only && prior.empty())
+        throw std::invalid_argument("--localise: the map " + opt.load_map_path + " has no landmarks");
+      std::cerr << "[" << name << "] loaded " << prior.size() << " landmarks from " << opt.load_map_path << std::endl;
+    }
     std::cerr << "[" << name << "] " << slamproc::describe(opt) << std::endl;
-    return replay.empty() ? runLive(opt, app::lcmUrl(url), name) : runReplay(opt, replay, out);
+    const bool show_progress = !no_progress && (progress || ::isatty(STDERR_FILENO));
+    return replay.empty() ? runLive(opt, std::move(prior), app::lcmUrl(url), name)
+                          : runReplay(opt, std::move(prior), replay, out, show_progress);
   });
 }

@@ -73,6 +73,8 @@ struct Frame {
   int64_t utime = 0;
   int64_t seq = 0;
   std::vector<slam::BearingMeasurement> z;
+  int32_t num_features = 0;            ///< features in the message (z holds the usable ones)
+  std::vector<int32_t> feature_index;  ///< per z: its index among the message's features
 };
 
 /// What the pairer decided; events come out in the order they must be applied.

@@ -19,9 +19,15 @@ int64_t seconds_us(const Node& n, const std::string& key, double lo, double hi, 
 }
 
 void parseMotion(const Node& n, slam::MotionNoiseOptions& m) {
-  n.rejectUnknownKeys({"trans_sigma_per_m", "lateral_sigma_per_m", "trans_sigma_per_rad", "rot_sigma_per_rad",
+  n.rejectUnknownKeys({"model", "err_tran_per_m", "err_rot_per_rad", "err_drift_rad_per_m", "trans_sigma_per_m", "lateral_sigma_per_m", "trans_sigma_per_rad", "rot_sigma_per_rad",
                        "rot_sigma_per_m", "trans_sigma_per_sqrt_m", "lateral_sigma_per_sqrt_m", "rot_sigma_per_sqrt_rad",
                        "rot_sigma_per_sqrt_m", "min_sigma_xy_m", "min_sigma_theta_rad"});
+  const std::string model = n.getEnum("model", {"chord", "translate_then_rotate"}, "chord");
+  m.model = model == "translate_then_rotate" ? slam::MotionNoiseModel::kTranslateThenRotate
+                                             : slam::MotionNoiseModel::kChord;
+  m.err_tran_per_m = n.getDouble("err_tran_per_m", 0.0, 10.0, m.err_tran_per_m);
+  m.err_rot_per_rad = n.getDouble("err_rot_per_rad", 0.0, 10.0, m.err_rot_per_rad);
+  m.err_drift_rad_per_m = n.getDouble("err_drift_rad_per_m", 0.0, 10.0, m.err_drift_rad_per_m);
   m.trans_sigma_per_m = n.getDouble("trans_sigma_per_m", 0.0, 10.0, m.trans_sigma_per_m);
   m.lateral_sigma_per_m = n.getDouble("lateral_sigma_per_m", 0.0, 10.0, m.lateral_sigma_per_m);
   m.trans_sigma_per_rad = n.getDouble("trans_sigma_per_rad", 0.0, 10.0, m.trans_sigma_per_rad);
@@ -82,13 +88,15 @@ void parseCandidates(const Node& n, slam::CandidateOptions& c) {
 }
 
 void parseFilter(const Node& n, slam::FastSlamOptions& f) {
-  n.rejectUnknownKeys({"particles", "association", "p_new_mahalanobis_sq", "resample_ess_fraction",
+  n.rejectUnknownKeys({"particles", "association", "proposal", "p_new_mahalanobis_sq", "resample_ess_fraction",
                        "inflate_azimuth_near_zenith", "weight_at_predicted_pose", "weight_unassociated_with_p_new",
                        "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
                        "perception", "candidates"});
   f.num_particles = static_cast<int>(n.getInt("particles", 1, 100000, f.num_particles));
   const std::string assoc = n.getEnum("association", {"hungarian", "ml"}, "hungarian");
   f.association = assoc == "ml" ? slam::AssociationMethod::kMaximumLikelihood : slam::AssociationMethod::kHungarian;
+  const std::string proposal = n.getEnum("proposal", {"fastslam2", "fastslam1"}, "fastslam2");
+  f.proposal = proposal == "fastslam1" ? slam::ProposalKind::kFastSlam1 : slam::ProposalKind::kFastSlam2;
   f.p_new_mahalanobis_sq = n.getDouble("p_new_mahalanobis_sq", 1e-6, 1e6, f.p_new_mahalanobis_sq);
   f.resample_ess_fraction = n.getDouble("resample_ess_fraction", 0.0, 1.0, f.resample_ess_fraction);
   f.inflate_azimuth_near_zenith = n.getBool("inflate_azimuth_near_zenith", f.inflate_azimuth_near_zenith);
@@ -130,12 +138,15 @@ std::string SlamProcessOptions::validate() const {
   const std::string p = pairing.validate();
   if (!p.empty()) return "pairing: " + p;
   if (map_every_n_frames < 1) return "map_every_n_frames must be >= 1";
+  if (odometry_only_after_us < 0) return "output.odometry_only_after_s must be >= 0";
+  if (odometry_only_period_us <= 0) return "output.odometry_only_period_s must be > 0";
+  if (localisation_only && load_map_path.empty()) return "map.localisation_only needs map.load_path (a map to localise in)";
   if (!use_ceiling_lights && !use_vertical_lines) return "at least one feature kind must be used";
   return "";
 }
 
 SlamProcessOptions parseSlamOptions(const Node& root) {
-  root.rejectUnknownKeys({"seed", "start_pose", "features", "output", "pairing", "filter"});
+  root.rejectUnknownKeys({"seed", "start_pose", "features", "output", "pairing", "filter", "map"});
   SlamProcessOptions o;
   o.seed = static_cast<std::uint64_t>(root.getInt("seed", 0, INT64_MAX, 1));
   if (auto s = root.optChild("start_pose")) {
@@ -156,8 +167,18 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
       throw ConfigError(f->where("use_ceiling_lights") + "and use_vertical_lines cannot both be false");
   }
   if (auto out = root.optChild("output")) {
-    out->rejectUnknownKeys({"map_every_n_frames"});
+    out->rejectUnknownKeys({"map_every_n_frames", "odometry_only_after_s", "odometry_only_period_s"});
     o.map_every_n_frames = static_cast<int>(out->getInt("map_every_n_frames", 1, 1000000, 1));
+    o.odometry_only_after_us = seconds_us(*out, "odometry_only_after_s", 0.0, 3600.0, o.odometry_only_after_us);
+    o.odometry_only_period_us = seconds_us(*out, "odometry_only_period_s", 0.01, 3600.0, o.odometry_only_period_us);
+  }
+  if (auto m = root.optChild("map")) {
+    m->rejectUnknownKeys({"save_path", "load_path", "localisation_only"});
+    if (m->has("save_path")) o.save_map_path = m->getPath("save_path");
+    if (m->has("load_path")) o.load_map_path = m->getPath("load_path");
+    o.localisation_only = m->getBool("localisation_only", false);
+    if (o.localisation_only && o.load_map_path.empty())
+      throw ConfigError(m->where("localisation_only") + "needs map.load_path (a map to localise in)");
   }
   if (auto p = root.optChild("pairing")) parsePairing(*p, o.pairing);
   if (auto f = root.optChild("filter")) parseFilter(*f, o.filter);
@@ -169,8 +190,10 @@ SlamProcessOptions loadSlamOptions(const std::string& path) { return parseSlamOp
 std::string describe(const SlamProcessOptions& o) {
   std::ostringstream s;
   const auto& f = o.filter;
-  s << "filter: " << f.num_particles << " particles, association "
-    << (f.association == slam::AssociationMethod::kHungarian ? "hungarian" : "ml") << ", P_new at Mahalanobis^2 "
+  s << "filter: " << f.num_particles << " particles, "
+    << (f.proposal == slam::ProposalKind::kFastSlam2 ? "FastSLAM 2.0" : "FastSLAM 1.0") << ", association "
+    << (f.association == slam::AssociationMethod::kHungarian ? "hungarian" : "ml") << ", motion noise "
+    << (f.motion.model == slam::MotionNoiseModel::kChord ? "chord" : "translate-then-rotate") << ", P_new at Mahalanobis^2 "
     << f.p_new_mahalanobis_sq << ", NZ_min " << f.candidates.nz_min << ", NCROSS_valid " << f.candidates.ncross_valid
     << ", ANG_min " << rad2deg(f.candidates.min_parallax_rad) << " deg, D_min " << f.candidates.d_min_m
     << " m, p_in " << f.perception.detection_probability << ", seed " << o.seed << "\n";
@@ -186,6 +209,9 @@ std::string describe(const SlamProcessOptions& o) {
     << "; features: ceiling lights " << (o.use_ceiling_lights ? "on" : "off") << ", vertical lines "
     << (o.use_vertical_lines ? "on" : "off") << ", sigma floor " << rad2deg(o.min_sigma_rad) << " deg; SLAM_MAP every "
     << o.map_every_n_frames << " frame(s)";
+  if (!o.load_map_path.empty())
+    s << "\nmap: start from " << o.load_map_path << (o.localisation_only ? " (localisation only: fixed)" : " (updated)");
+  if (!o.save_map_path.empty()) s << (o.load_map_path.empty() ? "\n" : "; ") << "map: saved to " << o.save_map_path << " on exit";
   return s.str();
 }
 

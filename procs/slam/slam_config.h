@@ -28,6 +28,17 @@ struct SlamProcessOptions {
   /// covariance are raised to at least min_sigma_rad^2 (0: the covariance as published).
   double min_sigma_rad = 0.0;
   int map_every_n_frames = 1;  ///< SLAM_MAP on every n-th processed frame (SLAM_POSE, SLAM_PARTICLES on every one)
+  /// Odometry-only poses: when no frame has been stepped for odometry_only_after_us of odometry time
+  /// (and none is waiting), the filter predicts with the odometry alone and SLAM_POSE and
+  /// SLAM_PARTICLES are published every odometry_only_period_us (input_seq -1). 0 = off.
+  int64_t odometry_only_after_us = 3'000'000;
+  int64_t odometry_only_period_us = 1'000'000;
+  /// Saved maps (map_file.h). save: on exit (end of replay, SIGINT, SIGTERM) the best particle's map
+  /// is written atomically here ("" = not saved). load: the filter starts from this map (its
+  /// landmarks shared by all particles). localisation_only: with a loaded map, the map stays fixed.
+  std::string save_map_path;
+  std::string load_map_path;
+  bool localisation_only = false;
 
   /// Empty when valid, otherwise a message naming the first bad field.
   std::string validate() const;

@@ -1,6 +1,7 @@
 // The SLAM process's shared code path: see slam_driver.h and docs/slam-process.md.
 #include "slam_driver.h"
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -34,9 +35,12 @@ Frame toFrame(const features_t& msg, const SlamProcessOptions& options, int64_t*
   fr.utime = msg.utime;
   fr.seq = msg.seq;
   fr.z.reserve(msg.features.size());
-  for (const feature_t& f : msg.features) {
+  fr.num_features = static_cast<int32_t>(msg.features.size());
+  for (std::size_t i = 0; i < msg.features.size(); ++i) {
+    const feature_t& f = msg.features[i];
     if (auto m = toMeasurement(f, msg.camera_position_m, options)) {
       fr.z.push_back(*m);
+      fr.feature_index.push_back(static_cast<int32_t>(i));
     } else if (skipped) {
       ++*skipped;
     }
@@ -44,9 +48,13 @@ Frame toFrame(const features_t& msg, const SlamProcessOptions& options, int64_t*
   return fr;
 }
 
-SlamDriver::SlamDriver(const SlamProcessOptions& options) : opt_(options), pairer_(options.pairing) {
+SlamDriver::SlamDriver(const SlamProcessOptions& options, std::vector<slam::Landmark> prior_map)
+    : opt_(options), pairer_(options.pairing), prior_map_(std::move(prior_map)) {
+  if (opt_.localisation_only) opt_.filter.update_map = false;
   const std::string err = opt_.validate();
   if (!err.empty()) throw std::invalid_argument("SLAM options: " + err);
+  if (opt_.localisation_only && prior_map_.empty())
+    throw std::invalid_argument("SLAM options: localisation only needs a non-empty prior map");
 }
 
 const DriverStats& SlamDriver::stats() const {
@@ -69,12 +77,14 @@ DriverResult SlamDriver::onOdometry(const odometry_t& msg) {
   std::vector<PairEvent> events;
   note(pairer_.addOdometry(msg.utime, Pose2{msg.x_m, msg.y_m, msg.theta_rad}, events), "ODOMETRY", r);
   apply(events, r);
+  maybePredict(r);
   return r;
 }
 
 DriverResult SlamDriver::onFeatures(const features_t& msg) {
   DriverResult r;
   stats_.features_in += msg.num_features;
+  newest_frame_seen_utime_ = std::max(newest_frame_seen_utime_, msg.utime);
   std::vector<PairEvent> events;
   note(pairer_.addFrame(toFrame(msg, opt_, &stats_.features_skipped_kind), events), "OMNI_FEATURES", r);
   apply(events, r);
@@ -96,46 +106,65 @@ void SlamDriver::apply(std::vector<PairEvent>& events, DriverResult& r) {
         if (filter_) ++stats_.filter_resets;
         filter_.reset();  // the next frame initialises a new filter (new epoch)
         ++epoch_;
+        last_step_utime_ = last_frame_utime_ = newest_frame_seen_utime_ = 0;
         break;
       case PairEvent::Kind::kDropped:
         r.dropped.push_back(ev.reason);
         break;
       case PairEvent::Kind::kPaired:
-        r.outputs.push_back(process(ev.frame, ev.odom_O));
+        if (auto out = process(ev.frame, ev.odom_O, r)) r.outputs.push_back(std::move(*out));
         break;
     }
   }
 }
 
-FrameOutput SlamDriver::process(const Frame& frame, const Pose2& odom_O) {
-  if (!filter_) {
-    // First frame of an epoch: the start pose is known (paper 000), all particles at it.
-    filter_ = std::make_unique<slam::FastSlam>(opt_.filter, opt_.seed + static_cast<std::uint64_t>(epoch_));
-    const Pose2 start_W = opt_.start_source == SlamProcessOptions::StartSource::kFixed ? opt_.start_pose_W : odom_O;
-    filter_->initialise(start_W);
-    odom_prev_O_ = odom_O;
+void SlamDriver::ensureFilter(const Pose2& odom_O) {
+  if (filter_) return;
+  // First step of an epoch: the start pose is known (paper 000), all particles at it.
+  filter_ = std::make_unique<slam::FastSlam>(opt_.filter, opt_.seed + static_cast<std::uint64_t>(epoch_));
+  const Pose2 start_W = opt_.start_source == SlamProcessOptions::StartSource::kFixed ? opt_.start_pose_W : odom_O;
+  filter_->initialise(start_W, prior_map_);
+  odom_prev_O_ = odom_O;
+}
+
+// Odometry-only steps: only after the filter has started (the first frame fixes the start), only
+// when no frame waits for odometry, and only on the odometry's own clock.
+void SlamDriver::maybePredict(DriverResult& r) {
+  if (opt_.odometry_only_after_us <= 0 || !filter_ || pairer_.pendingFrames() > 0 || pairer_.odometry().empty())
+    return;
+  const int64_t t = pairer_.odometry().newestUtime();
+  // Frames still arrive (even ones that are dropped): the features process is alive.
+  if (t - std::max(last_frame_utime_, newest_frame_seen_utime_) < opt_.odometry_only_after_us) return;
+  if (t - last_step_utime_ < opt_.odometry_only_period_us) return;
+  const auto lk = pairer_.odometry().at(t, opt_.pairing.max_odometry_gap_us);
+  if (lk.status != OdometryBuffer::Status::kOk) return;
+  filter_->predictOnly(odom_prev_O_, lk.pose_O);
+  odom_prev_O_ = lk.pose_O;
+  last_step_utime_ = t;
+  ++stats_.odometry_only_steps;
+  FrameOutput out = makeOutput(t, -1, filter_->ess());
+  out.odometry_only = true;
+  r.outputs.push_back(std::move(out));
+}
+
+std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& odom_O, DriverResult& r) {
+  if (filter_ && frame.utime <= last_step_utime_) {
+    // An odometry-only step already moved the filter past this frame (it came too late).
+    ++stats_.dropped_behind_prediction;
+    r.dropped.push_back("frame seq " + std::to_string(frame.seq) + " utime " + std::to_string(frame.utime) +
+                        " is not after the last odometry-only step (utime " + std::to_string(last_step_utime_) +
+                        "): dropped");
+    return std::nullopt;
   }
+  ensureFilter(odom_O);
   const slam::StepResult sr = filter_->step(odom_prev_O_, odom_O, frame.z);
   odom_prev_O_ = odom_O;
+  last_step_utime_ = last_frame_utime_ = frame.utime;
   ++stats_.frames_processed;
   stats_.measurements_rejected += sr.num_rejected;
   if (sr.weights_degenerate) ++stats_.degenerate_weights;
 
-  FrameOutput out;
-  const Pose2 mean = filter_->meanPose();
-  const Eigen::Matrix3d cov = filter_->poseCovariance();
-  pose_t& p = out.pose;
-  p.utime = frame.utime;
-  p.seq = pose_seq_++;
-  p.x_m = mean.x_m;
-  p.y_m = mean.y_m;
-  p.theta_rad = mean.theta_rad;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) p.covariance[i][j] = cov(i, j);
-  p.num_particles = static_cast<int32_t>(filter_->particles().size());
-  p.effective_sample_size = sr.ess;
-  p.input_seq = frame.seq;
-
+  FrameOutput out = makeOutput(frame.utime, frame.seq, sr.ess);
   if ((stats_.frames_processed - 1) % opt_.map_every_n_frames == 0) {  // the first frame has a map
     map_t m{};
     m.utime = frame.utime;
@@ -159,12 +188,43 @@ FrameOutput SlamDriver::process(const Frame& frame, const Pose2& odom_O) {
     out.map = std::move(m);
   }
 
+  associations_t a{};
+  a.utime = frame.utime;
+  a.seq = associations_seq_++;
+  a.input_seq = frame.seq;
+  a.num_features = frame.num_features;
+  a.landmark_id.assign(static_cast<std::size_t>(frame.num_features), +associations_t::NOT_USED);
+  for (std::size_t k = 0; k < frame.feature_index.size(); ++k) {
+    const std::int64_t id = k < sr.landmark_of_measurement.size() ? sr.landmark_of_measurement[k] : -1;
+    a.landmark_id[static_cast<std::size_t>(frame.feature_index[k])] = id >= 0 ? id : +associations_t::NOT_ASSOCIATED;
+  }
+  out.associations = std::move(a);
+  return out;
+}
+
+FrameOutput SlamDriver::makeOutput(int64_t utime, int64_t input_seq, double ess) {
+  FrameOutput out;
+  const Pose2 mean = filter_->meanPose();
+  const Eigen::Matrix3d cov = filter_->poseCovariance();
+  pose_t& p = out.pose;
+  p.utime = utime;
+  p.seq = pose_seq_++;
+  p.x_m = mean.x_m;
+  p.y_m = mean.y_m;
+  p.theta_rad = mean.theta_rad;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) p.covariance[i][j] = cov(i, j);
+  p.num_particles = static_cast<int32_t>(filter_->particles().size());
+  p.effective_sample_size = ess;
+  p.input_seq = input_seq;
+
   particles_t& q = out.particles;
-  q.utime = frame.utime;
+  q.utime = utime;
   q.seq = particles_seq_++;
-  q.input_seq = frame.seq;
-  const std::vector<Pose2> poses = filter_->particlePoses();
-  const std::vector<double>& w = filter_->particleWeights();
+  q.input_seq = input_seq;
+  // The contract: the sampled poses and their weights before resampling.
+  const std::vector<Pose2>& poses = filter_->posesBeforeResampling();
+  const std::vector<double>& w = filter_->weightsBeforeResampling();
   q.num_particles = static_cast<int32_t>(poses.size());
   for (std::size_t k = 0; k < poses.size(); ++k) {
     q.x_m.push_back(poses[k].x_m);
@@ -184,7 +244,8 @@ std::string SlamDriver::summary() const {
     << " restart " << p.dropped_restart << "; odometry " << p.odometry_in << "; refused: duplicates "
     << p.duplicates << " out_of_order " << p.out_of_order << " stale " << p.stale_after_restart << "; restarts "
     << p.restarts << "; odometry_jumps " << p.odometry_jumps << "; features " << s.features_in << " skipped " << s.features_skipped_kind
-    << " rejected_by_filter " << s.measurements_rejected;
+    << " rejected_by_filter " << s.measurements_rejected << "; odometry_only_steps " << s.odometry_only_steps
+    << " dropped_behind_prediction " << s.dropped_behind_prediction;
   if (filter_) o << "; landmarks " << filter_->bestParticle().map.size() << " candidates " << filter_->bestCandidateCount();
   return o.str();
 }

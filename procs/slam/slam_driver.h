@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "omnislam/core/slam/fastslam.h"
+#include "omnislam/associations_t.hpp"
 #include "omnislam/features_t.hpp"
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
@@ -21,11 +22,14 @@
 
 namespace omnislam::slamproc {
 
-/// What answers one processed frame, in publishing order: pose, map (every n-th frame), particles.
+/// What answers one processed frame, in publishing order: pose, map (every n-th frame), particles,
+/// associations.
 struct FrameOutput {
   pose_t pose;
   std::optional<map_t> map;
   particles_t particles;
+  std::optional<associations_t> associations;  ///< absent for an odometry-only step
+  bool odometry_only = false;  ///< a prediction without a frame (pose.input_seq = -1)
 };
 
 /// Everything one input produced: the outputs, the refusal of the input itself, the frames
@@ -51,6 +55,8 @@ struct DriverStats {
   int64_t measurements_rejected = 0;     ///< refused by the filter (non-finite, covariance not PD)
   int64_t filter_resets = 0;             ///< restarts that re-initialised the filter
   int64_t degenerate_weights = 0;        ///< steps whose weights were all zero (reset to uniform)
+  int64_t odometry_only_steps = 0;       ///< predictions published while no frame came
+  int64_t dropped_behind_prediction = 0; ///< frames older than the last odometry-only step
 };
 
 /// Converts one feature to a filter measurement; nothing for a kind that is off in `options` or a
@@ -63,7 +69,10 @@ Frame toFrame(const features_t& msg, const SlamProcessOptions& options, int64_t*
 class SlamDriver {
  public:
   /// Throws std::invalid_argument when the options are invalid.
-  explicit SlamDriver(const SlamProcessOptions& options);
+  /// `prior_map`: landmarks every particle starts from (a loaded map), shared; with
+  /// options.localisation_only the filter keeps it fixed. Throws std::invalid_argument when the
+  /// options are invalid.
+  explicit SlamDriver(const SlamProcessOptions& options, std::vector<slam::Landmark> prior_map = {});
 
   DriverResult onOdometry(const odometry_t& msg);
   DriverResult onFeatures(const features_t& msg);
@@ -75,18 +84,27 @@ class SlamDriver {
   std::string summary() const;
   /// The filter of the current epoch (nothing before the first processed frame).
   const slam::FastSlam* filter() const { return filter_.get(); }
+  /// utime of the last step (frame or odometry-only), 0 before the first.
+  int64_t lastStepUtime() const { return last_step_utime_; }
 
  private:
   void apply(std::vector<PairEvent>& events, DriverResult& r);
   static void note(const InputResult& in, const char* channel, DriverResult& r);
-  FrameOutput process(const Frame& frame, const Pose2& odom_O);
+  std::optional<FrameOutput> process(const Frame& frame, const Pose2& odom_O, DriverResult& r);
+  void maybePredict(DriverResult& r);
+  void ensureFilter(const Pose2& odom_O);
+  FrameOutput makeOutput(int64_t utime, int64_t input_seq, double ess);
 
   SlamProcessOptions opt_;
   Pairer pairer_;
   std::unique_ptr<slam::FastSlam> filter_;  ///< created at the first frame of each epoch
   Pose2 odom_prev_O_;
+  std::vector<slam::Landmark> prior_map_;
+  int64_t last_step_utime_ = 0;     ///< utime of the last filter step (frame or prediction)
+  int64_t last_frame_utime_ = 0;    ///< utime of the last frame step
+  int64_t newest_frame_seen_utime_ = 0;  ///< newest frame utime received (processed or not)
   int64_t epoch_ = 0;
-  int64_t pose_seq_ = 0, map_seq_ = 0, particles_seq_ = 0;
+  int64_t pose_seq_ = 0, map_seq_ = 0, particles_seq_ = 0, associations_seq_ = 0;
   mutable DriverStats stats_;
 };
 

@@ -3,6 +3,8 @@
 // never corrupts the filter.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <set>
 #include <cmath>
 #include <limits>
 
@@ -312,6 +314,158 @@ TEST(SlamDriver, FramesWithoutOdometryAreDroppedAndCounted) {
   EXPECT_EQ(d.stats().pairing.dropped_no_odometry, 6);
   EXPECT_EQ(d.filter(), nullptr);
   EXPECT_NE(d.summary().find("no_odometry 6"), std::string::npos) << d.summary();
+}
+
+}  // namespace
+
+namespace {
+
+// Features stop (the features process died) while odometry goes on: after
+// odometry_only_after_us the driver publishes odometry-only poses every odometry_only_period_us
+// (input_seq -1, no map, no associations); a frame older than the last prediction is dropped and
+// counted; frames after it are processed again.
+TEST(SlamDriver, OdometryOnlyPosesWhileFramesAreMissingThenRecovers) {
+  SlamProcessOptions o;
+  o.odometry_only_after_us = 3'000'000;
+  o.odometry_only_period_us = 1'000'000;
+  SlamDriver d(o);
+  auto outs = run(d, 10);  // frames 0..9 s, odometry to 10 s
+  ASSERT_EQ(outs.size(), 10u);
+  for (const auto& f : outs) EXPECT_FALSE(f.odometry_only);
+  // Odometry alone from 10.02 s to 20 s.
+  std::vector<FrameOutput> pred;
+  int64_t oseq = 10000;
+  for (int64_t t = kT0 + 10'020'000; t <= kT0 + 20'000'000; t += 20'000)
+    for (auto& f : d.onOdometry(odo(t, oseq++)).outputs) pred.push_back(std::move(f));
+  // Last frame at 9 s: predictions at 12, 13, ..., 20 s.
+  ASSERT_EQ(pred.size(), 9u);
+  for (std::size_t i = 0; i < pred.size(); ++i) {
+    EXPECT_TRUE(pred[i].odometry_only);
+    EXPECT_EQ(pred[i].pose.utime, kT0 + static_cast<int64_t>(12 + i) * 1'000'000);
+    EXPECT_EQ(pred[i].pose.input_seq, -1);
+    EXPECT_FALSE(pred[i].map.has_value());
+    EXPECT_FALSE(pred[i].associations.has_value());
+    EXPECT_EQ(pred[i].pose.seq, outs.back().pose.seq + 1 + static_cast<int64_t>(i));
+    const Pose2 truth = truthAt(pred[i].pose.utime);
+    EXPECT_LT(std::hypot(pred[i].pose.x_m - truth.x_m, pred[i].pose.y_m - truth.y_m), 0.2);
+  }
+  EXPECT_EQ(d.stats().odometry_only_steps, 9);
+  // A late frame from before the last prediction is dropped, not stepped backwards.
+  auto late = d.onFeatures(feats(kT0 + 15'000'000, 500));
+  EXPECT_TRUE(late.outputs.empty());
+  ASSERT_EQ(late.dropped.size(), 1u);
+  EXPECT_NE(late.dropped[0].find("odometry-only"), std::string::npos) << late.dropped[0];
+  EXPECT_EQ(d.stats().dropped_behind_prediction, 1);
+  // Frames come back: processed normally, with associations to the mapped lights (the first one, at
+  // the time of the last prediction, is dropped; a frame seen stops the predictions).
+  std::vector<FrameOutput> back;
+  int64_t fseq = 600;
+  for (int64_t t = kT0 + 20'020'000; t <= kT0 + 25'000'000; t += 20'000) {
+    for (auto& f : d.onOdometry(odo(t, oseq++)).outputs) back.push_back(std::move(f));
+    if ((t - kT0 - 100'000) % 1'000'000 == 0)
+      for (auto& f : d.onFeatures(feats(t - 100'000, fseq++)).outputs) back.push_back(std::move(f));
+  }
+  ASSERT_GE(back.size(), 4u);
+  for (const auto& f : back) {
+    EXPECT_FALSE(f.odometry_only);
+    ASSERT_TRUE(f.associations.has_value());
+    EXPECT_EQ(f.associations->num_features, 16);
+    int associated = 0;
+    for (int64_t id : f.associations->landmark_id) associated += id >= 0;
+    EXPECT_GT(associated, 4) << "the mapped lights are associated again";
+    const Pose2 truth = truthAt(f.pose.utime);
+    EXPECT_LT(std::hypot(f.pose.x_m - truth.x_m, f.pose.y_m - truth.y_m), 0.2);
+  }
+  // Off: no prediction at all.
+  SlamProcessOptions off;
+  off.odometry_only_after_us = 0;
+  SlamDriver d2(off);
+  run(d2, 5);
+  for (int64_t t = kT0 + 5'020'000; t <= kT0 + 15'000'000; t += 20'000)
+    EXPECT_TRUE(d2.onOdometry(odo(t, oseq++)).outputs.empty());
+}
+
+// SLAM_ASSOCIATIONS has one entry per feature of the message: features the filter does not use
+// (a kind turned off) are NOT_USED, the others a landmark id or NOT_ASSOCIATED.
+TEST(SlamDriver, AssociationsCoverEveryFeatureOfTheFrame) {
+  SlamProcessOptions o;
+  o.use_vertical_lines = false;
+  SlamDriver d(o);
+  run(d, 10);
+  const int64_t t = kT0 + 10'000'000;
+  features_t m = feats(t, 50);
+  feature_t line{};
+  line.kind = feature_t::KIND_VERTICAL_LINE;
+  line.covariance[0][0] = 1e-4;
+  m.features.insert(m.features.begin() + 3, line);  // an unused kind in the middle
+  m.num_features = static_cast<int32_t>(m.features.size());
+  auto r = d.onFeatures(m);
+  for (auto& f : d.onOdometry(odo(t + 20'000, 99999)).outputs) r.outputs.push_back(std::move(f));
+  ASSERT_EQ(r.outputs.size(), 1u);
+  ASSERT_TRUE(r.outputs[0].associations);
+  const associations_t& a = *r.outputs[0].associations;
+  EXPECT_EQ(a.utime, t);
+  EXPECT_EQ(a.input_seq, 50);
+  ASSERT_EQ(a.num_features, 17);
+  ASSERT_EQ(a.landmark_id.size(), 17u);
+  EXPECT_EQ(a.landmark_id[3], +associations_t::NOT_USED);
+  std::set<int64_t> ids;
+  for (int i = 0; i < 17; ++i) {
+    if (i == 3) continue;
+    EXPECT_GE(a.landmark_id[i], +associations_t::NOT_ASSOCIATED);
+    if (a.landmark_id[i] >= 0) {
+      EXPECT_TRUE(ids.insert(a.landmark_id[i]).second) << "one landmark per feature";
+    }
+  }
+  EXPECT_GT(ids.size(), 4u);
+  // Every associated id is in the map of the best particle.
+  const auto map = d.filter()->bestMap();
+  for (int64_t id : ids)
+    EXPECT_TRUE(std::any_of(map.begin(), map.end(), [&](const slam::Landmark& L) { return int64_t(L.id) == id; }));
+}
+
+// Localisation only from a saved map: the pose follows the truth, the map is exactly the prior.
+TEST(SlamDriver, LocalisationOnlyFromAPriorMap) {
+  std::vector<slam::Landmark> prior;
+  for (const auto& p : hallLights()) {
+    slam::Landmark L;
+    L.id = 1000 + prior.size();
+    L.p_LinW_m = p;
+    L.cov_LinW_m2 = Eigen::Matrix3d::Identity() * 1e-3;
+    L.counter = 20;
+    prior.push_back(L);
+  }
+  SlamProcessOptions o;
+  o.localisation_only = true;
+  o.load_map_path = "prior.yaml";  // only its presence is checked here; main.cpp reads the file
+  o.start_source = SlamProcessOptions::StartSource::kFixed;
+  o.start_pose_W = truthAt(kT0);
+  SlamDriver d(o, prior);
+  const auto outs = run(d, 15);
+  ASSERT_EQ(outs.size(), 15u);
+  for (const auto& f : outs) {
+    const Pose2 truth = truthAt(f.pose.utime);
+    EXPECT_LT(std::hypot(f.pose.x_m - truth.x_m, f.pose.y_m - truth.y_m), 0.1);
+    ASSERT_TRUE(f.associations);
+    int associated = 0;
+    for (int64_t id : f.associations->landmark_id) associated += id >= 1000;
+    EXPECT_GE(associated, 10);
+  }
+  const auto map = d.filter()->bestMap();
+  ASSERT_EQ(map.size(), prior.size());
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    EXPECT_EQ(map[i].id, prior[i].id);
+    EXPECT_EQ(map[i].p_LinW_m, prior[i].p_LinW_m);
+    EXPECT_EQ(map[i].counter, 20);
+  }
+  EXPECT_EQ(d.filter()->bestCandidateCount(), 0u);
+  // Localisation without a map is refused at construction.
+  SlamProcessOptions bad;
+  bad.localisation_only = true;
+  bad.load_map_path = "x.yaml";
+  EXPECT_THROW(SlamDriver(bad, {}), std::invalid_argument);
+  bad.load_map_path.clear();
+  EXPECT_NE(bad.validate().find("load_path"), std::string::npos) << bad.validate();
 }
 
 }  // namespace

@@ -1,0 +1,39 @@
+// Saved maps of the SLAM process: the best particle's landmarks written as YAML (one landmark per
+// line, full double precision) and read back as a prior map. Writing is atomic: a temporary file
+// in the same folder is written, flushed to disk and renamed over the target, so a reader (or a
+// crash, SIGINT or SIGTERM during the write) never sees a half-written map.
+// Frame: the map frame W of the run that saved it (docs/conventions.md); metres, m^2.
+// Format (version 1):
+//   format: omnislam-map
+//   version: 1
+//   utime: <utime of the frame the map answers, microseconds>
+//   landmarks:
+//     - {id: 3, kind: point3d|vertical_line, type: 1|2, counter: 7,
+//        position_m: [x, y, z], covariance_m2: [c00, c01, c02, c10, ..., c22]}
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "omnislam/core/slam/types.h"
+
+namespace omnislam::slamproc {
+
+struct SavedMap {
+  int64_t utime = 0;
+  std::vector<slam::Landmark> landmarks;
+};
+
+/// The YAML text of a map (deterministic: the same map gives the same bytes).
+std::string mapToYaml(const SavedMap& map);
+
+/// Writes atomically (temporary file, fsync, rename). Throws std::runtime_error naming the path.
+void saveMapAtomically(const SavedMap& map, const std::string& path);
+
+/// Reads a map file; a missing file, a wrong format, version, kind, non-finite number or a
+/// covariance that is not symmetric positive definite throws config::ConfigError naming the file,
+/// the key and the landmark.
+SavedMap loadMap(const std::string& path);
+
+}  // namespace omnislam::slamproc

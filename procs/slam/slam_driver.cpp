@@ -84,7 +84,8 @@ DriverResult SlamDriver::onOdometry(const odometry_t& msg) {
 DriverResult SlamDriver::onFeatures(const features_t& msg) {
   DriverResult r;
   stats_.features_in += msg.num_features;
-  newest_frame_seen_utime_ = std::max(newest_frame_seen_utime_, msg.utime);
+  if (!pairer_.odometry().empty())
+    odom_utime_at_last_frame_ = std::max(odom_utime_at_last_frame_, pairer_.odometry().newestUtime());
   std::vector<PairEvent> events;
   note(pairer_.addFrame(toFrame(msg, opt_, &stats_.features_skipped_kind), events), "OMNI_FEATURES", r);
   apply(events, r);
@@ -106,7 +107,7 @@ void SlamDriver::apply(std::vector<PairEvent>& events, DriverResult& r) {
         if (filter_) ++stats_.filter_resets;
         filter_.reset();  // the next frame initialises a new filter (new epoch)
         ++epoch_;
-        last_step_utime_ = last_frame_utime_ = newest_frame_seen_utime_ = 0;
+        last_step_utime_ = last_frame_utime_ = odom_utime_at_last_frame_ = 0;
         break;
       case PairEvent::Kind::kDropped:
         r.dropped.push_back(ev.reason);
@@ -133,8 +134,8 @@ void SlamDriver::maybePredict(DriverResult& r) {
   if (opt_.odometry_only_after_us <= 0 || !filter_ || pairer_.pendingFrames() > 0 || pairer_.odometry().empty())
     return;
   const int64_t t = pairer_.odometry().newestUtime();
-  // Frames still arrive (even ones that are dropped): the features process is alive.
-  if (t - std::max(last_frame_utime_, newest_frame_seen_utime_) < opt_.odometry_only_after_us) return;
+  // Frames still arrive (late ones too, even ones that are dropped): the features process is alive.
+  if (t - std::max(last_frame_utime_, odom_utime_at_last_frame_) < opt_.odometry_only_after_us) return;
   if (t - last_step_utime_ < opt_.odometry_only_period_us) return;
   const auto lk = pairer_.odometry().at(t, opt_.pairing.max_odometry_gap_us);
   if (lk.status != OdometryBuffer::Status::kOk) return;

@@ -102,7 +102,10 @@ class SlamDriver {
   std::vector<slam::Landmark> prior_map_;
   int64_t last_step_utime_ = 0;     ///< utime of the last filter step (frame or prediction)
   int64_t last_frame_utime_ = 0;    ///< utime of the last frame step
-  int64_t newest_frame_seen_utime_ = 0;  ///< newest frame utime received (processed or not)
+  /// Newest odometry utime when the last frame arrived (processed or not): the odometry-only rule
+  /// measures how long no frame has *arrived*, so a features stream that lags behind the odometry
+  /// but is alive never triggers predictions (a replayed log of a loaded machine).
+  int64_t odom_utime_at_last_frame_ = 0;
   int64_t epoch_ = 0;
   int64_t pose_seq_ = 0, map_seq_ = 0, particles_seq_ = 0, associations_seq_ = 0;
   mutable DriverStats stats_;

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Reproduces paper 000's table I and figs. 7-8 on the simulated sports hall, end to end from the
+# features process's output: for each seed, the simulator, capture, odometry and ceiling-light
+# features processes run live and are recorded; the recording is then replayed through
+# omnislam-slam twice (Hungarian and Maximum-Likelihood association, same filter seed, 10 particles
+# as in the paper) and scored with omnislam-eval. Prints a Markdown table (docs/slam-results.md).
+#
+#   scripts/reproduce-table1.sh [--seeds "1 2 ... 10"] [--speedup 10] [--out DIR] [--particles 10]
+#                               [--keep-recordings]
+# Needs a build (scripts/build.sh). Takes about 45 s per seed at --speedup 10 on 2 cores.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BIN="$ROOT/build/bin"
+SEEDS="1 2 3 4 5 6 7 8 9 10"
+SPEEDUP=10
+PARTICLES=10
+OUT=""
+KEEP=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --seeds) SEEDS="$2"; shift 2 ;;
+    --speedup) SPEEDUP="$2"; shift 2 ;;
+    --particles) PARTICLES="$2"; shift 2 ;;
+    --out) OUT="$2"; shift 2 ;;
+    --keep-recordings) KEEP=1; shift ;;
+    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
+    *) echo "reproduce-table1: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+for t in omnislam-launch omnislam-slam omnislam-eval omnislam-sim omnislam-capture omnislam-odometry omnislam-features omnislam-record; do
+  [ -x "$BIN/$t" ] || { echo "reproduce-table1: $BIN/$t missing: run scripts/build.sh first" >&2; exit 2; }
+done
+[ -n "$OUT" ] || OUT="$(mktemp -d /tmp/omnislam-table1.XXXXXX)"
+mkdir -p "$OUT"
+export PATH="$BIN:$PATH"
+# A private multicast port (ttl=0: never leaves this machine) so that other runs do not cross.
+PORT=$((20000 + $$ % 20000))
+URL="udpm://239.255.76.67:${PORT}?ttl=0&recv_buf_size=4194304"
+SLAM_CFG="$ROOT/config/slam/sports_hall.yaml"
+
+for s in $SEEDS; do
+  rec="$OUT/features-seed$s.lcm"
+  if [ ! -s "$rec" ]; then
+    echo "reproduce-table1: seed $s: recording the features pipeline at ${SPEEDUP}x ..." >&2
+    "$BIN/omnislam-launch" "$ROOT/config/launch/sports_hall_features.yaml" --url "$URL" \
+      --set "seed=$s" --set "speedup=$SPEEDUP" --log-file "$rec" > "$OUT/launch-seed$s.txt" 2>&1 || {
+      echo "reproduce-table1: seed $s: the launch failed, see $OUT/launch-seed$s.txt" >&2; exit 1; }
+  fi
+  for assoc in hungarian ml; do
+    res="$OUT/slam-$assoc-seed$s.lcm"
+    "$BIN/omnislam-slam" --config "$SLAM_CFG" --seed "$s" --particles "$PARTICLES" --association "$assoc" \
+      --replay "$rec" --out "$res" --no-progress 2> "$OUT/slam-$assoc-seed$s.txt"
+    "$BIN/omnislam-eval" --json --tum-out "$OUT/slam-$assoc-seed$s" "$res" > "$OUT/eval-$assoc-seed$s.json"
+  done
+  [ "$KEEP" = 1 ] || rm -f "$rec"
+done
+python3 "$ROOT/scripts/table1.py" "$OUT" $SEEDS
+echo "reproduce-table1: files in $OUT" >&2

@@ -258,11 +258,13 @@ int main(int argc, char** argv) {
   std::string config_path, url, name = "slam", replay, out, save_map, load_map, association;
   uint64_t seed = 0;
   int particles = 0;
+  std::vector<std::string> sets;
   bool localise = false, progress = false, no_progress = false;
   cli.add_option("--config", config_path, "SLAM config (YAML, e.g. config/slam/sports_hall.yaml); default: built-in");
   auto* seed_opt = cli.add_option("--seed", seed, "filter seed (overrides the config's seed)");
   cli.add_option("--replay", replay, "offline: read this LCM log instead of the bus");
   cli.add_option("--out", out, "offline: write the input events and the outputs to this LCM log");
+  cli.add_option("--set", sets, "override a config key: --set filter.resample_ess_fraction=1.0 (repeatable; needs --config)");
   cli.add_option("--save-map", save_map, "write the best particle's map here on exit (atomic; overrides map.save_path)");
   cli.add_option("--load-map", load_map, "start from this saved map (overrides map.load_path)");
   cli.add_flag("--localise", localise, "localisation only: keep the loaded map fixed (needs a map to load)");
@@ -276,7 +278,8 @@ int main(int argc, char** argv) {
   return app::runMain("omnislam-slam", [&]() -> int {
     if (replay.empty() != out.empty()) throw std::invalid_argument("--replay IN.lcm and --out OUT.lcm go together");
     slamproc::SlamProcessOptions opt;
-    if (!config_path.empty()) opt = slamproc::loadSlamOptions(config_path);
+    if (!sets.empty() && config_path.empty()) throw std::invalid_argument("--set needs --config FILE");
+    if (!config_path.empty()) opt = slamproc::loadSlamOptions(config_path, sets);
     if (*seed_opt) opt.seed = seed;
     if (!save_map.empty()) opt.save_map_path = save_map;
     if (!load_map.empty()) opt.load_map_path = load_map;

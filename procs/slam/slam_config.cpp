@@ -187,6 +187,10 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
 
 SlamProcessOptions loadSlamOptions(const std::string& path) { return parseSlamOptions(Node::loadFile(path)); }
 
+SlamProcessOptions loadSlamOptions(const std::string& path, const std::vector<std::string>& overrides) {
+  return parseSlamOptions(Node::loadFileWithOverrides(path, overrides));
+}
+
 std::string describe(const SlamProcessOptions& o) {
   std::ostringstream s;
   const auto& f = o.filter;

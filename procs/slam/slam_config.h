@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "omnislam/config/yaml_node.h"
 #include "omnislam/core/pose2.h"
@@ -48,6 +49,8 @@ struct SlamProcessOptions {
 /// values out of range throw config::ConfigError naming the key.
 SlamProcessOptions parseSlamOptions(const config::Node& root);
 SlamProcessOptions loadSlamOptions(const std::string& path);
+/// The file with "dotted.key=value" overrides applied first (config::Node::loadFileWithOverrides).
+SlamProcessOptions loadSlamOptions(const std::string& path, const std::vector<std::string>& overrides);
 
 /// One line per option group, for the start-up echo.
 std::string describe(const SlamProcessOptions& o);

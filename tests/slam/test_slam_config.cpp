@@ -110,3 +110,36 @@ TEST(SlamConfig, MistakesNameTheKey) {
 }
 
 }  // namespace
+
+namespace {
+
+// --set overrides: dotted keys into the file's maps (created when missing), values read as YAML,
+// the same checks as in the file; a malformed override is named.
+TEST(SlamConfig, OverridesApplyOnTopOfTheFile) {
+  const std::string file = std::string(OMNISLAM_SOURCE_DIR) + "/config/slam/sports_hall.yaml";
+  using omnislam::slamproc::loadSlamOptions;
+  const auto base = loadSlamOptions(file);
+  const auto o = loadSlamOptions(file, {"filter.resample_ess_fraction=0.25", "filter.association=ml",
+                                        "filter.perception.default_camera_position_m=[0, 0, 2]",
+                                        "output.odometry_only_after_s=0", "map.save_path=/tmp/x.yaml"});
+  EXPECT_EQ(o.filter.resample_ess_fraction, 0.25);
+  EXPECT_EQ(o.filter.association, omnislam::slam::AssociationMethod::kMaximumLikelihood);
+  EXPECT_EQ(o.filter.perception.default_p_CinR_m.z(), 2.0);
+  EXPECT_EQ(o.odometry_only_after_us, 0);
+  EXPECT_EQ(o.save_map_path, "/tmp/x.yaml");
+  EXPECT_EQ(o.filter.num_particles, base.filter.num_particles) << "other keys as in the file";
+  const auto err = [&](const std::string& ov) {
+    try {
+      loadSlamOptions(file, {ov});
+    } catch (const omnislam::config::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(err("filter.particles=0").find("filter.particles"), std::string::npos) << err("filter.particles=0");
+  EXPECT_NE(err("filter.partcles=5").find("partcles"), std::string::npos);
+  EXPECT_NE(err("filter.particles").find("dotted.key=value"), std::string::npos);
+  EXPECT_NE(err("seed.x=1").find("'seed' is not a map"), std::string::npos) << err("seed.x=1");
+}
+
+}  // namespace

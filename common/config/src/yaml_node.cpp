@@ -36,6 +36,42 @@ Node Node::loadFile(const std::string& path) {
   }
 }
 
+Node Node::loadFileWithOverrides(const std::string& path, const std::vector<std::string>& overrides) {
+  Node n = loadFile(path);
+  YAML::Node root = n.node_;
+  for (const std::string& ov : overrides) {
+    const auto eq = ov.find('=');
+    const std::string key = ov.substr(0, eq);
+    if (eq == std::string::npos || key.empty() || key.front() == '.' || key.back() == '.' ||
+        key.find("..") != std::string::npos)
+      throw ConfigError("override '" + ov + "': expected dotted.key=value");
+    YAML::Node value;
+    try {
+      value = YAML::Load(ov.substr(eq + 1));
+    } catch (const YAML::Exception& e) {
+      throw ConfigError("override '" + ov + "': the value is not valid YAML: " + e.what());
+    }
+    // Walk with fresh handles (YAML::Node assignment would rebind, not copy into, a handle).
+    std::vector<std::string> parts;
+    for (std::size_t b = 0;;) {
+      const auto d = key.find('.', b);
+      parts.push_back(key.substr(b, d == std::string::npos ? std::string::npos : d - b));
+      if (d == std::string::npos) break;
+      b = d + 1;
+    }
+    std::vector<YAML::Node> chain{root};
+    for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+      YAML::Node next = chain.back()[parts[i]];
+      if (next.IsDefined() && !next.IsMap() && !next.IsNull())
+        throw ConfigError("override '" + ov + "': '" + parts[i] + "' is not a map of keys");
+      if (!next.IsDefined() || next.IsNull()) chain.back()[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      chain.push_back(chain.back()[parts[i]]);
+    }
+    chain.back()[parts.back()] = value;
+  }
+  return n;
+}
+
 Node Node::loadString(const std::string& text, const std::string& source) {
   try {
     YAML::Node root = YAML::Load(text);

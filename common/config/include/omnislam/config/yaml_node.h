@@ -26,6 +26,11 @@ class Node {
  public:
   /// Parses a file; throws ConfigError if it cannot be read or is not valid YAML.
   static Node loadFile(const std::string& path);
+  /// Parses a file, then applies `overrides`, each "dotted.key=value" (the value is read as YAML,
+  /// so "1.0", "true", "ml" and "[1, 2, 3]" work; missing maps on the path are created). The source
+  /// stays the file (relative paths resolve against it); a malformed override throws ConfigError
+  /// naming it. Unknown keys are caught later by the parser's rejectUnknownKeys, as in the file.
+  static Node loadFileWithOverrides(const std::string& path, const std::vector<std::string>& overrides);
   /// Parses text; `source` names it in messages (e.g. the file name).
   static Node loadString(const std::string& text, const std::string& source);
 

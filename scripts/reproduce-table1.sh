@@ -6,7 +6,9 @@
 # as in the paper) and scored with omnislam-eval. Prints a Markdown table (docs/slam-results.md).
 #
 #   scripts/reproduce-table1.sh [--seeds "1 2 ... 10"] [--speedup 10] [--out DIR] [--particles 10]
-#                               [--keep-recordings]
+#                               [--keep-recordings] [--set KEY=VALUE ...]
+# --set is passed to omnislam-slam (e.g. --set filter.resample_ess_fraction=1.0: the paper's
+# resampling at every step); recordings already in --out are reused.
 # Needs a build (scripts/build.sh). Takes about 45 s per seed at --speedup 10 on 2 cores.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -16,6 +18,7 @@ SPEEDUP=10
 PARTICLES=10
 OUT=""
 KEEP=0
+SETS=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --seeds) SEEDS="$2"; shift 2 ;;
@@ -23,7 +26,8 @@ while [ $# -gt 0 ]; do
     --particles) PARTICLES="$2"; shift 2 ;;
     --out) OUT="$2"; shift 2 ;;
     --keep-recordings) KEEP=1; shift ;;
-    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
+    --set) SETS+=(--set "$2"); shift 2 ;;
+    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
     *) echo "reproduce-table1: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -49,7 +53,7 @@ for s in $SEEDS; do
   for assoc in hungarian ml; do
     res="$OUT/slam-$assoc-seed$s.lcm"
     "$BIN/omnislam-slam" --config "$SLAM_CFG" --seed "$s" --particles "$PARTICLES" --association "$assoc" \
-      --replay "$rec" --out "$res" --no-progress 2> "$OUT/slam-$assoc-seed$s.txt"
+      ${SETS[@]+"${SETS[@]}"} --replay "$rec" --out "$res" --no-progress 2> "$OUT/slam-$assoc-seed$s.txt"
     "$BIN/omnislam-eval" --json --tum-out "$OUT/slam-$assoc-seed$s" "$res" > "$OUT/eval-$assoc-seed$s.json"
   done
   [ "$KEEP" = 1 ] || rm -f "$rec"

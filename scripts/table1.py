@@ -77,6 +77,22 @@ def main():
                   f"| {e['landmarks_matched']}/{e['landmarks_truth']} | {e['landmarks_spurious']} | {e['loops']} "
                   f"| {e['return_err']} | {'pass' if ok else 'FAIL'} |")
     print()
+    def ms(vals):
+        n = len(vals)
+        mu = sum(vals) / n
+        sd = math.sqrt(sum((v - mu) ** 2 for v in vals) / (n - 1)) if n > 1 else 0.0
+        return f"{mu:.3f} +- {sd:.3f}"
+
+    print("Figs. 7-8 of the paper (per-run figures over the seeds, mean +- standard deviation):")
+    print()
+    print("| method | landmark mean [m] | landmark max [m] | position RMSE [m] | position max [m] | heading RMSE [deg] |")
+    print("|---|---|---|---|---|---|")
+    for m, rows in summary.items():
+        e = [r[0] for r in rows]
+        print(f"| {'Hungarian' if m == 'hungarian' else 'ML'} | {ms([x['landmark_mean_err_m'] for x in e])} "
+              f"| {ms([x['landmark_max_err_m'] for x in e])} | {ms([x['ate_rmse_m'] for x in e])} "
+              f"| {ms([x['ate_max_m'] for x in e])} | {ms([math.degrees(x['heading_rmse_rad']) for x in e])} |")
+    print()
     for m, rows in summary.items():
         n = len(rows)
         mean = sum(r[0]["landmark_mean_err_m"] for r in rows) / n

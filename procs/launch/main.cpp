@@ -10,6 +10,7 @@
 
 #include "launcher.h"
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 
 int main(int argc, char** argv) {
   CLI::App cli{"omnislam-launch: runs a set of omnislam processes described in a launch file"};
@@ -22,7 +23,7 @@ int main(int argc, char** argv) {
   cli.add_option("--log-file", log_file, "exact path of the recording");
   cli.add_flag("--no-log", no_log, "do not record");
   cli.add_option("--set", sets, "override a variable: --set speedup=20 (repeatable)");
-  CLI11_PARSE(cli, argc, argv);
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return omnislam::app::runMain("omnislam-launch", [&]() -> int {
     std::map<std::string, std::string> overrides;
     for (const auto& s : sets) {

@@ -19,6 +19,7 @@
 #include <stdexcept>
 
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
@@ -274,7 +275,7 @@ int main(int argc, char** argv) {
   cli.add_flag("--no-progress", no_progress, "offline: no progress lines");
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", name, "process name in PROCESS_STATUS");
-  CLI11_PARSE(cli, argc, argv);
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-slam", [&]() -> int {
     if (replay.empty() != out.empty()) throw std::invalid_argument("--replay IN.lcm and --out OUT.lcm go together");
     slamproc::SlamProcessOptions opt;

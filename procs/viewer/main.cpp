@@ -21,6 +21,7 @@
 #include <algorithm>
 
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/node.h"
@@ -258,12 +259,7 @@ int main(int argc, char** argv) {
   cli.add_option("--image-width", s.view.image_width_px, "image panel width, pixels (0: no image panel)")
       ->check(CLI::Range(0, 4000));
   cli.add_option("--height", s.view.height_px, "view height, pixels")->check(CLI::Range(300, 4000));
-  try {
-    cli.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int rc = cli.exit(e);  // prints the message (or the help)
-    return rc == 0 ? app::kOk : app::kBadConfig;
-  }
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);  // a bad flag: exit 2
   return app::runMain("omnislam-viewer", [&]() -> int {
     if (!s.log.empty() && !s.headless)
       throw std::invalid_argument("--log needs --headless (to watch a log in the window, replay it with lcm-logplayer)");

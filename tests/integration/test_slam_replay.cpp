@@ -357,6 +357,24 @@ TEST(SlamReplay, BadConfigAndFlagsStopWithAMessageNamingTheKey) {
   r = t::run({t::binPath("omnislam-slam"), "--replay", dir.file("missing.lcm"), "--out", dir.file("o.lcm")}, 10.0);
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("missing.lcm"), std::string::npos) << r.output;
+  // A bad flag value is a bad config too: exit 2, naming the flag and its accepted range.
+  r = t::run({t::binPath("omnislam-slam"), "--particles", "0"}, 10.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--particles: Value 0 not in range 1 to 100000"), std::string::npos) << r.output;
+  r = t::run({t::binPath("omnislam-slam"), "--association", "nearest"}, 10.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--association"), std::string::npos) << r.output;
+  r = t::run({t::binPath("omnislam-slam"), "--set", "filter.particles=5"}, 10.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--set needs --config"), std::string::npos) << r.output;
+  r = t::run({t::binPath("omnislam-slam"), "--localise", "--url", "memq://"}, 10.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("load_path"), std::string::npos) << r.output;
+  std::ofstream(dir.file("badmap.yaml")) << "format: omnislam-map\nversion: 7\nlandmarks: []\n";
+  r = t::run({t::binPath("omnislam-slam"), "--load-map", dir.file("badmap.yaml"), "--url", "memq://"}, 10.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("badmap.yaml"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("version"), std::string::npos) << r.output;
 }
 
 // ---- live -----------------------------------------------------------------------------------

@@ -12,6 +12,7 @@
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 
 int main(int argc, char** argv) {
   CLI::App cli{"omnislam-logstat: per-channel statistics of an omnislam LCM log"};
@@ -19,7 +20,7 @@ int main(int argc, char** argv) {
   cli.add_option("log", path, "LCM log file")->required()->check(CLI::ExistingFile);
   std::string export_dir;
   cli.add_option("--export-images", export_dir, "also write every OMNI_IMAGE frame as PNG into this folder");
-  CLI11_PARSE(cli, argc, argv);
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return omnislam::app::runMain("omnislam-logstat", [&]() -> int {
     const auto stats = omnislam::tools::logStats(path);
     std::cout << path << "\n" << omnislam::tools::formatStats(stats);

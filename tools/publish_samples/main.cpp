@@ -8,6 +8,7 @@
 #include "omnislam/features_t.hpp"
 #include "omnislam/image_t.hpp"
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
@@ -25,7 +26,7 @@ int main(int argc, char** argv) {
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--period", period_s, "seconds between rounds")->check(CLI::Range(0.01, 60.0));
   cli.add_option("--duration", duration_s, "seconds to run")->check(CLI::Range(0.0, 3600.0));
-  CLI11_PARSE(cli, argc, argv);
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-publish-samples", [&]() -> int {
     lcmio::Node node("publish-samples", app::lcmUrl(url));
     const auto t_end = std::chrono::steady_clock::now() + std::chrono::duration<double>(duration_s);

@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/signals.h"
 
 namespace {
@@ -42,7 +43,7 @@ int main(int argc, char** argv) {
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("-c,--channels", channels, "channel regex (anchored, as in LCM)");
   cli.add_option("--queue", queue, "messages queued before LCM drops")->check(CLI::Range(30, 10'000'000));
-  CLI11_PARSE(cli, argc, argv);
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return omnislam::app::runMain("omnislam-record", [&]() -> int {
     lcm::LCM bus(omnislam::app::lcmUrl(url));
     if (!bus.good()) throw std::runtime_error("cannot start LCM");

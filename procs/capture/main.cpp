@@ -1,6 +1,9 @@
 // omnislam-capture: publishes OMNI_IMAGE from one of three sources chosen by flag:
-//   sim     renders the fish-eye image of the world's ceiling lights for the true pose at each
-//           image time (driven by GROUND_TRUTH_POSE, so images carry simulated time);
+//   sim     renders the world's camera image for the true pose at each image time (driven by
+//           GROUND_TRUTH_POSE, so images carry simulated time): the grey fish-eye image of the
+//           ceiling lights for a world with `lights` (paper 000), the colour catadioptric image
+//           of the room for a world with `room` (paper 002; published BGR unless --format says
+//           otherwise);
 //   dir     publishes the image files of a directory in name order at a fixed rate;
 //   device  grabs frames from a camera through OpenCV (utime = the grab time).
 #include <CLI/CLI.hpp>
@@ -17,7 +20,6 @@
 #include <thread>
 
 #include "omnislam/config/world_config.h"
-#include "omnislam/core/camera/pajdla_bakstein.h"
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/image_msg.h"
@@ -25,6 +27,7 @@
 #include "omnislam/lcmio/signals.h"
 #include "omnislam/vision/image_files.h"
 #include "omnislam/vision/render_lights.h"
+#include "omnislam/vision/render_room.h"
 
 using namespace omnislam;
 
@@ -50,10 +53,19 @@ int64_t wallUtime() {
       .count();
 }
 
-int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uint64_t seed) {
+int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uint64_t seed, bool format_given,
+           bool name_given) {
   const sim::World world = config::loadWorld(world_path);
-  const camera::PajdlaBaksteinCamera cam(world.camera.intrinsics);
-  const vision::CeilingLightRenderer renderer(cam, world.camera.mounting, world.nuisance);
+  if (!name_given) pub.camera_name = world.camera.name;
+  const std::unique_ptr<camera::CameraModel> cam = sim::makeCamera(world.camera);
+  std::unique_ptr<vision::CeilingLightRenderer> lights;
+  std::unique_ptr<vision::RoomRenderer> room;
+  if (world.room) {
+    room = std::make_unique<vision::RoomRenderer>(*cam, world.camera.mounting, *world.room, world.nuisance);
+    if (!format_given) pub.format = image_t::FORMAT_BGR8;  // the room is in colour
+  } else {
+    lights = std::make_unique<vision::CeilingLightRenderer>(*cam, world.camera.mounting, world.nuisance);
+  }
   std::mt19937_64 rng(seed);
   const int64_t period_us = std::llround(1e6 / world.image_rate_hz);
   int64_t next_utime = world.start_utime;
@@ -62,18 +74,29 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
   truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
   node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
     if (p.utime < next_utime) return;
-    vision::RenderReport rep;
-    const cv::Mat img = renderer.render(Pose2{p.x_m, p.y_m, p.theta_rad}, world.lights, rng, &rep);
-    pub.publish(img, p.utime);
-    ++frames;
+    const Pose2 T_RinW{p.x_m, p.y_m, p.theta_rad};
+    if (room) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const cv::Mat img = room->render(T_RinW, &rng);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      pub.publish(img, p.utime);
+      ++frames;
+      node.setDetail("frame " + std::to_string(frames) + ": room rendered in " + std::to_string(std::lround(ms)) + " ms");
+    } else {
+      vision::RenderReport rep;
+      const cv::Mat img = lights->render(T_RinW, world.lights, rng, &rep);
+      pub.publish(img, p.utime);
+      ++frames;
+      node.setDetail("frame " + std::to_string(frames) + ": " + std::to_string(rep.lights_drawn) + " lights, " +
+                     std::to_string(rep.lights_missed) + " missed, " + std::to_string(rep.false_blobs) + " false blobs");
+    }
     // Next image time: the next multiple of the period after this one (skips any gap honestly).
     while (next_utime <= p.utime) next_utime += period_us;
-    node.setDetail("frame " + std::to_string(frames) + ": " + std::to_string(rep.lights_drawn) + " lights, " +
-                   std::to_string(rep.lights_missed) + " missed, " + std::to_string(rep.false_blobs) + " false blobs");
   }, truth_opt);
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
-  std::cerr << node.tag() << "rendering '" << world.name << "' at " << world.image_rate_hz << " Hz, "
-            << cam.widthPx() << "x" << cam.heightPx() << ", seed " << seed << std::endl;
+  std::cerr << node.tag() << "rendering '" << world.name << "' (" << (room ? "room, colour" : "ceiling lights")
+            << ") at " << world.image_rate_hz << " Hz, " << cam->widthPx() << "x" << cam->heightPx() << ", seed "
+            << seed << std::endl;
   node.spin();
   return app::kOk;
 }
@@ -139,7 +162,7 @@ int runDevice(lcmio::Node& node, Publisher& pub, int device, double rate_hz) {
 
 int main(int argc, char** argv) {
   CLI::App cli{"omnislam-capture: publishes OMNI_IMAGE from a simulation, an image directory or a camera"};
-  std::string source, world_path, dir, url, name = "capture", format_name = "gray", camera_name;
+  std::string source, world_path, dir, url, name = "capture", format_name, camera_name;
   uint64_t seed = 1;
   double rate_hz = 1.0, speedup = 1.0;
   int64_t start_utime = -1;
@@ -153,7 +176,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1000.0));
   cli.add_option("--start-utime", start_utime, "source dir: utime of the first image (default: now)");
   cli.add_option("--device", device, "camera index (source device)")->check(CLI::Range(0, 64));
-  cli.add_option("--format", format_name, "published pixel format: gray | bgr | rgb | png | jpeg")
+  cli.add_option("--format", format_name,
+                 "published pixel format: gray | bgr | rgb | png | jpeg (default: gray; bgr for a room world)")
       ->check(CLI::IsMember({"gray", "grey", "bgr", "rgb", "png", "jpeg", "jpg"}));
   cli.add_option("--camera-name", camera_name, "camera name in the messages (default: the world's or 'camera')");
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
@@ -164,9 +188,10 @@ int main(int argc, char** argv) {
     if (source == "sim" && world_path.empty()) throw std::invalid_argument("--source sim needs --world FILE");
     if (source == "dir" && dir.empty()) throw std::invalid_argument("--source dir needs --dir PATH");
     lcmio::Node node(name, app::lcmUrl(url));
+    const bool format_given = !format_name.empty();
     Publisher pub{node, camera_name.empty() ? (source == "sim" ? "fisheye" : "camera") : camera_name,
-                  *lcmio::parsePixelFormat(format_name)};
-    if (source == "sim") return runSim(node, pub, world_path, seed);
+                  *lcmio::parsePixelFormat(format_given ? format_name : "gray")};
+    if (source == "sim") return runSim(node, pub, world_path, seed, format_given, !camera_name.empty());
     if (source == "dir") return runDir(node, pub, dir, rate_hz, start_utime, speedup);
     return runDevice(node, pub, device, rate_hz);
   });

@@ -47,10 +47,10 @@ CameraSetup parseCamera(const Node& c) {
   const std::string model = c.getEnum("model", {"world", "ocamcalib", "centre_only"});
   if (model == "world") {
     const sim::World w = config::loadWorld(c.getPath("world"));
-    s.model = std::make_unique<camera::PajdlaBaksteinCamera>(w.camera.intrinsics);
+    s.model = sim::makeCamera(w.camera);  // the world's model: Pajdla-Bakstein or Scaramuzza
     s.mounting = c.has("mounting") ? parseMounting(c.child("mounting")) : w.camera.mounting;
-    s.centre_px = Eigen::Vector2d(w.camera.intrinsics.u0_px, w.camera.intrinsics.v0_px);
-    s.description = "pajdla-bakstein camera of world '" + w.name + "'";
+    s.centre_px = sim::cameraCentrePx(w.camera);
+    s.description = s.model->name() + " camera of world '" + w.name + "'";
   } else if (model == "ocamcalib") {
     const std::string path = c.getPath("file");
     std::ifstream f(path);

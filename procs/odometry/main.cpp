@@ -1,6 +1,7 @@
 // omnislam-odometry: publishes ODOMETRY, the cumulative dead-reckoned pose, from
 //   sim  noisy encoder integration of the true motion (GROUND_TRUTH_POSE), one message per
-//        truth sample (>= 20 Hz), noise from the world file's odometry_noise section;
+//        truth sample (>= 20 Hz), noise from the world file's odometry_noise section (its model:
+//        wheel, or paper 002's translate_rotate);
 //   csv  a recorded CSV of wheel data (utime,v_mps,omega_radps), integrated and paced by utime.
 #include <CLI/CLI.hpp>
 
@@ -55,10 +56,21 @@ int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed) {
     last_utime = p.utime;
   }, truth_opt);
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
-  std::cerr << node.tag() << "simulating odometry of '" << world.name << "', seed " << seed << ": scale error "
-            << odo.scaleError() << ", heading drift " << odo.headingDrift_rad_per_m() << " rad/m" << std::endl;
-  node.setDetail("scale_error=" + std::to_string(odo.scaleError()) +
-                 " heading_drift_rad_per_m=" + std::to_string(odo.headingDrift_rad_per_m()));
+  const auto& nz = world.odometry_noise;
+  if (nz.model == sim::OdometryModel::kTranslateRotate) {
+    std::cerr << node.tag() << "simulating odometry of '" << world.name << "', seed " << seed
+              << ": translate-then-rotate model, err_tran " << nz.err_tran_m_per_sqrt_m << " m/sqrt(m), err_rot "
+              << nz.err_rot_rad_per_sqrt_rad << " rad/sqrt(rad), err_drift " << nz.err_drift_rad_per_sqrt_m
+              << " rad/sqrt(m)" << std::endl;
+    node.setDetail("model=translate_rotate err_tran=" + std::to_string(nz.err_tran_m_per_sqrt_m) +
+                   " err_rot=" + std::to_string(nz.err_rot_rad_per_sqrt_rad) +
+                   " err_drift=" + std::to_string(nz.err_drift_rad_per_sqrt_m));
+  } else {
+    std::cerr << node.tag() << "simulating odometry of '" << world.name << "', seed " << seed << ": scale error "
+              << odo.scaleError() << ", heading drift " << odo.headingDrift_rad_per_m() << " rad/m" << std::endl;
+    node.setDetail("scale_error=" + std::to_string(odo.scaleError()) +
+                   " heading_drift_rad_per_m=" + std::to_string(odo.headingDrift_rad_per_m()));
+  }
   node.spin();
   return app::kOk;
 }

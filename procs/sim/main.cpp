@@ -1,5 +1,6 @@
 // omnislam-sim: the simulated world's clock. Publishes GROUND_TRUTH_POSE (the true robot pose at
-// the world's truth rate) and GROUND_TRUTH_MAP (once per simulated second), in simulated time,
+// the world's truth rate) and GROUND_TRUTH_MAP (once per simulated second: the ceiling lights, or
+// the room's vertical lines as kind 2 at (x, y, 0)), in simulated time,
 // paced at a speed-up of real time. Capture and odometry derive their sensors from this stream.
 #include <CLI/CLI.hpp>
 
@@ -14,6 +15,7 @@
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
+#include "omnislam/feature_t.hpp"
 #include "omnislam/map_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/sim/trajectory.h"
@@ -22,7 +24,7 @@ using namespace omnislam;
 
 namespace {
 
-map_t truthMap(const sim::World& w, int64_t utime, int64_t seq) {
+map_t truthMap(const sim::World& w, const std::vector<sim::RoomLine>& room_lines, int64_t utime, int64_t seq) {
   map_t m{};
   m.utime = utime;
   m.seq = seq;
@@ -33,7 +35,18 @@ map_t truthMap(const sim::World& w, int64_t utime, int64_t seq) {
     for (int i = 0; i < 3; ++i) l.position_m[i] = L.p_LinW_m[i];
     l.type = 0;
     l.times_detected = 0;
-    l.kind = 1;  // feature_t::KIND_CEILING_LIGHT
+    l.kind = feature_t::KIND_CEILING_LIGHT;
+    m.landmarks.push_back(l);
+  }
+  for (const sim::RoomLine& R : room_lines) {
+    landmark_t l{};
+    l.id = R.id;
+    l.position_m[0] = R.p_m.x();
+    l.position_m[1] = R.p_m.y();
+    l.position_m[2] = 0.0;  // a vertical line: z is meaningless (landmark_t)
+    l.type = 0;
+    l.times_detected = 0;
+    l.kind = feature_t::KIND_VERTICAL_LINE;
     m.landmarks.push_back(l);
   }
   m.num_landmarks = static_cast<int32_t>(m.landmarks.size());
@@ -70,9 +83,11 @@ int main(int argc, char** argv) {
   return app::runMain("omnislam-sim", [&]() -> int {
     const sim::World world = config::loadWorld(world_path);
     const sim::Trajectory traj(world.trajectory_options, world.segments);
+    const std::vector<sim::RoomLine> room_lines = world.room ? world.room->lines() : std::vector<sim::RoomLine>{};
     const double end_s = duration_s > 0 ? std::min(duration_s, traj.duration_s()) : traj.duration_s();
     lcmio::Node node(name, app::lcmUrl(url));
-    std::cerr << node.tag() << "world '" << world.name << "': " << world.lights.size() << " lights, trajectory "
+    std::cerr << node.tag() << "world '" << world.name << "': " << (world.room ? room_lines.size() : world.lights.size())
+              << (world.room ? " vertical lines" : " lights") << ", trajectory "
               << traj.length_m() << " m in " << traj.duration_s() << " s (running " << end_s << " s at "
               << speedup << "x), truth at " << world.truth_rate_hz << " Hz" << std::endl;
 
@@ -133,7 +148,7 @@ int main(int argc, char** argv) {
       p.effective_sample_size = 0;
       p.input_seq = -1;
       node.publish(channels::kGroundTruthPose, p);
-      if (k % map_every == 0) node.publish(channels::kGroundTruthMap, truthMap(world, utime, map_seq++));
+      if (k % map_every == 0) node.publish(channels::kGroundTruthMap, truthMap(world, room_lines, utime, map_seq++));
       if (k % map_every == 0) {
         std::ostringstream d;
         d << "t=" << t << " s of " << end_s;

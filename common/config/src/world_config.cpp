@@ -1,6 +1,8 @@
 // World file parsing: see world_config.h and docs/world-file.md.
 #include "omnislam/config/world_config.h"
 
+#include <Eigen/QR>
+
 #include <cmath>
 
 #include "omnislam/core/angles.h"
@@ -48,12 +50,82 @@ std::vector<sim::Light> parseLights(const Node& n) {
   return out;
 }
 
+camera::CameraMounting parseMounting(const Node& n) {
+  camera::CameraMounting m;
+  if (auto mo = n.optChild("mounting")) {
+    mo->rejectUnknownKeys({"x_m", "y_m", "z_m", "yaw_deg"});
+    m.x_m = mo->getDouble("x_m", -10.0, 10.0, 0.0);
+    m.y_m = mo->getDouble("y_m", -10.0, 10.0, 0.0);
+    m.z_m = mo->getDouble("z_m", 0.0, 10.0, 1.8);
+    m.yaw_rad = deg2rad(mo->getDouble("yaw_deg", -180.0, 180.0, 0.0));
+  }
+  return m;
+}
+
+/// rho(theta) (theta = elevation of a catadioptric camera, beta - pi/2) fitted by least squares
+/// over the usable radii: the initial guess of ScaramuzzaCamera::project (which refines it).
+std::vector<double> fitInvpol(camera::ScaramuzzaParams p) {
+  p.invpol = {0.5 * (p.min_radius_px + 1.0)};  // placeholder, only to construct the model
+  const camera::ScaramuzzaCamera cam(p);
+  const double lo = p.min_radius_px, hi = cam.maxRadiusPx();
+  constexpr int kSamples = 200, kDegree = 6;
+  Eigen::MatrixXd A(kSamples, kDegree + 1);
+  Eigen::VectorXd b(kSamples);
+  for (int i = 0; i < kSamples; ++i) {
+    const double rho = lo + (hi - lo) * i / (kSamples - 1);
+    const double theta = cam.offCentreAngle(rho) - kPi / 2.0;
+    double pw = 1.0;
+    for (int k = 0; k <= kDegree; ++k, pw *= theta) A(i, k) = pw;
+    b(i) = rho;
+  }
+  const Eigen::VectorXd x = A.colPivHouseholderQr().solve(b);
+  return std::vector<double>(x.data(), x.data() + x.size());
+}
+
 sim::CameraSetup parseCamera(const Node& n) {
+  sim::CameraSetup c;
+  const std::string model = n.getEnum("model", {"pajdla_bakstein", "scaramuzza"}, "pajdla_bakstein");
+  if (model == "scaramuzza") {
+    n.rejectUnknownKeys({"name", "model", "optics", "pol", "invpol", "xc_row_px", "yc_col_px", "affine_c", "affine_d",
+                         "affine_e", "width_px", "height_px", "min_radius_px", "max_radius_px", "min_elevation_deg",
+                         "max_elevation_deg", "mounting"});
+    c.name = n.getString("name", "catadioptric");
+    c.model = sim::CameraModelKind::kScaramuzza;
+    auto& p = c.scaramuzza;
+    p.optics = n.getEnum("optics", {"catadioptric", "dioptric"}, "catadioptric") == "catadioptric"
+                   ? camera::OcamOptics::kCatadioptric
+                   : camera::OcamOptics::kDioptric;
+    p.pol = n.getDoubles("pol", n.getStrings("pol").size(), -1e6, 1e6);
+    if (p.pol.size() < 2 || p.pol.size() > 16)
+      throw ConfigError(n.where("pol") + " must have 2 to 16 coefficients (got " + std::to_string(p.pol.size()) + ")");
+    p.width_px = static_cast<int>(n.getInt("width_px", 16, 8192));
+    p.height_px = static_cast<int>(n.getInt("height_px", 16, 8192));
+    p.xc_row_px = n.getDouble("xc_row_px", -0.5, p.height_px - 0.5);
+    p.yc_col_px = n.getDouble("yc_col_px", -0.5, p.width_px - 0.5);
+    p.c = n.getDouble("affine_c", 0.5, 2.0, 1.0);
+    p.d = n.getDouble("affine_d", -0.5, 0.5, 0.0);
+    p.e = n.getDouble("affine_e", -0.5, 0.5, 0.0);
+    p.min_radius_px = n.getDouble("min_radius_px", 0.0, 1e4, 0.0);
+    if (n.has("max_radius_px")) p.max_radius_px = n.getDouble("max_radius_px", 1.0, 1e4);
+    p.min_elevation_rad = deg2rad(n.getDouble("min_elevation_deg", -90.0, 90.0, -90.0));
+    p.max_elevation_rad = deg2rad(n.getDouble("max_elevation_deg", -90.0, 90.0, 90.0));
+    if (!(p.max_elevation_rad > p.min_elevation_rad))
+      throw ConfigError(n.where("max_elevation_deg") + " must be > min_elevation_deg");
+    if (n.has("invpol")) {
+      p.invpol = n.getDoubles("invpol", n.getStrings("invpol").size(), -1e6, 1e6);
+      if (p.invpol.size() > 64) throw ConfigError(n.where("invpol") + " must have 1 to 64 coefficients");
+    } else {
+      p.invpol = {1.0};
+      if (auto err = camera::ScaramuzzaCamera::validate(p)) throw ConfigError(n.where("pol") + " (camera model): " + *err);
+      p.invpol = fitInvpol(p);
+    }
+    if (auto err = camera::ScaramuzzaCamera::validate(p)) throw ConfigError(n.where("pol") + " (camera model): " + *err);
+    c.mounting = parseMounting(n);
+    return c;
+  }
   n.rejectUnknownKeys({"name", "model", "a_px", "b", "c_px", "d", "u0_px", "v0_px", "beta", "width_px", "height_px",
                        "max_zenith_deg", "mounting"});
-  sim::CameraSetup c;
   c.name = n.getString("name", "fisheye");
-  n.getEnum("model", {"pajdla_bakstein"}, "pajdla_bakstein");
   auto& p = c.intrinsics;
   p.a_px = n.getDouble("a_px", -1e5, 1e5, p.a_px);
   p.b = n.getDouble("b", 1e-3, 1e3, p.b);
@@ -66,14 +138,69 @@ sim::CameraSetup parseCamera(const Node& n) {
   p.height_px = static_cast<int>(n.getInt("height_px", 16, 8192, p.height_px));
   p.max_zenith_rad = deg2rad(n.getDouble("max_zenith_deg", 1.0, 179.0, rad2deg(p.max_zenith_rad)));
   if (auto err = camera::PajdlaBaksteinCamera::validate(p)) throw ConfigError(n.where("a_px") + " (camera model): " + *err);
-  if (auto m = n.optChild("mounting")) {
-    m->rejectUnknownKeys({"x_m", "y_m", "z_m", "yaw_deg"});
-    c.mounting.x_m = m->getDouble("x_m", -10.0, 10.0, 0.0);
-    c.mounting.y_m = m->getDouble("y_m", -10.0, 10.0, 0.0);
-    c.mounting.z_m = m->getDouble("z_m", 0.0, 10.0, 1.8);
-    c.mounting.yaw_rad = deg2rad(m->getDouble("yaw_deg", -180.0, 180.0, 0.0));
-  }
+  c.mounting = parseMounting(n);
   return c;
+}
+
+Eigen::Vector3d getRgb(const Node& n, const std::string& key) {
+  const std::vector<double> v = n.getDoubles(key, 3, 0.0, 255.0);
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+Eigen::Vector3d getRgb(const Node& n, const std::string& key, const Eigen::Vector3d& def) {
+  return n.has(key) ? getRgb(n, key) : def;
+}
+
+sim::Room parseRoom(const Node& n) {
+  n.rejectUnknownKeys({"height_m", "floor_rgb", "ceiling_rgb", "walls", "boxes"});
+  sim::Room r;
+  r.height_m = n.getDouble("height_m", 1.0, 20.0, r.height_m);
+  r.floor_rgb = getRgb(n, "floor_rgb", r.floor_rgb);
+  r.ceiling_rgb = getRgb(n, "ceiling_rgb", r.ceiling_rgb);
+  for (const Node& w : n.items("walls")) {
+    w.rejectUnknownKeys({"from", "to", "panels"});
+    sim::Wall wall;
+    const auto a = w.getDoubles("from", 2, -1e4, 1e4), b = w.getDoubles("to", 2, -1e4, 1e4);
+    wall.from_m = Eigen::Vector2d(a[0], a[1]);
+    wall.to_m = Eigen::Vector2d(b[0], b[1]);
+    const std::vector<Node> panels = w.items("panels");
+    for (size_t j = 0; j < panels.size(); ++j) {
+      const Node& p = panels[j];
+      p.rejectUnknownKeys({"width_m", "rgb"});
+      sim::WallPanel panel;
+      const bool last = j + 1 == panels.size();
+      panel.width_m = last && !p.has("width_m") ? 0.0 : p.getDouble("width_m", 0.005, 1e4);
+      panel.rgb = getRgb(p, "rgb");
+      wall.panels.push_back(panel);
+    }
+    r.walls.push_back(wall);
+    sim::Room one;  // check this wall alone so that the message names it
+    one.height_m = r.height_m;
+    one.walls = {wall};
+    if (auto err = one.validate()) throw ConfigError(w.where("panels") + ": " + *err);
+  }
+  if (n.has("boxes")) {
+    for (const Node& b : n.items("boxes")) {
+      b.rejectUnknownKeys({"name", "x_m", "y_m", "size_x_m", "size_y_m", "yaw_deg", "z_min_m", "z_max_m", "rgb",
+                           "rgb_x_plus", "rgb_y_plus", "rgb_x_minus", "rgb_y_minus", "top_rgb", "lines"});
+      sim::Box bx;
+      bx.name = b.getString("name", "box" + std::to_string(r.boxes.size()));
+      bx.centre_m = Eigen::Vector2d(b.getDouble("x_m", -1e4, 1e4), b.getDouble("y_m", -1e4, 1e4));
+      bx.size_x_m = b.getDouble("size_x_m", 0.01, 100.0);
+      bx.size_y_m = b.getDouble("size_y_m", 0.01, 100.0);
+      bx.yaw_rad = deg2rad(b.getDouble("yaw_deg", -360.0, 360.0, 0.0));
+      bx.z_min_m = b.getDouble("z_min_m", 0.0, r.height_m, 0.0);
+      bx.z_max_m = b.getDouble("z_max_m", 0.0, r.height_m);
+      if (!(bx.z_max_m > bx.z_min_m + 0.005)) throw ConfigError(b.where("z_max_m") + " must be > z_min_m + 0.005");
+      const Eigen::Vector3d rgb = getRgb(b, "rgb");
+      bx.side_rgb = {getRgb(b, "rgb_x_plus", rgb), getRgb(b, "rgb_y_plus", rgb), getRgb(b, "rgb_x_minus", rgb),
+                     getRgb(b, "rgb_y_minus", rgb)};
+      bx.top_rgb = getRgb(b, "top_rgb", rgb);
+      bx.lines = b.getBool("lines", true);
+      r.boxes.push_back(bx);
+    }
+  }
+  if (auto err = r.validate()) throw ConfigError(n.where("walls") + ": " + *err);
+  return r;
 }
 
 void parseTrajectory(const Node& n, sim::World& w) {
@@ -111,12 +238,14 @@ void parseTrajectory(const Node& n, sim::World& w) {
 
 void parseImage(const Node& n, sim::ImageNuisance& z) {
   n.rejectUnknownKeys({"noise_sigma_grey", "blur_sigma_px", "background_grey", "light_peak_grey", "samples_per_light",
-                       "window_wall", "false_blobs"});
+                       "supersample", "shading", "window_wall", "false_blobs"});
   z.noise_sigma_grey = n.getDouble("noise_sigma_grey", 0.0, 50.0, z.noise_sigma_grey);
   z.blur_sigma_px = n.getDouble("blur_sigma_px", 0.0, 10.0, z.blur_sigma_px);
   z.background_grey = n.getDouble("background_grey", 0.0, 200.0, z.background_grey);
   z.light_peak_grey = n.getDouble("light_peak_grey", 1.0, 255.0, z.light_peak_grey);
   z.samples_per_light = static_cast<int>(n.getInt("samples_per_light", 16, 100000, z.samples_per_light));
+  z.supersample = static_cast<int>(n.getInt("supersample", 1, 4, z.supersample));
+  z.shading = n.getDouble("shading", 0.0, 0.9, z.shading);
   if (auto ww = n.optChild("window_wall")) {
     ww->rejectUnknownKeys({"enabled", "y_m", "band_m", "miss_probability"});
     z.window_wall_enabled = ww->getBool("enabled", z.window_wall_enabled);
@@ -135,27 +264,39 @@ void parseImage(const Node& n, sim::ImageNuisance& z) {
 }  // namespace
 
 sim::World parseWorld(const Node& root) {
-  root.rejectUnknownKeys({"name", "start_utime", "truth_rate_hz", "image_rate_hz", "lights", "camera", "trajectory",
-                          "odometry_noise", "image"});
+  root.rejectUnknownKeys({"name", "start_utime", "truth_rate_hz", "image_rate_hz", "lights", "room", "camera",
+                          "trajectory", "odometry_noise", "image"});
   sim::World w;
   w.name = root.getString("name", "world");
   w.start_utime = root.getInt("start_utime", 1, 4'000'000'000'000'000, w.start_utime);
   w.truth_rate_hz = root.getDouble("truth_rate_hz", 20.0, 1000.0, w.truth_rate_hz);
   w.image_rate_hz = root.getDouble("image_rate_hz", 0.01, 100.0, w.image_rate_hz);
-  w.lights = parseLights(root.child("lights"));
+  if (root.has("lights") == root.has("room"))
+    throw ConfigError(root.where("lights") + " or 'room': a world needs exactly one of them (ceiling lights or a room)");
+  if (root.has("lights")) w.lights = parseLights(root.child("lights"));
+  if (root.has("room")) w.room = parseRoom(root.child("room"));
   w.camera = parseCamera(root.child("camera"));
   parseTrajectory(root.child("trajectory"), w);
   if (auto o = root.optChild("odometry_noise")) {
-    o->rejectUnknownKeys({"distance_sigma_m_per_sqrt_m", "rotation_sigma_rad_per_sqrt_rad",
-                          "heading_sigma_rad_per_sqrt_m", "scale_error_sigma", "heading_drift_sigma_rad_per_m"});
     auto& z = w.odometry_noise;
-    z.distance_sigma_m_per_sqrt_m = o->getDouble("distance_sigma_m_per_sqrt_m", 0.0, 1.0, z.distance_sigma_m_per_sqrt_m);
-    z.rotation_sigma_rad_per_sqrt_rad =
-        o->getDouble("rotation_sigma_rad_per_sqrt_rad", 0.0, 1.0, z.rotation_sigma_rad_per_sqrt_rad);
-    z.heading_sigma_rad_per_sqrt_m = o->getDouble("heading_sigma_rad_per_sqrt_m", 0.0, 1.0, z.heading_sigma_rad_per_sqrt_m);
-    z.scale_error_sigma = o->getDouble("scale_error_sigma", 0.0, 0.5, z.scale_error_sigma);
-    z.heading_drift_sigma_rad_per_m =
-        o->getDouble("heading_drift_sigma_rad_per_m", 0.0, 0.5, z.heading_drift_sigma_rad_per_m);
+    const std::string model = o->getEnum("model", {"wheel", "translate_rotate"}, "wheel");
+    if (model == "translate_rotate") {
+      o->rejectUnknownKeys({"model", "err_tran_m_per_sqrt_m", "err_rot_rad_per_sqrt_rad", "err_drift_rad_per_sqrt_m"});
+      z.model = sim::OdometryModel::kTranslateRotate;
+      z.err_tran_m_per_sqrt_m = o->getDouble("err_tran_m_per_sqrt_m", 0.0, 1.0, z.err_tran_m_per_sqrt_m);
+      z.err_rot_rad_per_sqrt_rad = o->getDouble("err_rot_rad_per_sqrt_rad", 0.0, 1.0, z.err_rot_rad_per_sqrt_rad);
+      z.err_drift_rad_per_sqrt_m = o->getDouble("err_drift_rad_per_sqrt_m", 0.0, 1.0, z.err_drift_rad_per_sqrt_m);
+    } else {
+      o->rejectUnknownKeys({"model", "distance_sigma_m_per_sqrt_m", "rotation_sigma_rad_per_sqrt_rad",
+                            "heading_sigma_rad_per_sqrt_m", "scale_error_sigma", "heading_drift_sigma_rad_per_m"});
+      z.distance_sigma_m_per_sqrt_m = o->getDouble("distance_sigma_m_per_sqrt_m", 0.0, 1.0, z.distance_sigma_m_per_sqrt_m);
+      z.rotation_sigma_rad_per_sqrt_rad =
+          o->getDouble("rotation_sigma_rad_per_sqrt_rad", 0.0, 1.0, z.rotation_sigma_rad_per_sqrt_rad);
+      z.heading_sigma_rad_per_sqrt_m = o->getDouble("heading_sigma_rad_per_sqrt_m", 0.0, 1.0, z.heading_sigma_rad_per_sqrt_m);
+      z.scale_error_sigma = o->getDouble("scale_error_sigma", 0.0, 0.5, z.scale_error_sigma);
+      z.heading_drift_sigma_rad_per_m =
+          o->getDouble("heading_drift_sigma_rad_per_m", 0.0, 0.5, z.heading_drift_sigma_rad_per_m);
+    }
   }
   if (auto im = root.optChild("image")) parseImage(*im, w.nuisance);
   if (std::fmod(w.truth_rate_hz, w.image_rate_hz) > 1e-9 && w.image_rate_hz < w.truth_rate_hz) {

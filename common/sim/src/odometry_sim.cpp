@@ -12,10 +12,14 @@ std::optional<std::string> OdometryNoise::validate() const {
   if (bad(heading_sigma_rad_per_sqrt_m)) return "heading_sigma_rad_per_sqrt_m must be in [0, 1]";
   if (bad(scale_error_sigma)) return "scale_error_sigma must be in [0, 1]";
   if (bad(heading_drift_sigma_rad_per_m)) return "heading_drift_sigma_rad_per_m must be in [0, 1]";
+  if (bad(err_tran_m_per_sqrt_m)) return "err_tran_m_per_sqrt_m must be in [0, 1]";
+  if (bad(err_rot_rad_per_sqrt_rad)) return "err_rot_rad_per_sqrt_rad must be in [0, 1]";
+  if (bad(err_drift_rad_per_sqrt_m)) return "err_drift_rad_per_sqrt_m must be in [0, 1]";
   return std::nullopt;
 }
 
 OdometrySimulator::OdometrySimulator(const OdometryNoise& noise, uint64_t seed) : noise_(noise), rng_(seed) {
+  if (noise_.model != OdometryModel::kWheel) return;  // no per-run terms
   std::normal_distribution<double> n01(0.0, 1.0);
   k_scale_ = noise_.scale_error_sigma * n01(rng_);
   drift_ = noise_.heading_drift_sigma_rad_per_m * n01(rng_);
@@ -33,6 +37,16 @@ Pose2 OdometrySimulator::step(const Pose2& truth) {
   const double ds = d.x_m >= 0.0 ? dist : -dist;
   const double dth = d.theta_rad;
   std::normal_distribution<double> n01(0.0, 1.0);
+  if (noise_.model == OdometryModel::kTranslateRotate) {
+    // Translate along the true direction of the step, then rotate (paper 002, sec. III-C).
+    const double alpha = dist > 0.0 ? (d.x_m >= 0.0 ? std::atan2(d.y_m, d.x_m) : std::atan2(-d.y_m, -d.x_m)) : 0.0;
+    const double e_tran = noise_.err_tran_m_per_sqrt_m * std::sqrt(dist) * n01(rng_);
+    const double e_drift = noise_.err_drift_rad_per_sqrt_m * std::sqrt(dist) * n01(rng_);
+    const double e_rot = noise_.err_rot_rad_per_sqrt_rad * std::sqrt(std::abs(dth)) * n01(rng_);
+    const double ds_odo = ds + e_tran;
+    odo_ = odo_.compose(Pose2{ds_odo * std::cos(alpha), ds_odo * std::sin(alpha), dth + e_drift + e_rot});
+    return odo_;
+  }
   const double sd = noise_.distance_sigma_m_per_sqrt_m * std::sqrt(dist);
   const double sr = std::sqrt(noise_.rotation_sigma_rad_per_sqrt_rad * noise_.rotation_sigma_rad_per_sqrt_rad * std::abs(dth) +
                               noise_.heading_sigma_rad_per_sqrt_m * noise_.heading_sigma_rad_per_sqrt_m * dist);

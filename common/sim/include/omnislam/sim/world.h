@@ -4,12 +4,17 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "omnislam/core/camera/camera_model.h"
 #include "omnislam/core/camera/mounting.h"
 #include "omnislam/core/camera/pajdla_bakstein.h"
+#include "omnislam/core/camera/scaramuzza.h"
 #include "omnislam/sim/odometry_sim.h"
+#include "omnislam/sim/room.h"
 #include "omnislam/sim/trajectory.h"
 
 namespace omnislam::sim {
@@ -39,20 +44,36 @@ struct ImageNuisance {
   double false_blobs_per_frame = 0.3;
   double false_blob_radius_px = 3.0;
   double false_blob_peak_grey = 160.0;
+  /// Room worlds: sub-samples per pixel side (n x n rays per pixel) for anti-aliased edges.
+  int supersample = 2;
+  /// Room worlds: relative brightness change across the scene from the shading of surfaces
+  /// (0 = flat colours); surfaces facing different directions differ by up to this fraction.
+  double shading = 0.25;
 };
+
+enum class CameraModelKind { kPajdlaBakstein, kScaramuzza };
 
 struct CameraSetup {
   std::string name = "fisheye";
-  camera::PajdlaBaksteinParams intrinsics;
+  CameraModelKind model = CameraModelKind::kPajdlaBakstein;
+  camera::PajdlaBaksteinParams intrinsics;  ///< model == kPajdlaBakstein
+  camera::ScaramuzzaParams scaramuzza;      ///< model == kScaramuzza
   camera::CameraMounting mounting;  ///< optical centre in the robot frame
 };
+
+/// The camera model of a setup (PajdlaBaksteinCamera or ScaramuzzaCamera); throws
+/// std::invalid_argument on invalid parameters.
+std::unique_ptr<camera::CameraModel> makeCamera(const CameraSetup& setup);
+/// The image centre of a setup's model (the mirror / optical axis), pixels (u = column, v = row).
+Eigen::Vector2d cameraCentrePx(const CameraSetup& setup);
 
 struct World {
   std::string name = "world";
   int64_t start_utime = 1'700'000'000'000'000;  ///< simulated time of t = 0, microseconds
   double truth_rate_hz = 50.0;                  ///< GROUND_TRUTH_POSE rate (>= 20 Hz)
   double image_rate_hz = 1.0;                   ///< OMNI_IMAGE rate
-  std::vector<Light> lights;
+  std::vector<Light> lights;   ///< ceiling lights (paper 000); empty in a room world
+  std::optional<Room> room;    ///< paper 002's room with vertical lines; exclusive with lights
   CameraSetup camera;
   TrajectoryOptions trajectory_options;
   std::vector<Segment> segments;

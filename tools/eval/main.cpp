@@ -2,7 +2,9 @@
 // (from the same log or --truth) and prints a table, or one JSON object with --json. Landmarks are
 // matched one-to-one by optimal assignment within --gate; unmatched estimates are spurious. No
 // alignment unless --align (best rigid 2D transform of the trajectory onto the truth, applied to
-// trajectory and map). Writes both trajectories in TUM format for evo.
+// trajectory and map). Writes both trajectories in TUM format for evo. Also: dead reckoning
+// (ODOMETRY mapped into the truth frame by the start pose) raw and aligned, and, when the log has
+// SLAM_ASSOCIATIONS and GROUND_TRUTH_FEATURE_LABELS, association precision / recall.
 #include <CLI/CLI.hpp>
 
 #include <Eigen/Geometry>
@@ -15,11 +17,15 @@
 #include <sstream>
 
 #include "omnislam/core/eval/metrics.h"
+#include "omnislam/associations_t.hpp"
+#include "omnislam/feature_labels_t.hpp"
 #include "omnislam/features_t.hpp"
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/map_t.hpp"
+#include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/vision/plots.h"
 
@@ -35,6 +41,10 @@ struct LogContent {
   std::vector<Eigen::Matrix2d> slam_map_cov_xy;
   int64_t feature_frames = 0;
   bool have_slam_map = false, have_truth_map = false;
+  std::vector<int64_t> slam_map_ids, truth_map_ids;
+  std::vector<eval::TimedPose> odometry;                     ///< ODOMETRY (of the first log that has it)
+  std::map<int64_t, std::vector<int64_t>> associations;      ///< SLAM_ASSOCIATIONS by frame utime
+  std::map<int64_t, std::vector<int64_t>> labels;            ///< GROUND_TRUTH_FEATURE_LABELS by frame utime
 };
 
 /// Poses by utime (a later message with the same utime replaces the earlier one), sorted.
@@ -45,8 +55,20 @@ std::vector<eval::TimedPose> posesOf(const std::map<int64_t, Pose2>& m) {
 }
 
 void read(const std::string& path, bool want_slam, bool want_truth, LogContent& c) {
-  std::map<int64_t, Pose2> slam, truth;
+  std::map<int64_t, Pose2> slam, truth, odom;
   lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
+    if (ev.channel == channels::kOdometry) {
+      if (auto m = lcmio::decodeAs<odometry_t>(ev)) odom[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+      return;
+    }
+    if (want_slam && ev.channel == channels::kSlamAssociations) {
+      if (auto m = lcmio::decodeAs<associations_t>(ev)) c.associations[m->utime] = m->landmark_id;
+      return;
+    }
+    if (want_truth && ev.channel == channels::kGroundTruthFeatureLabels) {
+      if (auto m = lcmio::decodeAs<feature_labels_t>(ev)) c.labels[m->utime] = m->landmark_id;
+      return;
+    }
     if (want_slam && ev.channel == channels::kSlamPose) {
       if (auto m = lcmio::decodeAs<pose_t>(ev)) slam[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
     } else if (want_truth && ev.channel == channels::kGroundTruthPose) {
@@ -55,7 +77,9 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
       if (auto m = lcmio::decodeAs<map_t>(ev)) {
         c.slam_map.clear();
         c.slam_map_cov_xy.clear();
+        c.slam_map_ids.clear();
         for (const auto& l : m->landmarks) {
+          c.slam_map_ids.push_back(l.id);
           c.slam_map.emplace_back(l.position_m[0], l.position_m[1], l.position_m[2]);
           Eigen::Matrix2d cov;
           cov << l.covariance[0][0], l.covariance[0][1], l.covariance[1][0], l.covariance[1][1];
@@ -66,7 +90,11 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
     } else if (want_truth && ev.channel == channels::kGroundTruthMap) {
       if (auto m = lcmio::decodeAs<map_t>(ev)) {
         c.truth_map.clear();
-        for (const auto& l : m->landmarks) c.truth_map.emplace_back(l.position_m[0], l.position_m[1], l.position_m[2]);
+        c.truth_map_ids.clear();
+        for (const auto& l : m->landmarks) {
+          c.truth_map.emplace_back(l.position_m[0], l.position_m[1], l.position_m[2]);
+          c.truth_map_ids.push_back(l.id);
+        }
         c.have_truth_map = true;
       }
     } else if (want_slam && ev.channel == channels::kOmniFeatures) {
@@ -75,6 +103,41 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
   });
   if (want_slam) c.slam = posesOf(slam);
   if (want_truth) c.truth = posesOf(truth);
+  if (c.odometry.empty()) c.odometry = posesOf(odom);
+}
+
+/// Dead reckoning: ODOMETRY at the SLAM poses' utimes, mapped into the truth frame by the start pose
+/// (the truth at the first SLAM pose, where the filter was given its start), raw and aligned.
+struct DeadReckoning {
+  bool available = false;
+  eval::TrajectoryErrors raw, aligned;
+};
+
+DeadReckoning deadReckoning(const LogContent& c) {
+  DeadReckoning d;
+  constexpr int64_t kMaxOdometryGapUs = 2'000'000;  // odometry loggers may pause (MRCLAM: 1 s)
+  if (c.odometry.empty() || c.slam.empty()) return d;
+  const int64_t t0 = c.slam.front().utime;
+  const auto odom0 = eval::poseAt(c.odometry, t0, kMaxOdometryGapUs);
+  const auto truth0 = eval::poseAt(c.truth, t0, 200'000);
+  if (!odom0 || !truth0) return d;
+  const eval::Rigid2D T0 = eval::rigidFromPoses(*odom0, *truth0);
+  std::vector<eval::TimedPose> dr;
+  for (const auto& p : c.slam)
+    if (auto o = eval::poseAt(c.odometry, p.utime, kMaxOdometryGapUs)) dr.push_back({p.utime, T0.apply(*o)});
+  auto pairs = eval::pairByTime(dr, c.truth);
+  if (pairs.empty()) return d;
+  d.available = true;
+  d.raw = eval::trajectoryErrors(pairs);
+  std::vector<Eigen::Vector2d> from, to;
+  for (const auto& p : pairs) {
+    from.emplace_back(p.estimate.x_m, p.estimate.y_m);
+    to.emplace_back(p.truth.x_m, p.truth.y_m);
+  }
+  if (const auto T = eval::fitRigid2D(from, to))
+    for (auto& p : pairs) p.estimate = T->apply(p.estimate);
+  d.aligned = eval::trajectoryErrors(pairs);
+  return d;
 }
 
 void writeTum(const std::string& path, const std::vector<eval::TimedPose>& poses) {
@@ -103,7 +166,7 @@ int main(int argc, char** argv) {
   cli.add_option("--tum-out", tum_prefix, "prefix of the TUM trajectory files (default: the log's path)");
   cli.add_flag("--no-tum", no_tum, "do not write TUM files");
   cli.add_option("--plot", plot_prefix, "write PREFIX.map.png (map and trajectories) and PREFIX.errors.png");
-  CLI11_PARSE(cli, argc, argv);
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-eval", [&]() -> int {
     LogContent c;
     if (truth_log.empty()) {
@@ -131,6 +194,24 @@ int main(int argc, char** argv) {
     const auto te = eval::trajectoryErrors(pairs);
     const auto me = eval::mapErrors(c.slam_map, c.truth_map, gate_m, planar);
     const int64_t frames = c.feature_frames > 0 ? c.feature_frames : static_cast<int64_t>(c.slam.size());
+    const DeadReckoning dr = deadReckoning(c);
+    // Association against the labels, with the landmark assignment of the map figures above.
+    const bool have_assoc = !c.associations.empty() && !c.labels.empty() && c.have_slam_map && c.have_truth_map;
+    eval::AssociationScore as;
+    if (have_assoc) {
+      std::map<int64_t, int64_t> truth_of_estimate;
+      for (size_t i = 0; i < me.truth_of_estimate.size() && i < c.slam_map_ids.size(); ++i)
+        if (me.truth_of_estimate[i] >= 0)
+          truth_of_estimate[c.slam_map_ids[i]] = c.truth_map_ids[static_cast<size_t>(me.truth_of_estimate[i])];
+      std::vector<std::vector<int64_t>> a, l;
+      for (const auto& [u, lab] : c.labels) {
+        const auto it = c.associations.find(u);
+        if (it == c.associations.end()) continue;  // a frame the SLAM did not answer (dropped)
+        a.push_back(it->second);
+        l.push_back(lab);
+      }
+      as = eval::scoreAssociations(a, l, truth_of_estimate);
+    }
     if (!no_tum) {
       const std::string prefix = tum_prefix.empty() ? log : tum_prefix;
       writeTum(prefix + ".slam.tum", c.slam);
@@ -177,7 +258,22 @@ int main(int argc, char** argv) {
         << ", \"frames\": " << frames << ", \"frames_with_pose\": " << c.slam.size()
         << ", \"poses_compared\": " << te.pairs << ", \"aligned\": " << (T ? "true" : "false");
       if (T) o << ", \"align_theta_rad\": " << T->theta_rad << ", \"align_tx_m\": " << T->t_m.x() << ", \"align_ty_m\": " << T->t_m.y();
-      o << ", \"map_available\": " << (c.have_slam_map && c.have_truth_map ? "true" : "false") << "}\n";
+      o << ", \"map_available\": " << (c.have_slam_map && c.have_truth_map ? "true" : "false");
+      o << ", \"dr_available\": " << (dr.available ? "true" : "false");
+      if (dr.available)
+        o << ", \"dr_ate_rmse_m\": " << dr.raw.ate_rmse_m << ", \"dr_ate_max_m\": " << dr.raw.ate_max_m
+          << ", \"dr_heading_rmse_rad\": " << dr.raw.heading_rmse_rad
+          << ", \"dr_ate_rmse_aligned_m\": " << dr.aligned.ate_rmse_m
+          << ", \"dr_ate_max_aligned_m\": " << dr.aligned.ate_max_m << ", \"dr_poses_compared\": " << dr.raw.pairs;
+      o << ", \"assoc_available\": " << (have_assoc ? "true" : "false");
+      if (have_assoc)
+        o << ", \"assoc_precision\": " << as.precision() << ", \"assoc_recall\": " << as.recall()
+          << ", \"assoc_frames\": " << as.frames << ", \"assoc_frames_mismatched\": " << as.frames_mismatched
+          << ", \"assoc_features\": " << as.features
+          << ", \"assoc_true_landmark_features\": " << as.true_landmark_features
+          << ", \"assoc_associated\": " << as.associated << ", \"assoc_correct\": " << as.correct
+          << ", \"assoc_clutter_associated\": " << as.clutter_associated;
+      o << "}\n";
     } else {
       o << "omnislam-eval " << log << (T ? "  (aligned)" : "") << "\n";
       o << "  trajectory: " << te.pairs << " poses compared of " << c.slam.size() << " (" << frames << " frames)\n";
@@ -187,6 +283,14 @@ int main(int argc, char** argv) {
         << gate_m << " m, " << me.spurious << " spurious\n";
       o << "    landmark error mean " << me.mean_err_m << " m, max " << me.max_err_m << " m\n";
       if (T) o << "  alignment: rotation " << T->theta_rad << " rad, translation (" << T->t_m.x() << ", " << T->t_m.y() << ") m\n";
+      if (dr.available)
+        o << "  dead reckoning (ODOMETRY from the start pose): ATE RMSE " << dr.raw.ate_rmse_m << " m, max "
+          << dr.raw.ate_max_m << " m; aligned: RMSE " << dr.aligned.ate_rmse_m << " m, max " << dr.aligned.ate_max_m
+          << " m\n";
+      if (have_assoc)
+        o << "  association: precision " << as.precision() << " (" << as.correct << "/" << as.associated
+          << "), recall " << as.recall() << " (" << as.correct << "/" << as.true_landmark_features << "); "
+          << as.clutter_associated << " clutter features associated; " << as.frames << " frames\n";
     }
     std::cout << o.str();
     return 0;

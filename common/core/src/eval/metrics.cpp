@@ -122,4 +122,51 @@ MapErrors mapErrors(const std::vector<Eigen::Vector3d>& est, const std::vector<E
   return r;
 }
 
+Rigid2D rigidFromPoses(const Pose2& from, const Pose2& to) {
+  Rigid2D T;
+  T.theta_rad = wrapAngle(to.theta_rad - from.theta_rad);
+  T.t_m = Eigen::Vector2d(to.x_m, to.y_m) - T.apply(Eigen::Vector2d(from.x_m, from.y_m));  // t_m still zero
+  return T;
+}
+
+std::optional<Pose2> poseAt(const std::vector<TimedPose>& tr, int64_t utime, int64_t max_gap_us) {
+  const auto it =
+      std::lower_bound(tr.begin(), tr.end(), utime, [](const TimedPose& t, int64_t u) { return t.utime < u; });
+  if (it == tr.end()) return std::nullopt;
+  if (it->utime == utime) return it->pose;
+  if (it == tr.begin()) return std::nullopt;
+  const TimedPose& a = *(it - 1);
+  if (it->utime - a.utime > max_gap_us) return std::nullopt;
+  return interpolate(a.pose, it->pose, static_cast<double>(utime - a.utime) / static_cast<double>(it->utime - a.utime));
+}
+
+AssociationScore scoreAssociations(const std::vector<std::vector<int64_t>>& associated,
+                                   const std::vector<std::vector<int64_t>>& labels,
+                                   const std::map<int64_t, int64_t>& truth_of_estimate) {
+  AssociationScore s;
+  const size_t n = std::min(associated.size(), labels.size());
+  s.frames_mismatched = static_cast<int64_t>(std::max(associated.size(), labels.size()) - n);
+  for (size_t f = 0; f < n; ++f) {
+    if (associated[f].size() != labels[f].size()) {
+      ++s.frames_mismatched;
+      continue;
+    }
+    ++s.frames;
+    for (size_t i = 0; i < labels[f].size(); ++i) {
+      const int64_t a = associated[f][i], l = labels[f][i];
+      ++s.features;
+      if (l >= 0) ++s.true_landmark_features;
+      if (a < 0) continue;
+      ++s.associated;
+      if (l < 0) {
+        ++s.clutter_associated;
+        continue;
+      }
+      const auto it = truth_of_estimate.find(a);
+      if (it != truth_of_estimate.end() && it->second == l) ++s.correct;
+    }
+  }
+  return s;
+}
+
 }  // namespace omnislam::eval

@@ -24,7 +24,9 @@ std::string CandidateOptions::validate() const {
       .inLeftOpen("initial_cov_diag_m2.y", initial_cov_diag_m2.y(), 0.0, inf)
       .inLeftOpen("initial_cov_diag_m2.z", initial_cov_diag_m2.z(), 0.0, inf)
       .inClosed("refine_iterations", refine_iterations, 0, 100)
-      .inClosed("max_observations", max_observations, 2, 1000);
+      .inClosed("max_observations", max_observations, 2, 1000)
+      .inClosed("min_range_m", min_range_m, 0.0, inf)
+      .inLeftOpen("max_range_m", max_range_m, min_range_m, inf);
   // NCROSS_valid cross-points need enough pairs among the kept rays.
   c.require(static_cast<long>(max_observations) * (max_observations - 1) / 2 >= ncross_valid, "max_observations",
             "must give at least ncross_valid pairs: n (n - 1) / 2 >= ncross_valid");
@@ -89,6 +91,33 @@ double totalLogLikelihood(const Candidate& c, const Eigen::Vector3d& X) {
   return sum;
 }
 
+// Validity d): X within [min_range_m, max_range_m] of every observation's optical centre.
+bool insideRanges(const Candidate& c, const Eigen::Vector3d& X, const CandidateOptions& o) {
+  if (o.min_range_m <= 0.0 && o.max_range_m == std::numeric_limits<double>::infinity()) return true;
+  const bool line = c.kind == LandmarkKind::kVerticalLine;
+  for (const auto& oi : c.observations) {
+    const Eigen::Vector3d d = X - oi.p_CinW_m;
+    const double r = line ? std::hypot(d.x(), d.y()) : d.norm();
+    if (r < o.min_range_m || r > o.max_range_m) return false;
+  }
+  return true;
+}
+
+// Validity e) for vertical lines: two azimuth rays always cross, so a pair checks nothing; count
+// the views of X pairwise more than spacing_rad apart (greedy over the sorted directions from X
+// to the optical centres; the circle's wrap-around is checked between the last and the first).
+int distinctViews(const Candidate& c, const Eigen::Vector3d& X, double spacing_rad) {
+  std::vector<double> a;
+  for (const auto& oi : c.observations) a.push_back(std::atan2(oi.p_CinW_m.y() - X.y(), oi.p_CinW_m.x() - X.x()));
+  std::sort(a.begin(), a.end());
+  if (a.empty()) return 0;
+  std::vector<double> kept{a.front()};
+  for (double v : a)
+    if (v - kept.back() > spacing_rad) kept.push_back(v);
+  if (kept.size() > 1 && kept.front() + 2.0 * kPi - kept.back() <= spacing_rad) kept.pop_back();
+  return static_cast<int>(kept.size());
+}
+
 // Gauss-Newton on sum_i |z_i - h(X, x_i)|^2_{Q_i^-1}, starting from X0; returns the improved point
 // or X0. Vertical lines move in x-y only.
 Eigen::Vector3d refinePoint(const Candidate& c, const Eigen::Vector3d& X0, double ll0, const CandidateOptions& o) {
@@ -121,6 +150,7 @@ Eigen::Vector3d refinePoint(const Candidate& c, const Eigen::Vector3d& X0, doubl
     }
     const Eigen::Vector3d Xn = X + dx;
     if (!line && o.require_above_camera && !(Xn.z() > min_cam_z + o.min_height_above_camera_m)) break;
+    if (!insideRanges(c, Xn, o)) break;  // d)
     const double lln = totalLogLikelihood(c, Xn);
     if (!(lln > ll)) break;
     X = Xn;
@@ -150,6 +180,7 @@ CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions
           !(x->p_XinW_m.z() > std::max(oa.p_CinW_m.z(), ob.p_CinW_m.z()) + o.min_height_above_camera_m)) {
         continue;  // b)
       }
+      if (!insideRanges(c, x->p_XinW_m, o)) continue;  // d)
       double sum_ll = 0.0;
       bool ok = true;
       for (const auto& oi : c.observations) {  // c)
@@ -179,6 +210,7 @@ CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions
     }
   }
   ev.ready = c.num_associated >= o.nz_min && ev.num_valid >= o.ncross_valid && ev.valid_with_latest;
+  if (ev.ready && !point) ev.ready = distinctViews(c, ev.best_p_LinW_m, 0.5 * o.min_parallax_rad) >= 3;  // e)
   if (ev.ready && o.refine_initial_point) {
     ev.best_p_LinW_m = refinePoint(c, ev.best_p_LinW_m, ev.best_log_likelihood, o);
   }
@@ -192,7 +224,7 @@ CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions
 }
 
 double candidateLogLikelihood(const Candidate& c, const MeasVec& z, const MeasMat& Q, const Pose2& x_t,
-                              const Eigen::Vector3d& p_CinR_m) {
+                              const Eigen::Vector3d& p_CinR_m, double min_range_m, double max_range_m) {
   const double ninf = -std::numeric_limits<double>::infinity();
   if (c.observations.empty() || z.size() != measurementDim(c.kind)) return ninf;
   if (c.has_estimate) {
@@ -205,6 +237,23 @@ double candidateLogLikelihood(const Candidate& c, const MeasVec& z, const MeasMa
   const CandidateObservation& o = c.observations.back();
   const CandidateObservation now = makeObservation(c.kind, x_t, p_CinR_m, z, Q);
   const auto x = crossPointOfRays(o.p_CinW_m, o.dir_W, now.p_CinW_m, now.dir_W, 1e-6);
+  if (min_range_m > 0.0 || max_range_m < std::numeric_limits<double>::infinity()) {
+    // The landmark lies on the candidate's ray within [min_range_m, max_range_m] of its camera:
+    // predict from the point of that segment nearest (in bearing) to the measured ray, i.e. the
+    // crossing clamped to the segment, or the better end when the rays do not cross in front.
+    auto at = [&](double depth) {
+      const Eigen::Vector3d P = o.p_CinW_m + depth * o.dir_W;
+      const auto zhat = predictMeasurement(c.kind, P, x_t, p_CinR_m);
+      const double range_now = (P - now.p_CinW_m).norm();
+      if (!zhat || !(range_now > 0.0)) return ninf;
+      const double scale = depth / range_now;
+      return logGaussian(innovation(z, *zhat), MeasMat(Q + scale * scale * o.Q));
+    };
+    const double lo = std::max(min_range_m, 1e-3);
+    if (x && x->depth1_m > 0.0 && x->depth2_m > 0.0) return at(std::clamp(x->depth1_m, lo, std::max(lo, max_range_m)));
+    if (max_range_m == std::numeric_limits<double>::infinity()) return std::max(at(lo), at(1e6));
+    return std::max(at(lo), at(max_range_m));
+  }
   if (x && x->depth1_m > 0.0 && x->depth2_m > 0.0) {
     const Eigen::Vector3d P = o.p_CinW_m + x->depth1_m * o.dir_W;  // on the candidate's ray
     const auto zhat = predictMeasurement(c.kind, P, x_t, p_CinR_m);

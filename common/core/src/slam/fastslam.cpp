@@ -21,6 +21,26 @@ Pose2 poseFromVec(const Eigen::Vector3d& v) { return Pose2::fromVec(v); }
 
 double xyDistance(const Pose2& T, const Eigen::Vector3d& p) { return std::hypot(p.x() - T.x_m, p.y() - T.y_m); }
 
+// Counter increment of a detection: 1 (the paper) when p_in >= 0.5. With a lower p_in a landmark
+// inside the range is missed more often than seen, and +1 / -1 would delete every true landmark;
+// a detection then counts ceil((1 - p_in) / p_in), so that at the nominal rate i_j does not drift down.
+int hitIncrement(double p_in) {
+  if (p_in >= 0.5) return 1;
+  return static_cast<int>(std::ceil((1.0 - p_in) / std::max(p_in, 1e-3) - 1e-9));
+}
+
+// Whether a candidate could have been seen from x_t: its estimate inside the perceptual range, or
+// without one, the direction of its newest ray inside the azimuth window (always true for an
+// all-round camera).
+bool candidateInsideRange(const Candidate& c, const Pose2& x_t, const PerceptionOptions& per) {
+  if (c.observations.empty()) return true;
+  const CandidateObservation& ob = c.observations.back();
+  if (c.has_estimate) return insidePerceptualRange(c.estimate_W_m, c.kind, x_t, ob.p_CinR_m, per);
+  if (per.azimuth_half_width_rad >= kPi) return true;
+  const double az = wrapAngle(std::atan2(ob.dir_W.y(), ob.dir_W.x()) - x_t.theta_rad);
+  return std::abs(wrapAngle(az - per.azimuth_centre_rad)) <= per.azimuth_half_width_rad;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -285,7 +305,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
     LandmarkMap::Edit e;
     e.ref = vis[j];
     e.value = L;
-    ++e.value.counter;  // i_j + 1
+    e.value.counter += hitIncrement(per.detection_probability);  // i_j + 1 (p_in >= 0.5)
     MeasJac Hx, Hm;
     const auto zt = predictMeasurement(L.kind, L.p_LinW_m, x_t, m.p_CinR_m, &Hx, &Hm);  // lines 5-6
     if (zt) {
@@ -433,7 +453,9 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
     for (int c = 0; c < nc; ++c) {
       const Candidate& cand = *p.candidates[c];
       if (cand.kind != m.kind) continue;
-      cost(r, c) = -candidateLogLikelihood(cand, m.z, m.Q, x_t, m.p_CinR_m);
+      cost(r, c) = -candidateLogLikelihood(cand, m.z, m.Q, x_t, m.p_CinR_m,
+                                           std::max(o.candidates.min_range_m, o.perception.min_range_m),
+                                           std::min(o.candidates.max_range_m, o.perception.max_range_m));
     }
   }
   const std::vector<int> cand_of_meas = associate(cost, cost_new, o.association);
@@ -450,7 +472,12 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
     Candidate& cand = *nc_ptr;
     const int l = meas_of_cand[c];
     if (l < 0) {
-      // Not observed: i_j -= I_not (I_not consecutive misses); deleted when not above 0.
+      // Not observed: i_j -= I_not (I_not consecutive misses); deleted when not above 0. Only a
+      // candidate that could have been seen misses (a forward camera does not see behind it).
+      if (!candidateInsideRange(cand, x_t, o.perception)) {
+        next.push_back(std::move(nc_ptr));
+        continue;
+      }
       ++cand.consecutive_misses;
       cand.counter -= cand.consecutive_misses;
       if (cand.counter > 0) next.push_back(std::move(nc_ptr));
@@ -460,12 +487,30 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
     ++info.num_to_candidates;
     cand.observations.push_back(makeObservation(cand.kind, x_t, m.p_CinR_m, m.z, m.Q));
     if (static_cast<int>(cand.observations.size()) > o.candidates.max_observations) {
-      cand.observations.erase(cand.observations.begin());
+      // Azimuth-only (vertical-line) rays carry no depth: their parallax is all there is to
+      // triangulate, and a slow or still robot fills the window with nearly parallel rays. Keep the
+      // first and the newest ray and drop the one taken nearest to the ray before it (the window
+      // thins out evenly in space); other kinds drop the oldest (unchanged).
+      size_t drop = 0;
+      if (cand.kind == LandmarkKind::kVerticalLine && cand.observations.size() > 2) {
+        double nearest = kInf;
+        for (size_t i = 1; i + 1 < cand.observations.size(); ++i) {
+          const double b = (cand.observations[i].p_CinW_m - cand.observations[i - 1].p_CinW_m).head<2>().norm();
+          if (b < nearest) {
+            nearest = b;
+            drop = i;
+          }
+        }
+      }
+      cand.observations.erase(cand.observations.begin() + static_cast<std::ptrdiff_t>(drop));
     }
     ++cand.num_associated;
-    ++cand.counter;
+    cand.counter += hitIncrement(o.perception.detection_probability);
     cand.consecutive_misses = 0;
-    const CandidateEvaluation ev = evaluateCandidate(cand, o.candidates, o.p_new_mahalanobis_sq);
+    CandidateOptions co = o.candidates;  // validity d) with the tighter of the two range limits
+    co.min_range_m = std::max(co.min_range_m, o.perception.min_range_m);
+    co.max_range_m = std::min(co.max_range_m, o.perception.max_range_m);
+    const CandidateEvaluation ev = evaluateCandidate(cand, co, o.p_new_mahalanobis_sq);
     if (ev.ready) {
       Landmark lm;
       lm.id = next_landmark_id_++;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <vector>
 
@@ -70,5 +71,36 @@ struct MapErrors {
 /// summed distance (Hungarian). Distances are 3D, or 2D (x, y) when planar is true.
 MapErrors mapErrors(const std::vector<Eigen::Vector3d>& estimated, const std::vector<Eigen::Vector3d>& truth,
                     double gate_m = 2.0, bool planar = false);
+
+/// T with T.apply(from) == to: maps a trajectory given in `from`'s frame into `to`'s frame so that
+/// the pose `from` lands on `to` (e.g. odometry mapped into the truth frame by a known start pose).
+Rigid2D rigidFromPoses(const Pose2& from, const Pose2& to);
+
+/// The pose of a sorted trajectory at utime (interpolated between the samples around it, or the
+/// sample at that utime); nothing outside its span or across a gap longer than max_gap_us.
+std::optional<Pose2> poseAt(const std::vector<TimedPose>& trajectory, int64_t utime, int64_t max_gap_us);
+
+/// Data association scored against truth labels, feature by feature (docs/evaluation.md,
+/// "Association"). A feature associated with map landmark L is correct when L is matched (by the
+/// landmark assignment of mapErrors) to the true landmark the feature's label names.
+struct AssociationScore {
+  int64_t frames = 0;                  ///< frames with both associations and labels
+  int64_t frames_mismatched = 0;       ///< frames left out: their feature counts differ
+  int64_t features = 0;                ///< features of the frames scored
+  int64_t true_landmark_features = 0;  ///< features whose label is a true landmark (>= 0)
+  int64_t associated = 0;              ///< features associated with a map landmark (id >= 0)
+  int64_t correct = 0;                 ///< associated with the landmark matched to their true one
+  int64_t clutter_associated = 0;      ///< associated features whose label is not a true landmark
+  double precision() const { return associated > 0 ? double(correct) / double(associated) : 0.0; }
+  double recall() const { return true_landmark_features > 0 ? double(correct) / double(true_landmark_features) : 0.0; }
+};
+
+/// associated[f][i]: the map landmark id feature i of frame f was associated with, or < 0 (none);
+/// labels[f][i]: the id of its true landmark, or < 0 (clutter); frames f of both lists correspond.
+/// truth_of_estimate: estimated landmark id -> id of the true landmark matched to it (unmatched
+/// estimates are absent: every association with them is wrong).
+AssociationScore scoreAssociations(const std::vector<std::vector<int64_t>>& associated,
+                                   const std::vector<std::vector<int64_t>>& labels,
+                                   const std::map<int64_t, int64_t>& truth_of_estimate);
 
 }  // namespace omnislam::eval

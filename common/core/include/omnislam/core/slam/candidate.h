@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -41,6 +42,14 @@ struct CandidateOptions {
   int refine_iterations = 5;  ///< Gauss-Newton iterations of the refinement
   /// Rays kept per candidate (the oldest is dropped beyond this; bounds the O(n^3) evaluation).
   int max_observations = 16;
+  /// Validity d) [m]: the cross-point (and the refined point) must lie at a range within
+  /// [min_range_m, max_range_m] of the optical centre of every observation (horizontal range for
+  /// vertical lines, 3D for points): a landmark can only have been seen from inside the camera's
+  /// perceptual range. Rejects the degenerate cross-points of rays of different landmarks taken from
+  /// nearly the same place (they cross at the camera), which nothing else rejects for 2D lines.
+  /// FastSlam uses the tighter of these and PerceptionOptions' min/max_range_m. Default: no limit.
+  double min_range_m = 0.0;
+  double max_range_m = std::numeric_limits<double>::infinity();
 
   /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
   std::string validate() const;
@@ -86,7 +95,10 @@ struct CandidateEvaluation {
 /// Computes every cross-point of pairs of the candidate's rays and their validity:
 /// a) parallax > min_parallax_rad; b) (points, if required) above both optical centres;
 /// c) every observation i has (z_i - h(X, x_i))^T Q_i^-1 (...) < p_new_mahalanobis_sq, i.e. its
-///    probability exceeds its P_New. Type I when both poses of the best pair are within d_min_m (x-y).
+///    probability exceeds its P_New; d) X within [min_range_m, max_range_m] of every optical centre.
+/// For vertical lines ready also needs e): X seen from at least three views pairwise more than
+/// min_parallax_rad / 2 apart (two azimuth rays always cross, so one pair confirms nothing; a third
+/// view between the two of a valid pair does). Type I when both poses of the best pair are within d_min_m (x-y).
 CandidateEvaluation evaluateCandidate(const Candidate& candidate, const CandidateOptions& options,
                                       double p_new_mahalanobis_sq);
 
@@ -94,8 +106,13 @@ CandidateEvaluation evaluateCandidate(const Candidate& candidate, const Candidat
 /// N(z; h(X, x_t), Q + H_m Sigma_X H_m^T). Without: the ray of the newest observation is
 /// intersected with the measured ray; zhat = h(point on the candidate ray, x_t), covariance
 /// Q + (s_cand / range_now)^2 Q_cand; parallel or diverging rays predict the ray's direction
-/// (point at infinity) with Q + Q_cand. -infinity when undefined.
+/// (point at infinity) with Q + Q_cand. -infinity when undefined. With a range limit (min_range_m > 0
+/// or max_range_m finite), the point without an estimate is taken on the segment of the candidate's
+/// ray within [min_range_m, max_range_m] of its camera: the crossing clamped to it, or the better end
+/// when the rays do not cross in front (rays from nearly the same place, which cross at the camera,
+/// then no longer match every direction).
 double candidateLogLikelihood(const Candidate& candidate, const MeasVec& z, const MeasMat& Q, const Pose2& x_t,
-                              const Eigen::Vector3d& p_CinR_m);
+                              const Eigen::Vector3d& p_CinR_m, double min_range_m = 0.0,
+                              double max_range_m = std::numeric_limits<double>::infinity());
 
 }  // namespace omnislam::slam

@@ -1,0 +1,195 @@
+// Parsing the MRCLAM text files: see mrclam_files.h.
+#include "mrclam_files.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace omnislam::mrclam {
+namespace {
+
+std::string at(const std::string& path, int64_t line) { return path + ":" + std::to_string(line) + ": "; }
+
+std::string fmtTime(double t) {
+  std::ostringstream s;
+  s.precision(15);
+  s << t;
+  return s.str();
+}
+
+int integral(const std::string& path, int64_t line, const std::string& name, double v) {
+  if (v != std::floor(v) || std::abs(v) > 1e9)
+    throw ParseError(at(path, line) + "column '" + name + "' must be an integer, got " + fmtTime(v));
+  return static_cast<int>(v);
+}
+
+/// Strictly increasing times in column 0; a repeated time is an error or replaces the earlier row.
+void checkTimes(Table& t, DuplicateTimes dup) {
+  std::vector<std::vector<double>> rows;
+  std::vector<int64_t> lines;
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    if (!rows.empty()) {
+      const double prev = rows.back()[0], now = t.rows[i][0];
+      if (now < prev)
+        throw ParseError(at(t.stats.path, t.line_of_row[i]) + "time " + fmtTime(now) + " s is before the previous (" +
+                         fmtTime(prev) + " s at line " + std::to_string(lines.back()) + "): times must increase");
+      if (now == prev) {
+        if (dup == DuplicateTimes::kError)
+          throw ParseError(at(t.stats.path, t.line_of_row[i]) + "duplicated time " + fmtTime(now) +
+                           " s (same as line " + std::to_string(lines.back()) +
+                           "); --duplicate-times keep-last keeps the later line");
+        rows.back() = t.rows[i];
+        lines.back() = t.line_of_row[i];
+        ++t.stats.duplicates_replaced;
+        t.stats.duplicate_lines.push_back(t.line_of_row[i]);
+        continue;
+      }
+    }
+    rows.push_back(t.rows[i]);
+    lines.push_back(t.line_of_row[i]);
+  }
+  t.rows = std::move(rows);
+  t.line_of_row = std::move(lines);
+}
+
+void put(FileStats* out, const FileStats& s) {
+  if (out) *out = s;
+}
+
+}  // namespace
+
+Table readTable(const std::string& path, const std::vector<std::string>& names) {
+  std::ifstream f(path);
+  if (!f) throw ParseError(path + ": cannot open file");
+  Table t;
+  t.stats.path = path;
+  std::string line;
+  int64_t n = 0;
+  while (std::getline(f, line)) {
+    ++n;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos) {
+      ++t.stats.blank_lines;
+      continue;
+    }
+    if (line[first] == '#') {
+      ++t.stats.comment_lines;
+      continue;
+    }
+    std::istringstream in(line);
+    std::vector<double> row;
+    std::string tok;
+    while (in >> tok) {
+      if (row.size() == names.size())
+        throw ParseError(at(path, n) + "extra column '" + tok + "' (expected " + std::to_string(names.size()) +
+                         " columns)");
+      errno = 0;
+      char* end = nullptr;
+      const double v = std::strtod(tok.c_str(), &end);
+      const std::string& name = names[row.size()];
+      if (end == tok.c_str() || *end != '\0' || errno == ERANGE)
+        throw ParseError(at(path, n) + "column " + std::to_string(row.size() + 1) + " '" + name +
+                         "' is not a number: '" + tok + "'");
+      if (!std::isfinite(v))
+        throw ParseError(at(path, n) + "column " + std::to_string(row.size() + 1) + " '" + name +
+                         "' is not finite: '" + tok + "'");
+      row.push_back(v);
+    }
+    if (row.size() < names.size())
+      throw ParseError(at(path, n) + "missing column " + std::to_string(row.size() + 1) + " '" + names[row.size()] +
+                       "' (expected " + std::to_string(names.size()) + " columns, found " +
+                       std::to_string(row.size()) + ")");
+    t.rows.push_back(std::move(row));
+    t.line_of_row.push_back(n);
+  }
+  if (f.bad()) throw ParseError(path + ": read error");
+  t.stats.lines = n;
+  t.stats.data_lines = static_cast<int64_t>(t.rows.size());
+  if (t.rows.empty()) throw ParseError(path + ": no data lines (empty file)");
+  return t;
+}
+
+std::vector<OdometrySample> readOdometry(const std::string& path, DuplicateTimes dup, FileStats* stats) {
+  Table t = readTable(path, {"time [s]", "forward velocity [m/s]", "angular velocity [rad/s]"});
+  checkTimes(t, dup);
+  std::vector<OdometrySample> out;
+  for (const auto& r : t.rows) out.push_back({r[0], r[1], r[2]});
+  put(stats, t.stats);
+  return out;
+}
+
+std::vector<PoseSample> readGroundtruth(const std::string& path, DuplicateTimes dup, FileStats* stats) {
+  Table t = readTable(path, {"time [s]", "x [m]", "y [m]", "orientation [rad]"});
+  checkTimes(t, dup);
+  std::vector<PoseSample> out;
+  for (const auto& r : t.rows) out.push_back({r[0], r[1], r[2], r[3]});
+  put(stats, t.stats);
+  return out;
+}
+
+std::vector<Measurement> readMeasurements(const std::string& path, FileStats* stats) {
+  Table t = readTable(path, {"time [s]", "subject (barcode)", "range [m]", "bearing [rad]"});
+  std::vector<Measurement> out;
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& r = t.rows[i];
+    const int64_t line = t.line_of_row[i];
+    if (!out.empty() && r[0] < out.back().t_s)
+      throw ParseError(at(path, line) + "time " + fmtTime(r[0]) + " s is before the previous (" +
+                       fmtTime(out.back().t_s) + " s at line " + std::to_string(out.back().line) +
+                       "): times must not decrease");
+    out.push_back({r[0], integral(path, line, "subject (barcode)", r[1]), r[2], r[3], line});
+  }
+  put(stats, t.stats);
+  return out;
+}
+
+std::vector<LandmarkTruth> readLandmarks(const std::string& path, FileStats* stats) {
+  Table t = readTable(path, {"subject", "x [m]", "y [m]", "x std-dev [m]", "y std-dev [m]"});
+  std::vector<LandmarkTruth> out;
+  std::set<int> seen;
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& r = t.rows[i];
+    const int s = integral(path, t.line_of_row[i], "subject", r[0]);
+    if (!seen.insert(s).second)
+      throw ParseError(at(path, t.line_of_row[i]) + "duplicated subject " + std::to_string(s));
+    out.push_back({s, r[1], r[2], r[3], r[4]});
+  }
+  put(stats, t.stats);
+  return out;
+}
+
+std::vector<BarcodeEntry> readBarcodes(const std::string& path, FileStats* stats) {
+  Table t = readTable(path, {"subject", "barcode"});
+  std::vector<BarcodeEntry> out;
+  std::set<int> subjects, codes;
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& r = t.rows[i];
+    const int64_t line = t.line_of_row[i];
+    const int s = integral(path, line, "subject", r[0]);
+    const int b = integral(path, line, "barcode", r[1]);
+    if (!subjects.insert(s).second) throw ParseError(at(path, line) + "duplicated subject " + std::to_string(s));
+    if (!codes.insert(b).second) throw ParseError(at(path, line) + "duplicated barcode " + std::to_string(b));
+    out.push_back({s, b});
+  }
+  put(stats, t.stats);
+  return out;
+}
+
+std::string describe(const FileStats& s) {
+  std::ostringstream o;
+  o << s.path << ": " << s.lines << " lines (" << s.comment_lines << " comments, " << s.blank_lines << " blank, "
+    << s.data_lines << " data)";
+  if (s.duplicates_replaced > 0) {
+    o << ", " << s.duplicates_replaced << " duplicated times, the later line kept (lines";
+    for (size_t i = 0; i < s.duplicate_lines.size() && i < 10; ++i) o << " " << s.duplicate_lines[i];
+    if (s.duplicate_lines.size() > 10) o << " ...";
+    o << ")";
+  }
+  return o.str();
+}
+
+}  // namespace omnislam::mrclam

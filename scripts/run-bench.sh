@@ -1,15 +1,51 @@
 #!/usr/bin/env bash
-# Builds and runs the benchmarks under bench/ (not part of the test suite). Each program prints its
-# figures beside the baseline it is compared with in the same run; JSON copies go to build/bench/.
+# Builds and runs the benchmarks under bench/ (not part of the test suite; docs/benchmarks.md). Each
+# program prints its figures beside the baseline it is compared with in the same run; JSON copies go
+# to build/bench/.
+#   bench_fastslam, bench_detectors  Google Benchmark programs
+#   bench_replay    needs a features log: $OMNISLAM_BENCH_LOG, else build/bench/sports_hall_features.lcm,
+#                   recorded first (sports_hall_features.yaml at 10x on a private bus) when absent
+#   bench_latency   runs the live pipeline (sports_hall_slam.yaml) for 10 and 100 particles
 # Usage: bash scripts/run-bench.sh [NAME_FILTER]   e.g.  bash scripts/run-bench.sh fastslam
+# Environment: OMNISLAM_BUILD_DIR (default build/); OMNISLAM_BENCH_NO_PREPARE=1 uses the build as it
+# is (no install/build step); OMNISLAM_BENCH_LOG (see above); OMNISLAM_BENCH_ARGS extra arguments for
+# every Google Benchmark program (e.g. --benchmark_min_time=0.05).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-bash "$root/scripts/prepare.sh"
+[[ "${OMNISLAM_BENCH_NO_PREPARE:-0}" == 1 ]] || bash "$root/scripts/prepare.sh"
 build="${OMNISLAM_BUILD_DIR:-$root/build}"
 mkdir -p "$build/bench"
+# A private bus for the recording: no other run on this machine hears it or talks into it.
+private_url="udpm://239.255.76.67:$((20000 + ($$ * 7 + 4242) % 30000))?ttl=0&recv_buf_size=4194304"
+
+features_log() {
+  local log="${OMNISLAM_BENCH_LOG:-$build/bench/sports_hall_features.lcm}"
+  if [[ ! -s "$log" ]]; then
+    echo "-- recording $log (config/launch/sports_hall_features.yaml at 10x on $private_url)" >&2
+    local tmp="$log.part"
+    "$build/bin/omnislam-launch" "$root/config/launch/sports_hall_features.yaml" --url "$private_url" \
+      --set speedup=10 --log-file "$tmp" > "$build/bench/record-features.out" 2>&1 \
+      || { tail -20 "$build/bench/record-features.out" >&2; rm -f "$tmp"; return 1; }
+    mv "$tmp" "$log"
+  fi
+  echo "$log"
+}
+
 for exe in "$build"/bin/bench_*; do
   name="$(basename "$exe")"
   [[ -z "${1:-}" || "$name" == *"$1"* ]] || continue
   echo "== $name"
-  "$exe" --benchmark_out="$build/bench/$name.json" --benchmark_out_format=json
+  case "$name" in
+    bench_replay)
+      log="$(features_log)"
+      "$exe" --log "$log" --json "$build/bench/$name.json"
+      ;;
+    bench_latency)
+      "$exe" --bin-dir "$build/bin" --out-dir "$build/bench" --json "$build/bench/$name.json"
+      ;;
+    *)
+      # shellcheck disable=SC2086
+      "$exe" --benchmark_out="$build/bench/$name.json" --benchmark_out_format=json ${OMNISLAM_BENCH_ARGS:-}
+      ;;
+  esac
 done

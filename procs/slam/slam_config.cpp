@@ -19,7 +19,8 @@ int64_t seconds_us(const Node& n, const std::string& key, double lo, double hi, 
 }
 
 void parseMotion(const Node& n, slam::MotionNoiseOptions& m) {
-  n.rejectUnknownKeys({"model", "err_tran_per_m", "err_rot_per_rad", "err_drift_rad_per_m", "trans_sigma_per_m", "lateral_sigma_per_m", "trans_sigma_per_rad", "rot_sigma_per_rad",
+  n.rejectUnknownKeys({"model", "err_tran_per_m", "err_rot_per_rad", "err_drift_rad_per_m", "err_tran_per_sqrt_m",
+                       "err_rot_per_sqrt_rad", "err_drift_rad_per_sqrt_m", "trans_sigma_per_m", "lateral_sigma_per_m", "trans_sigma_per_rad", "rot_sigma_per_rad",
                        "rot_sigma_per_m", "trans_sigma_per_sqrt_m", "lateral_sigma_per_sqrt_m", "rot_sigma_per_sqrt_rad",
                        "rot_sigma_per_sqrt_m", "min_sigma_xy_m", "min_sigma_theta_rad"});
   const std::string model = n.getEnum("model", {"chord", "translate_then_rotate"}, "chord");
@@ -28,6 +29,9 @@ void parseMotion(const Node& n, slam::MotionNoiseOptions& m) {
   m.err_tran_per_m = n.getDouble("err_tran_per_m", 0.0, 10.0, m.err_tran_per_m);
   m.err_rot_per_rad = n.getDouble("err_rot_per_rad", 0.0, 10.0, m.err_rot_per_rad);
   m.err_drift_rad_per_m = n.getDouble("err_drift_rad_per_m", 0.0, 10.0, m.err_drift_rad_per_m);
+  m.err_tran_per_sqrt_m = n.getDouble("err_tran_per_sqrt_m", 0.0, 10.0, m.err_tran_per_sqrt_m);
+  m.err_rot_per_sqrt_rad = n.getDouble("err_rot_per_sqrt_rad", 0.0, 10.0, m.err_rot_per_sqrt_rad);
+  m.err_drift_rad_per_sqrt_m = n.getDouble("err_drift_rad_per_sqrt_m", 0.0, 10.0, m.err_drift_rad_per_sqrt_m);
   m.trans_sigma_per_m = n.getDouble("trans_sigma_per_m", 0.0, 10.0, m.trans_sigma_per_m);
   m.lateral_sigma_per_m = n.getDouble("lateral_sigma_per_m", 0.0, 10.0, m.lateral_sigma_per_m);
   m.trans_sigma_per_rad = n.getDouble("trans_sigma_per_rad", 0.0, 10.0, m.trans_sigma_per_rad);

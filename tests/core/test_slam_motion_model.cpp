@@ -200,8 +200,21 @@ TEST(slam_MotionModel, TranslateThenRotateClosedFormStraight) {
   const Eigen::Matrix3d R = incrementCovariance(Pose2{0.0, 0.0, -0.5}, o);
   EXPECT_NEAR(R(2, 2), std::pow(0.2 * 0.5, 2), 1e-12);
   EXPECT_NEAR(R(0, 0), 1e-18, 1e-15);
+  // Random-walk forms add variance proportional to the distance and to the rotation.
+  MotionNoiseOptions rw = o;
+  rw.err_tran_per_m = rw.err_drift_rad_per_m = rw.err_rot_per_rad = 0.0;
+  rw.err_tran_per_sqrt_m = 0.03;
+  rw.err_drift_rad_per_sqrt_m = 0.02;
+  rw.err_rot_per_sqrt_rad = 0.05;
+  const Eigen::Matrix3d W = incrementCovariance(Pose2{d, 0.0, 0.0}, rw);
+  EXPECT_NEAR(W(0, 0), 0.03 * 0.03 * d, 1e-12);
+  EXPECT_NEAR(W(2, 2), 0.02 * 0.02 * d, 1e-12);
+  EXPECT_NEAR(W(1, 1), 0.25 * d * d * 0.02 * 0.02 * d, 1e-12);
+  EXPECT_NEAR(incrementCovariance(Pose2{0.0, 0.0, 0.5}, rw)(2, 2), 0.05 * 0.05 * 0.5, 1e-12);
   o.err_rot_per_rad = -1;
   EXPECT_NE(o.validate().find("err_rot_per_rad"), std::string::npos) << o.validate();
+  rw.err_drift_rad_per_sqrt_m = -1;
+  EXPECT_NE(rw.validate().find("err_drift_rad_per_sqrt_m"), std::string::npos) << rw.validate();
 }
 
 }  // namespace

@@ -25,6 +25,9 @@ std::string MotionNoiseOptions::validate() const {
       .inClosed("err_tran_per_m", err_tran_per_m, 0.0, inf)
       .inClosed("err_rot_per_rad", err_rot_per_rad, 0.0, inf)
       .inClosed("err_drift_rad_per_m", err_drift_rad_per_m, 0.0, inf)
+      .inClosed("err_tran_per_sqrt_m", err_tran_per_sqrt_m, 0.0, inf)
+      .inClosed("err_rot_per_sqrt_rad", err_rot_per_sqrt_rad, 0.0, inf)
+      .inClosed("err_drift_rad_per_sqrt_m", err_drift_rad_per_sqrt_m, 0.0, inf)
       .inLeftOpen("min_sigma_xy_m", min_sigma_xy_m, 0.0, inf)
       .inLeftOpen("min_sigma_theta_rad", min_sigma_theta_rad, 0.0, inf);
   return c.message();
@@ -45,7 +48,9 @@ Eigen::Matrix3d incrementCovariance(const Pose2& u, const MotionNoiseOptions& o)
     J << c, -0.5 * d * s, 0.0,  //
         s, 0.5 * d * c, 0.0,    //
         0.0, 1.0, 1.0;
-    const Eigen::Vector3d var(sq(o.err_tran_per_m * d), sq(o.err_drift_rad_per_m * d), sq(o.err_rot_per_rad * a));
+    const Eigen::Vector3d var(sq(o.err_tran_per_m * d) + sq(o.err_tran_per_sqrt_m) * d,
+                              sq(o.err_drift_rad_per_m * d) + sq(o.err_drift_rad_per_sqrt_m) * d,
+                              sq(o.err_rot_per_rad * a) + sq(o.err_rot_per_sqrt_rad) * a);
     Eigen::Matrix3d S = J * var.asDiagonal() * J.transpose();
     S(0, 0) += sq(o.min_sigma_xy_m);
     S(1, 1) += sq(o.min_sigma_xy_m);

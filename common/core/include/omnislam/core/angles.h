@@ -12,6 +12,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 /// Wraps an angle to (-pi, pi].
 inline double wrapAngle(double a_rad) {
+  // Fast path (most calls): already in range, std::remainder would return it unchanged (n = 0).
+  if (a_rad > -kPi && a_rad <= kPi) return a_rad;
   double w = std::remainder(a_rad, 2.0 * kPi);  // in [-pi, pi]
   if (w <= -kPi) w += 2.0 * kPi;
   return w;

@@ -21,6 +21,7 @@
 // rotation per radian turned):
 //   (dx, dy, dtheta) = (d cos(alpha + delta / 2), d sin(alpha + delta / 2), delta + rho)
 //   Sigma_(d, delta, rho) = diag((err_tran d)^2, (err_drift d)^2, (err_rot |rho|)^2)
+//     + diag(err_tran_sqrt^2 d, err_drift_sqrt^2 d, err_rot_sqrt^2 |rho|)   (random-walk forms)
 //   Sigma_u = J Sigma_(d, delta, rho) J^T + diag(min_sigma_xy_m^2, min_sigma_xy_m^2, min_sigma_theta_rad^2),
 //   J = d(dx, dy, dtheta) / d(d, delta, rho) at delta = 0 (the chord-model fields are then unused).
 #pragma once
@@ -57,6 +58,10 @@ struct MotionNoiseOptions {
   double err_tran_per_m = 0.05;      ///< std of the translated distance per metre [m/m]
   double err_rot_per_rad = 0.05;     ///< std of the rotation per radian turned [rad/rad]
   double err_drift_rad_per_m = 0.01; ///< std of the heading drift per metre translated [rad/m]
+  // Their random-walk forms (variance proportional to the distance / rotation, frame-rate free):
+  double err_tran_per_sqrt_m = 0.0;        ///< std of the distance after 1 m [m/sqrt(m)]
+  double err_rot_per_sqrt_rad = 0.0;       ///< std of the rotation after 1 rad [rad/sqrt(rad)]
+  double err_drift_rad_per_sqrt_m = 0.0;   ///< std of the heading drift after 1 m [rad/sqrt(m)]
   double min_sigma_xy_m = 0.002;       ///< floor of both translation stds [m], > 0
   double min_sigma_theta_rad = 0.002;  ///< floor of the heading std [rad], > 0
 

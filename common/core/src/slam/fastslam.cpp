@@ -2,6 +2,7 @@
 #include "omnislam/core/slam/fastslam.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -20,6 +21,29 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 Pose2 poseFromVec(const Eigen::Vector3d& v) { return Pose2::fromVec(v); }
 
 double xyDistance(const Pose2& T, const Eigen::Vector3d& p) { return std::hypot(p.x() - T.x_m, p.y() - T.y_m); }
+
+const double kLog2Pi = std::log(2.0 * kPi);
+
+// Inverse and log-determinant of a 1x1 or 2x2 symmetric positive definite matrix in closed form
+// (false when it is not positive definite). The generic LLT solves of these tiny matrices took a
+// quarter of a 100-particle step (docs/benchmarks.md).
+bool smallSpdInverse(const MeasMat& S, MeasMat& S_inv, double& log_det) {
+  if (S.rows() == 1) {
+    const double a = S(0, 0);
+    if (!(a > 0.0) || !std::isfinite(a)) return false;
+    S_inv.resize(1, 1);
+    S_inv(0, 0) = 1.0 / a;
+    log_det = std::log(a);
+    return true;
+  }
+  const double a = S(0, 0), b = 0.5 * (S(0, 1) + S(1, 0)), d = S(1, 1);
+  const double det = a * d - b * b;
+  if (!(a > 0.0) || !(det > 0.0) || !std::isfinite(det)) return false;
+  S_inv.resize(2, 2);
+  S_inv << d / det, -b / det, -b / det, a / det;
+  log_det = std::log(det);
+  return true;
+}
 
 // Counter increment of a detection: 1 (the paper) when p_in >= 0.5. With a lower p_in a landmark
 // inside the range is missed more often than seen, and +1 / -1 would delete every true landmark;
@@ -224,16 +248,18 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
       }
       if (!zbar) continue;
       const MeasMat Qjl = m.Q + Hm * L.cov_LinW_m2 * Hm.transpose();  // line 6
-      const Eigen::LLT<MeasMat> llt(Qjl);
-      if (llt.info() != Eigen::Success) continue;
-      const MeasJac QinvHx = llt.solve(Hx);
-      const Eigen::Matrix3d Sx = (Hx.transpose() * QinvHx + R_inv).llt().solve(Eigen::Matrix3d::Identity());  // 7
+      MeasMat Qjl_inv;
+      double log_det_Qjl = 0.0;
+      if (!smallSpdInverse(Qjl, Qjl_inv, log_det_Qjl)) continue;
+      const MeasJac QinvHx = Qjl_inv * Hx;
+      const Eigen::Matrix3d Sx = (Hx.transpose() * QinvHx + R_inv).inverse();  // line 7 (SPD 3x3, closed form)
       const MeasVec nu = innovation(m.z, *zbar);
       const Eigen::Vector3d dmu = Sx * (QinvHx.transpose() * nu);  // line 8: Sx H^T Q^-1 (z - zbar)
       const Pose2 mu_x{x_hat.x_m + dmu(0), x_hat.y_m + dmu(1), wrapAngle(x_hat.theta_rad + dmu(2))};
       const auto zhat = predictMeasurement(L.kind, L.p_LinW_m, mu_x, m.p_CinR_m);  // line 10
       if (!zhat) continue;
-      cost(l, j) = -logGaussian(innovation(m.z, *zhat), Qjl);  // line 11: -log phi_{l,j}
+      const MeasVec r = innovation(m.z, *zhat);  // line 11: -log phi_{l,j} = -log N(r; 0, Q_jl)
+      cost(l, j) = 0.5 * (static_cast<double>(r.size()) * kLog2Pi + log_det_Qjl + r.dot(Qjl_inv * r));
     }
   }
   std::vector<double> cost_new(nz);

@@ -92,7 +92,7 @@ void parseCandidates(const Node& n, slam::CandidateOptions& c) {
 }
 
 void parseFilter(const Node& n, slam::FastSlamOptions& f) {
-  n.rejectUnknownKeys({"particles", "association", "proposal", "p_new_mahalanobis_sq", "resample_ess_fraction",
+  n.rejectUnknownKeys({"particles", "association", "proposal", "descriptor_gate", "descriptor_update_rate", "p_new_mahalanobis_sq", "resample_ess_fraction",
                        "inflate_azimuth_near_zenith", "weight_at_predicted_pose", "weight_unassociated_with_p_new",
                        "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
                        "perception", "candidates"});
@@ -101,6 +101,8 @@ void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   f.association = assoc == "ml" ? slam::AssociationMethod::kMaximumLikelihood : slam::AssociationMethod::kHungarian;
   const std::string proposal = n.getEnum("proposal", {"fastslam2", "fastslam1"}, "fastslam2");
   f.proposal = proposal == "fastslam1" ? slam::ProposalKind::kFastSlam1 : slam::ProposalKind::kFastSlam2;
+  f.descriptor_gate = n.getDouble("descriptor_gate", 0.0, 1e4, f.descriptor_gate);
+  f.descriptor_update_rate = n.getDouble("descriptor_update_rate", 1e-6, 1.0, f.descriptor_update_rate);
   f.p_new_mahalanobis_sq = n.getDouble("p_new_mahalanobis_sq", 1e-6, 1e6, f.p_new_mahalanobis_sq);
   f.resample_ess_fraction = n.getDouble("resample_ess_fraction", 0.0, 1.0, f.resample_ess_fraction);
   f.inflate_azimuth_near_zenith = n.getBool("inflate_azimuth_near_zenith", f.inflate_azimuth_near_zenith);

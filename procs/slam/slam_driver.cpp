@@ -2,6 +2,7 @@
 #include "slam_driver.h"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -22,6 +23,16 @@ std::optional<slam::BearingMeasurement> toMeasurement(const feature_t& f, const 
     return std::nullopt;
   }
   m.azimuth_rad = f.azimuth_rad;
+  if (m.kind == slam::LandmarkKind::kVerticalLine) {  // the neighbourhood colours (paper 002)
+    bool any = false;
+    for (int i = 0; i < 3; ++i) {
+      m.descriptor.rgb[static_cast<std::size_t>(i)] = f.colour_a[i];
+      m.descriptor.rgb[static_cast<std::size_t>(i + 3)] = f.colour_b[i];
+      any = any || f.colour_a[i] != 0.0f || f.colour_b[i] != 0.0f;
+    }
+    m.descriptor.valid = any && std::isfinite(f.colour_a[0] + f.colour_a[1] + f.colour_a[2] + f.colour_b[0] +
+                                              f.colour_b[1] + f.colour_b[2]);
+  }
   m.cov_rad2 << f.covariance[0][0], f.covariance[0][1], f.covariance[1][0], f.covariance[1][1];
   const double floor = options.min_sigma_rad * options.min_sigma_rad;
   for (int i = 0; i < 2; ++i)

@@ -24,6 +24,21 @@ double xyDistance(const Pose2& T, const Eigen::Vector3d& p) { return std::hypot(
 
 const double kLog2Pi = std::log(2.0 * kPi);
 
+// The appearance gate: false when both descriptors are valid and further apart than the gate.
+bool descriptorsCompatible(const ColourDescriptor& a, const ColourDescriptor& b, double gate) {
+  return gate <= 0.0 || !a.valid || !b.valid || a.distanceTo(b) <= gate;
+}
+
+// Running mean of a descriptor (the first valid one is taken as is).
+void blendDescriptor(ColourDescriptor& into, const ColourDescriptor& z, double rate) {
+  if (!z.valid) return;
+  if (!into.valid) {
+    into = z;
+    return;
+  }
+  for (std::size_t i = 0; i < 6; ++i) into.rgb[i] += static_cast<float>(rate * (z.rgb[i] - into.rgb[i]));
+}
+
 // Inverse and log-determinant of a 1x1 or 2x2 symmetric positive definite matrix in closed form
 // (false when it is not positive definite). The generic LLT solves of these tiny matrices took a
 // quarter of a 100-particle step (docs/benchmarks.md).
@@ -76,6 +91,8 @@ std::string FastSlamOptions::validate() const {
       .require(proposal == ProposalKind::kFastSlam2 || proposal == ProposalKind::kFastSlam1, "proposal",
                "must be kFastSlam2 or kFastSlam1")
       .inLeftOpen("p_new_mahalanobis_sq", p_new_mahalanobis_sq, 0.0, kInf)
+      .inClosed("descriptor_gate", descriptor_gate, 0.0, 1e4)
+      .inLeftOpen("descriptor_update_rate", descriptor_update_rate, 0.0, 1.0)
       .inClosed("resample_ess_fraction", resample_ess_fraction, 0.0, 1.0)
       .inLeftOpen("scale_correction_max_step", scale_correction_max_step, 0.0, 1.0)
       .inLeftOpen("map_cell_size_m", map_cell_size_m, 0.0, kInf)
@@ -92,6 +109,7 @@ struct FastSlam::Meas {
   MeasMat Q;
   Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();
   double neg_log_p_new = 0.0;  ///< -log P_new,l
+  ColourDescriptor descriptor;
 };
 
 struct FastSlam::ParticleStepInfo {
@@ -153,6 +171,7 @@ StepResult FastSlam::step(const Pose2& odom_prev, const Pose2& odom_now, const s
     q.input_index = i;
     q.kind = m.kind;
     q.p_CinR_m = m.p_CinR_m;
+    q.descriptor = m.descriptor;
     q.z = measurementVector(m);
     q.Q = measurementCovariance(m, options_.inflate_azimuth_near_zenith);
     const bool kind_ok = m.kind == LandmarkKind::kPoint3D || m.kind == LandmarkKind::kVerticalLine;
@@ -225,7 +244,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
     const Landmark& L = *vis[j].landmark;
     for (int l = 0; l < nz; ++l) {
       const Meas& m = Z[l];
-      if (m.kind != L.kind) continue;
+      if (m.kind != L.kind || !descriptorsCompatible(m.descriptor, L.descriptor, o.descriptor_gate)) continue;
       MeasJac Hx, Hm;
       const auto zt = predictMeasurement(L.kind, L.p_LinW_m, x_t, m.p_CinR_m, &Hx, &Hm);
       if (!zt) continue;
@@ -241,7 +260,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
     const Eigen::Vector3d* cached_cam = nullptr;
     for (int l = 0; l < nz; ++l) {
       const Meas& m = Z[l];
-      if (m.kind != L.kind) continue;
+      if (m.kind != L.kind || !descriptorsCompatible(m.descriptor, L.descriptor, o.descriptor_gate)) continue;
       if (cached_cam == nullptr || *cached_cam != m.p_CinR_m) {  // Alg. 2 lines 2-4
         zbar = predictMeasurement(L.kind, L.p_LinW_m, x_hat, m.p_CinR_m, &Hx, &Hm);
         cached_cam = &m.p_CinR_m;
@@ -331,6 +350,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
     LandmarkMap::Edit e;
     e.ref = vis[j];
     e.value = L;
+    blendDescriptor(e.value.descriptor, m.descriptor, o.descriptor_update_rate);
     e.value.counter += hitIncrement(per.detection_probability);  // i_j + 1 (p_in >= 0.5)
     MeasJac Hx, Hm;
     const auto zt = predictMeasurement(L.kind, L.p_LinW_m, x_t, m.p_CinR_m, &Hx, &Hm);  // lines 5-6
@@ -478,7 +498,7 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
     cost_new[r] = m.neg_log_p_new;
     for (int c = 0; c < nc; ++c) {
       const Candidate& cand = *p.candidates[c];
-      if (cand.kind != m.kind) continue;
+      if (cand.kind != m.kind || !descriptorsCompatible(m.descriptor, cand.descriptor, o.descriptor_gate)) continue;
       cost(r, c) = -candidateLogLikelihood(cand, m.z, m.Q, x_t, m.p_CinR_m,
                                            std::max(o.candidates.min_range_m, o.perception.min_range_m),
                                            std::min(o.candidates.max_range_m, o.perception.max_range_m));
@@ -511,6 +531,7 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
     }
     const Meas& m = Z[l];
     ++info.num_to_candidates;
+    blendDescriptor(cand.descriptor, m.descriptor, o.descriptor_update_rate);
     cand.observations.push_back(makeObservation(cand.kind, x_t, m.p_CinR_m, m.z, m.Q));
     if (static_cast<int>(cand.observations.size()) > o.candidates.max_observations) {
       // Azimuth-only (vertical-line) rays carry no depth: their parallax is all there is to
@@ -541,6 +562,7 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
       Landmark lm;
       lm.id = next_landmark_id_++;
       lm.kind = cand.kind;
+      lm.descriptor = cand.descriptor;
       lm.p_LinW_m = ev.best_p_LinW_m;
       lm.cov_LinW_m2 = ev.cov_m2;
       lm.counter = cand.num_associated;
@@ -561,6 +583,7 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
     const Meas& m = Z[leftover[r]];
     auto cand = std::make_shared<Candidate>();
     cand->kind = m.kind;
+    cand->descriptor = m.descriptor;
     cand->observations.push_back(makeObservation(m.kind, x_t, m.p_CinR_m, m.z, m.Q));
     cand->num_associated = 1;
     cand->counter = 1;

@@ -71,6 +71,7 @@ CandidateObservation makeObservation(LandmarkKind kind, const Pose2& T_WtoR, con
 /// C_j of paper 000: its rays and counters, plus the current best estimate used for association.
 struct Candidate {
   LandmarkKind kind = LandmarkKind::kPoint3D;
+  ColourDescriptor descriptor;  ///< running mean of its measurements' descriptors (optional)
   std::vector<CandidateObservation> observations;  ///< oldest first
   int num_associated = 0;      ///< NZ_j: measurements associated along time (including dropped)
   int counter = 1;             ///< i_j: +1 per association, -I_not per missed step, deleted at <= 0

@@ -42,6 +42,12 @@ struct FastSlamOptions {
   int num_particles = 10;  ///< M (paper: 10)
   AssociationMethod association = AssociationMethod::kHungarian;
   ProposalKind proposal = ProposalKind::kFastSlam2;
+  /// Appearance gate (paper 002: lines are matched across frames by their neighbourhood colours):
+  /// when > 0, a measurement and a landmark or candidate that both carry a colour descriptor can be
+  /// associated only if their descriptors are closer than this (RGB units, Euclidean over the six
+  /// values). Descriptors are running means (weight descriptor_update_rate). 0 = off (default).
+  double descriptor_gate = 0.0;
+  double descriptor_update_rate = 0.2;
   /// false = localisation only: the map given to initialise() is fixed. Landmarks are associated
   /// and weigh the particles but are neither updated, counted, deleted nor created; no candidates.
   bool update_map = true;

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
+#include <cmath>
 #include <cstdint>
 
 namespace omnislam::slam {
@@ -17,6 +19,19 @@ enum class LandmarkKind : std::uint8_t {
 /// (Alg. 4); type II (initialised from far away, > D_min) are only updated.
 enum class LandmarkType : std::uint8_t { kTypeI = 1, kTypeII = 2 };
 
+/// Appearance of a feature or landmark: for a vertical line the mean colours (R, G, B, 0..255) on
+/// its counter-clockwise and clockwise sides (paper 002's neighbourhood colour). Optional.
+struct ColourDescriptor {
+  bool valid = false;
+  std::array<float, 6> rgb{};  ///< colour_a (R, G, B), colour_b (R, G, B)
+  /// Euclidean distance in RGB units over the six values (both must be valid).
+  double distanceTo(const ColourDescriptor& o) const {
+    double s = 0.0;
+    for (std::size_t i = 0; i < 6; ++i) s += (double(rgb[i]) - double(o.rgb[i])) * (double(rgb[i]) - double(o.rgb[i]));
+    return std::sqrt(s);
+  }
+};
+
 /// One detected feature. The bearing is expressed in axes parallel to the robot frame R with its
 /// origin at the camera's optical centre, whose position in R is p_CinR_m (docs/conventions.md).
 struct BearingMeasurement {
@@ -26,6 +41,7 @@ struct BearingMeasurement {
   Eigen::Matrix2d cov_rad2 = Eigen::Matrix2d::Identity() * 2.7e-5;  // (0.3 deg)^2
   Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();  ///< optical centre in the robot frame [m]
   LandmarkKind kind = LandmarkKind::kPoint3D;
+  ColourDescriptor descriptor;  ///< optional appearance (FastSlamOptions::descriptor_gate)
 };
 
 /// A map landmark of one particle (paper 000: B_j = mean, covariance, detection counter i_j, type).
@@ -37,6 +53,7 @@ struct Landmark {
   int counter = 1;  ///< i_j: +1 when detected, -1 when missed inside the perceptual range
   LandmarkType type = LandmarkType::kTypeI;
   LandmarkKind kind = LandmarkKind::kPoint3D;
+  ColourDescriptor descriptor;  ///< running mean of the associated measurements' descriptors
 };
 
 }  // namespace omnislam::slam

@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Paper 002 end to end on the simulated room: for each seed the simulator, capture (colour
+# catadioptric images), odometry and vertical-line features processes run live and are recorded
+# (config/launch/room.yaml); the recording is replayed through omnislam-slam with the paper's method
+# (FastSLAM 1.0 + per-measurement ML, config/slam/room.yaml) and with ours (FastSLAM 2.0 +
+# hierarchical Hungarian: the same file with two --set), and scored in 2D with omnislam-eval
+# --planar. Prints a Markdown table (docs/room-scenario.md).
+#
+#   scripts/reproduce-room.sh [--seeds "1 ... 10"] [--speedup 5] [--out DIR] [--keep-recordings] [--set KEY=VALUE ...]
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BIN="$ROOT/build/bin"
+SEEDS="1 2 3 4 5 6 7 8 9 10"
+SPEEDUP=5
+OUT=""
+KEEP=0
+SETS=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --seeds) SEEDS="$2"; shift 2 ;;
+    --speedup) SPEEDUP="$2"; shift 2 ;;
+    --out) OUT="$2"; shift 2 ;;
+    --keep-recordings) KEEP=1; shift ;;
+    --set) SETS+=(--set "$2"); shift 2 ;;
+    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    *) echo "reproduce-room: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+for t in omnislam-launch omnislam-slam omnislam-eval omnislam-sim omnislam-capture omnislam-odometry omnislam-features omnislam-record; do
+  [ -x "$BIN/$t" ] || { echo "reproduce-room: $BIN/$t missing: run scripts/build.sh first" >&2; exit 2; }
+done
+[ -n "$OUT" ] || OUT="$(mktemp -d /tmp/omnislam-room.XXXXXX)"
+mkdir -p "$OUT"
+export PATH="$BIN:$PATH"
+PORT=$((20000 + $$ % 20000))
+URL="udpm://239.255.76.67:${PORT}?ttl=0&recv_buf_size=4194304"
+CFG="$ROOT/config/slam/room.yaml"
+for s in $SEEDS; do
+  rec="$OUT/room-seed$s.lcm"
+  if [ ! -s "$rec" ]; then
+    echo "reproduce-room: seed $s: recording at ${SPEEDUP}x ..." >&2
+    "$BIN/omnislam-launch" "$ROOT/config/launch/room.yaml" --url "$URL" --set "seed=$s" --set "speedup=$SPEEDUP" \
+      --log-file "$rec" > "$OUT/launch-seed$s.txt" 2>&1 || { echo "reproduce-room: seed $s: launch failed, see $OUT/launch-seed$s.txt" >&2; exit 1; }
+  fi
+  for method in paper ours; do
+    extra=()
+    [ "$method" = ours ] && extra=(--set filter.proposal=fastslam2 --set filter.association=hungarian)
+    res="$OUT/slam-$method-seed$s.lcm"
+    "$BIN/omnislam-slam" --config "$CFG" --seed "$s" "${extra[@]}" ${SETS[@]+"${SETS[@]}"} --replay "$rec" --out "$res" \
+      --no-progress 2> "$OUT/slam-$method-seed$s.txt"
+    "$BIN/omnislam-eval" --planar --json --no-tum "$res" > "$OUT/eval-$method-seed$s.json"
+    rm -f "$res"
+  done
+  [ "$KEEP" = 1 ] || rm -f "$rec"
+done
+python3 "$ROOT/scripts/room_table.py" "$OUT" $SEEDS
+echo "reproduce-room: files in $OUT" >&2

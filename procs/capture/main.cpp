@@ -21,6 +21,7 @@
 
 #include "omnislam/config/world_config.h"
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/node.h"
@@ -182,7 +183,7 @@ int main(int argc, char** argv) {
   cli.add_option("--camera-name", camera_name, "camera name in the messages (default: the world's or 'camera')");
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", name, "process name in PROCESS_STATUS");
-  CLI11_PARSE(cli, argc, argv);
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);
 
   return app::runMain("omnislam-capture", [&]() -> int {
     if (source == "sim" && world_path.empty()) throw std::invalid_argument("--source sim needs --world FILE");

@@ -21,6 +21,7 @@
 #include "omnislam/core/angles.h"
 #include "omnislam/features_t.hpp"
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/node.h"
@@ -143,7 +144,7 @@ int main(int argc, char** argv) {
   cli.add_option("--annotate", annotate, "offline: write annotated images and features.csv to this directory");
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", name, "process name in PROCESS_STATUS");
-  CLI11_PARSE(cli, argc, argv);
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-features", [&]() -> int {
     if (!annotate.empty() && images.empty()) throw std::invalid_argument("--annotate needs --images DIR");
     const auto det = features::makeDetector(config::Node::loadFile(config_path));

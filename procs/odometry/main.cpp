@@ -13,6 +13,7 @@
 #include "csv_source.h"
 #include "omnislam/config/world_config.h"
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
@@ -120,7 +121,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1000.0));
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", name, "process name in PROCESS_STATUS");
-  CLI11_PARSE(cli, argc, argv);
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-odometry", [&]() -> int {
     if (source == "sim" && world_path.empty()) throw std::invalid_argument("--source sim needs --world FILE");
     if (source == "csv" && csv.empty()) throw std::invalid_argument("--source csv needs --csv FILE");

@@ -12,6 +12,7 @@
 
 #include "omnislam/config/world_config.h"
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
@@ -78,7 +79,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1e6));
   cli.add_option("--wait-for", wait_for, "comma-separated process names to wait for (PROCESS_STATUS) before starting");
   cli.add_option("--wait-timeout", wait_timeout_s, "seconds to wait for them")->check(CLI::Range(0.0, 600.0));
-  CLI11_PARSE(cli, argc, argv);
+  OMNISLAM_PARSE_FLAGS(cli, argc, argv);
 
   return app::runMain("omnislam-sim", [&]() -> int {
     const sim::World world = config::loadWorld(world_path);

@@ -10,6 +10,8 @@
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
+#include "omnislam/associations_t.hpp"
+#include "omnislam/feature_labels_t.hpp"
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
@@ -61,6 +63,8 @@ std::map<std::string, ChannelStats> logStats(const std::string& path) {
     else if (c == ch::kSlamPose || c == ch::kGroundTruthPose) ok = account<pose_t>(ev, s, tracks[c]);
     else if (c == ch::kSlamMap || c == ch::kGroundTruthMap) ok = account<map_t>(ev, s, tracks[c]);
     else if (c == ch::kSlamParticles) ok = account<particles_t>(ev, s, tracks[c]);
+    else if (c == ch::kSlamAssociations) ok = account<associations_t>(ev, s, tracks[c]);
+    else if (c == ch::kGroundTruthFeatureLabels) ok = account<feature_labels_t>(ev, s, tracks[c]);
     else if (c == ch::kProcessStatus) {
       // Several processes publish status, each with its own sequence: track per name.
       const auto m = lcmio::decodeAs<process_status_t>(ev);

@@ -43,6 +43,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_util.h"
 #include "omnislam/lcmio/channels.h"
 
 #ifndef OMNISLAM_SOURCE_DIR
@@ -55,6 +56,9 @@
 using namespace omnislam;
 
 namespace {
+
+using omnislam::bench::fmt;
+using omnislam::bench::loadAverage;
 
 volatile std::sig_atomic_t g_stop = 0;
 void onSignal(int) { g_stop = 1; }
@@ -118,20 +122,6 @@ struct RunResult {
   Stats total, features_stage, slam_stage, render_stage;
   std::vector<double> total_ms, features_ms, slam_ms, render_ms;
 };
-
-/// The first line of /proc/loadavg (other work on the machine shows in the figures).
-std::string loadAverage() {
-  std::ifstream f("/proc/loadavg");
-  std::string line;
-  std::getline(f, line);
-  return line.empty() ? "?" : line;
-}
-
-std::string fmt(double x, int prec) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(prec) << x;
-  return s.str();
-}
 
 /// Runs the launch file once with `particles` and listens; returns false if it could not start.
 bool runOnce(const std::string& launcher, const std::string& launch_file, const std::string& url, int particles,

@@ -30,6 +30,7 @@
 
 #include <unistd.h>
 
+#include "bench_util.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/validate.h"
@@ -45,6 +46,9 @@ using omnislam::slamproc::SlamDriver;
 using omnislam::slamproc::SlamProcessOptions;
 
 namespace {
+
+using omnislam::bench::fmt;
+using omnislam::bench::loadAverage;
 
 struct Event {
   bool features = false;  ///< OMNI_FEATURES, else ODOMETRY
@@ -115,20 +119,6 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-/// The first line of /proc/loadavg (other work on the machine shows in the wall times).
-std::string loadAverage() {
-  std::ifstream f("/proc/loadavg");
-  std::string line;
-  std::getline(f, line);
-  return line.empty() ? "?" : line;
-}
-
-std::string fmt(double x, int prec) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(prec) << x;
-  return s.str();
 }
 
 }  // namespace

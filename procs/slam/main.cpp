@@ -21,6 +21,7 @@
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/log_writer.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
 #include "omnislam/lcmio/validate.h"
@@ -155,33 +156,6 @@ struct ReplayReport {
   }
 };
 
-class LogWriter {
- public:
-  explicit LogWriter(const std::string& path) : log_(path, "w") {
-    if (!log_.good()) throw std::runtime_error("--out: cannot write LCM log '" + path + "'");
-  }
-  void write(int64_t timestamp, const std::string& channel, const void* data, int32_t size) {
-    lcm::LogEvent ev;
-    ev.eventnum = n_++;
-    ev.timestamp = timestamp;
-    ev.channel = channel;
-    ev.datalen = size;
-    ev.data = const_cast<void*>(data);
-    if (log_.writeEvent(&ev) != 0) throw std::runtime_error("writing the output log failed");
-  }
-  template <class Msg>
-  void write(int64_t timestamp, const std::string& channel, const Msg& m) {
-    std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
-    m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-    write(timestamp, channel, buf.data(), static_cast<int32_t>(buf.size()));
-  }
-  int64_t events() const { return n_; }
-
- private:
-  lcm::LogFile log_;
-  int64_t n_ = 0;
-};
-
 template <class Msg>
 std::optional<Msg> decodeChecked(const lcm::LogEvent& ev, ReplayReport& rep) {
   Msg m;
@@ -204,7 +178,7 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
               const std::string& out_path, bool show_progress) {
   lcm::LogFile in(in_path, "r");
   if (!in.good()) throw std::runtime_error("--replay: cannot read LCM log '" + in_path + "'");
-  LogWriter out(out_path);
+  lcmio::LogWriter out(out_path);
   SlamDriver driver(opt, std::move(prior));
   Progress progress(in_path, show_progress);
   lcmio::installStopHandlers();  // SIGINT / SIGTERM: stop reading, write what was computed

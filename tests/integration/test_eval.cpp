@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
-#include <lcm/lcm-cpp.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
@@ -16,24 +15,19 @@
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "eval_json.h"
+#include "omnislam/lcmio/log_writer.h"
 #include "proc_util.h"
 
 using namespace omnislam;
 namespace t = omnislam::testing;
+using omnislam::testing::jsonNumber;
 
 namespace {
 
 template <class Msg>
-void write(lcm::LogFile& log, const std::string& channel, const Msg& m, int64_t utime) {
-  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
-  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  lcm::LogEvent ev;
-  ev.eventnum = 0;
-  ev.timestamp = utime;
-  ev.channel = channel;
-  ev.datalen = static_cast<int32_t>(buf.size());
-  ev.data = buf.data();
-  log.writeEvent(&ev);
+void write(lcmio::LogWriter& log, const std::string& channel, const Msg& m, int64_t utime) {
+  log.write(utime, channel, m);
 }
 
 pose_t pose(int64_t utime, double x, double y, double th) {
@@ -54,18 +48,11 @@ map_t mapOf(const std::vector<Eigen::Vector3d>& pts) {
   return m;
 }
 
-double jsonNumber(const std::string& json, const std::string& key) {
-  std::smatch m;
-  const std::regex re("\"" + key + "\": ([-0-9.eE+]+)");
-  if (!std::regex_search(json, m, re)) return NAN;
-  return std::stod(m[1]);
-}
-
 // Truth: a circle of radius 5 m; SLAM: the same rotated by 0.2 rad about the origin and shifted.
 void makeLogs(const std::string& slam_path, const std::string& truth_path, bool one_log) {
-  lcm::LogFile slam(slam_path, "w");
-  lcm::LogFile truth_file(truth_path, "w");
-  lcm::LogFile& truth = one_log ? slam : truth_file;
+  lcmio::LogWriter slam(slam_path);
+  lcmio::LogWriter truth_file(truth_path);
+  lcmio::LogWriter& truth = one_log ? slam : truth_file;
   const std::vector<Eigen::Vector3d> lights{{4.5, -5.5, 6.5}, {13.5, -5.5, 6.5}, {4.5, 3.5, 6.5}};
   for (int k = 0; k <= 500; ++k) {
     const int64_t u = 1'000'000 + k * 20'000;
@@ -148,7 +135,7 @@ TEST(Eval, TruthFromASecondLog) {
 TEST(Eval, ALogWithoutSlamOutputIsAClearError) {
   t::TempDir dir;
   {
-    lcm::LogFile log(dir.file("empty.lcm"), "w");
+    lcmio::LogWriter log(dir.file("empty.lcm"));
     write(log, channels::kGroundTruthPose, pose(1, 0, 0, 0), 1);
   }
   const auto r = t::run({t::binPath("omnislam-eval"), dir.file("empty.lcm"), "--no-tum"}, 30);

@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <regex>
 
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
@@ -15,18 +14,14 @@
 #include "omnislam/core/eval/metrics.h"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "eval_json.h"
 #include "proc_util.h"
 
 using namespace omnislam;
 namespace t = omnislam::testing;
+using omnislam::testing::jsonNumber;
 
 namespace {
-
-double jsonNumber(const std::string& json, const std::string& key) {
-  std::smatch m;
-  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([-0-9.eE+]+)"))) return NAN;
-  return std::stod(m[1]);
-}
 
 TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
   t::LaunchedRun run("config/launch/sports_hall_slam.yaml", 13, {"speedup=25", "seed=2", "slam_seed=2"}, 180.0);

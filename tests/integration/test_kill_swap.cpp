@@ -27,18 +27,14 @@
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
+#include "eval_json.h"
 #include "proc_util.h"
 
 using namespace omnislam;
 namespace t = omnislam::testing;
+using omnislam::testing::jsonNumber;
 
 namespace {
-
-double jsonNumber(const std::string& json, const std::string& key) {
-  std::smatch m;
-  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([-0-9.eE+]+)"))) return NAN;
-  return std::stod(m[1]);
-}
 
 std::string readFile(const std::string& p) {
   std::ifstream f(p);

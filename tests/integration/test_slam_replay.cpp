@@ -32,6 +32,7 @@
 #include "omnislam/process_status_t.hpp"
 #include "omnislam/sim/trajectory.h"
 #include "bus_util.h"
+#include "omnislam/lcmio/log_writer.h"
 #include "proc_util.h"
 
 using namespace omnislam;
@@ -152,18 +153,8 @@ const Synthetic& synthetic() {
 }
 
 void writeLog(const std::string& path, const std::vector<Event>& events) {
-  lcm::LogFile log(path, "w");
-  ASSERT_TRUE(log.good());
-  int64_t n = 0;
-  for (const auto& e : events) {
-    lcm::LogEvent le;
-    le.eventnum = n++;
-    le.timestamp = e.log_utime;
-    le.channel = e.channel;
-    le.datalen = static_cast<int32_t>(e.data.size());
-    le.data = const_cast<uint8_t*>(e.data.data());
-    ASSERT_EQ(log.writeEvent(&le), 0);
-  }
+  lcmio::LogWriter log(path);
+  for (const auto& e : events) log.write(e.log_utime, e.channel, e.data.data(), static_cast<int32_t>(e.data.size()));
 }
 
 std::string readBytes(const std::string& path) {

@@ -28,6 +28,7 @@
 #include "omnislam/process_status_t.hpp"
 #include "omnislam/vision/slam_view.h"
 #include "bus_util.h"
+#include "omnislam/lcmio/log_writer.h"
 #include "proc_util.h"
 
 using namespace omnislam;
@@ -163,16 +164,9 @@ TEST(Viewer, HeadlessFromALogWritesEveryNthStepAndTheFinalView) {
   t::TempDir dir;
   const std::string log = dir.file("run.lcm"), out = dir.file("png");
   {
-    lcm::LogFile lf(log, "w");
-    int64_t n = 0;
+    lcmio::LogWriter lf(log);
     auto write = [&](const std::string& ch, const std::vector<uint8_t>& data) {
-      lcm::LogEvent ev;
-      ev.eventnum = n++;
-      ev.timestamp = kT0 + n * 1000;
-      ev.channel = ch;
-      ev.datalen = static_cast<int32_t>(data.size());
-      ev.data = const_cast<uint8_t*>(data.data());
-      ASSERT_EQ(lf.writeEvent(&ev), 0);
+      lf.write(kT0 + (lf.events() + 1) * 1000, ch, data.data(), static_cast<int32_t>(data.size()));
     };
     for (int k = 0; k < 6; ++k) {
       for (const auto& [ch, data] : makeStep(k).events) write(ch, data);

@@ -9,18 +9,13 @@
 #include <regex>
 
 #include "datasets.h"
+#include "eval_json.h"
 #include "proc_util.h"
 
 namespace t = omnislam::testing;
+using omnislam::testing::jsonNumber;
 
 namespace {
-
-double jsonNumber(const std::string& json, const std::string& key) {
-  std::smatch m;
-  const std::regex re("\"" + key + "\": ([-0-9.eE+]+)");
-  if (!std::regex_search(json, m, re)) return NAN;
-  return std::stod(m[1]);
-}
 
 TEST(MrclamEndToEnd, ShortStretchOfRobot3) {
   const std::string dir = t::datasetPath("mrclam/MRCLAM_Dataset6");

@@ -4,7 +4,6 @@
 // known answers; plus the pure functions behind them.
 #include <gtest/gtest.h>
 
-#include <lcm/lcm-cpp.hpp>
 
 #include <cmath>
 #include <regex>
@@ -17,24 +16,19 @@
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "eval_json.h"
+#include "omnislam/lcmio/log_writer.h"
 #include "proc_util.h"
 
 using namespace omnislam;
 namespace t = omnislam::testing;
+using omnislam::testing::jsonNumber;
 
 namespace {
 
 template <class Msg>
-void write(lcm::LogFile& log, const std::string& channel, const Msg& m, int64_t utime) {
-  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
-  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  lcm::LogEvent ev;
-  ev.eventnum = 0;
-  ev.timestamp = utime;
-  ev.channel = channel;
-  ev.datalen = static_cast<int32_t>(buf.size());
-  ev.data = buf.data();
-  log.writeEvent(&ev);
+void write(lcmio::LogWriter& log, const std::string& channel, const Msg& m, int64_t utime) {
+  log.write(utime, channel, m);
 }
 
 pose_t pose(int64_t utime, double x, double y, double th) {
@@ -57,13 +51,6 @@ map_t mapOf(const std::vector<std::pair<int64_t, Eigen::Vector2d>>& pts) {
   return m;
 }
 
-double jsonNumber(const std::string& json, const std::string& key) {
-  std::smatch m;
-  const std::regex re("\"" + key + "\": ([-0-9.eE+]+)");
-  if (!std::regex_search(json, m, re)) return NAN;
-  return std::stod(m[1]);
-}
-
 int64_t utimeOf(int k) { return 1'000'000 + static_cast<int64_t>(k) * 100'000; }
 
 // Truth: x = 0.1 k along +x. Odometry: 10 % long, in a frame rotated by +90 deg and shifted, so
@@ -74,7 +61,7 @@ int64_t utimeOf(int k) { return 1'000'000 + static_cast<int64_t>(k) * 100'000; }
 // Plus a frame with labels but no SLAM answer (ignored) and one whose association has the wrong
 // number of entries (left out, counted).
 void makeLog(const std::string& path) {
-  lcm::LogFile log(path, "w");
+  lcmio::LogWriter log(path);
   write(log, channels::kGroundTruthMap,
         mapOf({{6, {1.0, 1.1}}, {7, {2.0, -1.0}}, {8, {3.0, 1.0}}}), utimeOf(0));
   for (int k = 0; k <= 110; ++k) {
@@ -190,7 +177,7 @@ TEST(EvalAssociation, WithoutLabelsNoAssociationKeys) {
   t::TempDir d;
   const std::string log = d.file("plain.lcm");
   {
-    lcm::LogFile f(log, "w");
+    lcmio::LogWriter f(log);
     write(f, channels::kGroundTruthMap, mapOf({{6, {1.0, 1.0}}}), utimeOf(0));
     for (int k = 0; k <= 10; ++k) {
       write(f, channels::kGroundTruthPose, pose(utimeOf(k), 0.1 * k, 0.0, 0.0), utimeOf(k));

@@ -3,7 +3,6 @@
 // GROUND_TRUTH_FEATURE_LABELS), and optionally the SLAM config with the known start pose.
 // See docs/mrclam.md. Malformed input: exit 1 with "FILE:LINE: reason"; a bad flag: exit 2.
 #include <CLI/CLI.hpp>
-#include <lcm/lcm-cpp.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -14,24 +13,16 @@
 #include "omnislam/core/angles.h"
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
+#include "omnislam/lcmio/log_writer.h"
 
 using namespace omnislam;
 
 namespace {
 
 void writeLog(const std::string& path, const mrclam::ImportedLog& log) {
-  lcm::LogFile out(path, "w");
-  if (!out.good()) throw std::runtime_error("--out: cannot write '" + path + "'");
-  int64_t n = 0;
-  for (const auto& e : log.events) {
-    lcm::LogEvent ev;
-    ev.eventnum = n++;
-    ev.timestamp = e.utime;
-    ev.channel = e.channel;
-    ev.datalen = static_cast<int32_t>(e.data.size());
-    ev.data = const_cast<uint8_t*>(e.data.data());
-    if (out.writeEvent(&ev) != 0) throw std::runtime_error("writing '" + path + "' failed");
-  }
+  lcmio::LogWriter out(path);
+  for (const auto& e : log.events)
+    out.write(e.utime, e.channel, e.data.data(), static_cast<int32_t>(e.data.size()));
 }
 
 /// The template config with start_pose set to the truth at the first processed frame.

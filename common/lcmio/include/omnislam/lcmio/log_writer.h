@@ -1,0 +1,41 @@
+// Writing LCM log files (the lcm-logger format) event by event: raw bytes or an encoded message,
+// with the event number counted and every write checked. The counterpart of log_reader.h.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace lcm {
+class LogFile;
+}
+
+namespace omnislam::lcmio {
+
+class LogWriter {
+ public:
+  /// Creates (truncates) the file; throws std::runtime_error naming it when it cannot be written.
+  explicit LogWriter(const std::string& path);
+  ~LogWriter();  // closes the file
+  LogWriter(const LogWriter&) = delete;
+  LogWriter& operator=(const LogWriter&) = delete;
+
+  /// One event with the given log timestamp (microseconds); throws std::runtime_error on failure.
+  void write(int64_t timestamp, const std::string& channel, const void* data, int32_t size);
+  template <class Msg>
+  void write(int64_t timestamp, const std::string& channel, const Msg& m) {
+    std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+    m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    write(timestamp, channel, buf.data(), static_cast<int32_t>(buf.size()));
+  }
+  int64_t events() const { return n_; }  ///< events written so far
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::unique_ptr<lcm::LogFile> log_;
+  int64_t n_ = 0;
+};
+
+}  // namespace omnislam::lcmio

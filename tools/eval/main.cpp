@@ -111,6 +111,7 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
 struct DeadReckoning {
   bool available = false;
   eval::TrajectoryErrors raw, aligned;
+  std::vector<eval::TimedPose> poses;  ///< odometry in the truth frame at the SLAM poses' utimes (raw)
 };
 
 DeadReckoning deadReckoning(const LogContent& c) {
@@ -127,6 +128,7 @@ DeadReckoning deadReckoning(const LogContent& c) {
     if (auto o = eval::poseAt(c.odometry, p.utime, kMaxOdometryGapUs)) dr.push_back({p.utime, T0.apply(*o)});
   auto pairs = eval::pairByTime(dr, c.truth);
   if (pairs.empty()) return d;
+  d.poses = dr;
   d.available = true;
   d.raw = eval::trajectoryErrors(pairs);
   std::vector<Eigen::Vector2d> from, to;
@@ -163,7 +165,9 @@ int main(int argc, char** argv) {
   cli.add_flag("--align", align, "fit the best rigid 2D transform of the trajectory onto the truth first");
   cli.add_option("--gate", gate_m, "landmark matching gate, metres")->check(CLI::Range(0.01, 100.0));
   cli.add_flag("--planar", planar, "landmark distances in x, y only (2D landmarks)");
-  cli.add_option("--tum-out", tum_prefix, "prefix of the TUM trajectory files (default: the log's path)");
+  cli.add_option("--tum-out", tum_prefix,
+                 "prefix of the TUM trajectory files PREFIX.slam.tum, .truth.tum and .odometry.tum (dead reckoning "
+                 "in the truth frame; default: the log's path)");
   cli.add_flag("--no-tum", no_tum, "do not write TUM files");
   cli.add_option("--plot", plot_prefix, "write PREFIX.map.png (map and trajectories) and PREFIX.errors.png");
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
@@ -216,6 +220,7 @@ int main(int argc, char** argv) {
       const std::string prefix = tum_prefix.empty() ? log : tum_prefix;
       writeTum(prefix + ".slam.tum", c.slam);
       writeTum(prefix + ".truth.tum", c.truth);
+      if (dr.available) writeTum(prefix + ".odometry.tum", dr.poses);
     }
     if (!plot_prefix.empty()) {
       vision::MapPlot mp;

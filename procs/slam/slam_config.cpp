@@ -74,7 +74,7 @@ void parsePerception(const Node& n, slam::PerceptionOptions& p) {
 void parseCandidates(const Node& n, slam::CandidateOptions& c) {
   n.rejectUnknownKeys({"nz_min", "ncross_valid", "min_parallax_deg", "require_above_camera",
                        "min_height_above_camera_m", "d_min_m", "initial_cov_diag_m2", "initial_cov_from_triangulation",
-                       "refine_initial_point", "refine_iterations", "max_observations"});
+                       "refine_initial_point", "refine_iterations", "max_observations", "ray_motion_noise"});
   c.nz_min = static_cast<int>(n.getInt("nz_min", 2, 1000, c.nz_min));
   c.ncross_valid = static_cast<int>(n.getInt("ncross_valid", 1, 100000, c.ncross_valid));
   c.min_parallax_rad = deg2rad(n.getDouble("min_parallax_deg", 0.0, 90.0, rad2deg(c.min_parallax_rad)));
@@ -87,6 +87,7 @@ void parseCandidates(const Node& n, slam::CandidateOptions& c) {
   }
   c.initial_cov_from_triangulation = n.getBool("initial_cov_from_triangulation", c.initial_cov_from_triangulation);
   c.refine_initial_point = n.getBool("refine_initial_point", c.refine_initial_point);
+  c.ray_motion_noise = n.getBool("ray_motion_noise", c.ray_motion_noise);
   c.refine_iterations = static_cast<int>(n.getInt("refine_iterations", 0, 100, c.refine_iterations));
   c.max_observations = static_cast<int>(n.getInt("max_observations", 2, 1000, c.max_observations));
 }

@@ -3,6 +3,7 @@
 // initialisation, odometry-only steps, measurement rejection, vertical-line landmarks.
 #include <gtest/gtest.h>
 
+#include <iostream>
 #include <random>
 #include <set>
 #include <stdexcept>
@@ -448,6 +449,58 @@ FastSlam runPriorMapScenario(const FastSlamOptions& o, Pose2* truth_out, std::ve
   *truth_out = truth;
   *prior_out = prior;
   return f;
+}
+
+TEST(slam_FastSlam, RayMotionNoiseWidensTheTriangulationByTheHeadingVariance) {
+  // One vertical line beside a straight path, exact bearings with a small stated sigma and a motion
+  // model whose heading drift dominates: with candidates.ray_motion_noise the rays after the first
+  // carry the heading variance accumulated since the first ray, so the initial landmark covariance
+  // is far wider than the bearing noise alone gives (and wider by the ratio of the variances).
+  const Eigen::Vector3d line(2.0, -1.5, 0.0);
+  const Eigen::Vector3d cam(0.0, 0.0, 0.5);
+  const double sigma = 0.05 * kPi / 180.0;
+  auto firstLandmark = [&](bool ray_noise) {
+    FastSlamOptions o;
+    o.num_particles = 1;
+    o.proposal = ProposalKind::kFastSlam1;
+    o.association = AssociationMethod::kMaximumLikelihood;
+    o.inflate_azimuth_near_zenith = false;
+    o.motion.model = MotionNoiseModel::kTranslateThenRotate;
+    o.motion.err_tran_per_m = o.motion.err_rot_per_rad = o.motion.err_drift_rad_per_m = 0.0;
+    o.motion.err_tran_per_sqrt_m = 1e-4;
+    o.motion.err_drift_rad_per_sqrt_m = 0.02;  // 0.36 deg per 10 cm: 7x the bearing sigma
+    o.motion.min_sigma_xy_m = o.motion.min_sigma_theta_rad = 1e-6;
+    o.candidates.nz_min = 3;
+    o.candidates.ncross_valid = 1;
+    o.candidates.require_above_camera = false;
+    o.candidates.initial_cov_diag_m2 = Eigen::Vector3d::Constant(1e-10);
+    o.candidates.ray_motion_noise = ray_noise;
+    FastSlam f(o, 5);
+    Pose2 truth{0.0, 0.0, 0.0};
+    f.initialise(truth);
+    for (int k = 0; k < 30; ++k) {
+      const Pose2 next = truth.compose(Pose2{0.1, 0.0, 0.0});
+      const auto zt = predictMeasurement(LandmarkKind::kVerticalLine, line, next, cam);
+      BearingMeasurement m;
+      m.kind = LandmarkKind::kVerticalLine;
+      m.azimuth_rad = (*zt)(0);
+      m.cov_rad2 = Eigen::Matrix2d::Identity() * sigma * sigma;
+      m.p_CinR_m = cam;
+      f.step(truth, next, {m});
+      truth = next;
+      const auto map = f.bestMap();
+      if (!map.empty()) return map.front();
+    }
+    ADD_FAILURE() << "the line was never initialised";
+    return Landmark{};
+  };
+  const Landmark off = firstLandmark(false), on = firstLandmark(true);
+  const double tr_off = off.cov_LinW_m2.topLeftCorner<2, 2>().trace();
+  const double tr_on = on.cov_LinW_m2.topLeftCorner<2, 2>().trace();
+  // Heading variance over >= 0.2 m: 0.02^2 * 0.2 = 8e-5 rad^2 against (0.05 deg)^2 = 7.6e-7 rad^2.
+  EXPECT_GT(tr_on, 20.0 * tr_off) << "on " << tr_on << " off " << tr_off;
+  std::cout << "[ray motion noise] initial cov trace (x-y) " << tr_off << " m^2 without, " << tr_on << " m^2 with\n";
+  EXPECT_LT((on.p_LinW_m.head<2>() - line.head<2>()).norm(), 0.5);
 }
 
 }  // namespace

@@ -532,7 +532,14 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
     const Meas& m = Z[l];
     ++info.num_to_candidates;
     blendDescriptor(cand.descriptor, m.descriptor, o.descriptor_update_rate);
-    cand.observations.push_back(makeObservation(cand.kind, x_t, m.p_CinR_m, m.z, m.Q));
+    MeasMat Q_ray = m.Q;
+    if (o.candidates.ray_motion_noise && !cand.observations.empty()) {
+      // The ray's azimuth in W also carries the heading error the motion model allows between the
+      // candidate's first ray and this one (the particle's sampled path wanders by that much).
+      const Pose2& first = cand.observations.front().T_WtoR;
+      Q_ray(0, 0) += motionCovariance(first, first.between(x_t), o.motion)(2, 2);
+    }
+    cand.observations.push_back(makeObservation(cand.kind, x_t, m.p_CinR_m, m.z, Q_ray));
     if (static_cast<int>(cand.observations.size()) > o.candidates.max_observations) {
       // Azimuth-only (vertical-line) rays carry no depth: their parallax is all there is to
       // triangulate, and a slow or still robot fills the window with nearly parallel rays. Keep the

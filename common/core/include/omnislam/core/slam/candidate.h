@@ -50,6 +50,12 @@ struct CandidateOptions {
   /// FastSlam uses the tighter of these and PerceptionOptions' min/max_range_m. Default: no limit.
   double min_range_m = 0.0;
   double max_range_m = std::numeric_limits<double>::infinity();
+  /// Deviation (the paper: false). A candidate's ray after the first gets, on top of the bearing
+  /// variance, the heading variance of the motion model over the path since the first ray: the
+  /// particle's path, sampled step by step, wanders that much between the rays, and a triangulation
+  /// that ignores it is overconfident (paper 002's triangulation error model includes the odometry
+  /// error). See docs/slam-core.md, "Ray noise from the motion model".
+  bool ray_motion_noise = false;
 
   /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
   std::string validate() const;

@@ -3,12 +3,16 @@
 // (three views), the candidate likelihood restricted to the ray segment within the range, the first
 // ray kept when the window is full, misses only inside the perceptual range, and the detection
 // counter with a low detection probability. Defaults (all-round camera, no range) are unchanged.
+// Also paper 002's 2D Gaussian triangulation error model against its closed form and sampling.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
+#include <vector>
 
 #include "omnislam/core/slam/candidate.h"
 #include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/triangulation.h"
 
 namespace {
 
@@ -202,6 +206,58 @@ TEST(LineCandidates, LowDetectionProbabilityKeepsTrueLandmarks) {
   bool kept = false;
   for (const auto& l : f.bestMap()) kept = kept || l.id == 1;
   EXPECT_TRUE(kept);
+}
+
+// Paper 002's 2D Gaussian error model of a triangulated line, against its closed form and against
+// sampling. Two views at (-b/2, 0) and (b/2, 0) of a line at (0, d), azimuth std sigma each:
+// d alpha_i / d(x, y) = (-(y - y_i), x - x_i) / r^2, so Sigma = sigma^2 (H^T H)^-1
+//   = diag(sigma^2 r^4 / (2 d^2), 2 sigma^2 r^4 / b^2),  r^2 = b^2 / 4 + d^2.
+TEST(LineCandidates, TriangulationCovarianceClosedFormAndSampled) {
+  const double b = 0.6, d = 2.0, sigma = 0.002;  // 0.11 deg; parallax 17 deg
+  const Eigen::Vector3d L(0.0, d, 0.0);
+  const Pose2 T1{-b / 2, 0.0, 0.3}, T2{b / 2, 0.0, -0.2};  // headings do not matter
+  const MeasMat Q = MeasMat::Constant(1, 1, sigma * sigma);
+  CandidateOptions o;
+  o.nz_min = 2;
+  o.ncross_valid = 1;
+  o.require_above_camera = false;
+  o.initial_cov_diag_m2 = Eigen::Vector3d::Constant(1e-12);  // the triangulation term alone
+  Candidate c = lineCandidate();
+  c.observations = {makeObservation(LandmarkKind::kVerticalLine, T1, Eigen::Vector3d::Zero(), azimuthTo(L, T1), Q),
+                    makeObservation(LandmarkKind::kVerticalLine, T2, Eigen::Vector3d::Zero(), azimuthTo(L, T2), Q)};
+  c.num_associated = 2;
+  const auto ev = evaluateCandidate(c, o, 64.0);
+  ASSERT_TRUE(ev.has_best);
+  const double r2 = b * b / 4 + d * d;
+  const double var_x = sigma * sigma * r2 * r2 / (2 * d * d), var_y = 2 * sigma * sigma * r2 * r2 / (b * b);
+  EXPECT_NEAR(ev.cov_m2(0, 0), var_x, 1e-6 * var_x);
+  EXPECT_NEAR(ev.cov_m2(1, 1), var_y, 1e-6 * var_y);
+  EXPECT_NEAR(ev.cov_m2(0, 1), 0.0, 1e-6 * var_x);
+
+  // Sampled: the cross-points of noisy rays spread as the model says (within 5 %).
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> n(0.0, sigma);
+  const int N = 20000;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i < N; ++i) {
+    const auto o1 = makeObservation(LandmarkKind::kVerticalLine, T1, Eigen::Vector3d::Zero(),
+                                    MeasVec::Constant(1, azimuthTo(L, T1)(0) + n(rng)), Q);
+    const auto o2 = makeObservation(LandmarkKind::kVerticalLine, T2, Eigen::Vector3d::Zero(),
+                                    MeasVec::Constant(1, azimuthTo(L, T2)(0) + n(rng)), Q);
+    const auto x = crossPointOfRays(o1.p_CinW_m, o1.dir_W, o2.p_CinW_m, o2.dir_W, 1e-9);
+    ASSERT_TRUE(x.has_value());
+    pts.push_back(x->p_XinW_m.head<2>());
+    mean += pts.back();
+  }
+  mean /= N;
+  Eigen::Matrix2d S = Eigen::Matrix2d::Zero();
+  for (const auto& p : pts) S += (p - mean) * (p - mean).transpose();
+  S /= N - 1;
+  EXPECT_NEAR(S(0, 0), var_x, 0.05 * var_x);
+  EXPECT_NEAR(S(1, 1), var_y, 0.05 * var_y);
+  EXPECT_NEAR(S(0, 1) / std::sqrt(var_x * var_y), 0.0, 0.03);
+  EXPECT_NEAR((mean - L.head<2>()).norm(), 0.0, 3.0 * std::sqrt(var_y / N) + 1e-4);  // unbiased to first order
 }
 
 }  // namespace

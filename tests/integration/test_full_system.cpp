@@ -16,6 +16,7 @@
 #include "omnislam/pose_t.hpp"
 #include "eval_json.h"
 #include "proc_util.h"
+#include "slam_log.h"
 
 using namespace omnislam;
 namespace t = omnislam::testing;
@@ -27,11 +28,8 @@ TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
   t::LaunchedRun run("config/launch/sports_hall_slam.yaml", 13, {"speedup=25", "seed=2", "slam_seed=2"}, 180.0);
   ASSERT_EQ(run.result.exit_code, 0) << run.result.output;
   EXPECT_EQ(run.result.output.find("died"), std::string::npos) << run.result.output;
-  const auto frames = lcmio::readChannel<features_t>(run.log, channels::kOmniFeatures);
-  const auto poses = lcmio::readChannel<pose_t>(run.log, channels::kSlamPose);
-  ASSERT_EQ(frames.size(), 321u);
-  ASSERT_EQ(poses.size(), frames.size()) << "every feature frame answered";
-  for (size_t i = 0; i < poses.size(); ++i) EXPECT_EQ(poses[i].input_seq, frames[i].seq);
+  const size_t num_frames = t::expectEveryFrameAnswered(run.log);
+  ASSERT_EQ(num_frames, 321u);
   const auto ev = t::run({t::binPath("omnislam-eval"), run.log, "--json", "--no-tum"}, 60);
   ASSERT_EQ(ev.exit_code, 0) << ev.output;
   std::cout << ev.output;
@@ -71,7 +69,7 @@ TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
     return v;
   };
   const auto o1 = outputs(out1), o2 = outputs(out2);
-  EXPECT_EQ(o1.size(), 4u * frames.size());  // pose, map, particles, associations per frame
+  EXPECT_EQ(o1.size(), 4u * num_frames);  // pose, map, particles, associations per frame
   EXPECT_TRUE(o1 == o2) << "two replays with the same seed must write the same bytes";
   const auto ev2 = t::run({t::binPath("omnislam-eval"), out1, "--json", "--no-tum"}, 60);
   ASSERT_EQ(ev2.exit_code, 0) << ev2.output;

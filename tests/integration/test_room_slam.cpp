@@ -24,7 +24,8 @@ void expectWithinTheTile(const std::string& eval_json) {
 }
 
 TEST(RoomSlam, LiveAndReplayWithinOneFloorTile) {
-  // Seed 6 of docs/room-scenario.md (seeds 1-10 all pass there; this one is not the best).
+  // Seed 6 of docs/room-scenario.md (seeds 1-10 all pass there; seed 6 is the third best of the ten,
+  // path 0.086 m: the test guards the pipeline, the tables measure the method).
   t::LaunchedRun run("config/launch/room_slam.yaml", 17, {"speedup=4", "seed=6", "slam_seed=6"}, 240.0);
   ASSERT_EQ(run.result.exit_code, 0) << run.result.output;
   EXPECT_EQ(run.result.output.find("died"), std::string::npos) << run.result.output;

@@ -17,7 +17,7 @@ echo "== what the run produced =="
 echo
 echo "== SLAM against the truth =="
 "$build/bin/omnislam-eval" "$log" --plot "${log%.lcm}"
-echo "Plots: ${log%.lcm}.map.png ${log%.lcm}.errors.png; trajectories for evo: $log.slam.tum $log.truth.tum"
+echo "Plots: ${log%.lcm}.map.png ${log%.lcm}.errors.png; trajectories for evo: $log.slam.tum $log.truth.tum (dead reckoning: $log.odometry.tum)"
 echo
 echo "Replay it:  lcm-logplayer --lcm-url='udpm://239.255.76.67:7667?ttl=0' $log"
 echo "Watch it:   bash scripts/lcm-spy.sh   (in another terminal, while replaying)"

@@ -128,7 +128,7 @@ DeadReckoning deadReckoning(const LogContent& c) {
     if (auto o = eval::poseAt(c.odometry, p.utime, kMaxOdometryGapUs)) dr.push_back({p.utime, T0.apply(*o)});
   auto pairs = eval::pairByTime(dr, c.truth);
   if (pairs.empty()) return d;
-  d.poses = dr;
+  d.poses = std::move(dr);
   d.available = true;
   d.raw = eval::trajectoryErrors(pairs);
   std::vector<Eigen::Vector2d> from, to;

@@ -18,23 +18,13 @@
 #include "eval_json.h"
 #include "omnislam/lcmio/log_writer.h"
 #include "proc_util.h"
+#include "slam_log.h"
 
 using namespace omnislam;
 namespace t = omnislam::testing;
 using omnislam::testing::jsonNumber;
 
 namespace {
-
-template <class Msg>
-void write(lcmio::LogWriter& log, const std::string& channel, const Msg& m, int64_t utime) {
-  log.write(utime, channel, m);
-}
-
-pose_t pose(int64_t utime, double x, double y, double th) {
-  pose_t p{};
-  p.utime = utime, p.x_m = x, p.y_m = y, p.theta_rad = th, p.input_seq = -1;
-  return p;
-}
 
 map_t mapOf(const std::vector<Eigen::Vector3d>& pts) {
   map_t m{};
@@ -57,27 +47,25 @@ void makeLogs(const std::string& slam_path, const std::string& truth_path, bool 
   for (int k = 0; k <= 500; ++k) {
     const int64_t u = 1'000'000 + k * 20'000;
     const double a = 0.01 * k;
-    write(truth, channels::kGroundTruthPose, pose(u, 5 * std::cos(a), 5 * std::sin(a), a + M_PI / 2), u);
+    truth.write(u, channels::kGroundTruthPose, t::makePose(u, 5 * std::cos(a), 5 * std::sin(a), a + M_PI / 2));
     if (k % 50 == 0) {
       const double c = std::cos(0.2), s = std::sin(0.2);
       const double x = 5 * std::cos(a), y = 5 * std::sin(a);
-      write(slam, channels::kSlamPose, pose(u, c * x - s * y + 0.3, s * x + c * y - 0.4, a + M_PI / 2 + 0.2), u);
+      slam.write(u, channels::kSlamPose, t::makePose(u, c * x - s * y + 0.3, s * x + c * y - 0.4, a + M_PI / 2 + 0.2));
       features_t f{};
       f.utime = u;
-      write(slam, channels::kOmniFeatures, f, u);
+      slam.write(u, channels::kOmniFeatures, f);
     }
   }
-  write(truth, channels::kGroundTruthMap, mapOf(lights), 1);
+  truth.write(1, channels::kGroundTruthMap, mapOf(lights));
   // Estimated map (in the SLAM frame, unaligned): light 0 exact, light 1 off by 0.5 m, a duplicate
   // of light 0 at 0.3 m, a ghost far away, light 2 missing.
   auto toSlam = [](const Eigen::Vector3d& p) {
     const double c = std::cos(0.2), s = std::sin(0.2);
     return Eigen::Vector3d(c * p.x() - s * p.y() + 0.3, s * p.x() + c * p.y() - 0.4, p.z());
   };
-  write(slam, channels::kSlamMap,
-        mapOf({toSlam(lights[0]), toSlam(lights[1] + Eigen::Vector3d(0.5, 0, 0)), toSlam(lights[0] + Eigen::Vector3d(0, 0.3, 0)),
-               toSlam({40, 40, 6.5})}),
-        2);
+  slam.write(2, channels::kSlamMap, mapOf({toSlam(lights[0]), toSlam(lights[1] + Eigen::Vector3d(0.5, 0, 0)), toSlam(lights[0] + Eigen::Vector3d(0, 0.3, 0)),
+               toSlam({40, 40, 6.5})}));
 }
 
 TEST(Eval, AlignedFiguresAreExactAndRawOnesShowTheOffset) {
@@ -136,7 +124,7 @@ TEST(Eval, ALogWithoutSlamOutputIsAClearError) {
   t::TempDir dir;
   {
     lcmio::LogWriter log(dir.file("empty.lcm"));
-    write(log, channels::kGroundTruthPose, pose(1, 0, 0, 0), 1);
+    log.write(1, channels::kGroundTruthPose, t::makePose(1, 0, 0, 0));
   }
   const auto r = t::run({t::binPath("omnislam-eval"), dir.file("empty.lcm"), "--no-tum"}, 30);
   EXPECT_NE(r.exit_code, 0);

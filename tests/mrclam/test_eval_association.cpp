@@ -19,23 +19,13 @@
 #include "eval_json.h"
 #include "omnislam/lcmio/log_writer.h"
 #include "proc_util.h"
+#include "slam_log.h"
 
 using namespace omnislam;
 namespace t = omnislam::testing;
 using omnislam::testing::jsonNumber;
 
 namespace {
-
-template <class Msg>
-void write(lcmio::LogWriter& log, const std::string& channel, const Msg& m, int64_t utime) {
-  log.write(utime, channel, m);
-}
-
-pose_t pose(int64_t utime, double x, double y, double th) {
-  pose_t p{};
-  p.utime = utime, p.x_m = x, p.y_m = y, p.theta_rad = th, p.input_seq = -1;
-  return p;
-}
 
 map_t mapOf(const std::vector<std::pair<int64_t, Eigen::Vector2d>>& pts) {
   map_t m{};
@@ -62,18 +52,17 @@ int64_t utimeOf(int k) { return 1'000'000 + static_cast<int64_t>(k) * 100'000; }
 // number of entries (left out, counted).
 void makeLog(const std::string& path) {
   lcmio::LogWriter log(path);
-  write(log, channels::kGroundTruthMap,
-        mapOf({{6, {1.0, 1.1}}, {7, {2.0, -1.0}}, {8, {3.0, 1.0}}}), utimeOf(0));
+  log.write(utimeOf(0), channels::kGroundTruthMap, mapOf({{6, {1.0, 1.1}}, {7, {2.0, -1.0}}, {8, {3.0, 1.0}}}));
   for (int k = 0; k <= 110; ++k) {
     const int64_t u = utimeOf(k);
-    write(log, channels::kGroundTruthPose, pose(u, 0.1 * k, 0.0, 0.0), u);
+    log.write(u, channels::kGroundTruthPose, t::makePose(u, 0.1 * k, 0.0, 0.0));
     odometry_t o{};
     o.utime = u;
     o.seq = k;
     o.x_m = 5.0;
     o.y_m = 3.0 + 0.11 * k;
     o.theta_rad = M_PI / 2;
-    write(log, channels::kOdometry, o, u);
+    log.write(u, channels::kOdometry, o);
     if (k % 10 == 0 && k <= 100) {
       const int i = k / 10;
       std::vector<int64_t> lab{6, 7, +feature_labels_t::OTHER_ROBOT, 8};
@@ -90,7 +79,7 @@ void makeLog(const std::string& path) {
       f.seq = i;
       f.num_features = static_cast<int32_t>(lab.size());
       f.features.resize(lab.size());
-      write(log, channels::kOmniFeatures, f, u);
+      log.write(u, channels::kOmniFeatures, f);
       feature_labels_t fl{};
       fl.utime = u;
       fl.seq = i;
@@ -98,16 +87,16 @@ void makeLog(const std::string& path) {
       fl.num_features = f.num_features;
       fl.landmark_id = lab;
       fl.source_code.assign(lab.size(), -1);
-      write(log, channels::kGroundTruthFeatureLabels, fl, u);
-      write(log, channels::kSlamPose, pose(u, 0.1 * k, 0.0, 0.0), u);
+      log.write(u, channels::kGroundTruthFeatureLabels, fl);
+      log.write(u, channels::kSlamPose, t::makePose(u, 0.1 * k, 0.0, 0.0));
       associations_t a{};
       a.utime = u;
       a.seq = i;
       a.input_seq = i;
       a.num_features = f.num_features;
       a.landmark_id = ass;
-      write(log, channels::kSlamAssociations, a, u);
-      write(log, channels::kSlamMap, mapOf({{100, {1.0, 1.0}}, {101, {2.0, -1.0}}, {102, {5.0, 5.0}}}), u);
+      log.write(u, channels::kSlamAssociations, a);
+      log.write(u, channels::kSlamMap, mapOf({{100, {1.0, 1.0}}, {101, {2.0, -1.0}}, {102, {5.0, 5.0}}}));
     }
     if (k == 95 || k == 105) {  // labels for a frame the SLAM answered badly (95) or not at all (105)
       feature_labels_t fl{};
@@ -117,13 +106,13 @@ void makeLog(const std::string& path) {
       fl.num_features = 3;
       fl.landmark_id = {6, 7, 8};
       fl.source_code = {-1, -1, -1};
-      write(log, channels::kGroundTruthFeatureLabels, fl, u);
+      log.write(u, channels::kGroundTruthFeatureLabels, fl);
       if (k == 95) {
         associations_t a{};
         a.utime = u;
         a.num_features = 2;
         a.landmark_id = {100, 101};
-        write(log, channels::kSlamAssociations, a, u);
+        log.write(u, channels::kSlamAssociations, a);
       }
     }
   }
@@ -178,12 +167,12 @@ TEST(EvalAssociation, WithoutLabelsNoAssociationKeys) {
   const std::string log = d.file("plain.lcm");
   {
     lcmio::LogWriter f(log);
-    write(f, channels::kGroundTruthMap, mapOf({{6, {1.0, 1.0}}}), utimeOf(0));
+    f.write(utimeOf(0), channels::kGroundTruthMap, mapOf({{6, {1.0, 1.0}}}));
     for (int k = 0; k <= 10; ++k) {
-      write(f, channels::kGroundTruthPose, pose(utimeOf(k), 0.1 * k, 0.0, 0.0), utimeOf(k));
-      write(f, channels::kSlamPose, pose(utimeOf(k), 0.1 * k, 0.0, 0.0), utimeOf(k));
+      f.write(utimeOf(k), channels::kGroundTruthPose, t::makePose(utimeOf(k), 0.1 * k, 0.0, 0.0));
+      f.write(utimeOf(k), channels::kSlamPose, t::makePose(utimeOf(k), 0.1 * k, 0.0, 0.0));
     }
-    write(f, channels::kSlamMap, mapOf({{100, {1.0, 1.0}}}), utimeOf(10));
+    f.write(utimeOf(10), channels::kSlamMap, mapOf({{100, {1.0, 1.0}}}));
   }
   const auto r = t::run({t::binPath("omnislam-eval"), log, "--json", "--no-tum"}, 60);
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -1,4 +1,4 @@
-// Checks on a recorded run's SLAM output shared by the integration tests.
+// Pose messages for the logs tests write, and checks on a recorded run's SLAM output.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -10,8 +10,16 @@
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/pose_t.hpp"
+#include "eval_json.h"
 
 namespace omnislam::testing {
+
+/// A pose_t (SLAM_POSE or GROUND_TRUTH_POSE) at `utime`, no covariance, input_seq -1.
+inline pose_t makePose(int64_t utime, double x_m, double y_m, double theta_rad) {
+  pose_t p{};
+  p.utime = utime, p.x_m = x_m, p.y_m = y_m, p.theta_rad = theta_rad, p.input_seq = -1;
+  return p;
+}
 
 /// Every OMNI_FEATURES frame of the log has its SLAM_POSE, in order (input_seq = the frame's seq).
 /// Returns the number of feature frames.
@@ -22,6 +30,15 @@ inline size_t expectEveryFrameAnswered(const std::string& log) {
   for (size_t i = 0; i < std::min(poses.size(), frames.size()); ++i)
     EXPECT_EQ(poses[i].input_seq, frames[i].seq) << "SLAM_POSE " << i;
   return frames.size();
+}
+
+/// The sports hall's map against paper 000's table I, from `omnislam-eval --json` output: every one
+/// of the 16 lights mapped once, nothing spurious, landmark mean <= 0.48 m and max <= 1.05 m.
+inline void expectHallMapWithinPaper000Bars(const std::string& eval_json) {
+  EXPECT_EQ(jsonNumber(eval_json, "landmarks_matched"), 16) << eval_json;
+  EXPECT_EQ(jsonNumber(eval_json, "landmarks_spurious"), 0) << eval_json;
+  EXPECT_LE(jsonNumber(eval_json, "landmark_mean_err_m"), 0.48) << eval_json;
+  EXPECT_LE(jsonNumber(eval_json, "landmark_max_err_m"), 1.05) << eval_json;
 }
 
 }  // namespace omnislam::testing

@@ -41,6 +41,19 @@ Landmark priorLandmark(std::uint64_t id, const Eigen::Vector3d& p, int counter =
   return l;
 }
 
+/// Six lights at 6.5 m on x in {0, 5, 10}, y in {-3, 3}, and the prior map that holds them exactly
+/// (ids 100..105, in the order of `lights`).
+std::vector<Landmark> sixLightPrior(std::vector<Eigen::Vector3d>* lights) {
+  std::vector<Landmark> prior;
+  for (double x : {0.0, 5.0, 10.0}) {
+    for (double y : {-3.0, 3.0}) {
+      lights->emplace_back(x, y, 6.5);
+      prior.push_back(priorLandmark(100 + prior.size(), lights->back()));
+    }
+  }
+  return prior;
+}
+
 TEST(slam_FastSlam, OptionsValidate) {
   FastSlamOptions o;
   EXPECT_EQ(o.validate(), "");
@@ -82,14 +95,8 @@ TEST(slam_FastSlam, ContractsBeforeInitialise) {
 }
 
 TEST(slam_FastSlam, LocalisesWithPriorMapAndAssociatesById) {
-  std::vector<Landmark> prior;
   std::vector<Eigen::Vector3d> lights;
-  for (double x : {0.0, 5.0, 10.0}) {
-    for (double y : {-3.0, 3.0}) {
-      lights.emplace_back(x, y, 6.5);
-      prior.push_back(priorLandmark(100 + prior.size(), lights.back()));
-    }
-  }
+  std::vector<Landmark> prior = sixLightPrior(&lights);
   FastSlam f(FastSlamOptions{}, 3);
   f.initialise(Pose2{0.0, 0.0, 0.0}, prior);
   std::mt19937_64 rng(5);
@@ -422,14 +429,8 @@ namespace {
 /// unknown light measured at every step (it would become a candidate, then a landmark, when
 /// mapping). Returns the filter after 30 steps; `truth_out` the final true pose.
 FastSlam runPriorMapScenario(const FastSlamOptions& o, Pose2* truth_out, std::vector<Landmark>* prior_out) {
-  std::vector<Landmark> prior;
   std::vector<Eigen::Vector3d> lights;
-  for (double x : {0.0, 5.0, 10.0}) {
-    for (double y : {-3.0, 3.0}) {
-      lights.emplace_back(x, y, 6.5);
-      prior.push_back(priorLandmark(100 + prior.size(), lights.back()));
-    }
-  }
+  std::vector<Landmark> prior = sixLightPrior(&lights);
   prior.push_back(priorLandmark(200, Eigen::Vector3d(4.0, 0.5, 6.5), 3));  // never measured: counts down
   const Eigen::Vector3d unknown(7.0, 0.0, 6.0);
   FastSlam f(o, 3);

@@ -1,12 +1,14 @@
 // omnislam-import-mrclam's library on small MRCLAM-format files written by the test: a good
 // dataset (counts, frames, labels, odometry integration, event order, start pose), every malformed
-// case with file and line in the message, the duplicated-time policy, dropping robot sightings.
+// case with file and line in the message, the duplicated-time policy, dropping robot sightings, the
+// oracle-association colours.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 #include <map>
 
+#include "map_file.h"
 #include "mrclam_import.h"
 #include "omnislam/feature_labels_t.hpp"
 #include "omnislam/features_t.hpp"
@@ -160,6 +162,53 @@ TEST(MrclamImport, DropRobotSightingsIsCounted) {
   const Decoded dec = decode(log);
   EXPECT_EQ(dec.features[0].num_features, 1);
   EXPECT_EQ(dec.labels[0].landmark_id[0], 6);
+}
+
+TEST(MrclamImport, SubjectAsColourOnlyOnRequest) {
+  t::TempDir d;
+  writeDataset(d);
+  mrclam::ImportOptions o;
+  for (const feature_t& f : decode(mrclam::importRobot(d.path(), o)).features[0].features) {
+    EXPECT_EQ(f.colour_a[0], 0.0f);  // no appearance by default: the filter sees bearings only
+  }
+  o.subject_as_colour = true;
+  const Decoded dec = decode(mrclam::importRobot(d.path(), o));
+  ASSERT_EQ(dec.features.size(), 3u);
+  EXPECT_EQ(dec.features[0].features[0].colour_a[0], 6.0f);  // landmark 6 (barcode 63)
+  EXPECT_EQ(dec.features[0].features[1].colour_a[0], 2.0f);  // robot 2 (barcode 14)
+  EXPECT_EQ(dec.features[1].features[0].colour_a[0], 0.0f);  // unknown barcode 43
+  EXPECT_EQ(dec.features[2].features[0].colour_a[0], 7.0f);  // landmark 7 (barcode 81)
+  for (const auto& fr : dec.features) {
+    for (const feature_t& f : fr.features) EXPECT_EQ(f.colour_a[1] + f.colour_a[2] + f.colour_b[0], 0.0f);
+  }
+}
+
+TEST(MrclamImport, TruthLandmarksForLocalisationInTheTrueMap) {
+  t::TempDir d;
+  writeDataset(d);
+  const std::vector<slam::Landmark> L = mrclam::truthLandmarks(d.path());
+  ASSERT_EQ(L.size(), 2u);
+  EXPECT_EQ(L[0].id, 6u);
+  EXPECT_EQ(L[0].kind, slam::LandmarkKind::kVerticalLine);
+  EXPECT_DOUBLE_EQ(L[0].p_LinW_m.x(), 1.0);
+  EXPECT_DOUBLE_EQ(L[0].p_LinW_m.y(), 2.0);
+  EXPECT_NEAR(L[0].cov_LinW_m2(0, 0), 1e-6, 1e-18);  // the file's x std-dev 0.001 m
+  EXPECT_NEAR(L[0].cov_LinW_m2(1, 1), 4e-6, 1e-18);
+  EXPECT_DOUBLE_EQ(L[0].cov_LinW_m2(2, 2), 1.0);
+  EXPECT_DOUBLE_EQ(L[0].cov_LinW_m2(0, 1), 0.0);
+  EXPECT_EQ(L[1].id, 7u);
+  EXPECT_DOUBLE_EQ(L[1].p_LinW_m.x(), -1.0);
+  // A saved map the SLAM process loads back unchanged.
+  slamproc::SavedMap m;
+  m.landmarks = L;
+  slamproc::saveMapAtomically(m, d.file("truth_map.yaml"));
+  const slamproc::SavedMap back = slamproc::loadMap(d.file("truth_map.yaml"));
+  ASSERT_EQ(back.landmarks.size(), 2u);
+  EXPECT_EQ(back.landmarks[1].p_LinW_m, L[1].p_LinW_m);
+  EXPECT_EQ(back.landmarks[1].cov_LinW_m2, L[1].cov_LinW_m2);
+  // A malformed landmark file names file and line.
+  writeFile(d.file("Landmark_Groundtruth.dat"), "6 1.0 2.0 0.001\n");
+  EXPECT_NE(errorOf([&] { mrclam::truthLandmarks(d.path()); }).find("Landmark_Groundtruth.dat:5"), std::string::npos);
 }
 
 TEST(MrclamImport, MaxDurationCutsAndCounts) {

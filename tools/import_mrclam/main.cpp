@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iostream>
 
+#include "map_file.h"
 #include "mrclam_import.h"
 #include "omnislam/core/angles.h"
 #include "omnislam/lcmio/app.h"
@@ -75,6 +76,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"error", "keep-last"}));
   cli.add_flag("--odometry-from-truth", o.odometry_from_truth,
                "diagnostic: ODOMETRY from the Vicon truth instead of the wheels (perfect odometry)");
+  cli.add_flag("--subject-as-colour", o.subject_as_colour,
+               "diagnostic: colour_a = (barcode subject, 0, 0) for oracle association with filter.descriptor_gate 0.5");
   std::vector<double> still;
   cli.add_option("--skip-still-frames", still,
                  "diagnostic: leave out frames after less than M metres and DEG degrees of motion (M DEG)")
@@ -84,6 +87,9 @@ int main(int argc, char** argv) {
   cli.add_option("--slam-config-template", tmpl, "SLAM config to copy with the start pose set (e.g. config/slam/mrclam.yaml)")
       ->check(CLI::ExistingFile);
   cli.add_option("--slam-config-out", cfg_out, "where to write that config");
+  std::string truth_map_out;
+  cli.add_option("--truth-map-out", truth_map_out,
+                 "diagnostic: write the true landmarks as an omnislam map (for omnislam-slam --load-map --localise)");
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-import-mrclam", [&]() -> int {
     if (tmpl.empty() != cfg_out.empty())
@@ -112,6 +118,15 @@ int main(int argc, char** argv) {
     if (!cfg_out.empty()) {
       writeSlamConfig(tmpl, cfg_out, log.report, dir, o.robot);
       std::cerr << "[import-mrclam] wrote " << cfg_out << std::endl;
+    }
+    if (!truth_map_out.empty()) {
+      // Localisation in the true map separates localisation (association, clutter, odometry) from mapping.
+      slamproc::SavedMap m;
+      m.utime = log.report.start_frame_utime;
+      m.landmarks = mrclam::truthLandmarks(dir);
+      slamproc::saveMapAtomically(m, truth_map_out);
+      std::cerr << "[import-mrclam] wrote the true map (" << m.landmarks.size() << " landmarks) to " << truth_map_out
+                << std::endl;
     }
     return app::kOk;
   });

@@ -207,7 +207,9 @@ ImportedLog importRobot(const std::string& dir, const ImportOptions& o) {
     for (size_t k = i; k < j; ++k) {
       const Measurement& z = meas[k];
       int64_t label = feature_labels_t::UNKNOWN;
+      int subject = 0;
       const auto it = subject_of_code.find(z.code);
+      if (it != subject_of_code.end()) subject = it->second;
       if (it == subject_of_code.end()) {
         ++r.unknown_code_sightings;
         unknown.insert(z.code);
@@ -233,6 +235,7 @@ ImportedLog importRobot(const std::string& dir, const ImportOptions& o) {
       ft.elevation_rad = 0.0;
       ft.has_elevation = false;
       ft.covariance[0][0] = o.bearing_sigma_rad * o.bearing_sigma_rad;
+      if (o.subject_as_colour) ft.colour_a[0] = static_cast<float>(subject);
       r.max_abs_bearing_rad = std::max(r.max_abs_bearing_rad, std::abs(ft.azimuth_rad));
       f.features.push_back(ft);
       lab.landmark_id.push_back(label);
@@ -311,6 +314,20 @@ std::string ImportReport::describe() const {
   else
     s << "  start pose: none (no frame within the odometry)";
   return s.str();
+}
+
+std::vector<slam::Landmark> truthLandmarks(const std::string& dataset_dir) {
+  std::vector<slam::Landmark> out;
+  for (const auto& l : readLandmarks(file(dataset_dir, "Landmark_Groundtruth.dat"))) {
+    slam::Landmark L;
+    L.id = static_cast<std::uint64_t>(l.subject);
+    L.kind = slam::LandmarkKind::kVerticalLine;
+    L.p_LinW_m = Eigen::Vector3d(l.x_m, l.y_m, 0.0);
+    L.cov_LinW_m2 = Eigen::Vector3d(std::max(l.x_sigma_m * l.x_sigma_m, 1e-10), std::max(l.y_sigma_m * l.y_sigma_m, 1e-10), 1.0)
+                        .asDiagonal();
+    out.push_back(L);
+  }
+  return out;
 }
 
 }  // namespace omnislam::mrclam

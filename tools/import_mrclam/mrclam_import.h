@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "mrclam_files.h"
+#include "omnislam/core/slam/types.h"
 
 namespace omnislam::mrclam {
 
@@ -49,6 +50,10 @@ struct ImportOptions {
   /// less than still_frame_rad since the last frame written (counted); 0 = keep every frame.
   double still_frame_m = 0.0;
   double still_frame_rad = 0.0;
+  /// Diagnostic only (oracle association): each feature's colour_a = (subject, 0, 0) of its barcode
+  /// (0 when unknown), so that omnislam-slam with filter.descriptor_gate 0.5 can associate only the
+  /// sightings of one subject: the filter with known identities, an upper bound for the association.
+  bool subject_as_colour = false;
 
   std::string validate() const;  ///< empty when valid
 };
@@ -97,6 +102,12 @@ struct ImportedLog {
 /// Reads DIR/RobotN_{Odometry,Measurement,Groundtruth}.dat, DIR/Landmark_Groundtruth.dat and
 /// DIR/Barcodes.dat. Throws ParseError (file and line) for malformed input, std::invalid_argument
 /// for bad options.
+/// Diagnostic: the dataset's landmarks (Landmark_Groundtruth.dat) as filter landmarks of kind
+/// vertical line, id = subject, for localisation in the true map (omnislam-slam --load-map
+/// --localise): x-y covariance from the file's Vicon std-devs (at least 1e-10 m^2), z not observed
+/// (1 m^2). Throws ParseError naming file and line like the import.
+std::vector<slam::Landmark> truthLandmarks(const std::string& dataset_dir);
+
 ImportedLog importRobot(const std::string& dir, const ImportOptions& options);
 
 /// Pose at t_s interpolated in `truth` (linear position, shortest-arc heading); nothing outside.

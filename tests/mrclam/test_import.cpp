@@ -1,7 +1,7 @@
 // omnislam-import-mrclam's library on small MRCLAM-format files written by the test: a good
 // dataset (counts, frames, labels, odometry integration, event order, start pose), every malformed
-// case with file and line in the message, the duplicated-time policy, dropping robot sightings, the
-// oracle-association colours.
+// case with file and line in the message, the duplicated-time policy, dropping robot sightings, and
+// the two diagnostics: the oracle-association colours and the true map.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -9,7 +9,6 @@
 #   scripts/reproduce-room.sh [--seeds "1 ... 10"] [--speedup 5] [--out DIR] [--keep-recordings] [--set KEY=VALUE ...]
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-BIN="$ROOT/build/bin"
 SEEDS="1 2 3 4 5 6 7 8 9 10"
 SPEEDUP=5
 OUT=""
@@ -26,22 +25,12 @@ while [ $# -gt 0 ]; do
     *) echo "reproduce-room: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
-for t in omnislam-launch omnislam-slam omnislam-eval omnislam-sim omnislam-capture omnislam-odometry omnislam-features omnislam-record; do
-  [ -x "$BIN/$t" ] || { echo "reproduce-room: $BIN/$t missing: run scripts/build.sh first" >&2; exit 2; }
-done
-[ -n "$OUT" ] || OUT="$(mktemp -d /tmp/omnislam-room.XXXXXX)"
-mkdir -p "$OUT"
-export PATH="$BIN:$PATH"
-PORT=$((20000 + $$ % 20000))
-URL="udpm://239.255.76.67:${PORT}?ttl=0&recv_buf_size=4194304"
+source "$ROOT/scripts/lib/reproduce.sh"
+reproduce_prepare reproduce-room
 CFG="$ROOT/config/slam/room.yaml"
 for s in $SEEDS; do
   rec="$OUT/room-seed$s.lcm"
-  if [ ! -s "$rec" ]; then
-    echo "reproduce-room: seed $s: recording at ${SPEEDUP}x ..." >&2
-    "$BIN/omnislam-launch" "$ROOT/config/launch/room.yaml" --url "$URL" --set "seed=$s" --set "speedup=$SPEEDUP" \
-      --log-file "$rec" > "$OUT/launch-seed$s.txt" 2>&1 || { echo "reproduce-room: seed $s: launch failed, see $OUT/launch-seed$s.txt" >&2; exit 1; }
-  fi
+  reproduce_record reproduce-room "$ROOT/config/launch/room.yaml" "$s" "$SPEEDUP" "$rec" "the room"
   for method in paper ours; do
     extra=()
     [ "$method" = ours ] && extra=(--set filter.proposal=fastslam2 --set filter.association=hungarian)

@@ -12,7 +12,6 @@
 # Needs a build (scripts/build.sh). Takes about 45 s per seed at --speedup 10 on 2 cores.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-BIN="$ROOT/build/bin"
 SEEDS="1 2 3 4 5 6 7 8 9 10"
 SPEEDUP=10
 PARTICLES=10
@@ -31,25 +30,14 @@ while [ $# -gt 0 ]; do
     *) echo "reproduce-table1: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
-for t in omnislam-launch omnislam-slam omnislam-eval omnislam-sim omnislam-capture omnislam-odometry omnislam-features omnislam-record; do
-  [ -x "$BIN/$t" ] || { echo "reproduce-table1: $BIN/$t missing: run scripts/build.sh first" >&2; exit 2; }
-done
-[ -n "$OUT" ] || OUT="$(mktemp -d /tmp/omnislam-table1.XXXXXX)"
-mkdir -p "$OUT"
-export PATH="$BIN:$PATH"
-# A private multicast port (ttl=0: never leaves this machine) so that other runs do not cross.
-PORT=$((20000 + $$ % 20000))
-URL="udpm://239.255.76.67:${PORT}?ttl=0&recv_buf_size=4194304"
+source "$ROOT/scripts/lib/reproduce.sh"
+reproduce_prepare reproduce-table1
 SLAM_CFG="$ROOT/config/slam/sports_hall.yaml"
 
 for s in $SEEDS; do
   rec="$OUT/features-seed$s.lcm"
-  if [ ! -s "$rec" ]; then
-    echo "reproduce-table1: seed $s: recording the features pipeline at ${SPEEDUP}x ..." >&2
-    "$BIN/omnislam-launch" "$ROOT/config/launch/sports_hall_features.yaml" --url "$URL" \
-      --set "seed=$s" --set "speedup=$SPEEDUP" --log-file "$rec" > "$OUT/launch-seed$s.txt" 2>&1 || {
-      echo "reproduce-table1: seed $s: the launch failed, see $OUT/launch-seed$s.txt" >&2; exit 1; }
-  fi
+  reproduce_record reproduce-table1 "$ROOT/config/launch/sports_hall_features.yaml" "$s" "$SPEEDUP" "$rec" \
+    "the features pipeline"
   for assoc in hungarian ml; do
     res="$OUT/slam-$assoc-seed$s.lcm"
     "$BIN/omnislam-slam" --config "$SLAM_CFG" --seed "$s" --particles "$PARTICLES" --association "$assoc" \

@@ -1,0 +1,219 @@
+// Tests of the batch bearing-only smoother: Jacobians against central differences, the ray crossing
+// against a closed form, exact recovery from noise-free data, the robust kernel against outliers,
+// determinism, and the refusal of invalid problems.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "omnislam/core/angles.h"
+#include "omnislam/core/slam/bearing_smoother.h"
+#include "omnislam/core/slam/motion_model.h"
+#include "omnislam/core/slam/random.h"
+
+namespace {
+
+using namespace omnislam;
+using namespace omnislam::slam;
+
+Pose2 perturbed(const Pose2& p, int k, double h) {
+  Eigen::Vector3d v = p.vec();
+  v(k) += h;
+  return Pose2{v.x(), v.y(), v.z()};
+}
+
+TEST(slam_BearingSmoother, OdometryJacobiansMatchCentralDifferences) {
+  const Pose2 a{1.0, -2.0, 2.9}, b{1.7, -1.1, -2.8}, u{0.6, 0.3, 0.5};
+  Eigen::Matrix3d Ja, Jb;
+  odometryResidual(a, b, u, &Ja, &Jb);
+  const double h = 1e-6;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d da = (odometryResidual(perturbed(a, k, h), b, u) - odometryResidual(perturbed(a, k, -h), b, u)) / (2 * h);
+    const Eigen::Vector3d db = (odometryResidual(a, perturbed(b, k, h), u) - odometryResidual(a, perturbed(b, k, -h), u)) / (2 * h);
+    EXPECT_LT((da - Ja.col(k)).norm(), 1e-7) << "d r / d a_" << k;
+    EXPECT_LT((db - Jb.col(k)).norm(), 1e-7) << "d r / d b_" << k;
+  }
+}
+
+TEST(slam_BearingSmoother, OdometryResidualIsZeroForTheTrueIncrementAndWrapsTheHeading) {
+  const Pose2 a{0.3, 0.4, 3.0}, b{-1.0, 2.0, -3.0};
+  const Eigen::Vector3d r = odometryResidual(a, b, odometryIncrement(a, b));
+  EXPECT_LT(r.norm(), 1e-12);
+  // A heading increment off by 2 pi is the same motion.
+  Pose2 u = odometryIncrement(a, b);
+  u.theta_rad += 2 * kPi;
+  EXPECT_LT(odometryResidual(a, b, u).norm(), 1e-12);
+}
+
+TEST(slam_BearingSmoother, RaysCrossAtTheirCommonPoint) {
+  const Eigen::Vector2d p(2.5, -1.5);
+  std::vector<Eigen::Vector2d> c = {{0, 0}, {1, -4}, {5, 1}};
+  std::vector<double> phi;
+  for (const auto& ci : c) phi.push_back(std::atan2(p.y() - ci.y(), p.x() - ci.x()));
+  const auto x = intersectRays2D(c, phi);
+  ASSERT_TRUE(x.has_value());
+  EXPECT_LT((*x - p).norm(), 1e-12);
+  // Two rays crossing at right angles through the origin offset by 1 m: closed form.
+  const auto y = intersectRays2D({{0, 1}, {3, 0}}, {0.0, kPi / 2});
+  ASSERT_TRUE(y.has_value());
+  EXPECT_NEAR(y->x(), 3.0, 1e-12);
+  EXPECT_NEAR(y->y(), 1.0, 1e-12);
+  // Parallel rays, or a single one: no crossing.
+  EXPECT_FALSE(intersectRays2D({{0, 0}, {0, 1}}, {0.2, 0.2}).has_value());
+  EXPECT_FALSE(intersectRays2D({{0, 0}}, {0.2}).has_value());
+}
+
+// A loop around six landmarks: true poses and landmarks, odometry increments with the motion model's
+// covariance, bearings of every landmark within 6 m (an omnidirectional camera).
+struct Scene {
+  std::vector<Pose2> poses;
+  std::vector<Eigen::Vector2d> landmarks;
+  SmootherProblem problem;
+};
+
+Scene makeScene(double odo_noise_scale, double bearing_sigma, double outlier_fraction, std::uint64_t seed) {
+  Scene s;
+  Rng rng(seed);
+  const int n = 120;
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * kPi * i / n;
+    s.poses.push_back(Pose2{3.0 * std::cos(t), 2.0 * std::sin(t), wrapAngle(t + kPi / 2)});
+  }
+  s.landmarks = {{0.5, 0.3}, {5.0, 0.0}, {-5.0, 0.5}, {0.0, 4.0}, {0.5, -4.0}, {-1.0, -0.5}};
+  MotionNoiseOptions mn;
+  mn.trans_sigma_per_sqrt_m = 0.03;
+  mn.lateral_sigma_per_sqrt_m = 0.02;
+  mn.rot_sigma_per_sqrt_rad = 0.05;
+  mn.rot_sigma_per_sqrt_m = 0.03;
+  auto& pb = s.problem;
+  const Eigen::Vector3d p_CinR(0.1, 0.0, 0.0);
+  Pose2 dead = s.poses[0];
+  pb.poses.push_back(dead);
+  for (int i = 1; i < n; ++i) {
+    const Pose2 u_true = odometryIncrement(s.poses[i - 1], s.poses[i]);
+    const Eigen::Matrix3d cov = incrementCovariance(u_true, mn);
+    const Eigen::Vector3d w = cov.llt().matrixL() * Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal());
+    const Pose2 u = Pose2::fromVec(u_true.vec() + odo_noise_scale * w);
+    pb.odometry.push_back({i - 1, i, u, cov});
+    dead = predictPose(dead, u);
+    pb.poses.push_back(dead);  // initial estimate: dead reckoning
+  }
+  for (const auto& l : s.landmarks) pb.landmarks_m.push_back(l + Eigen::Vector2d(0.4, -0.3));
+  for (int i = 0; i < n; ++i) {
+    const Pose2& x = s.poses[i];
+    const Eigen::Vector2d c = x.transformFrom(p_CinR.head<2>());
+    for (int j = 0; j < static_cast<int>(s.landmarks.size()); ++j) {
+      const Eigen::Vector2d d = s.landmarks[j] - c;
+      const double az = wrapAngle(std::atan2(d.y(), d.x()) - x.theta_rad);
+      if (d.norm() > 6.0) continue;
+      double z = az + bearing_sigma * rng.normal();
+      if (rng.uniform01() < outlier_fraction) z = wrapAngle(az + (rng.uniform01() < 0.5 ? -1 : 1) * (0.1 + 0.4 * rng.uniform01()));
+      pb.bearings.push_back({i, j, z, bearing_sigma > 0 ? bearing_sigma : 0.01, p_CinR});
+    }
+  }
+  return s;
+}
+
+double positionRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b) {
+  double s = 0;
+  for (size_t i = 0; i < a.size(); ++i) s += std::pow(a[i].x_m - b[i].x_m, 2) + std::pow(a[i].y_m - b[i].y_m, 2);
+  return std::sqrt(s / static_cast<double>(a.size()));
+}
+
+TEST(slam_BearingSmoother, NoiseFreeDataIsRecoveredExactly) {
+  // Odometry and bearings exact; the initial landmarks 0.5 m off: the zero-cost solution is the truth.
+  Scene s = makeScene(0.0, 0.0, 0.0, 1);
+  for (auto& f : s.problem.odometry) f.covariance = Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal();
+  for (int i = 1; i < static_cast<int>(s.problem.poses.size()); ++i)  // start far from the truth
+    s.problem.poses[i] = Pose2{s.poses[i].x_m + 0.3, s.poses[i].y_m - 0.2, wrapAngle(s.poses[i].theta_rad + 0.05)};
+  const SmootherResult r = smoothBearingOnly(s.problem);
+  ASSERT_TRUE(r.failure.empty()) << r.failure;
+  EXPECT_TRUE(r.converged);
+  EXPECT_LT(r.final_cost, 1e-12);
+  EXPECT_LT(positionRmse(r.poses, s.poses), 1e-6);
+  for (size_t j = 0; j < s.landmarks.size(); ++j) EXPECT_LT((r.landmarks_m[j] - s.landmarks[j]).norm(), 1e-6) << j;
+  for (double w : r.bearing_weights) EXPECT_NEAR(w, 1.0, 1e-9);
+}
+
+TEST(slam_BearingSmoother, BeatsDeadReckoningOnNoisyData) {
+  Scene s = makeScene(1.0, 0.01, 0.0, 2);
+  SmootherOptions ls;
+  ls.cauchy_scale = 0.0;  // Gaussian noise only: the least-squares cost is the chi-square statistic
+  const double dr = positionRmse(s.problem.poses, s.poses);
+  const SmootherResult r = smoothBearingOnly(s.problem, ls);
+  ASSERT_TRUE(r.failure.empty()) << r.failure;
+  EXPECT_TRUE(r.converged);
+  EXPECT_LT(r.final_cost, r.initial_cost);
+  const double sm = positionRmse(r.poses, s.poses);
+  EXPECT_LT(sm, 0.25 * dr) << "smoothed " << sm << " m, dead reckoning " << dr << " m";
+  // With the true noise models the minimum cost is chi-square distributed with (residuals - unknowns)
+  // degrees of freedom: mean dof, standard deviation sqrt(2 dof).
+  const double dof = 3.0 * (1 + s.problem.odometry.size()) + s.problem.bearings.size() -
+                     3.0 * s.problem.poses.size() - 2.0 * s.problem.landmarks_m.size();
+  EXPECT_NEAR(r.final_cost, dof, 4.0 * std::sqrt(2.0 * dof)) << "sm " << sm << " dr " << dr;
+  // The first pose is held by its prior.
+  EXPECT_LT(std::hypot(r.poses[0].x_m - s.poses[0].x_m, r.poses[0].y_m - s.poses[0].y_m), 1e-2);
+}
+
+TEST(slam_BearingSmoother, CauchyKernelHoldsAgainstOutliersWhereLeastSquaresBends) {
+  Scene clean = makeScene(1.0, 0.01, 0.0, 3);
+  Scene dirty = makeScene(1.0, 0.01, 0.15, 3);  // same odometry noise (same draws), 15 % wrong bearings
+  SmootherOptions ls;
+  ls.cauchy_scale = 0.0;
+  const double e_clean = positionRmse(smoothBearingOnly(clean.problem).poses, clean.poses);
+  const SmootherResult robust = smoothBearingOnly(dirty.problem);
+  const SmootherResult plain = smoothBearingOnly(dirty.problem, ls);
+  ASSERT_TRUE(robust.failure.empty() && plain.failure.empty());
+  const double e_robust = positionRmse(robust.poses, dirty.poses);
+  const double e_plain = positionRmse(plain.poses, dirty.poses);
+  EXPECT_LT(e_robust, 2.0 * e_clean + 0.01) << "clean " << e_clean << ", least squares " << e_plain;
+  EXPECT_LT(e_robust, 0.5 * e_plain);
+  // The outliers (>= 0.1 rad = 10 sigma) end with small weights, the inliers near 1.
+  int low = 0;
+  for (double w : robust.bearing_weights) low += w < 0.2;
+  const double frac = static_cast<double>(low) / static_cast<double>(robust.bearing_weights.size());
+  EXPECT_GT(frac, 0.10);
+  EXPECT_LT(frac, 0.20);
+}
+
+TEST(slam_BearingSmoother, IsDeterministic) {
+  Scene s = makeScene(1.0, 0.01, 0.05, 4);
+  const SmootherResult a = smoothBearingOnly(s.problem), b = smoothBearingOnly(s.problem);
+  ASSERT_EQ(a.poses.size(), b.poses.size());
+  for (size_t i = 0; i < a.poses.size(); ++i) {
+    EXPECT_EQ(a.poses[i].x_m, b.poses[i].x_m);
+    EXPECT_EQ(a.poses[i].theta_rad, b.poses[i].theta_rad);
+  }
+  EXPECT_EQ(a.final_cost, b.final_cost);
+}
+
+TEST(slam_BearingSmoother, RefusesInvalidProblemsAndOptionsNamingTheCause) {
+  Scene s = makeScene(1.0, 0.01, 0.0, 5);
+  {
+    SmootherProblem p = s.problem;
+    p.bearings[3].landmark = 99;
+    const auto r = smoothBearingOnly(p);
+    EXPECT_NE(r.failure.find("bearing factor 3: landmark index 99"), std::string::npos) << r.failure;
+    EXPECT_TRUE(r.poses.empty());
+  }
+  {
+    SmootherProblem p = s.problem;
+    p.odometry[7].covariance(2, 2) = -1.0;
+    EXPECT_NE(smoothBearingOnly(p).failure.find("odometry factor 7: covariance"), std::string::npos);
+  }
+  {
+    SmootherProblem p = s.problem;
+    p.poses[2].x_m = std::nan("");
+    EXPECT_NE(smoothBearingOnly(p).failure.find("pose 2 is not finite"), std::string::npos);
+  }
+  {
+    SmootherProblem p = s.problem;
+    p.bearings[0].sigma_rad = 0.0;
+    EXPECT_NE(smoothBearingOnly(p).failure.find("sigma_rad"), std::string::npos);
+  }
+  SmootherOptions o;
+  o.cauchy_scale = -1.0;
+  EXPECT_NE(smoothBearingOnly(s.problem, o).failure.find("cauchy_scale"), std::string::npos);
+  EXPECT_FALSE(SmootherProblem{}.validate().empty());
+}
+
+}  // namespace

@@ -1,0 +1,230 @@
+// Batch smoothing of a recorded SLAM run: log in, problem, core smoother, log out (smooth_log.h).
+#include "smooth_log.h"
+
+#include <cmath>
+#include <map>
+#include <optional>
+#include <stdexcept>
+
+#include "omnislam/associations_t.hpp"
+#include "omnislam/core/angles.h"
+#include "omnislam/core/slam/bearing_model.h"
+#include "omnislam/feature_labels_t.hpp"
+#include "omnislam/features_t.hpp"
+#include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/log_reader.h"
+#include "omnislam/lcmio/log_writer.h"
+#include "omnislam/map_t.hpp"
+#include "omnislam/odometry_t.hpp"
+#include "omnislam/pose_t.hpp"
+
+namespace omnislam::smooth {
+namespace {
+
+struct Counter {
+  std::map<std::string, int64_t> n;
+  void add(const std::string& why) { ++n[why]; }
+};
+
+/// Cumulative odometry at `utime`, linearly interpolated; nothing outside the samples' span.
+std::optional<Pose2> odometryAt(const std::map<int64_t, Pose2>& odo, int64_t utime) {
+  const auto hi = odo.lower_bound(utime);
+  if (hi == odo.end()) return std::nullopt;
+  if (hi->first == utime) return hi->second;
+  if (hi == odo.begin()) return std::nullopt;
+  const auto lo = std::prev(hi);
+  const double f = static_cast<double>(utime - lo->first) / static_cast<double>(hi->first - lo->first);
+  return interpolate(lo->second, hi->second, f);
+}
+
+}  // namespace
+
+SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log, const SmoothLogOptions& opt) {
+  SmoothLogReport rep;
+  Counter bad;
+  std::map<int64_t, Pose2> odo;
+  std::map<int64_t, pose_t> slam_pose;
+  std::map<int64_t, features_t> frames;
+  std::map<int64_t, std::vector<int64_t>> assoc;  // from the chosen source, by frame utime
+  std::map<int64_t, Eigen::Vector2d> last_map_position;
+  const char* assoc_channel = opt.associations == AssociationSource::kSlam ? channels::kSlamAssociations
+                                                                            : channels::kGroundTruthFeatureLabels;
+  lcmio::forEachEvent(in_log, [&](const lcmio::LogEvent& ev) {
+    const std::string& ch = ev.channel;
+    if (ch == channels::kOdometry) {
+      const auto m = lcmio::decodeAs<odometry_t>(ev);
+      if (!m) return bad.add("ODOMETRY: undecodable");
+      if (!std::isfinite(m->x_m) || !std::isfinite(m->y_m) || !std::isfinite(m->theta_rad))
+        return bad.add("ODOMETRY: non-finite pose");
+      odo[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+    } else if (ch == channels::kSlamPose) {
+      const auto m = lcmio::decodeAs<pose_t>(ev);
+      if (!m) return bad.add("SLAM_POSE: undecodable");
+      if (!std::isfinite(m->x_m) || !std::isfinite(m->y_m) || !std::isfinite(m->theta_rad))
+        return bad.add("SLAM_POSE: non-finite pose");
+      slam_pose[m->utime] = *m;
+    } else if (ch == channels::kOmniFeatures) {
+      const auto m = lcmio::decodeAs<features_t>(ev);
+      if (!m) return bad.add("OMNI_FEATURES: undecodable");
+      frames[m->utime] = *m;
+    } else if (ch == channels::kSlamMap) {
+      const auto m = lcmio::decodeAs<map_t>(ev);
+      if (!m) return bad.add("SLAM_MAP: undecodable");
+      for (const auto& l : m->landmarks)
+        if (std::isfinite(l.position_m[0]) && std::isfinite(l.position_m[1]))
+          last_map_position[l.id] = Eigen::Vector2d(l.position_m[0], l.position_m[1]);
+    } else if (ch == assoc_channel) {
+      if (opt.associations == AssociationSource::kSlam) {
+        const auto m = lcmio::decodeAs<associations_t>(ev);
+        if (!m) return bad.add(ch + ": undecodable");
+        assoc[m->utime] = m->landmark_id;
+      } else {
+        const auto m = lcmio::decodeAs<feature_labels_t>(ev);
+        if (!m) return bad.add(ch + ": undecodable");
+        assoc[m->utime] = m->landmark_id;
+      }
+    }
+  });
+  if (slam_pose.empty()) throw std::invalid_argument(in_log + ": no SLAM_POSE message");
+  if (odo.size() < 2) throw std::invalid_argument(in_log + ": fewer than two ODOMETRY messages");
+
+  // Poses: one per SLAM_POSE, the filter's estimate as the initial value.
+  slam::SmootherProblem pb;
+  std::vector<int64_t> utimes;
+  std::map<int64_t, int> node_of;
+  for (const auto& [u, p] : slam_pose) {
+    node_of[u] = static_cast<int>(utimes.size());
+    utimes.push_back(u);
+    pb.poses.push_back(Pose2{p.x_m, p.y_m, p.theta_rad});
+  }
+  // Odometry: the filter's step between consecutive frames, with its R_t (motion_model.h).
+  std::optional<Pose2> prev_odo = odometryAt(odo, utimes[0]);
+  if (!prev_odo) ++rep.frames_without_odometry;
+  for (size_t i = 1; i < utimes.size(); ++i) {
+    const auto o = odometryAt(odo, utimes[i]);
+    if (!o) ++rep.frames_without_odometry;
+    if (o && prev_odo) {
+      const Pose2 u = slam::odometryIncrement(*prev_odo, *o);
+      pb.odometry.push_back({static_cast<int>(i - 1), static_cast<int>(i), u, slam::incrementCovariance(u, opt.motion)});
+    }
+    prev_odo = o;
+  }
+  if (opt.initial_from_odometry) {
+    const auto o0 = odometryAt(odo, utimes[0]);
+    if (!o0) throw std::invalid_argument(in_log + ": the first SLAM_POSE is outside the ODOMETRY time span");
+    const Pose2 start = pb.poses[0];
+    for (size_t i = 1; i < utimes.size(); ++i)
+      if (const auto o = odometryAt(odo, utimes[i])) pb.poses[i] = start.compose(o0->between(*o));
+  }
+  // Bearings of associated vertical-line features, grouped by landmark id.
+  struct Ray {
+    int node;
+    double azimuth_rad, sigma_rad;
+    Eigen::Vector3d p_CinR_m;
+  };
+  std::map<int64_t, std::vector<Ray>> rays;
+  for (const auto& [u, f] : frames) {
+    const auto n = node_of.find(u);
+    const auto a = assoc.find(u);
+    if (n == node_of.end() || a == assoc.end()) continue;  // a frame the filter did not answer
+    if (a->second.size() != f.features.size()) {
+      bad.add("association and OMNI_FEATURES of one frame differ in length");
+      continue;
+    }
+    const Eigen::Vector3d p_CinR(f.camera_position_m[0], f.camera_position_m[1], f.camera_position_m[2]);
+    for (size_t k = 0; k < f.features.size(); ++k) {
+      const feature_t& ft = f.features[k];
+      if (a->second[k] < 0 || ft.kind != feature_t::KIND_VERTICAL_LINE) continue;
+      const double sigma = std::sqrt(ft.covariance[0][0]);
+      if (!std::isfinite(ft.azimuth_rad) || !(sigma > 0.0) || !std::isfinite(sigma) || !p_CinR.allFinite()) {
+        bad.add("OMNI_FEATURES: non-finite azimuth, sigma or camera position");
+        continue;
+      }
+      rays[a->second[k]].push_back({n->second, ft.azimuth_rad, sigma, p_CinR});
+    }
+  }
+  std::vector<int64_t> landmark_ids;
+  for (const auto& [id, rs] : rays) {
+    std::optional<Eigen::Vector2d> init;
+    const auto known = last_map_position.find(id);
+    if (opt.associations == AssociationSource::kSlam && known != last_map_position.end()) {
+      init = known->second;
+    } else {  // cross the rays from the filter's poses
+      std::vector<Eigen::Vector2d> c;
+      std::vector<double> phi;
+      for (const Ray& r : rs) {
+        const Pose2& x = pb.poses[static_cast<size_t>(r.node)];
+        c.push_back(slam::cameraCentreInWorld(x, r.p_CinR_m).head<2>());
+        phi.push_back(x.theta_rad + r.azimuth_rad);
+      }
+      init = slam::intersectRays2D(c, phi);
+    }
+    if (!init) {
+      ++rep.unanchored_landmarks;
+      continue;
+    }
+    const int j = static_cast<int>(pb.landmarks_m.size());
+    pb.landmarks_m.push_back(*init);
+    landmark_ids.push_back(id);
+    for (const Ray& r : rs) pb.bearings.push_back({r.node, j, r.azimuth_rad, r.sigma_rad, r.p_CinR_m});
+  }
+
+  rep.result = slam::smoothBearingOnly(pb, opt.smoother);
+  if (!rep.result.failure.empty()) throw std::invalid_argument("smoother: " + rep.result.failure);
+  rep.poses = static_cast<int64_t>(pb.poses.size());
+  rep.odometry_factors = static_cast<int64_t>(pb.odometry.size());
+  rep.bearing_factors = static_cast<int64_t>(pb.bearings.size());
+  rep.landmarks = static_cast<int64_t>(pb.landmarks_m.size());
+  std::vector<int32_t> inliers(pb.landmarks_m.size(), 0);
+  for (size_t k = 0; k < pb.bearings.size(); ++k) {
+    if (rep.result.bearing_weights[k] < 0.5)
+      ++rep.bearings_downweighted;
+    else
+      ++inliers[static_cast<size_t>(pb.bearings[k].landmark)];
+  }
+  for (const auto& [why, count] : bad.n) {
+    rep.skipped_messages += count;
+    rep.problems.push_back(why + " (" + std::to_string(count) + ")");
+  }
+
+  // The copy: smoothed SLAM_POSE in place, one final SLAM_MAP at the end.
+  lcmio::LogWriter out(out_log);
+  int64_t last_timestamp = 0;
+  lcmio::forEachEvent(in_log, [&](const lcmio::LogEvent& ev) {
+    last_timestamp = ev.log_utime;
+    const std::string& ch = ev.channel;
+    if (ch == channels::kSlamMap || ch == channels::kSlamParticles) return;
+    if (ch == channels::kSlamAssociations && opt.associations != AssociationSource::kSlam) return;
+    if (ch == channels::kSlamPose) {
+      auto m = lcmio::decodeAs<pose_t>(ev);
+      if (!m) return;
+      const auto n = node_of.find(m->utime);
+      if (n == node_of.end()) return;  // non-finite: skipped above
+      const Pose2& p = rep.result.poses[static_cast<size_t>(n->second)];
+      m->x_m = p.x_m, m->y_m = p.y_m, m->theta_rad = p.theta_rad;
+      out.write(ev.log_utime, ch, *m);
+      return;
+    }
+    out.write(ev.log_utime, ch, ev.data.data(), static_cast<int32_t>(ev.data.size()));
+  });
+  map_t map{};
+  map.utime = utimes.back();
+  map.seq = 0;
+  map.input_seq = -1;
+  for (size_t j = 0; j < landmark_ids.size(); ++j) {
+    landmark_t l{};
+    l.id = landmark_ids[j];
+    l.position_m[0] = rep.result.landmarks_m[j].x();
+    l.position_m[1] = rep.result.landmarks_m[j].y();
+    l.type = 1;
+    l.times_detected = inliers[j];
+    l.kind = feature_t::KIND_VERTICAL_LINE;
+    map.landmarks.push_back(l);
+  }
+  map.num_landmarks = static_cast<int32_t>(map.landmarks.size());
+  map.num_candidates = 0;
+  out.write(last_timestamp, channels::kSlamMap, map);
+  return rep;
+}
+
+}  // namespace omnislam::smooth

@@ -1,0 +1,50 @@
+// Batch smoothing of a recorded omnislam-slam run (docs/smoothing.md): reads a log with ODOMETRY,
+// OMNI_FEATURES and the SLAM output, builds the problem of core/slam/bearing_smoother.h from it (one
+// pose per SLAM_POSE, one odometry factor per pair of consecutive frames with the filter's motion
+// noise, one bearing factor per associated vertical-line feature) and writes a copy of the log with
+// SLAM_POSE and SLAM_MAP replaced by the smoothed estimate, for omnislam-eval.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "omnislam/core/slam/bearing_smoother.h"
+#include "omnislam/core/slam/motion_model.h"
+
+namespace omnislam::smooth {
+
+/// Where the association of each feature comes from.
+enum class AssociationSource {
+  kSlam,    ///< SLAM_ASSOCIATIONS: the filter's best particle at each frame (what the filter decided)
+  kLabels,  ///< GROUND_TRUTH_FEATURE_LABELS: the truth (diagnosis only: how good could it be?)
+};
+
+struct SmoothLogOptions {
+  AssociationSource associations = AssociationSource::kSlam;
+  /// Initial poses: false, the filter's SLAM_POSE; true, dead reckoning (ODOMETRY) from the first
+  /// SLAM_POSE (a start that does not depend on the filter, for --associations labels).
+  bool initial_from_odometry = false;
+  slam::MotionNoiseOptions motion;   ///< the filter's motion noise (from its SLAM config)
+  slam::SmootherOptions smoother;
+};
+
+struct SmoothLogReport {
+  int64_t poses = 0;               ///< SLAM_POSE frames smoothed
+  int64_t odometry_factors = 0;
+  int64_t bearing_factors = 0;
+  int64_t landmarks = 0;
+  int64_t bearings_downweighted = 0;  ///< kernel weight below 0.5 at the solution (outliers)
+  int64_t skipped_messages = 0;    ///< undecodable or non-finite messages (reasons in `problems`)
+  int64_t unanchored_landmarks = 0;   ///< associated but no initial position (one ray or parallel rays): not used
+  int64_t frames_without_odometry = 0;  ///< frames outside the ODOMETRY time span: no odometry factor
+  std::vector<std::string> problems;    ///< one line per kind of skipped input, with its count
+  slam::SmootherResult result;
+};
+
+/// Smooths `in_log` into `out_log` (every other event copied as is; SLAM_PARTICLES dropped since
+/// they are the filter's; SLAM_ASSOCIATIONS dropped with kLabels). Throws std::invalid_argument
+/// with the reason when the log has no SLAM_POSE or ODOMETRY, or the problem cannot be solved.
+SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log, const SmoothLogOptions& options);
+
+}  // namespace omnislam::smooth

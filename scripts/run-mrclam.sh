@@ -6,11 +6,15 @@
 #
 #   scripts/run-mrclam.sh [--build DIR] [--data DIR] [--out DIR] [--seed N] [--robots "1 2 3 4 5"]
 #                         [--config FILE] [--import-args "ARGS"] [--slam-args "ARGS"] [--localise-in-truth]
+#                         [--smooth slam|labels] [--smooth-args "ARGS"]
 #
 # Diagnosis only (the figures of the issue are without): --import-args passes more options to the
 # importer (e.g. "--drop-robot-sightings", "--odometry-from-truth", "--subject-as-colour"),
 # --slam-args to omnislam-slam (e.g. "--set filter.particles=300"), and --localise-in-truth localises
-# in the true map (importer --truth-map-out, omnislam-slam --load-map --localise) instead of mapping.
+# in the true map (importer --truth-map-out, omnislam-slam --load-map --localise) instead of mapping,
+# and --smooth scores omnislam-smooth's batch smoothing of each run instead of the filter (with the
+# filter's associations, or with the barcodes: how good could the same data be; docs/smoothing.md),
+# --smooth-args passing it more options (e.g. "--initial-from-odometry").
 # Defaults: build dir $OMNISLAM_BUILD_DIR or build; data ../shared/datasets/mrclam/MRCLAM_Dataset6;
 # out /tmp/omnislam-mrclam; seed 1. Needs no network; about a minute per robot on one core.
 set -euo pipefail
@@ -23,6 +27,8 @@ ROBOTS="1 2 3 4 5"
 IMPORT_ARGS=""
 SLAM_ARGS=""
 LOCALISE=0
+SMOOTH=""
+SMOOTH_ARGS=""
 CONFIG="$ROOT/config/slam/mrclam.yaml"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -35,12 +41,15 @@ while [ $# -gt 0 ]; do
     --import-args) IMPORT_ARGS="$2"; shift 2 ;;
     --slam-args) SLAM_ARGS="$2"; shift 2 ;;
     --localise-in-truth) LOCALISE=1; shift ;;
-    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+    --smooth) SMOOTH="$2"; shift 2 ;;
+    --smooth-args) SMOOTH_ARGS="$2"; shift 2 ;;
+    -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
     *) echo "run-mrclam.sh: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
 BIN="$BUILD/bin"
-for exe in omnislam-import-mrclam omnislam-slam omnislam-eval; do
+case "$SMOOTH" in ""|slam|labels) ;; *) echo "run-mrclam.sh: --smooth takes slam or labels, got '$SMOOTH'" >&2; exit 2 ;; esac
+for exe in omnislam-import-mrclam omnislam-slam omnislam-eval ${SMOOTH:+omnislam-smooth}; do
   [ -x "$BIN/$exe" ] || { echo "run-mrclam.sh: $BIN/$exe not built" >&2; exit 1; }
 done
 [ -d "$DATA" ] || { echo "run-mrclam.sh: dataset not found at $DATA" >&2; exit 1; }
@@ -49,6 +58,8 @@ mkdir -p "$OUT"
 # One JSON key of a one-line JSON object.
 key() { sed -n "s/.*\"$2\": \([^,}]*\).*/\1/p" <<< "$1"; }
 fmt() { printf "%.${2:-2}f" "$1"; }
+# An association figure, or n/a when the scored log has no SLAM_ASSOCIATIONS (smoothed with labels).
+assoc_cell() { if [ "$(key "$1" assoc_available)" = true ]; then fmt "$(key "$1" "$2")"; else echo n/a; fi; }
 
 rows=()
 for r in $ROBOTS; do
@@ -61,6 +72,11 @@ for r in $ROBOTS; do
     --slam-config-template "$CONFIG" --slam-config-out "$cfg" "${loc_import[@]}" $IMPORT_ARGS 2> "$OUT/robot$r.import.txt"
   "$BIN/omnislam-slam" --replay "$log" --out "$res" --config "$cfg" --seed "$SEED" "${loc_slam[@]}" $SLAM_ARGS \
     2> "$OUT/robot$r.slam.txt"
+  if [ -n "$SMOOTH" ]; then
+    "$BIN/omnislam-smooth" "$res" --out "$OUT/robot$r.smooth.lcm" --config "$cfg" --associations "$SMOOTH" $SMOOTH_ARGS \
+      2> "$OUT/robot$r.smooth.txt"
+    res="$OUT/robot$r.smooth.lcm"
+  fi
   raw=$("$BIN/omnislam-eval" "$res" --planar --json --no-tum)
   ali=$("$BIN/omnislam-eval" "$res" --planar --json --no-tum --align --plot "$OUT/robot$r.aligned")
   echo "$raw" > "$OUT/robot$r.eval.json"; echo "$ali" > "$OUT/robot$r.eval-aligned.json"
@@ -70,9 +86,9 @@ for r in $ROBOTS; do
     "$(fmt "$(key "$raw" ate_rmse_m)")" "$(fmt "$(key "$ali" ate_rmse_m)")" \
     "$(fmt "$(key "$ali" landmark_mean_err_m)")" "$(fmt "$(key "$ali" landmark_max_err_m)")" \
     "$(key "$ali" landmarks_matched)" "$(key "$ali" landmarks_spurious)" \
-    "$(fmt "$(key "$ali" assoc_precision)")" "$(fmt "$(key "$ali" assoc_recall)")")")
+    "$(assoc_cell "$ali" assoc_precision)" "$(assoc_cell "$ali" assoc_recall)")")
 done
-echo "MRCLAM dataset 6, config $(basename "$CONFIG"), seed $SEED${IMPORT_ARGS:+, importer $IMPORT_ARGS}${SLAM_ARGS:+, slam $SLAM_ARGS}$([ "$LOCALISE" = 1 ] && echo ", localised in the true map") (ATE RMSE in m; landmarks and association after --align)"
+echo "MRCLAM dataset 6, config $(basename "$CONFIG"), seed $SEED${IMPORT_ARGS:+, importer $IMPORT_ARGS}${SLAM_ARGS:+, slam $SLAM_ARGS}$([ "$LOCALISE" = 1 ] && echo ", localised in the true map")${SMOOTH:+, smoothed with the $SMOOTH associations}${SMOOTH_ARGS:+ $SMOOTH_ARGS} (ATE RMSE in m; landmarks and association after --align)"
 echo "| robot | frames | DR ATE raw / aligned | SLAM ATE raw / aligned | landmark mean / max | matched | spurious | assoc precision / recall |"
 echo "|---|---|---|---|---|---|---|---|"
 printf '%s\n' "${rows[@]}"

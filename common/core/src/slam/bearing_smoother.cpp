@@ -167,7 +167,6 @@ SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOption
 
   std::vector<Eigen::Triplet<double>> trip;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
-  bool pattern_known = false;
   for (int it = 0; it < opt.max_iterations; ++it) {
     res.iterations = it + 1;
     // Normal equations H dx = -g of the re-weighted problem at s.
@@ -220,11 +219,8 @@ SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOption
       Eigen::SparseMatrix<double> Hd = H;
       // A landmark seen only at rejected (undefined) bearings has a zero diagonal: keep it solvable.
       for (int k = 0; k < n; ++k) Hd.coeffRef(k, k) += lambda * diag(k) + 1e-12;
-      if (!pattern_known) {
-        ldlt.analyzePattern(Hd);
-        pattern_known = true;
-      }
-      ldlt.factorize(Hd);
+      // The pattern is analysed every time: a bearing whose azimuth becomes undefined drops its block.
+      ldlt.compute(Hd);
       if (ldlt.info() != Eigen::Success) {
         lambda *= 10.0;
         continue;

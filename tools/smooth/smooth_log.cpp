@@ -2,18 +2,20 @@
 #include "smooth_log.h"
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <stdexcept>
 
 #include "omnislam/associations_t.hpp"
-#include "omnislam/core/angles.h"
+#include "omnislam/core/eval/metrics.h"
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/feature_labels_t.hpp"
 #include "omnislam/features_t.hpp"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/log_writer.h"
+#include "omnislam/lcmio/validate.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
@@ -26,15 +28,20 @@ struct Counter {
   void add(const std::string& why) { ++n[why]; }
 };
 
-/// Cumulative odometry at `utime`, linearly interpolated; nothing outside the samples' span.
-std::optional<Pose2> odometryAt(const std::map<int64_t, Pose2>& odo, int64_t utime) {
-  const auto hi = odo.lower_bound(utime);
-  if (hi == odo.end()) return std::nullopt;
-  if (hi->first == utime) return hi->second;
-  if (hi == odo.begin()) return std::nullopt;
-  const auto lo = std::prev(hi);
-  const double f = static_cast<double>(utime - lo->first) / static_cast<double>(hi->first - lo->first);
-  return interpolate(lo->second, hi->second, f);
+/// The event decoded as Msg if it decodes and passes lcmio::validate; otherwise counted with the
+/// channel and the reason.
+template <class Msg>
+std::optional<Msg> decodeValid(const lcmio::LogEvent& ev, Counter& bad) {
+  auto m = lcmio::decodeAs<Msg>(ev);
+  if (!m) {
+    bad.add(ev.channel + ": undecodable");
+    return std::nullopt;
+  }
+  if (auto why = lcmio::validate(*m)) {
+    bad.add(ev.channel + ": " + *why);
+    return std::nullopt;
+  }
+  return m;
 }
 
 }  // namespace
@@ -52,35 +59,18 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
   lcmio::forEachEvent(in_log, [&](const lcmio::LogEvent& ev) {
     const std::string& ch = ev.channel;
     if (ch == channels::kOdometry) {
-      const auto m = lcmio::decodeAs<odometry_t>(ev);
-      if (!m) return bad.add("ODOMETRY: undecodable");
-      if (!std::isfinite(m->x_m) || !std::isfinite(m->y_m) || !std::isfinite(m->theta_rad))
-        return bad.add("ODOMETRY: non-finite pose");
-      odo[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+      if (const auto m = decodeValid<odometry_t>(ev, bad)) odo[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
     } else if (ch == channels::kSlamPose) {
-      const auto m = lcmio::decodeAs<pose_t>(ev);
-      if (!m) return bad.add("SLAM_POSE: undecodable");
-      if (!std::isfinite(m->x_m) || !std::isfinite(m->y_m) || !std::isfinite(m->theta_rad))
-        return bad.add("SLAM_POSE: non-finite pose");
-      slam_pose[m->utime] = *m;
+      if (const auto m = decodeValid<pose_t>(ev, bad)) slam_pose[m->utime] = *m;
     } else if (ch == channels::kOmniFeatures) {
-      const auto m = lcmio::decodeAs<features_t>(ev);
-      if (!m) return bad.add("OMNI_FEATURES: undecodable");
-      frames[m->utime] = *m;
+      if (const auto m = decodeValid<features_t>(ev, bad)) frames[m->utime] = *m;
     } else if (ch == channels::kSlamMap) {
-      const auto m = lcmio::decodeAs<map_t>(ev);
-      if (!m) return bad.add("SLAM_MAP: undecodable");
-      for (const auto& l : m->landmarks)
-        if (std::isfinite(l.position_m[0]) && std::isfinite(l.position_m[1]))
-          last_map_position[l.id] = Eigen::Vector2d(l.position_m[0], l.position_m[1]);
+      if (const auto m = decodeValid<map_t>(ev, bad))
+        for (const auto& l : m->landmarks) last_map_position[l.id] = Eigen::Vector2d(l.position_m[0], l.position_m[1]);
     } else if (ch == assoc_channel) {
       if (opt.associations == AssociationSource::kSlam) {
-        const auto m = lcmio::decodeAs<associations_t>(ev);
-        if (!m) return bad.add(ch + ": undecodable");
-        assoc[m->utime] = m->landmark_id;
-      } else {
-        const auto m = lcmio::decodeAs<feature_labels_t>(ev);
-        if (!m) return bad.add(ch + ": undecodable");
+        if (const auto m = decodeValid<associations_t>(ev, bad)) assoc[m->utime] = m->landmark_id;
+      } else if (const auto m = decodeValid<feature_labels_t>(ev, bad)) {
         assoc[m->utime] = m->landmark_id;
       }
     }
@@ -97,24 +87,24 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
     utimes.push_back(u);
     pb.poses.push_back(Pose2{p.x_m, p.y_m, p.theta_rad});
   }
+  // Cumulative odometry at every frame (interpolated; nothing outside the samples' span).
+  std::vector<eval::TimedPose> odo_track;
+  for (const auto& [u, p] : odo) odo_track.push_back({u, p});
+  std::vector<std::optional<Pose2>> odo_at(utimes.size());
+  for (size_t i = 0; i < utimes.size(); ++i) {
+    odo_at[i] = eval::poseAt(odo_track, utimes[i], std::numeric_limits<int64_t>::max());
+    if (!odo_at[i]) ++rep.frames_without_odometry;
+  }
   // Odometry: the filter's step between consecutive frames, with its R_t (motion_model.h).
-  std::optional<Pose2> prev_odo = odometryAt(odo, utimes[0]);
-  if (!prev_odo) ++rep.frames_without_odometry;
   for (size_t i = 1; i < utimes.size(); ++i) {
-    const auto o = odometryAt(odo, utimes[i]);
-    if (!o) ++rep.frames_without_odometry;
-    if (o && prev_odo) {
-      const Pose2 u = slam::odometryIncrement(*prev_odo, *o);
-      pb.odometry.push_back({static_cast<int>(i - 1), static_cast<int>(i), u, slam::incrementCovariance(u, opt.motion)});
-    }
-    prev_odo = o;
+    if (!odo_at[i - 1] || !odo_at[i]) continue;
+    const Pose2 u = slam::odometryIncrement(*odo_at[i - 1], *odo_at[i]);
+    pb.odometry.push_back({static_cast<int>(i - 1), static_cast<int>(i), u, slam::incrementCovariance(u, opt.motion)});
   }
   if (opt.initial_from_odometry) {
-    const auto o0 = odometryAt(odo, utimes[0]);
-    if (!o0) throw std::invalid_argument(in_log + ": the first SLAM_POSE is outside the ODOMETRY time span");
-    const Pose2 start = pb.poses[0];
+    if (!odo_at[0]) throw std::invalid_argument(in_log + ": the first SLAM_POSE is outside the ODOMETRY time span");
     for (size_t i = 1; i < utimes.size(); ++i)
-      if (const auto o = odometryAt(odo, utimes[i])) pb.poses[i] = start.compose(o0->between(*o));
+      if (odo_at[i]) pb.poses[i] = pb.poses[0].compose(odo_at[0]->between(*odo_at[i]));
   }
   // Bearings of associated vertical-line features, grouped by landmark id.
   struct Ray {
@@ -135,12 +125,8 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
     for (size_t k = 0; k < f.features.size(); ++k) {
       const feature_t& ft = f.features[k];
       if (a->second[k] < 0 || ft.kind != feature_t::KIND_VERTICAL_LINE) continue;
-      const double sigma = std::sqrt(ft.covariance[0][0]);
-      if (!std::isfinite(ft.azimuth_rad) || !(sigma > 0.0) || !std::isfinite(sigma) || !p_CinR.allFinite()) {
-        bad.add("OMNI_FEATURES: non-finite azimuth, sigma or camera position");
-        continue;
-      }
-      rays[a->second[k]].push_back({n->second, ft.azimuth_rad, sigma, p_CinR});
+      // lcmio::validate has checked the azimuth, its variance (> 0) and the camera position.
+      rays[a->second[k]].push_back({n->second, ft.azimuth_rad, std::sqrt(ft.covariance[0][0]), p_CinR});
     }
   }
   std::vector<int64_t> landmark_ids;

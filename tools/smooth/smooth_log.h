@@ -35,7 +35,7 @@ struct SmoothLogReport {
   int64_t bearing_factors = 0;
   int64_t landmarks = 0;
   int64_t bearings_downweighted = 0;  ///< kernel weight below 0.5 at the solution (outliers)
-  int64_t skipped_messages = 0;    ///< undecodable or non-finite messages (reasons in `problems`)
+  int64_t skipped_messages = 0;    ///< undecodable messages or ones lcmio::validate refuses (reasons in `problems`)
   int64_t unanchored_landmarks = 0;   ///< associated but no initial position (one ray or parallel rays): not used
   int64_t frames_without_odometry = 0;  ///< frames outside the ODOMETRY time span: no odometry factor
   std::vector<std::string> problems;    ///< one line per kind of skipped input, with its count

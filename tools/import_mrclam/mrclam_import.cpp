@@ -207,18 +207,17 @@ ImportedLog importRobot(const std::string& dir, const ImportOptions& o) {
     for (size_t k = i; k < j; ++k) {
       const Measurement& z = meas[k];
       int64_t label = feature_labels_t::UNKNOWN;
-      int subject = 0;
       const auto it = subject_of_code.find(z.code);
-      if (it != subject_of_code.end()) subject = it->second;
+      const int subject = it == subject_of_code.end() ? 0 : it->second;  // colour 0: no subject has this code
       if (it == subject_of_code.end()) {
         ++r.unknown_code_sightings;
         unknown.insert(z.code);
-      } else if (landmark_subjects.count(it->second)) {
-        label = it->second;
+      } else if (landmark_subjects.count(subject)) {
+        label = subject;
         ++r.landmark_sightings;
-      } else if (it->second == own_subject) {
+      } else if (subject == own_subject) {
         ++r.own_code_sightings;
-      } else if (it->second < kFirstLandmarkSubject) {
+      } else if (subject < kFirstLandmarkSubject) {
         ++r.robot_sightings;
         label = feature_labels_t::OTHER_ROBOT;
         if (o.drop_robot_sightings) {

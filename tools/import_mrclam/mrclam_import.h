@@ -102,13 +102,13 @@ struct ImportedLog {
 /// Reads DIR/RobotN_{Odometry,Measurement,Groundtruth}.dat, DIR/Landmark_Groundtruth.dat and
 /// DIR/Barcodes.dat. Throws ParseError (file and line) for malformed input, std::invalid_argument
 /// for bad options.
+ImportedLog importRobot(const std::string& dir, const ImportOptions& options);
+
 /// Diagnostic: the dataset's landmarks (Landmark_Groundtruth.dat) as filter landmarks of kind
 /// vertical line, id = subject, for localisation in the true map (omnislam-slam --load-map
 /// --localise): x-y covariance from the file's Vicon std-devs (at least 1e-10 m^2), z not observed
 /// (1 m^2). Throws ParseError naming file and line like the import.
 std::vector<slam::Landmark> truthLandmarks(const std::string& dataset_dir);
-
-ImportedLog importRobot(const std::string& dir, const ImportOptions& options);
 
 /// Pose at t_s interpolated in `truth` (linear position, shortest-arc heading); nothing outside.
 std::optional<PoseSample> interpolatePose(const std::vector<PoseSample>& truth, double t_s);

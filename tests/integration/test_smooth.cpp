@@ -32,6 +32,13 @@ double truthX(double t) { return 2.0 * std::cos(0.1 * t); }
 double truthY(double t) { return 2.0 * std::sin(0.1 * t); }
 double truthTheta(double t) { return std::remainder(0.1 * t + M_PI / 2, 2 * M_PI); }
 
+/// The five landmarks as a map: ids id0 + j, each moved by offset_m.
+map_t landmarkMap(int64_t id0, const Eigen::Vector2d& offset_m) {
+  std::vector<std::pair<int64_t, Eigen::Vector2d>> pts;
+  for (size_t j = 0; j < kLandmarks.size(); ++j) pts.emplace_back(id0 + static_cast<int64_t>(j), kLandmarks[j] + offset_m);
+  return t::makeLineMap(pts);
+}
+
 /// 60 s: ODOMETRY at 20 Hz (heading drifting 0.01 rad/s), 2 Hz frames of all five landmarks with
 /// SLAM_POSE up to 0.3 m off the truth, SLAM_ASSOCIATIONS (ids 100 + j), labels (ids j), a SLAM_MAP 0.3 m
 /// off, GROUND_TRUTH_POSE; with `garbage`, one undecodable ODOMETRY event as well.
@@ -42,17 +49,8 @@ void writeRun(const std::string& path, bool garbage, bool with_slam_pose = true)
   const int64_t t0 = 1'000'000'000;
   double ox = 0, oy = 0, oth = 0;  // odometry integrated with a heading bias
   int64_t seq = 0, fseq = 0;
-  map_t truth_map{};
+  map_t truth_map = landmarkMap(0, Eigen::Vector2d::Zero());
   truth_map.utime = t0;
-  for (size_t j = 0; j < kLandmarks.size(); ++j) {
-    landmark_t l{};
-    l.id = static_cast<int64_t>(j);
-    l.position_m[0] = kLandmarks[j].x();
-    l.position_m[1] = kLandmarks[j].y();
-    l.kind = feature_t::KIND_VERTICAL_LINE;
-    truth_map.landmarks.push_back(l);
-  }
-  truth_map.num_landmarks = static_cast<int32_t>(truth_map.landmarks.size());
   w.write(t0, channels::kGroundTruthMap, truth_map);
   for (int k = 0; k <= 1200; ++k) {
     const double t = k * 0.05;
@@ -98,17 +96,8 @@ void writeRun(const std::string& path, bool garbage, bool with_slam_pose = true)
       p.input_seq = fseq;
       w.write(u, channels::kSlamPose, p);
       w.write(u, channels::kSlamAssociations, a);
-      map_t m{};
+      map_t m = landmarkMap(100, Eigen::Vector2d(0.3, -0.2));
       m.utime = u, m.seq = fseq, m.input_seq = fseq;
-      for (size_t j = 0; j < kLandmarks.size(); ++j) {
-        landmark_t l{};
-        l.id = 100 + static_cast<int64_t>(j);
-        l.position_m[0] = kLandmarks[j].x() + 0.3;
-        l.position_m[1] = kLandmarks[j].y() - 0.2;
-        l.kind = feature_t::KIND_VERTICAL_LINE;
-        m.landmarks.push_back(l);
-      }
-      m.num_landmarks = static_cast<int32_t>(m.landmarks.size());
       w.write(u, channels::kSlamMap, m);
     }
     ++fseq;

@@ -27,20 +27,6 @@ using omnislam::testing::jsonNumber;
 
 namespace {
 
-map_t mapOf(const std::vector<std::pair<int64_t, Eigen::Vector2d>>& pts) {
-  map_t m{};
-  for (const auto& [id, p] : pts) {
-    landmark_t l{};
-    l.id = id;
-    l.position_m[0] = p.x();
-    l.position_m[1] = p.y();
-    l.kind = 2;
-    m.landmarks.push_back(l);
-  }
-  m.num_landmarks = static_cast<int32_t>(pts.size());
-  return m;
-}
-
 int64_t utimeOf(int k) { return 1'000'000 + static_cast<int64_t>(k) * 100'000; }
 
 // Truth: x = 0.1 k along +x. Odometry: 10 % long, in a frame rotated by +90 deg and shifted, so
@@ -52,7 +38,7 @@ int64_t utimeOf(int k) { return 1'000'000 + static_cast<int64_t>(k) * 100'000; }
 // number of entries (left out, counted).
 void makeLog(const std::string& path) {
   lcmio::LogWriter log(path);
-  log.write(utimeOf(0), channels::kGroundTruthMap, mapOf({{6, {1.0, 1.1}}, {7, {2.0, -1.0}}, {8, {3.0, 1.0}}}));
+  log.write(utimeOf(0), channels::kGroundTruthMap, t::makeLineMap({{6, {1.0, 1.1}}, {7, {2.0, -1.0}}, {8, {3.0, 1.0}}}));
   for (int k = 0; k <= 110; ++k) {
     const int64_t u = utimeOf(k);
     log.write(u, channels::kGroundTruthPose, t::makePose(u, 0.1 * k, 0.0, 0.0));
@@ -96,7 +82,7 @@ void makeLog(const std::string& path) {
       a.num_features = f.num_features;
       a.landmark_id = ass;
       log.write(u, channels::kSlamAssociations, a);
-      log.write(u, channels::kSlamMap, mapOf({{100, {1.0, 1.0}}, {101, {2.0, -1.0}}, {102, {5.0, 5.0}}}));
+      log.write(u, channels::kSlamMap, t::makeLineMap({{100, {1.0, 1.0}}, {101, {2.0, -1.0}}, {102, {5.0, 5.0}}}));
     }
     if (k == 95 || k == 105) {  // labels for a frame the SLAM answered badly (95) or not at all (105)
       feature_labels_t fl{};
@@ -167,12 +153,12 @@ TEST(EvalAssociation, WithoutLabelsNoAssociationKeys) {
   const std::string log = d.file("plain.lcm");
   {
     lcmio::LogWriter f(log);
-    f.write(utimeOf(0), channels::kGroundTruthMap, mapOf({{6, {1.0, 1.0}}}));
+    f.write(utimeOf(0), channels::kGroundTruthMap, t::makeLineMap({{6, {1.0, 1.0}}}));
     for (int k = 0; k <= 10; ++k) {
       f.write(utimeOf(k), channels::kGroundTruthPose, t::makePose(utimeOf(k), 0.1 * k, 0.0, 0.0));
       f.write(utimeOf(k), channels::kSlamPose, t::makePose(utimeOf(k), 0.1 * k, 0.0, 0.0));
     }
-    f.write(utimeOf(10), channels::kSlamMap, mapOf({{100, {1.0, 1.0}}}));
+    f.write(utimeOf(10), channels::kSlamMap, t::makeLineMap({{100, {1.0, 1.0}}}));
   }
   const auto r = t::run({t::binPath("omnislam-eval"), log, "--json", "--no-tum"}, 60);
   ASSERT_EQ(r.exit_code, 0) << r.output;

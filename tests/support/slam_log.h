@@ -1,14 +1,19 @@
-// Pose messages for the logs tests write, and checks on a recorded run's SLAM output.
+// Pose and map messages for the logs tests write, and checks on a recorded run's SLAM output.
 #pragma once
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+
 #include <algorithm>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "omnislam/features_t.hpp"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
+#include "omnislam/map_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "eval_json.h"
 
@@ -19,6 +24,21 @@ inline pose_t makePose(int64_t utime, double x_m, double y_m, double theta_rad) 
   pose_t p{};
   p.utime = utime, p.x_m = x_m, p.y_m = y_m, p.theta_rad = theta_rad, p.input_seq = -1;
   return p;
+}
+
+/// A map_t of vertical-line landmarks (id, x-y position [m]), no covariance, utime and seq 0.
+inline map_t makeLineMap(const std::vector<std::pair<int64_t, Eigen::Vector2d>>& landmarks) {
+  map_t m{};
+  for (const auto& [id, p] : landmarks) {
+    landmark_t l{};
+    l.id = id;
+    l.position_m[0] = p.x();
+    l.position_m[1] = p.y();
+    l.kind = feature_t::KIND_VERTICAL_LINE;
+    m.landmarks.push_back(l);
+  }
+  m.num_landmarks = static_cast<int32_t>(m.landmarks.size());
+  return m;
 }
 
 /// Every OMNI_FEATURES frame of the log has its SLAM_POSE, in order (input_seq = the frame's seq).

@@ -7,10 +7,12 @@
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "omnislam/core/angles.h"
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/types.h"
+#include "omnislam/core/slam/validation.h"
 
 namespace omnislam::slam {
 namespace {
@@ -70,15 +72,15 @@ double totalCost(const SmootherProblem& pb, const State& s, const Eigen::Matrix3
 }  // namespace
 
 std::string SmootherOptions::validate() const {
-  if (max_iterations < 1) return "max_iterations must be >= 1";
-  if (!(cauchy_scale >= 0.0) || !std::isfinite(cauchy_scale)) return "cauchy_scale must be finite and >= 0";
-  if (!(prior_sigma_xy_m > 0.0) || !std::isfinite(prior_sigma_xy_m)) return "prior_sigma_xy_m must be finite and > 0";
-  if (!(prior_sigma_theta_rad > 0.0) || !std::isfinite(prior_sigma_theta_rad))
-    return "prior_sigma_theta_rad must be finite and > 0";
-  if (!(initial_lambda > 0.0) || !std::isfinite(initial_lambda)) return "initial_lambda must be finite and > 0";
-  if (!(relative_tolerance >= 0.0) || !std::isfinite(relative_tolerance))
-    return "relative_tolerance must be finite and >= 0";
-  return {};
+  const double big = std::numeric_limits<double>::max();  // finite: infinity is refused too
+  detail::FieldChecker c;
+  c.inClosed("max_iterations", max_iterations, 1, std::numeric_limits<int>::max())
+      .inClosed("cauchy_scale", cauchy_scale, 0.0, big)
+      .inLeftOpen("prior_sigma_xy_m", prior_sigma_xy_m, 0.0, big)
+      .inLeftOpen("prior_sigma_theta_rad", prior_sigma_theta_rad, 0.0, big)
+      .inLeftOpen("initial_lambda", initial_lambda, 0.0, big)
+      .inClosed("relative_tolerance", relative_tolerance, 0.0, big);
+  return c.message();
 }
 
 std::string SmootherProblem::validate() const {

@@ -1,11 +1,13 @@
 // Tests of the batch bearing-only smoother: Jacobians against central differences, the ray crossing
-// against a closed form, exact recovery from noise-free data, the robust kernel against outliers,
-// determinism, and the refusal of invalid problems.
+// against a closed form, exact recovery from noise-free data, the robust kernel against outliers, the
+// covariance against the brute-force inverse of the numerical information, determinism, and the
+// refusal of invalid problems.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "omnislam/core/angles.h"
+#include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/bearing_smoother.h"
 #include "omnislam/core/slam/motion_model.h"
 #include "omnislam/core/slam/random.h"
@@ -173,6 +175,66 @@ TEST(slam_BearingSmoother, CauchyKernelHoldsAgainstOutliersWhereLeastSquaresBend
   const double frac = static_cast<double>(low) / static_cast<double>(robust.bearing_weights.size());
   EXPECT_GT(frac, 0.10);
   EXPECT_LT(frac, 0.20);
+}
+
+// Whitened residuals of every factor (least squares, no kernel) at the stacked state
+// (x_0, ..., x_{n-1}, l_0, ..., l_{L-1}), written from the file header's cost independently of the solver.
+Eigen::VectorXd whitenedResiduals(const SmootherProblem& pb, const SmootherOptions& o, const Eigen::VectorXd& v) {
+  const int n = static_cast<int>(pb.poses.size());
+  auto pose = [&](int i) { return Pose2{v(3 * i), v(3 * i + 1), v(3 * i + 2)}; };
+  auto landmark = [&](int j) { return Eigen::Vector3d(v(3 * n + 2 * j), v(3 * n + 2 * j + 1), 0.0); };
+  std::vector<double> r;
+  const Pose2 x0 = pose(0);
+  r.push_back((x0.x_m - pb.poses[0].x_m) / o.prior_sigma_xy_m);
+  r.push_back((x0.y_m - pb.poses[0].y_m) / o.prior_sigma_xy_m);
+  r.push_back(wrapAngle(x0.theta_rad - pb.poses[0].theta_rad) / o.prior_sigma_theta_rad);
+  for (const auto& f : pb.odometry) {
+    const Eigen::Matrix3d U = f.covariance.inverse().llt().matrixU();  // U^T U = Sigma^-1
+    const Eigen::Vector3d w = U * odometryResidual(pose(f.from), pose(f.to), f.increment);
+    r.insert(r.end(), w.data(), w.data() + 3);
+  }
+  for (const auto& f : pb.bearings) {
+    const auto z = predictMeasurement(LandmarkKind::kVerticalLine, landmark(f.landmark), pose(f.pose), f.p_CinR_m);
+    r.push_back(wrapAngle((*z)(0) - f.azimuth_rad) / f.sigma_rad);
+  }
+  return Eigen::Map<Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()));
+}
+
+TEST(slam_BearingSmoother, CovarianceIsTheInverseOfTheNumericalInformation) {
+  Scene s = makeScene(1.0, 0.01, 0.0, 6);
+  SmootherOptions o;
+  o.cauchy_scale = 0.0;  // every weight 1: the information is J^T J of the whitened residuals
+  o.compute_covariance = true;
+  const SmootherResult r = smoothBearingOnly(s.problem, o);
+  ASSERT_TRUE(r.failure.empty()) << r.failure;
+  const int n = static_cast<int>(r.poses.size()), L = static_cast<int>(r.landmarks_m.size());
+  ASSERT_EQ(r.covariance.rows(), 3 + 2 * L);
+  ASSERT_EQ(r.covariance.cols(), 3 + 2 * L);
+  // Brute force: the Jacobian by central differences at the solution, the dense inverse of J^T J.
+  Eigen::VectorXd v(3 * n + 2 * L);
+  for (int i = 0; i < n; ++i) v.segment<3>(3 * i) = r.poses[i].vec();
+  for (int j = 0; j < L; ++j) v.segment<2>(3 * n + 2 * j) = r.landmarks_m[j];
+  const Eigen::VectorXd r0 = whitenedResiduals(s.problem, o, v);
+  Eigen::MatrixXd J(r0.size(), v.size());
+  const double h = 1e-6;
+  for (Eigen::Index k = 0; k < v.size(); ++k) {
+    Eigen::VectorXd a = v, b = v;
+    a(k) += h;
+    b(k) -= h;
+    J.col(k) = (whitenedResiduals(s.problem, o, a) - whitenedResiduals(s.problem, o, b)) / (2 * h);
+  }
+  const Eigen::MatrixXd full = (J.transpose() * J).inverse();
+  std::vector<int> idx = {3 * (n - 1), 3 * (n - 1) + 1, 3 * (n - 1) + 2};
+  for (int j = 0; j < L; ++j) idx.insert(idx.end(), {3 * n + 2 * j, 3 * n + 2 * j + 1});
+  Eigen::MatrixXd expected(idx.size(), idx.size());
+  for (size_t a = 0; a < idx.size(); ++a)
+    for (size_t b = 0; b < idx.size(); ++b) expected(a, b) = full(idx[a], idx[b]);
+  EXPECT_LT((r.covariance - expected).norm(), 1e-4 * expected.norm()) << "smoother\n" << r.covariance.topLeftCorner<5, 5>()
+                                                                       << "\nbrute force\n" << expected.topLeftCorner<5, 5>();
+  EXPECT_TRUE(r.covariance.isApprox(r.covariance.transpose()));
+  // Not requested: empty.
+  o.compute_covariance = false;
+  EXPECT_EQ(smoothBearingOnly(s.problem, o).covariance.size(), 0);
 }
 
 TEST(slam_BearingSmoother, IsDeterministic) {

@@ -69,6 +69,53 @@ double totalCost(const SmootherProblem& pb, const State& s, const Eigen::Matrix3
   return cost;
 }
 
+/// The normal equations H dx = -g of the re-weighted (IRLS) problem at s: H = J^T W J, g = J^T W r.
+void normalEquations(const SmootherProblem& pb, const State& s, const Layout& lay, int n, const Eigen::Matrix3d& prior_info,
+                     const std::vector<Eigen::Matrix3d>& odo_info, double c, Eigen::SparseMatrix<double>& H,
+                     Eigen::VectorXd& g) {
+  std::vector<Eigen::Triplet<double>> trip;
+  g = Eigen::VectorXd::Zero(n);
+  auto add = [&](int row0, int col0, const auto& block) {
+    for (int a = 0; a < block.rows(); ++a)
+      for (int b = 0; b < block.cols(); ++b) trip.emplace_back(row0 + a, col0 + b, block(a, b));
+  };
+  {
+    const Eigen::Vector3d r = priorResidual(s.poses[0], pb.poses[0]);
+    add(0, 0, prior_info);
+    g.segment<3>(0) += prior_info * r;
+  }
+  for (size_t k = 0; k < pb.odometry.size(); ++k) {
+    const auto& f = pb.odometry[k];
+    Eigen::Matrix3d Ja, Jb;
+    const Eigen::Vector3d r = odometryResidual(s.poses[f.from], s.poses[f.to], f.increment, &Ja, &Jb);
+    const int ia = lay.pose(f.from), ib = lay.pose(f.to);
+    const Eigen::Matrix3d WJa = odo_info[k] * Ja, WJb = odo_info[k] * Jb;
+    add(ia, ia, Ja.transpose() * WJa);
+    add(ia, ib, Ja.transpose() * WJb);
+    add(ib, ia, Jb.transpose() * WJa);
+    add(ib, ib, Jb.transpose() * WJb);
+    g.segment<3>(ia) += Ja.transpose() * odo_info[k] * r;
+    g.segment<3>(ib) += Jb.transpose() * odo_info[k] * r;
+  }
+  for (const auto& f : pb.bearings) {
+    Eigen::Matrix<double, 1, 3> Jp;
+    Eigen::Matrix<double, 1, 2> Jl;
+    const auto e = bearingError(s.poses[f.pose], s.landmarks[f.landmark], f, &Jp, &Jl);
+    if (!e) continue;
+    const double w = robustWeight(*e, c) / (f.sigma_rad * f.sigma_rad);
+    const double r = *e * f.sigma_rad;
+    const int ip = lay.pose(f.pose), il = lay.landmark(f.landmark);
+    add(ip, ip, w * Jp.transpose() * Jp);
+    add(ip, il, w * Jp.transpose() * Jl);
+    add(il, ip, w * Jl.transpose() * Jp);
+    add(il, il, w * Jl.transpose() * Jl);
+    g.segment<3>(ip) += w * r * Jp.transpose();
+    g.segment<2>(il) += w * r * Jl.transpose();
+  }
+  H.resize(n, n);
+  H.setFromTriplets(trip.begin(), trip.end());
+}
+
 }  // namespace
 
 std::string SmootherOptions::validate() const {
@@ -167,52 +214,12 @@ SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOption
   res.initial_cost = cost;
   double lambda = opt.initial_lambda;
 
-  std::vector<Eigen::Triplet<double>> trip;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  Eigen::SparseMatrix<double> H;
+  Eigen::VectorXd g;
   for (int it = 0; it < opt.max_iterations; ++it) {
     res.iterations = it + 1;
-    // Normal equations H dx = -g of the re-weighted problem at s.
-    trip.clear();
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
-    auto add = [&](int row0, int col0, const auto& block) {
-      for (int a = 0; a < block.rows(); ++a)
-        for (int b = 0; b < block.cols(); ++b) trip.emplace_back(row0 + a, col0 + b, block(a, b));
-    };
-    {
-      const Eigen::Vector3d r = priorResidual(s.poses[0], pb.poses[0]);
-      add(0, 0, prior_info);
-      g.segment<3>(0) += prior_info * r;
-    }
-    for (size_t k = 0; k < pb.odometry.size(); ++k) {
-      const auto& f = pb.odometry[k];
-      Eigen::Matrix3d Ja, Jb;
-      const Eigen::Vector3d r = odometryResidual(s.poses[f.from], s.poses[f.to], f.increment, &Ja, &Jb);
-      const int ia = lay.pose(f.from), ib = lay.pose(f.to);
-      const Eigen::Matrix3d WJa = odo_info[k] * Ja, WJb = odo_info[k] * Jb;
-      add(ia, ia, Ja.transpose() * WJa);
-      add(ia, ib, Ja.transpose() * WJb);
-      add(ib, ia, Jb.transpose() * WJa);
-      add(ib, ib, Jb.transpose() * WJb);
-      g.segment<3>(ia) += Ja.transpose() * odo_info[k] * r;
-      g.segment<3>(ib) += Jb.transpose() * odo_info[k] * r;
-    }
-    for (const auto& f : pb.bearings) {
-      Eigen::Matrix<double, 1, 3> Jp;
-      Eigen::Matrix<double, 1, 2> Jl;
-      const auto e = bearingError(s.poses[f.pose], s.landmarks[f.landmark], f, &Jp, &Jl);
-      if (!e) continue;
-      const double w = robustWeight(*e, c) / (f.sigma_rad * f.sigma_rad);
-      const double r = *e * f.sigma_rad;
-      const int ip = lay.pose(f.pose), il = lay.landmark(f.landmark);
-      add(ip, ip, w * Jp.transpose() * Jp);
-      add(ip, il, w * Jp.transpose() * Jl);
-      add(il, ip, w * Jl.transpose() * Jp);
-      add(il, il, w * Jl.transpose() * Jl);
-      g.segment<3>(ip) += w * r * Jp.transpose();
-      g.segment<2>(il) += w * r * Jl.transpose();
-    }
-    Eigen::SparseMatrix<double> H(n, n);
-    H.setFromTriplets(trip.begin(), trip.end());
+    normalEquations(pb, s, lay, n, prior_info, odo_info, c, H, g);
     const Eigen::VectorXd diag = H.diagonal();
 
     // Marquardt: raise lambda until a step lowers the cost (or give up).
@@ -253,6 +260,23 @@ SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOption
     if (res.converged) break;
   }
   res.final_cost = cost;
+  if (opt.compute_covariance) {
+    normalEquations(pb, s, lay, n, prior_info, odo_info, c, H, g);
+    for (int k = 0; k < n; ++k) H.coeffRef(k, k) += 1e-12;  // as in the steps: unobserved landmarks stay solvable
+    ldlt.compute(H);
+    const int nl = static_cast<int>(pb.landmarks_m.size());
+    std::vector<int> idx;
+    for (int a = 0; a < 3; ++a) idx.push_back(lay.pose(lay.num_poses - 1) + a);
+    for (int j = 0; j < nl; ++j)
+      for (int a = 0; a < 2; ++a) idx.push_back(lay.landmark(j) + a);
+    const int m = static_cast<int>(idx.size());
+    Eigen::MatrixXd E = Eigen::MatrixXd::Zero(n, m);
+    for (int k = 0; k < m; ++k) E(idx[k], k) = 1.0;
+    const Eigen::MatrixXd cols = ldlt.solve(E);
+    res.covariance.resize(m, m);
+    for (int a = 0; a < m; ++a)
+      for (int b = 0; b < m; ++b) res.covariance(a, b) = 0.5 * (cols(idx[a], b) + cols(idx[b], a));
+  }
   res.bearing_weights.reserve(pb.bearings.size());
   for (const auto& f : pb.bearings) {
     const auto e = bearingError(s.poses[f.pose], s.landmarks[f.landmark], f, nullptr, nullptr);

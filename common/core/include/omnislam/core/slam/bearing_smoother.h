@@ -15,6 +15,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Dense>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +31,7 @@ struct SmootherOptions {
   double prior_sigma_theta_rad = 1e-3;  ///< std of the first pose's heading prior [rad], > 0
   double initial_lambda = 1e-3;      ///< initial Marquardt damping (relative to the diagonal), > 0
   double relative_tolerance = 1e-9;  ///< stop when an accepted step lowers the cost by less than this fraction, >= 0
+  bool compute_covariance = false;   ///< fill SmootherResult::covariance (one more factorisation)
 
   /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
   std::string validate() const;
@@ -72,6 +74,10 @@ struct SmootherResult {
   int iterations = 0;                   ///< Levenberg-Marquardt iterations run
   bool converged = false;               ///< stopped by relative_tolerance (not by max_iterations)
   std::string failure;                  ///< non-empty: the problem or options were invalid; nothing solved
+  /// With SmootherOptions::compute_covariance: the joint covariance of (last pose (x, y, theta),
+  /// landmark 0 (x, y), ..., landmark L-1) [m, rad], (3 + 2L) square: the inverse of the Gauss-Newton
+  /// information at the solution (bearings with their kernel weights), marginalised onto those.
+  Eigen::MatrixXd covariance;
 };
 
 /// Odometry residual r = (R(theta_a)^T (p_b - p_a) - u_xy, wrap(theta_b - theta_a - u_theta)) with

@@ -4,6 +4,7 @@
 // refusal of invalid problems.
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
 
 #include "omnislam/core/angles.h"

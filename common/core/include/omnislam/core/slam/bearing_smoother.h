@@ -15,7 +15,6 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/Dense>
 #include <optional>
 #include <string>
 #include <vector>

@@ -14,7 +14,7 @@
 # in the true map (importer --truth-map-out, omnislam-slam --load-map --localise) instead of mapping,
 # and --smooth scores omnislam-smooth's batch smoothing of each run instead of the filter (with the
 # filter's associations, or with the barcodes: how good could the same data be; docs/smoothing.md),
-# --smooth-args passing it more options (e.g. "--initial-from-odometry").
+# --smooth-args passing it more options (e.g. "--initial-from-odometry" or "--incremental").
 # Defaults: build dir $OMNISLAM_BUILD_DIR or build; data ../shared/datasets/mrclam/MRCLAM_Dataset6;
 # out /tmp/omnislam-mrclam; seed 1. Needs no network; about a minute per robot on one core.
 set -euo pipefail

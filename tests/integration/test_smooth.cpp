@@ -1,6 +1,7 @@
 // omnislam-smooth end to end on a synthetic recorded run with known answers: a robot circling five
 // vertical-line landmarks (initial map 0.36 m off), drifting odometry, a filter estimate 0.3 m off; the smoothed copy of the
-// log must be near the truth, keep every other channel, and refuse or count bad input.
+// log must be near the truth, keep every other channel, and refuse or count bad input; the
+// incremental mode must publish causal poses (the same whether or not the run goes on).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -41,8 +42,9 @@ map_t landmarkMap(int64_t id0, const Eigen::Vector2d& offset_m) {
 
 /// 60 s: ODOMETRY at 20 Hz (heading drifting 0.01 rad/s), 2 Hz frames of all five landmarks with
 /// SLAM_POSE up to 0.3 m off the truth, SLAM_ASSOCIATIONS (ids 100 + j), labels (ids j), a SLAM_MAP 0.3 m
-/// off, GROUND_TRUTH_POSE; with `garbage`, one undecodable ODOMETRY event as well.
-void writeRun(const std::string& path, bool garbage, bool with_slam_pose = true) {
+/// off, GROUND_TRUTH_POSE; with `garbage`, one undecodable ODOMETRY event as well. `last_step`
+/// (<= 1200) ends the run early: the same events up to then.
+void writeRun(const std::string& path, bool garbage, bool with_slam_pose = true, int last_step = 1200) {
   lcmio::LogWriter w(path);
   std::mt19937_64 rng(7);
   std::normal_distribution<double> n01(0.0, 1.0);
@@ -52,7 +54,7 @@ void writeRun(const std::string& path, bool garbage, bool with_slam_pose = true)
   map_t truth_map = landmarkMap(0, Eigen::Vector2d::Zero());
   truth_map.utime = t0;
   w.write(t0, channels::kGroundTruthMap, truth_map);
-  for (int k = 0; k <= 1200; ++k) {
+  for (int k = 0; k <= last_step; ++k) {
     const double t = k * 0.05;
     const int64_t u = t0 + static_cast<int64_t>(std::llround(t * 1e6));
     if (k > 0) {
@@ -177,6 +179,48 @@ TEST(Smooth, LabelsGiveTheTruthIdsAndDropTheFilterAssociations) {
                          l.position_m[1] - kLandmarks[static_cast<size_t>(l.id)].y()), 0.1);
   }
   EXPECT_TRUE(lcmio::readChannel<associations_t>(out, channels::kSlamAssociations).empty());
+}
+
+TEST(Smooth, IncrementalPublishesEachPoseFromItsOwnFramesSolve) {
+  t::TempDir dir;
+  const std::string in = dir.file("in.lcm"), out = dir.file("out.lcm");
+  writeRun(in, false);
+  const auto r = smooth(in, out, {"--associations", "labels", "--incremental"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("121 poses, 120 odometry and 605 bearing factors"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("121 solve(s)"), std::string::npos) << r.output;
+  const auto online = lcmio::readChannel<pose_t>(out, channels::kSlamPose);
+  ASSERT_EQ(online.size(), 121u);
+  EXPECT_LT(rmseToTruth(online), 0.05);
+  const auto maps = lcmio::readChannel<map_t>(out, channels::kSlamMap);
+  ASSERT_EQ(maps.size(), 1u);
+  ASSERT_EQ(maps[0].num_landmarks, 5);
+  for (const auto& l : maps[0].landmarks)
+    EXPECT_LT(std::hypot(l.position_m[0] - kLandmarks[static_cast<size_t>(l.id)].x(),
+                         l.position_m[1] - kLandmarks[static_cast<size_t>(l.id)].y()), 0.1) << "landmark " << l.id;
+
+  // Causal: the first 61 frames of a run that ends there get exactly the same poses.
+  const std::string half = dir.file("half.lcm"), half_out = dir.file("half_out.lcm");
+  writeRun(half, false, true, 600);
+  ASSERT_EQ(smooth(half, half_out, {"--associations", "labels", "--incremental"}).exit_code, 0);
+  const auto early = lcmio::readChannel<pose_t>(half_out, channels::kSlamPose);
+  ASSERT_EQ(early.size(), 61u);
+  for (size_t i = 0; i < early.size(); ++i) {
+    EXPECT_EQ(early[i].utime, online[i].utime);
+    EXPECT_EQ(early[i].x_m, online[i].x_m) << i;
+    EXPECT_EQ(early[i].y_m, online[i].y_m) << i;
+    EXPECT_EQ(early[i].theta_rad, online[i].theta_rad) << i;
+  }
+  // The batch solve of the whole run does use later frames: it differs from the causal poses.
+  const std::string batch_out = dir.file("batch.lcm");
+  ASSERT_EQ(smooth(in, batch_out, {"--associations", "labels", "--initial-from-odometry"}).exit_code, 0);
+  const auto batch = lcmio::readChannel<pose_t>(batch_out, channels::kSlamPose);
+  ASSERT_EQ(batch.size(), online.size());
+  EXPECT_NE(batch[60].x_m, online[60].x_m);
+
+  const auto bad = smooth(in, out, {"--incremental", "--min-rays", "1"});
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("min-rays"), std::string::npos) << bad.output;
 }
 
 TEST(Smooth, CountsAnUndecodableMessageAndRefusesBadFlagsAndLogs) {

@@ -1,9 +1,10 @@
-// omnislam-smooth: batch smoothing of a recorded omnislam-slam run (docs/smoothing.md). Reads the
+// omnislam-smooth: batch or incremental smoothing of a recorded omnislam-slam run (docs/smoothing.md). Reads the
 // SLAM output log, smooths poses and vertical-line landmarks with the filter's motion noise (from
 // its SLAM config) and the association of --associations, and writes a copy of the log with
 // SLAM_POSE and SLAM_MAP replaced, for omnislam-eval. Prints a one-line summary on stderr.
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <iostream>
 
 #include "omnislam/lcmio/app.h"
@@ -14,7 +15,7 @@
 using namespace omnislam;
 
 int main(int argc, char** argv) {
-  CLI::App cli{"omnislam-smooth: batch smoothing of a recorded SLAM run (vertical-line landmarks)"};
+  CLI::App cli{"omnislam-smooth: batch or incremental smoothing of a recorded SLAM run (vertical-line landmarks)"};
   std::string in, out, config_path, source = "slam";
   std::vector<std::string> sets;
   smooth::SmoothLogOptions opt;
@@ -31,6 +32,15 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"slam", "labels"}));
   cli.add_flag("--initial-from-odometry", opt.initial_from_odometry,
                "start from dead reckoning from the first SLAM_POSE instead of the filter's poses");
+  cli.add_flag("--incremental", opt.incremental,
+               "grow the problem frame by frame from the first SLAM_POSE and publish each frame's pose from its own "
+               "solve (causal)");
+  double min_parallax_deg = opt.min_parallax_rad * 180.0 / M_PI;
+  cli.add_option("--min-rays", opt.min_rays, "--incremental: rays of a landmark before it is added (default 5)")
+      ->check(CLI::Range(2, 100000));
+  cli.add_option("--min-parallax-deg", min_parallax_deg,
+                 "--incremental: ... seen over at least this spread of directions at their crossing (default 7)")
+      ->check(CLI::Range(0.0, 179.0));
   cli.add_option("--cauchy-scale", opt.smoother.cauchy_scale, "robust kernel scale in bearing sigmas (0: least squares)")
       ->check(CLI::Range(0.0, 1000.0));
   cli.add_option("--max-iterations", opt.smoother.max_iterations, "Levenberg-Marquardt iterations")
@@ -38,13 +48,14 @@ int main(int argc, char** argv) {
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-smooth", [&]() -> int {
     opt.motion = slamproc::loadSlamOptions(config_path, sets).filter.motion;
+    opt.min_parallax_rad = min_parallax_deg * M_PI / 180.0;
     opt.associations = source == "labels" ? smooth::AssociationSource::kLabels : smooth::AssociationSource::kSlam;
     const auto rep = smooth::smoothLog(in, out, opt);
     for (const auto& p : rep.problems) std::cerr << "omnislam-smooth: skipped " << p << "\n";
     std::cerr << "omnislam-smooth: " << rep.poses << " poses, " << rep.odometry_factors << " odometry and "
               << rep.bearing_factors << " bearing factors (" << rep.bearings_downweighted << " down-weighted below 0.5), "
               << rep.landmarks << " landmarks (" << rep.unanchored_landmarks << " without an initial position, unused), "
-              << rep.frames_without_odometry << " frames without odometry; cost " << rep.result.initial_cost << " -> "
+              << rep.frames_without_odometry << " frames without odometry; " << rep.solves << " solve(s), the last: cost " << rep.result.initial_cost << " -> "
               << rep.result.final_cost << " in " << rep.result.iterations << " iterations"
               << (rep.result.converged ? "" : " (not converged)") << "\n";
     return app::kOk;

@@ -1,6 +1,7 @@
-// Batch smoothing of a recorded SLAM run: log in, problem, core smoother, log out (smooth_log.h).
+// Batch or incremental smoothing of a recorded SLAM run: log in, problem, core smoother, log out (smooth_log.h).
 #include "smooth_log.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -8,6 +9,7 @@
 #include <stdexcept>
 
 #include "omnislam/associations_t.hpp"
+#include "omnislam/core/angles.h"
 #include "omnislam/core/eval/metrics.h"
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/feature_labels_t.hpp"
@@ -44,9 +46,48 @@ std::optional<Msg> decodeValid(const lcmio::LogEvent& ev, Counter& bad) {
   return m;
 }
 
+/// One associated azimuth: the frame (problem pose index) it was seen from.
+struct Ray {
+  int node;
+  double azimuth_rad, sigma_rad;
+  Eigen::Vector3d p_CinR_m;
+};
+
+/// Least-squares crossing of the rays from `poses`; std::nullopt when they do not cross. With
+/// min_parallax_rad > 0 also when the crossing is behind one of them or they see it over less than
+/// min_parallax_rad (largest minus smallest direction from the camera centres to the crossing).
+std::optional<Eigen::Vector2d> crossRays(const std::vector<Pose2>& poses, const std::vector<Ray>& rays,
+                                         double min_parallax_rad) {
+  std::vector<Eigen::Vector2d> c;
+  std::vector<double> phi;
+  for (const Ray& r : rays) {
+    const Pose2& x = poses[static_cast<size_t>(r.node)];
+    c.push_back(slam::cameraCentreInWorld(x, r.p_CinR_m).head<2>());
+    phi.push_back(x.theta_rad + r.azimuth_rad);
+  }
+  const auto p = slam::intersectRays2D(c, phi);
+  if (!p || min_parallax_rad <= 0.0) return p;
+  double lo = 0.0, hi = 0.0;
+  const Eigen::Vector2d d0 = *p - c[0];
+  const double ref = std::atan2(d0.y(), d0.x());
+  for (size_t k = 0; k < c.size(); ++k) {
+    const Eigen::Vector2d d = *p - c[k];
+    if (d.dot(Eigen::Vector2d(std::cos(phi[k]), std::sin(phi[k]))) <= 0.0) return std::nullopt;
+    const double a = wrapAngle(std::atan2(d.y(), d.x()) - ref);
+    lo = std::min(lo, a);
+    hi = std::max(hi, a);
+  }
+  if (hi - lo < min_parallax_rad) return std::nullopt;
+  return p;
+}
+
 }  // namespace
 
 SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log, const SmoothLogOptions& opt) {
+  if (opt.incremental && opt.min_rays < 2)
+    throw std::invalid_argument("min_rays must be >= 2, got " + std::to_string(opt.min_rays));
+  if (opt.incremental && !(opt.min_parallax_rad >= 0.0 && opt.min_parallax_rad < M_PI))
+    throw std::invalid_argument("min_parallax_rad must be in [0, pi), got " + std::to_string(opt.min_parallax_rad));
   SmoothLogReport rep;
   Counter bad;
   std::map<int64_t, Pose2> odo;
@@ -106,13 +147,8 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
     for (size_t i = 1; i < utimes.size(); ++i)
       if (odo_at[i]) pb.poses[i] = pb.poses[0].compose(odo_at[0]->between(*odo_at[i]));
   }
-  // Bearings of associated vertical-line features, grouped by landmark id.
-  struct Ray {
-    int node;
-    double azimuth_rad, sigma_rad;
-    Eigen::Vector3d p_CinR_m;
-  };
-  std::map<int64_t, std::vector<Ray>> rays;
+  // Bearings of associated vertical-line features, in frame order, with their landmark id.
+  std::vector<std::pair<int64_t, Ray>> rays;
   for (const auto& [u, f] : frames) {
     const auto n = node_of.find(u);
     const auto a = assoc.find(u);
@@ -126,37 +162,80 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
       const feature_t& ft = f.features[k];
       if (a->second[k] < 0 || ft.kind != feature_t::KIND_VERTICAL_LINE) continue;
       // lcmio::validate has checked the azimuth, its variance (> 0) and the camera position.
-      rays[a->second[k]].push_back({n->second, ft.azimuth_rad, std::sqrt(ft.covariance[0][0]), p_CinR});
+      rays.push_back({a->second[k], {n->second, ft.azimuth_rad, std::sqrt(ft.covariance[0][0]), p_CinR}});
     }
   }
   std::vector<int64_t> landmark_ids;
-  for (const auto& [id, rs] : rays) {
-    std::optional<Eigen::Vector2d> init;
-    const auto known = last_map_position.find(id);
-    if (opt.associations == AssociationSource::kSlam && known != last_map_position.end()) {
-      init = known->second;
-    } else {  // cross the rays from the filter's poses
-      std::vector<Eigen::Vector2d> c;
-      std::vector<double> phi;
-      for (const Ray& r : rs) {
-        const Pose2& x = pb.poses[static_cast<size_t>(r.node)];
-        c.push_back(slam::cameraCentreInWorld(x, r.p_CinR_m).head<2>());
-        phi.push_back(x.theta_rad + r.azimuth_rad);
+  std::vector<Pose2> published;  // SLAM_POSE of the copy, by node
+  if (!opt.incremental) {
+    std::map<int64_t, std::vector<Ray>> by_id;
+    for (const auto& [id, r] : rays) by_id[id].push_back(r);
+    for (const auto& [id, rs] : by_id) {
+      std::optional<Eigen::Vector2d> init;
+      const auto known = last_map_position.find(id);
+      if (opt.associations == AssociationSource::kSlam && known != last_map_position.end())
+        init = known->second;
+      else  // cross the rays from the initial poses
+        init = crossRays(pb.poses, rs, 0.0);
+      if (!init) {
+        ++rep.unanchored_landmarks;
+        continue;
       }
-      init = slam::intersectRays2D(c, phi);
+      const int j = static_cast<int>(pb.landmarks_m.size());
+      pb.landmarks_m.push_back(*init);
+      landmark_ids.push_back(id);
+      for (const Ray& r : rs) pb.bearings.push_back({r.node, j, r.azimuth_rad, r.sigma_rad, r.p_CinR_m});
     }
-    if (!init) {
-      ++rep.unanchored_landmarks;
-      continue;
+    rep.result = slam::smoothBearingOnly(pb, opt.smoother);
+    if (!rep.result.failure.empty()) throw std::invalid_argument("smoother: " + rep.result.failure);
+    rep.solves = 1;
+    published = rep.result.poses;
+  } else {
+    // Frame by frame: pb.odometry holds, in order, the step into every frame (checked here).
+    if (rep.frames_without_odometry > 0 || pb.odometry.size() + 1 != utimes.size())
+      throw std::invalid_argument(in_log + ": --incremental needs ODOMETRY over every frame; " +
+                                  std::to_string(rep.frames_without_odometry) + " frame(s) outside its span");
+    slam::SmootherProblem grown;
+    std::map<int64_t, int> landmark_of;
+    std::map<int64_t, std::vector<Ray>> pending;
+    size_t next = 0;
+    for (size_t i = 0; i < utimes.size(); ++i) {
+      if (i == 0) {
+        grown.poses.push_back(pb.poses[0]);
+      } else {
+        const slam::SmootherOdometryFactor& step = pb.odometry[i - 1];
+        grown.poses.push_back(grown.poses.back().compose(step.increment));
+        grown.odometry.push_back(step);
+      }
+      for (; next < rays.size() && rays[next].second.node == static_cast<int>(i); ++next) {
+        const auto& [id, r] = rays[next];
+        const auto lm = landmark_of.find(id);
+        if (lm != landmark_of.end()) {
+          grown.bearings.push_back({r.node, lm->second, r.azimuth_rad, r.sigma_rad, r.p_CinR_m});
+          continue;
+        }
+        std::vector<Ray>& rs = pending[id];
+        rs.push_back(r);
+        if (static_cast<int>(rs.size()) < opt.min_rays) continue;
+        const auto p = crossRays(grown.poses, rs, opt.min_parallax_rad);
+        if (!p) continue;
+        const int j = static_cast<int>(grown.landmarks_m.size());
+        grown.landmarks_m.push_back(*p);
+        landmark_ids.push_back(id);
+        landmark_of[id] = j;
+        for (const Ray& q : rs) grown.bearings.push_back({q.node, j, q.azimuth_rad, q.sigma_rad, q.p_CinR_m});
+        pending.erase(id);
+      }
+      rep.result = slam::smoothBearingOnly(grown, opt.smoother);
+      if (!rep.result.failure.empty()) throw std::invalid_argument("smoother: " + rep.result.failure);
+      ++rep.solves;
+      grown.poses = rep.result.poses;
+      grown.landmarks_m = rep.result.landmarks_m;
+      published.push_back(grown.poses.back());
     }
-    const int j = static_cast<int>(pb.landmarks_m.size());
-    pb.landmarks_m.push_back(*init);
-    landmark_ids.push_back(id);
-    for (const Ray& r : rs) pb.bearings.push_back({r.node, j, r.azimuth_rad, r.sigma_rad, r.p_CinR_m});
+    rep.unanchored_landmarks = static_cast<int64_t>(pending.size());
+    pb = std::move(grown);
   }
-
-  rep.result = slam::smoothBearingOnly(pb, opt.smoother);
-  if (!rep.result.failure.empty()) throw std::invalid_argument("smoother: " + rep.result.failure);
   rep.poses = static_cast<int64_t>(pb.poses.size());
   rep.odometry_factors = static_cast<int64_t>(pb.odometry.size());
   rep.bearing_factors = static_cast<int64_t>(pb.bearings.size());
@@ -186,7 +265,7 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
       if (!m) return;
       const auto n = node_of.find(m->utime);
       if (n == node_of.end()) return;  // non-finite: skipped above
-      const Pose2& p = rep.result.poses[static_cast<size_t>(n->second)];
+      const Pose2& p = published[static_cast<size_t>(n->second)];
       m->x_m = p.x_m, m->y_m = p.y_m, m->theta_rad = p.theta_rad;
       out.write(ev.log_utime, ch, *m);
       return;

@@ -1,10 +1,11 @@
-// Batch smoothing of a recorded omnislam-slam run (docs/smoothing.md): reads a log with ODOMETRY,
+// Batch or incremental smoothing of a recorded omnislam-slam run (docs/smoothing.md): reads a log with ODOMETRY,
 // OMNI_FEATURES and the SLAM output, builds the problem of core/slam/bearing_smoother.h from it (one
 // pose per SLAM_POSE, one odometry factor per pair of consecutive frames with the filter's motion
 // noise, one bearing factor per associated vertical-line feature) and writes a copy of the log with
 // SLAM_POSE and SLAM_MAP replaced by the smoothed estimate, for omnislam-eval.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -25,6 +26,15 @@ struct SmoothLogOptions {
   /// Initial poses: false, the filter's SLAM_POSE; true, dead reckoning (ODOMETRY) from the first
   /// SLAM_POSE (a start that does not depend on the filter, for --associations labels).
   bool initial_from_odometry = false;
+  /// false: one batch solve over the whole run from the initial poses. true: grow the problem frame by
+  /// frame from the first SLAM_POSE, as a live smoother would: each frame's pose is predicted by
+  /// odometry from the previous solution, its bearings are added (a landmark once it has
+  /// `min_rays` rays whose crossing they see over at least `min_parallax_rad`), and the problem is
+  /// re-solved; SLAM_POSE gets the frame's pose from that frame's solve (causal), SLAM_MAP the last
+  /// solve's landmarks. Needs ODOMETRY over every frame. Independent of the filter's poses and map.
+  bool incremental = false;
+  int min_rays = 5;                          ///< incremental: rays before a landmark is added, >= 2
+  double min_parallax_rad = 7.0 * M_PI / 180;  ///< incremental: their spread of directions at the crossing, >= 0
   slam::MotionNoiseOptions motion;   ///< the filter's motion noise (from its SLAM config)
   slam::SmootherOptions smoother;
 };
@@ -38,13 +48,15 @@ struct SmoothLogReport {
   int64_t skipped_messages = 0;    ///< undecodable messages or ones lcmio::validate refuses (reasons in `problems`)
   int64_t unanchored_landmarks = 0;   ///< associated but no initial position (one ray or parallel rays): not used
   int64_t frames_without_odometry = 0;  ///< frames outside the ODOMETRY time span: no odometry factor
+  int64_t solves = 0;                  ///< smoother runs (1 in batch; one per frame when incremental)
   std::vector<std::string> problems;    ///< one line per kind of skipped input, with its count
   slam::SmootherResult result;
 };
 
 /// Smooths `in_log` into `out_log` (every other event copied as is; SLAM_PARTICLES dropped since
 /// they are the filter's; SLAM_ASSOCIATIONS dropped with kLabels). Throws std::invalid_argument
-/// with the reason when the log has no SLAM_POSE or ODOMETRY, or the problem cannot be solved.
+/// with the reason when the log has no SLAM_POSE or ODOMETRY, the options are out of range, an
+/// incremental run has a frame without odometry, or the problem cannot be solved.
 SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log, const SmoothLogOptions& options);
 
 }  // namespace omnislam::smooth

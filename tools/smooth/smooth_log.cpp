@@ -12,6 +12,7 @@
 #include "omnislam/core/angles.h"
 #include "omnislam/core/eval/metrics.h"
 #include "omnislam/core/slam/bearing_model.h"
+#include "omnislam/core/slam/validation.h"
 #include "omnislam/feature_labels_t.hpp"
 #include "omnislam/features_t.hpp"
 #include "omnislam/lcmio/channels.h"
@@ -81,13 +82,23 @@ std::optional<Eigen::Vector2d> crossRays(const std::vector<Pose2>& poses, const 
   return p;
 }
 
+/// The bearing factor of `r` on landmark `landmark` (an index into the problem's landmarks).
+slam::SmootherBearingFactor bearingFactor(const Ray& r, int landmark) {
+  return {r.node, landmark, r.azimuth_rad, r.sigma_rad, r.p_CinR_m};
+}
+
 }  // namespace
 
+std::string SmoothLogOptions::validate() const {
+  if (!incremental) return {};
+  slam::detail::FieldChecker c;
+  c.inClosed("min_rays", min_rays, 2, std::numeric_limits<int>::max())
+      .inRightOpen("min_parallax_rad", min_parallax_rad, 0.0, M_PI);
+  return c.message();
+}
+
 SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log, const SmoothLogOptions& opt) {
-  if (opt.incremental && opt.min_rays < 2)
-    throw std::invalid_argument("min_rays must be >= 2, got " + std::to_string(opt.min_rays));
-  if (opt.incremental && !(opt.min_parallax_rad >= 0.0 && opt.min_parallax_rad < M_PI))
-    throw std::invalid_argument("min_parallax_rad must be in [0, pi), got " + std::to_string(opt.min_parallax_rad));
+  if (const std::string why = opt.validate(); !why.empty()) throw std::invalid_argument(why);
   SmoothLogReport rep;
   Counter bad;
   std::map<int64_t, Pose2> odo;
@@ -184,7 +195,7 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
       const int j = static_cast<int>(pb.landmarks_m.size());
       pb.landmarks_m.push_back(*init);
       landmark_ids.push_back(id);
-      for (const Ray& r : rs) pb.bearings.push_back({r.node, j, r.azimuth_rad, r.sigma_rad, r.p_CinR_m});
+      for (const Ray& r : rs) pb.bearings.push_back(bearingFactor(r, j));
     }
     rep.result = slam::smoothBearingOnly(pb, opt.smoother);
     if (!rep.result.failure.empty()) throw std::invalid_argument("smoother: " + rep.result.failure);
@@ -211,7 +222,7 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
         const auto& [id, r] = rays[next];
         const auto lm = landmark_of.find(id);
         if (lm != landmark_of.end()) {
-          grown.bearings.push_back({r.node, lm->second, r.azimuth_rad, r.sigma_rad, r.p_CinR_m});
+          grown.bearings.push_back(bearingFactor(r, lm->second));
           continue;
         }
         std::vector<Ray>& rs = pending[id];
@@ -223,7 +234,7 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
         grown.landmarks_m.push_back(*p);
         landmark_ids.push_back(id);
         landmark_of[id] = j;
-        for (const Ray& q : rs) grown.bearings.push_back({q.node, j, q.azimuth_rad, q.sigma_rad, q.p_CinR_m});
+        for (const Ray& q : rs) grown.bearings.push_back(bearingFactor(q, j));
         pending.erase(id);
       }
       rep.result = slam::smoothBearingOnly(grown, opt.smoother);

@@ -37,6 +37,9 @@ struct SmoothLogOptions {
   double min_parallax_rad = 7.0 * M_PI / 180;  ///< incremental: their spread of directions at the crossing, >= 0
   slam::MotionNoiseOptions motion;   ///< the filter's motion noise (from its SLAM config)
   slam::SmootherOptions smoother;
+  /// Empty when the incremental fields are in range (checked with --incremental only), otherwise a
+  /// message naming the first bad field and its accepted range. The smoother checks its own options.
+  std::string validate() const;
 };
 
 struct SmoothLogReport {
@@ -46,7 +49,9 @@ struct SmoothLogReport {
   int64_t landmarks = 0;
   int64_t bearings_downweighted = 0;  ///< kernel weight below 0.5 at the solution (outliers)
   int64_t skipped_messages = 0;    ///< undecodable messages or ones lcmio::validate refuses (reasons in `problems`)
-  int64_t unanchored_landmarks = 0;   ///< associated but no initial position (one ray or parallel rays): not used
+  /// Associated but no initial position (batch: one ray or parallel rays; incremental: never
+  /// min_rays rays crossing over min_parallax_rad): not used.
+  int64_t unanchored_landmarks = 0;
   int64_t frames_without_odometry = 0;  ///< frames outside the ODOMETRY time span: no odometry factor
   int64_t solves = 0;                  ///< smoother runs (1 in batch; one per frame when incremental)
   std::vector<std::string> problems;    ///< one line per kind of skipped input, with its count

@@ -1,7 +1,8 @@
 // Tests of the batch bearing-only smoother: Jacobians against central differences, the ray crossing
 // against a closed form, exact recovery from noise-free data, the robust kernel against outliers, the
-// covariance against the brute-force inverse of the numerical information, determinism, and the
-// refusal of invalid problems.
+// covariance against the brute-force inverse of the numerical information (landmark priors included),
+// a single ray with a depth prior against its closed form, determinism, and the refusal of invalid
+// problems.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -198,11 +199,21 @@ Eigen::VectorXd whitenedResiduals(const SmootherProblem& pb, const SmootherOptio
     const auto z = predictMeasurement(LandmarkKind::kVerticalLine, landmark(f.landmark), pose(f.pose), f.p_CinR_m);
     r.push_back(wrapAngle((*z)(0) - f.azimuth_rad) / f.sigma_rad);
   }
+  for (const auto& f : pb.landmark_priors) {  // information = sum lambda_i v_i v_i^T: r_i = sqrt(lambda_i) v_i^T (l - mean)
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(f.information);
+    const Eigen::Vector2d d = landmark(f.landmark).head<2>() - f.mean_m;
+    for (int i = 0; i < 2; ++i) r.push_back(std::sqrt(std::max(es.eigenvalues()(i), 0.0)) * es.eigenvectors().col(i).dot(d));
+  }
   return Eigen::Map<Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()));
 }
 
 TEST(slam_BearingSmoother, CovarianceIsTheInverseOfTheNumericalInformation) {
   Scene s = makeScene(1.0, 0.01, 0.0, 6);
+  ASSERT_GE(s.problem.landmarks_m.size(), 2u);
+  // Priors enter the information too: one along a direction only (rank 1), one full rank.
+  const Eigen::Vector2d dir(std::cos(0.7), std::sin(0.7));
+  s.problem.landmark_priors.push_back({0, s.problem.landmarks_m[0] + Eigen::Vector2d(0.3, -0.2), dir * dir.transpose() / 0.25});
+  s.problem.landmark_priors.push_back({1, s.problem.landmarks_m[1], Eigen::Matrix2d{{50.0, 10.0}, {10.0, 20.0}}});
   SmootherOptions o;
   o.cauchy_scale = 0.0;  // every weight 1: the information is J^T J of the whitened residuals
   o.compute_covariance = true;
@@ -236,6 +247,32 @@ TEST(slam_BearingSmoother, CovarianceIsTheInverseOfTheNumericalInformation) {
   // Not requested: empty.
   o.compute_covariance = false;
   EXPECT_EQ(smoothBearingOnly(s.problem, o).covariance.size(), 0);
+}
+
+// One pose held by its prior sees one landmark once: the azimuth fixes the landmark's direction, a
+// prior along that ray fixes its depth. The optimum is the prior's point on the ray, and the
+// covariance along the ray is the prior's variance (the azimuth adds no information along it).
+TEST(slam_BearingSmoother, DepthPriorAlongASingleRayGivesItsPointAndVariance) {
+  const Pose2 x{1.0, 2.0, 0.4};
+  const double azimuth = 0.3, depth_m = 3.5, sigma_depth_m = 2.0;
+  const Eigen::Vector2d u(std::cos(x.theta_rad + azimuth), std::sin(x.theta_rad + azimuth));
+  const Eigen::Vector2d expected = Eigen::Vector2d(x.x_m, x.y_m) + depth_m * u;
+  SmootherProblem pb;
+  pb.poses = {x};
+  pb.landmarks_m = {expected + Eigen::Vector2d(0.4, -0.9)};  // start off the ray
+  pb.bearings.push_back({0, 0, azimuth, 0.01, Eigen::Vector3d::Zero()});
+  pb.landmark_priors.push_back({0, expected, u * u.transpose() / (sigma_depth_m * sigma_depth_m)});
+  SmootherOptions o;
+  o.compute_covariance = true;
+  o.cauchy_scale = 0.0;
+  const SmootherResult r = smoothBearingOnly(pb, o);
+  ASSERT_TRUE(r.failure.empty()) << r.failure;
+  EXPECT_LT((r.landmarks_m[0] - expected).norm(), 1e-6);
+  const Eigen::Matrix2d P = r.covariance.bottomRightCorner<2, 2>();
+  EXPECT_NEAR(u.dot(P * u), sigma_depth_m * sigma_depth_m, 1e-3 * sigma_depth_m * sigma_depth_m);
+  // Across the ray: the azimuth's sigma times the depth, plus the pose prior's share.
+  const Eigen::Vector2d n(-u.y(), u.x());
+  EXPECT_NEAR(std::sqrt(n.dot(P * n)), 0.01 * depth_m, 0.1 * 0.01 * depth_m);
 }
 
 TEST(slam_BearingSmoother, IsDeterministic) {
@@ -272,6 +309,17 @@ TEST(slam_BearingSmoother, RefusesInvalidProblemsAndOptionsNamingTheCause) {
     SmootherProblem p = s.problem;
     p.bearings[0].sigma_rad = 0.0;
     EXPECT_NE(smoothBearingOnly(p).failure.find("sigma_rad"), std::string::npos);
+  }
+  {
+    SmootherProblem p = s.problem;
+    p.landmark_priors.push_back({42, Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity()});
+    EXPECT_NE(smoothBearingOnly(p).failure.find("landmark prior 0: landmark index 42"), std::string::npos);
+  }
+  {
+    SmootherProblem p = s.problem;
+    p.landmark_priors.push_back({0, Eigen::Vector2d::Zero(), Eigen::Matrix2d{{1.0, 0.0}, {0.0, -1.0}}});
+    EXPECT_NE(smoothBearingOnly(p).failure.find("landmark prior 0: information is not symmetric positive semi-definite"),
+              std::string::npos);
   }
   SmootherOptions o;
   o.cauchy_scale = -1.0;

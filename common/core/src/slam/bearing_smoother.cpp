@@ -66,6 +66,10 @@ double totalCost(const SmootherProblem& pb, const State& s, const Eigen::Matrix3
     const auto e = bearingError(s.poses[f.pose], s.landmarks[f.landmark], f, nullptr, nullptr);
     if (e) cost += robustCost(*e, c);
   }
+  for (const auto& f : pb.landmark_priors) {
+    const Eigen::Vector2d r = s.landmarks[f.landmark] - f.mean_m;
+    cost += r.dot(f.information * r);
+  }
   return cost;
 }
 
@@ -112,6 +116,11 @@ void normalEquations(const SmootherProblem& pb, const State& s, const Layout& la
     g.segment<3>(ip) += w * r * Jp.transpose();
     g.segment<2>(il) += w * r * Jl.transpose();
   }
+  for (const auto& f : pb.landmark_priors) {
+    const int il = lay.landmark(f.landmark);
+    add(il, il, f.information);
+    g.segment<2>(il) += f.information * (s.landmarks[f.landmark] - f.mean_m);
+  }
   H.resize(n, n);
   H.setFromTriplets(trip.begin(), trip.end());
 }
@@ -157,6 +166,16 @@ std::string SmootherProblem::validate() const {
       return who + ": landmark index " + std::to_string(f.landmark) + " out of [0, " + std::to_string(nl - 1) + "]";
     if (!std::isfinite(f.azimuth_rad) || !f.p_CinR_m.allFinite()) return who + ": azimuth or p_CinR_m not finite";
     if (!(f.sigma_rad > 0.0) || !std::isfinite(f.sigma_rad)) return who + ": sigma_rad must be finite and > 0";
+  }
+  for (size_t k = 0; k < landmark_priors.size(); ++k) {
+    const auto& f = landmark_priors[k];
+    const std::string who = "landmark prior " + std::to_string(k);
+    if (f.landmark < 0 || f.landmark >= nl)
+      return who + ": landmark index " + std::to_string(f.landmark) + " out of [0, " + std::to_string(nl - 1) + "]";
+    if (!f.mean_m.allFinite() || !f.information.allFinite()) return who + ": not finite";
+    const Eigen::Vector2d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(f.information).eigenvalues();
+    if (!f.information.isApprox(f.information.transpose(), 1e-9) || ev(0) < -1e-9 * std::max(1.0, std::abs(ev(1))))
+      return who + ": information is not symmetric positive semi-definite";
   }
   return {};
 }

@@ -9,6 +9,8 @@
 //   bearing:  e = wrap(azimuth(l_j seen from x_i, camera at p_CinR) - z) / sigma   (bearing_model.h)
 //             cost c^2 log(1 + e^2 / c^2) (Cauchy, scale c in sigmas; c = 0: plain e^2), minimised
 //             by iteratively re-weighted least squares with weight 1 / (1 + e^2 / c^2).
+//   landmark prior (optional): r = l_j - mean, information I (may be rank 1: a depth prior along the
+//             first ray of a landmark seen once, which is how a landmark can join at its first sighting)
 // It answers "how well could the trajectory be known with this association?": the FastSLAM filter
 // samples one path per particle, the smoother optimises over all of them jointly. It does not
 // associate; a wrong association is only down-weighted by the kernel. docs/smoothing.md.
@@ -53,11 +55,20 @@ struct SmootherBearingFactor {
   Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();  ///< camera optical centre in robot axes [m]
 };
 
+/// Gaussian prior on landmark `landmark`: cost (l - mean)^T information (l - mean). The information
+/// may be rank-deficient (e.g. only along a first ray, where a single azimuth leaves the depth free).
+struct SmootherLandmarkPrior {
+  int landmark = 0;
+  Eigen::Vector2d mean_m = Eigen::Vector2d::Zero();              ///< in W [m]
+  Eigen::Matrix2d information = Eigen::Matrix2d::Zero();         ///< [1/m^2], symmetric positive semi-definite
+};
+
 struct SmootherProblem {
   std::vector<Pose2> poses;                     ///< initial estimate; poses[0] is also the prior
   std::vector<Eigen::Vector2d> landmarks_m;     ///< initial estimate
   std::vector<SmootherOdometryFactor> odometry;
   std::vector<SmootherBearingFactor> bearings;
+  std::vector<SmootherLandmarkPrior> landmark_priors;
 
   /// Empty when every index is in range and every value finite and admissible, otherwise a message
   /// naming the first bad factor.

@@ -115,6 +115,16 @@ double rmseToTruth(const std::vector<pose_t>& est) {
   return std::sqrt(s / static_cast<double>(est.size()));
 }
 
+/// Every landmark of `map` has an id in [id0, id0 + 5) and lies within 0.1 m of that true landmark.
+void expectLandmarksNearTruth(const map_t& map, int64_t id0) {
+  for (const auto& l : map.landmarks) {
+    const int64_t j = l.id - id0;
+    ASSERT_TRUE(j >= 0 && j < static_cast<int64_t>(kLandmarks.size())) << "landmark id " << l.id;
+    const Eigen::Vector2d& truth = kLandmarks[static_cast<size_t>(j)];
+    EXPECT_LT(std::hypot(l.position_m[0] - truth.x(), l.position_m[1] - truth.y()), 0.1) << "landmark " << l.id;
+  }
+}
+
 t::RunResult smooth(const std::string& in, const std::string& out, const std::vector<std::string>& extra) {
   std::vector<std::string> argv{t::binPath("omnislam-smooth"), in, "--out", out, "--config",
                                 t::sourcePath("config/slam/mrclam.yaml")};
@@ -141,13 +151,8 @@ TEST(Smooth, BringsTheFilterEstimateToTheTruthAndKeepsTheOtherChannels) {
   const auto maps = lcmio::readChannel<map_t>(out, channels::kSlamMap);
   ASSERT_EQ(maps.size(), 1u) << "one final map";
   ASSERT_EQ(maps[0].num_landmarks, 5);
-  for (const auto& l : maps[0].landmarks) {
-    ASSERT_GE(l.id, 100);
-    ASSERT_LT(l.id, 105);
-    const Eigen::Vector2d& truth = kLandmarks[static_cast<size_t>(l.id - 100)];
-    EXPECT_LT(std::hypot(l.position_m[0] - truth.x(), l.position_m[1] - truth.y()), 0.1) << "landmark " << l.id;
-    EXPECT_EQ(l.times_detected, 121);
-  }
+  ASSERT_NO_FATAL_FAILURE(expectLandmarksNearTruth(maps[0], 100));
+  for (const auto& l : maps[0].landmarks) EXPECT_EQ(l.times_detected, 121);
   // Everything else is copied; the filter's particles are not.
   for (const char* ch : {channels::kOdometry, channels::kOmniFeatures, channels::kGroundTruthPose,
                          channels::kGroundTruthFeatureLabels, channels::kSlamAssociations}) {
@@ -172,12 +177,7 @@ TEST(Smooth, LabelsGiveTheTruthIdsAndDropTheFilterAssociations) {
   EXPECT_LT(rmseToTruth(lcmio::readChannel<pose_t>(out, channels::kSlamPose)), 0.05);
   const auto maps = lcmio::readChannel<map_t>(out, channels::kSlamMap);
   ASSERT_EQ(maps.size(), 1u);
-  for (const auto& l : maps[0].landmarks) {
-    ASSERT_GE(l.id, 0);
-    ASSERT_LT(l.id, 5);
-    EXPECT_LT(std::hypot(l.position_m[0] - kLandmarks[static_cast<size_t>(l.id)].x(),
-                         l.position_m[1] - kLandmarks[static_cast<size_t>(l.id)].y()), 0.1);
-  }
+  ASSERT_NO_FATAL_FAILURE(expectLandmarksNearTruth(maps[0], 0));
   EXPECT_TRUE(lcmio::readChannel<associations_t>(out, channels::kSlamAssociations).empty());
 }
 
@@ -195,9 +195,7 @@ TEST(Smooth, IncrementalPublishesEachPoseFromItsOwnFramesSolve) {
   const auto maps = lcmio::readChannel<map_t>(out, channels::kSlamMap);
   ASSERT_EQ(maps.size(), 1u);
   ASSERT_EQ(maps[0].num_landmarks, 5);
-  for (const auto& l : maps[0].landmarks)
-    EXPECT_LT(std::hypot(l.position_m[0] - kLandmarks[static_cast<size_t>(l.id)].x(),
-                         l.position_m[1] - kLandmarks[static_cast<size_t>(l.id)].y()), 0.1) << "landmark " << l.id;
+  ASSERT_NO_FATAL_FAILURE(expectLandmarksNearTruth(maps[0], 0));
 
   // Causal: the first 61 frames of a run that ends there get exactly the same poses.
   const std::string half = dir.file("half.lcm"), half_out = dir.file("half_out.lcm");

@@ -140,6 +140,10 @@ std::string SmootherOptions::validate() const {
 }
 
 std::string SmootherProblem::validate() const {
+  // ": <what> index <i> out of [0, <n - 1>]", the one wording for every factor's index.
+  const auto outOfRange = [](const char* what, int i, int n) {
+    return std::string(": ") + what + " index " + std::to_string(i) + " out of [0, " + std::to_string(n - 1) + "]";
+  };
   const int np = static_cast<int>(poses.size());
   const int nl = static_cast<int>(landmarks_m.size());
   if (np == 0) return "no poses";
@@ -160,18 +164,15 @@ std::string SmootherProblem::validate() const {
   for (size_t k = 0; k < bearings.size(); ++k) {
     const auto& f = bearings[k];
     const std::string who = "bearing factor " + std::to_string(k);
-    if (f.pose < 0 || f.pose >= np) return who + ": pose index " + std::to_string(f.pose) + " out of [0, " +
-                                              std::to_string(np - 1) + "]";
-    if (f.landmark < 0 || f.landmark >= nl)
-      return who + ": landmark index " + std::to_string(f.landmark) + " out of [0, " + std::to_string(nl - 1) + "]";
+    if (f.pose < 0 || f.pose >= np) return who + outOfRange("pose", f.pose, np);
+    if (f.landmark < 0 || f.landmark >= nl) return who + outOfRange("landmark", f.landmark, nl);
     if (!std::isfinite(f.azimuth_rad) || !f.p_CinR_m.allFinite()) return who + ": azimuth or p_CinR_m not finite";
     if (!(f.sigma_rad > 0.0) || !std::isfinite(f.sigma_rad)) return who + ": sigma_rad must be finite and > 0";
   }
   for (size_t k = 0; k < landmark_priors.size(); ++k) {
     const auto& f = landmark_priors[k];
     const std::string who = "landmark prior " + std::to_string(k);
-    if (f.landmark < 0 || f.landmark >= nl)
-      return who + ": landmark index " + std::to_string(f.landmark) + " out of [0, " + std::to_string(nl - 1) + "]";
+    if (f.landmark < 0 || f.landmark >= nl) return who + outOfRange("landmark", f.landmark, nl);
     if (!f.mean_m.allFinite() || !f.information.allFinite()) return who + ": not finite";
     const Eigen::Vector2d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(f.information).eigenvalues();
     if (!f.information.isApprox(f.information.transpose(), 1e-9) || ev(0) < -1e-9 * std::max(1.0, std::abs(ev(1))))

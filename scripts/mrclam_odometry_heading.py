@@ -1,0 +1,136 @@
+#!/usr/bin/env python3
+"""mrclam_odometry_heading.py — how much of MRCLAM's odometry heading error is systematic.
+
+Usage: scripts/mrclam_odometry_heading.py [DATASET_DIR] [--window-s 5] [--block-s 150]
+
+For each robot of an MRCLAM dataset (default ../shared/datasets/mrclam/MRCLAM_Dataset6), cuts the
+run into windows of --window-s seconds and compares the heading change the odometry file commands
+(integral of omega) with the heading change of the Vicon truth (unwrapped, linearly interpolated).
+Prints, per robot:
+  - a least-squares fit of the window's heading error e [rad] = a * distance [m] + b * commanded
+    turn [rad] (a: heading drift per metre, b: turn-scale error) over the whole run, with the RMS of
+    e before and after removing that fit: if the systematic part were large, an odometry calibration
+    (fixed or estimated online) would shrink the error;
+  - the same fit over consecutive blocks of --block-s seconds, to see whether a and b are stable;
+  - the RMS of e split by what the robot did in the window (straight: |turn| < 0.05 rad; turning;
+    spinning in place: distance < 0.05 m).
+Standard library only; read-only on the dataset. Figures quoted in docs/mrclam.md.
+"""
+import argparse
+import bisect
+import math
+import os
+import sys
+
+
+def load(path):
+    rows = []
+    with open(path) as f:
+        for line in f:
+            if line.startswith('#'):
+                continue
+            parts = line.split()
+            if len(parts) >= 3:
+                rows.append([float(x) for x in parts])
+    if not rows:
+        sys.exit(f'{path}: no data lines')
+    return rows
+
+
+def wrap(a):
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+def fit(rows):
+    """Least squares e = a*d + b*turn; returns (a, b, rms before, rms after)."""
+    sdd = sum(r['d'] ** 2 for r in rows)
+    sdc = sum(r['d'] * r['turn'] for r in rows)
+    scc = sum(r['turn'] ** 2 for r in rows)
+    sde = sum(r['d'] * r['e'] for r in rows)
+    sce = sum(r['turn'] * r['e'] for r in rows)
+    det = sdd * scc - sdc * sdc
+    if abs(det) < 1e-12:
+        return float('nan'), float('nan'), float('nan'), float('nan')
+    a = (sde * scc - sce * sdc) / det
+    b = (sdd * sce - sdc * sde) / det
+    n = len(rows)
+    rms0 = math.sqrt(sum(r['e'] ** 2 for r in rows) / n)
+    rms1 = math.sqrt(sum((r['e'] - a * r['d'] - b * r['turn']) ** 2 for r in rows) / n)
+    return a, b, rms0, rms1
+
+
+def windows(odo, gt, window_s):
+    gt_t = [g[0] for g in gt]
+    heading = [gt[0][3]]
+    for i in range(1, len(gt)):
+        heading.append(heading[-1] + wrap(gt[i][3] - gt[i - 1][3]))
+
+    def heading_at(t):
+        i = max(1, min(bisect.bisect_left(gt_t, t), len(gt_t) - 1))
+        s = (t - gt_t[i - 1]) / (gt_t[i] - gt_t[i - 1])
+        return heading[i - 1] + s * (heading[i] - heading[i - 1])
+
+    t0 = odo[0][0]
+    sums = {}
+    for i in range(len(odo) - 1):
+        t, v, w = odo[i][:3]
+        dt = odo[i + 1][0] - t
+        acc = sums.setdefault(int((t - t0) // window_s), [0.0, 0.0, 0.0])
+        acc[0] += abs(v) * dt
+        acc[1] += w * dt
+        acc[2] += abs(w) * dt
+    out = []
+    for k, (d, turn, abs_turn) in sorted(sums.items()):
+        ts, te = t0 + k * window_s, t0 + (k + 1) * window_s
+        if ts < gt_t[0] or te > gt_t[-1] or te > odo[-1][0]:
+            continue
+        e = (heading_at(te) - heading_at(ts)) - turn
+        out.append({'t': ts - t0, 'd': d, 'turn': turn, 'abs_turn': abs_turn, 'e': e})
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    here = os.path.dirname(os.path.abspath(__file__))
+    ap.add_argument('dataset', nargs='?',
+                    default=os.path.join(here, '..', '..', 'shared', 'datasets', 'mrclam',
+                                         'MRCLAM_Dataset6'))
+    ap.add_argument('--window-s', type=float, default=5.0)
+    ap.add_argument('--block-s', type=float, default=150.0)
+    args = ap.parse_args()
+    if args.window_s <= 0 or args.block_s < args.window_s:
+        sys.exit('--window-s must be > 0 and --block-s >= --window-s')
+    for r in range(1, 6):
+        odo_path = os.path.join(args.dataset, f'Robot{r}_Odometry.dat')
+        gt_path = os.path.join(args.dataset, f'Robot{r}_Groundtruth.dat')
+        if not os.path.exists(odo_path):
+            continue
+        rows = windows(load(odo_path), load(gt_path), args.window_s)
+        a, b, rms0, rms1 = fit(rows)
+        print(f'robot {r}: {len(rows)} windows of {args.window_s:g} s; drift {a:+.3f} rad/m, '
+              f'turn scale {b:+.3f}; heading error RMS {rms0:.3f} rad, {rms1:.3f} after the fit')
+        blocks = []
+        for j in range(int(rows[-1]['t'] // args.block_s) + 1):
+            sel = [x for x in rows if j * args.block_s <= x['t'] < (j + 1) * args.block_s]
+            if len(sel) >= 5:
+                ba, bb, _, _ = fit(sel)
+                blocks.append(f'{ba:+.3f}/{bb:+.3f}')
+        print(f'  per {args.block_s:g} s block (drift/turn scale): ' + ' '.join(blocks))
+        kinds = {'straight': [], 'turning': [], 'spinning': []}
+        for x in rows:
+            if x['d'] < 0.02 and x['abs_turn'] < 0.02:
+                continue  # standing still
+            kind = ('straight' if x['abs_turn'] < 0.05 else
+                    'spinning' if x['d'] < 0.05 else 'turning')
+            kinds[kind].append(x)
+        parts = []
+        for kind, sel in kinds.items():
+            if sel:
+                rms = math.sqrt(sum(x['e'] ** 2 for x in sel) / len(sel))
+                mean_turn = sum(x['abs_turn'] for x in sel) / len(sel)
+                parts.append(f'{kind} {len(sel)}: RMS {rms:.3f} rad (mean |turn| {mean_turn:.2f} rad)')
+        print('  ' + '; '.join(parts))
+
+
+if __name__ == '__main__':
+    main()

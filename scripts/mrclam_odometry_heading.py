@@ -25,13 +25,29 @@ import sys
 
 def load(path):
     rows = []
-    with open(path) as f:
-        for line in f:
-            if line.startswith('#'):
-                continue
-            parts = line.split()
-            if len(parts) >= 3:
-                rows.append([float(x) for x in parts])
+    duplicates = 0
+    try:
+        with open(path) as f:
+            for number, line in enumerate(f, 1):
+                if line.startswith('#') or not line.strip():
+                    continue
+                try:
+                    row = [float(x) for x in line.split()]
+                except ValueError:
+                    sys.exit(f'{path}:{number}: a field is not a number')
+                if len(row) < 3 or not all(math.isfinite(x) for x in row):
+                    sys.exit(f'{path}:{number}: expected at least 3 finite numbers')
+                if rows and row[0] < rows[-1][0]:
+                    sys.exit(f'{path}:{number}: time {row[0]} before the previous line')
+                if rows and row[0] == rows[-1][0]:
+                    rows[-1] = row  # the importer's --duplicate-times keep-last
+                    duplicates += 1
+                else:
+                    rows.append(row)
+    except OSError as err:
+        sys.exit(f'{path}: {err.strerror}')
+    if duplicates:
+        print(f'{path}: {duplicates} repeated times, the last line of each kept', file=sys.stderr)
     if not rows:
         sys.exit(f'{path}: no data lines')
     return rows
@@ -100,11 +116,13 @@ def main():
     args = ap.parse_args()
     if args.window_s <= 0 or args.block_s < args.window_s:
         sys.exit('--window-s must be > 0 and --block-s >= --window-s')
+    found = 0
     for r in range(1, 6):
         odo_path = os.path.join(args.dataset, f'Robot{r}_Odometry.dat')
         gt_path = os.path.join(args.dataset, f'Robot{r}_Groundtruth.dat')
         if not os.path.exists(odo_path):
             continue
+        found += 1
         rows = windows(load(odo_path), load(gt_path), args.window_s)
         a, b, rms0, rms1 = fit(rows)
         print(f'robot {r}: {len(rows)} windows of {args.window_s:g} s; drift {a:+.3f} rad/m, '
@@ -130,6 +148,8 @@ def main():
                 mean_turn = sum(x['abs_turn'] for x in sel) / len(sel)
                 parts.append(f'{kind} {len(sel)}: RMS {rms:.3f} rad (mean |turn| {mean_turn:.2f} rad)')
         print('  ' + '; '.join(parts))
+    if not found:
+        sys.exit(f'{args.dataset}: no Robot1..5_Odometry.dat here (is the MRCLAM dataset present?)')
 
 
 if __name__ == '__main__':

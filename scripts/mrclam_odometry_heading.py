@@ -3,7 +3,8 @@
 
 Usage: scripts/mrclam_odometry_heading.py [DATASET_DIR] [--window-s 5] [--block-s 150]
 
-For each robot of an MRCLAM dataset (default ../shared/datasets/mrclam/MRCLAM_Dataset6), cuts the
+For each robot of an MRCLAM dataset (default, as scripts/run-mrclam.sh:
+$OMNISLAM_DATASETS/mrclam/MRCLAM_Dataset6, $OMNISLAM_DATASETS defaulting to ../shared/datasets), cuts the
 run into windows of --window-s seconds and compares the heading change the odometry file commands
 (integral of omega) with the heading change of the Vicon truth (unwrapped, linearly interpolated).
 Prints, per robot:
@@ -12,8 +13,8 @@ Prints, per robot:
     e before and after removing that fit: if the systematic part were large, an odometry calibration
     (fixed or estimated online) would shrink the error;
   - the same fit over consecutive blocks of --block-s seconds, to see whether a and b are stable;
-  - the RMS of e split by what the robot did in the window (straight: |turn| < 0.05 rad; turning;
-    spinning in place: distance < 0.05 m).
+  - the RMS of e split by what the robot did in the window (straight: summed |omega| dt < 0.05 rad;
+    spinning in place: distance < 0.05 m; turning: the rest; windows standing still left out).
 Standard library only; read-only on the dataset. Figures quoted in docs/mrclam.md.
 """
 import argparse
@@ -107,10 +108,10 @@ def windows(odo, gt, window_s):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    here = os.path.dirname(os.path.abspath(__file__))
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    datasets = os.environ.get('OMNISLAM_DATASETS') or os.path.join(root, '..', 'shared', 'datasets')
     ap.add_argument('dataset', nargs='?',
-                    default=os.path.join(here, '..', '..', 'shared', 'datasets', 'mrclam',
-                                         'MRCLAM_Dataset6'))
+                    default=os.path.join(datasets, 'mrclam', 'MRCLAM_Dataset6'))
     ap.add_argument('--window-s', type=float, default=5.0)
     ap.add_argument('--block-s', type=float, default=150.0)
     args = ap.parse_args()
@@ -124,6 +125,9 @@ def main():
             continue
         found += 1
         rows = windows(load(odo_path), load(gt_path), args.window_s)
+        if not rows:
+            print(f'robot {r}: no window of {args.window_s:g} s inside the truth')
+            continue
         a, b, rms0, rms1 = fit(rows)
         print(f'robot {r}: {len(rows)} windows of {args.window_s:g} s; drift {a:+.3f} rad/m, '
               f'turn scale {b:+.3f}; heading error RMS {rms0:.3f} rad, {rms1:.3f} after the fit')

@@ -2,6 +2,7 @@
 // with the paper's values, and every mistake names its key.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 
@@ -140,6 +141,47 @@ TEST(SlamConfig, OverridesApplyOnTopOfTheFile) {
   EXPECT_NE(err("filter.partcles=5").find("partcles"), std::string::npos);
   EXPECT_NE(err("filter.particles").find("dotted.key=value"), std::string::npos);
   EXPECT_NE(err("seed.x=1").find("'seed' is not a map"), std::string::npos) << err("seed.x=1");
+  // A bad value set by an override names the override, not a line of the file it never was in.
+  const std::string e0 = err("filter.particles=0");
+  EXPECT_NE(e0.find("key 'filter.particles' must be a whole number in [1, 100000], got 0 (from the override "
+                    "'filter.particles=0')"),
+            std::string::npos)
+      << e0;
+  EXPECT_EQ(e0.find("(line"), std::string::npos) << e0;
+  EXPECT_NE(err("filter.partcles=5").find("(from the override 'filter.partcles=5')"), std::string::npos)
+      << err("filter.partcles=5");
+  // A key inside a map that an override replaced, and the last of two overrides of one key.
+  const std::string e1 = err("filter.motion={trans_sigma_per_sqrt_m: -1}");
+  EXPECT_NE(e1.find("'filter.motion.trans_sigma_per_sqrt_m'"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("(from the override 'filter.motion={trans_sigma_per_sqrt_m: -1}')"), std::string::npos) << e1;
+  try {
+    loadSlamOptions(file, {"filter.particles=5", "filter.particles=-1"});
+    ADD_FAILURE() << "particles=-1 accepted";
+  } catch (const omnislam::config::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("(from the override 'filter.particles=-1')"), std::string::npos) << e.what();
+  }
+}
+
+// A bad value in the file itself still names its line when other keys are overridden.
+TEST(SlamConfig, FileErrorsKeepTheirLineBesideOverrides) {
+  const std::string src = std::string(OMNISLAM_SOURCE_DIR) + "/config/slam/sports_hall.yaml";
+  std::ifstream in(src);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string body = text.str();
+  const auto at = body.find("  particles: ");
+  ASSERT_NE(at, std::string::npos);
+  const auto eol = body.find('\n', at);
+  body.replace(at, eol - at, "  particles: -4");
+  const int line = static_cast<int>(std::count(body.begin(), body.begin() + static_cast<long>(at), '\n')) + 1;
+  const std::string file = ::testing::TempDir() + "/slam_config_bad_particles.yaml";
+  std::ofstream(file) << body;
+  try {
+    omnislam::slamproc::loadSlamOptions(file, {"filter.resample_ess_fraction=0.25"});
+    ADD_FAILURE() << "particles: -4 accepted";
+  } catch (const omnislam::config::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("got -4 (line " + std::to_string(line) + ")"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

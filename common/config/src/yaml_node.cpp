@@ -22,8 +22,23 @@ std::string fmt(double v) {
 
 }  // namespace
 
-Node::Node(YAML::Node node, std::shared_ptr<const std::string> source, std::string path)
-    : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)) {}
+Node::Node(YAML::Node node, std::shared_ptr<const std::string> source, std::string path,
+           std::shared_ptr<const Overrides> overrides)
+    : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)), overrides_(std::move(overrides)) {}
+
+std::string Node::origin(const std::string& key, const YAML::Node& n) const {
+  if (overrides_) {
+    // The key itself, or a map or list above it, set by an override (e.g. "filter.motion={...}").
+    for (std::string k = keyPath(key);;) {
+      const auto it = overrides_->find(k);
+      if (it != overrides_->end()) return " (from the override '" + it->second + "')";
+      const auto cut = k.back() == ']' ? k.rfind('[') : k.rfind('.');
+      if (cut == std::string::npos || cut == 0) break;
+      k.erase(cut);
+    }
+  }
+  return lineOf(n);
+}
 
 Node Node::loadFile(const std::string& path) {
   if (!std::filesystem::exists(path)) throw ConfigError(path + ": file not found");
@@ -39,6 +54,7 @@ Node Node::loadFile(const std::string& path) {
 Node Node::loadFileWithOverrides(const std::string& path, const std::vector<std::string>& overrides) {
   Node n = loadFile(path);
   YAML::Node root = n.node_;
+  auto origins = std::make_shared<Overrides>();
   for (const std::string& ov : overrides) {
     const auto eq = ov.find('=');
     const std::string key = ov.substr(0, eq);
@@ -68,7 +84,9 @@ Node Node::loadFileWithOverrides(const std::string& path, const std::vector<std:
       chain.push_back(chain.back()[parts[i]]);
     }
     chain.back()[parts.back()] = value;
+    (*origins)[key] = ov;  // a later override of the same key wins, as its value does
   }
+  n.overrides_ = std::move(origins);
   return n;
 }
 
@@ -93,7 +111,7 @@ std::string Node::where(const std::string& key) const { return *source_ + ": key
 
 void Node::fail(const std::string& key, const std::string& what) const {
   const YAML::Node n = node_[key];
-  throw ConfigError(where(key) + " " + what + (n ? lineOf(n) : lineOf(node_)));
+  throw ConfigError(where(key) + " " + what + (n ? origin(key, n) : origin(key, node_)));
 }
 
 bool Node::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined() && !node_[key].IsNull(); }
@@ -102,7 +120,7 @@ Node Node::child(const std::string& key) const {
   if (!has(key)) fail(key, "is missing (a map of keys is required)");
   const YAML::Node n = node_[key];
   if (!n.IsMap()) fail(key, "must be a map of keys");
-  return Node(n, source_, keyPath(key));
+  return Node(n, source_, keyPath(key), overrides_);
 }
 
 std::optional<Node> Node::optChild(const std::string& key) const {
@@ -117,7 +135,7 @@ std::vector<Node> Node::items(const std::string& key) const {
   std::vector<Node> out;
   for (size_t i = 0; i < n.size(); ++i) {
     if (!n[i].IsMap()) fail(key, "item " + std::to_string(i) + " must be a map of keys");
-    out.push_back(Node(n[i], source_, keyPath(key) + "[" + std::to_string(i) + "]"));
+    out.push_back(Node(n[i], source_, keyPath(key) + "[" + std::to_string(i) + "]", overrides_));
   }
   return out;
 }
@@ -246,7 +264,7 @@ void Node::rejectUnknownKeys(std::initializer_list<const char*> known) const {
     if (!ok) {
       std::string list;
       for (const char* c : known) list += (list.empty() ? "" : ", ") + std::string(c);
-      throw ConfigError(where(k) + " is not a known key (known here: " + list + ")" + lineOf(kv.first));
+      throw ConfigError(where(k) + " is not a known key (known here: " + list + ")" + origin(k, kv.first));
     }
   }
 }

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <initializer_list>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -76,7 +77,13 @@ class Node {
   std::string where(const std::string& key) const;
 
  private:
-  Node(YAML::Node node, std::shared_ptr<const std::string> source, std::string path);
+  /// Dotted key path -> the override ("key=value") that set it, for messages.
+  using Overrides = std::map<std::string, std::string>;
+  Node(YAML::Node node, std::shared_ptr<const std::string> source, std::string path,
+       std::shared_ptr<const Overrides> overrides = nullptr);
+  /// " (line N)" of the node at `key` in the file, or " (from the override 'k=v')" when an
+  /// override set that key or a map above it.
+  std::string origin(const std::string& key, const YAML::Node& n) const;
   YAML::Node scalar(const std::string& key) const;
   std::string keyPath(const std::string& key) const;
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;
@@ -84,6 +91,7 @@ class Node {
   YAML::Node node_;
   std::shared_ptr<const std::string> source_;
   std::string path_;
+  std::shared_ptr<const Overrides> overrides_;
 };
 
 }  // namespace omnislam::config

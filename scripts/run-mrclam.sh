@@ -22,6 +22,8 @@
 # --smooth-args passing it more options (e.g. "--initial-from-odometry" or "--incremental").
 # Defaults: build dir $OMNISLAM_BUILD_DIR or build; data ../shared/datasets/mrclam/MRCLAM_Dataset6;
 # out /tmp/omnislam-mrclam; seed 1. Needs no network; a few seconds per robot and seed on one core.
+# A bad option stops the script before anything runs, naming it (exit 2); a failing step stops it with
+# the step's name and the end of its messages (exit 1), and no table is printed.
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 BUILD="${OMNISLAM_BUILD_DIR:-$ROOT/build}"
@@ -37,22 +39,24 @@ LOCALISE=0
 SMOOTH=""
 SMOOTH_ARGS=""
 CONFIG="$ROOT/config/slam/mrclam.yaml"
+# An option's value, or a stop naming the option when it has none.
+need() { [ $# -ge 2 ] || { echo "run-mrclam.sh: $1 needs a value (--help lists the options)" >&2; exit 2; }; }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --build) BUILD="$2"; shift 2 ;;
-    --data) DATA="$2"; shift 2 ;;
-    --out) OUT="$2"; shift 2 ;;
-    --seed) SEED="$2"; SEED_GIVEN=1; shift 2 ;;
-    --seeds) SEEDS="$2"; shift 2 ;;
-    --robots) ROBOTS="$2"; shift 2 ;;
-    --config) CONFIG="$2"; shift 2 ;;
-    --import-args) IMPORT_ARGS="$2"; shift 2 ;;
-    --slam-args) SLAM_ARGS="$2"; shift 2 ;;
+    --build) need "$@"; BUILD="$2"; shift 2 ;;
+    --data) need "$@"; DATA="$2"; shift 2 ;;
+    --out) need "$@"; OUT="$2"; shift 2 ;;
+    --seed) need "$@"; SEED="$2"; SEED_GIVEN=1; shift 2 ;;
+    --seeds) need "$@"; SEEDS="$2"; shift 2 ;;
+    --robots) need "$@"; ROBOTS="$2"; shift 2 ;;
+    --config) need "$@"; CONFIG="$2"; shift 2 ;;
+    --import-args) need "$@"; IMPORT_ARGS="$2"; shift 2 ;;
+    --slam-args) need "$@"; SLAM_ARGS="$2"; shift 2 ;;
     --localise-in-truth) LOCALISE=1; shift ;;
-    --smooth) SMOOTH="$2"; shift 2 ;;
-    --smooth-args) SMOOTH_ARGS="$2"; shift 2 ;;
+    --smooth) need "$@"; SMOOTH="$2"; shift 2 ;;
+    --smooth-args) need "$@"; SMOOTH_ARGS="$2"; shift 2 ;;
     -h|--help) sed -n '2,/^set -e/{/^set -e/!p}' "$0"; exit 0 ;;
-    *) echo "run-mrclam.sh: unknown argument '$1'" >&2; exit 2 ;;
+    *) echo "run-mrclam.sh: unknown argument '$1' (--help lists the options)" >&2; exit 2 ;;
   esac
 done
 BIN="$BUILD/bin"
@@ -64,8 +68,14 @@ if [ -n "$SEEDS" ]; then
   done
   MULTI=1
 else
+  [[ "$SEED" =~ ^[0-9]+$ ]] || { echo "run-mrclam.sh: --seed takes a non-negative integer, got '$SEED'" >&2; exit 2; }
   SEEDS="$SEED"
 fi
+[ -n "${ROBOTS// /}" ] || { echo "run-mrclam.sh: --robots needs at least one robot number (1-5 in dataset 6)" >&2; exit 2; }
+for r in $ROBOTS; do
+  [[ "$r" =~ ^[1-9][0-9]*$ ]] || { echo "run-mrclam.sh: --robots takes robot numbers (1-5 in dataset 6), got '$r'" >&2; exit 2; }
+done
+[ -f "$CONFIG" ] || { echo "run-mrclam.sh: --config: no such file '$CONFIG'" >&2; exit 2; }
 case "$SMOOTH" in ""|slam|labels) ;; *) echo "run-mrclam.sh: --smooth takes slam or labels, got '$SMOOTH'" >&2; exit 2 ;; esac
 for exe in omnislam-import-mrclam omnislam-slam omnislam-eval ${SMOOTH:+omnislam-smooth}; do
   [ -x "$BIN/$exe" ] || { echo "run-mrclam.sh: $BIN/$exe not built" >&2; exit 1; }
@@ -73,6 +83,17 @@ done
 [ -d "$DATA" ] || { echo "run-mrclam.sh: dataset not found at $DATA" >&2; exit 1; }
 mkdir -p "$OUT"
 
+# Runs one step with its standard error in ERR_FILE; a failure stops the script with the step's name
+# and the end of its messages, rather than silently (set -e).
+step() {
+  local what="$1" err="$2"; shift 2
+  local rc=0
+  "$@" 2> "$err" || rc=$?
+  [ "$rc" = 0 ] && return 0
+  echo "run-mrclam.sh: $what failed (exit $rc); the end of its messages ($err):" >&2
+  tail -n 5 "$err" >&2
+  exit 1
+}
 # One JSON key of a one-line JSON object.
 key() { sed -n "s/.*\"$2\": \([^,}]*\).*/\1/p" <<< "$1"; }
 fmt() { printf "%.${2:-2}f" "$1"; }
@@ -86,40 +107,46 @@ for r in $ROBOTS; do
   if [ "$LOCALISE" = 1 ]; then
     loc_import=(--truth-map-out "$OUT/truthmap.yaml"); loc_slam=(--load-map "$OUT/truthmap.yaml" --localise)
   fi
-  "$BIN/omnislam-import-mrclam" "$DATA" --robot "$r" --out "$log" --duplicate-times keep-last \
-    --slam-config-template "$CONFIG" --slam-config-out "$cfg" "${loc_import[@]}" $IMPORT_ARGS 2> "$OUT/robot$r.import.txt"
+  step "omnislam-import-mrclam, robot $r" "$OUT/robot$r.import.txt" \
+    "$BIN/omnislam-import-mrclam" "$DATA" --robot "$r" --out "$log" --duplicate-times keep-last \
+    --slam-config-template "$CONFIG" --slam-config-out "$cfg" "${loc_import[@]}" $IMPORT_ARGS
   for seed in $SEEDS; do
     # One seed: robotN.*, as before; several: robotN.seedS.*.
     run="$OUT/robot$r"; [ "$MULTI" = 1 ] && run="$OUT/robot$r.seed$seed"
     res="$run.slam.lcm"
-    "$BIN/omnislam-slam" --replay "$log" --out "$res" --config "$cfg" --seed "$seed" "${loc_slam[@]}" $SLAM_ARGS \
-      2> "$run.slam.txt"
+    step "omnislam-slam, robot $r, seed $seed" "$run.slam.txt" \
+      "$BIN/omnislam-slam" --replay "$log" --out "$res" --config "$cfg" --seed "$seed" "${loc_slam[@]}" $SLAM_ARGS
     if [ -n "$SMOOTH" ]; then
-      "$BIN/omnislam-smooth" "$res" --out "$run.smooth.lcm" --config "$cfg" --associations "$SMOOTH" $SMOOTH_ARGS \
-        2> "$run.smooth.txt"
+      step "omnislam-smooth, robot $r, seed $seed" "$run.smooth.txt" \
+        "$BIN/omnislam-smooth" "$res" --out "$run.smooth.lcm" --config "$cfg" --associations "$SMOOTH" $SMOOTH_ARGS
       res="$run.smooth.lcm"
     fi
-    raw=$("$BIN/omnislam-eval" "$res" --planar --json --no-tum)
-    ali=$("$BIN/omnislam-eval" "$res" --planar --json --no-tum --align --plot "$run.aligned")
+    raw=$("$BIN/omnislam-eval" "$res" --planar --json --no-tum) \
+      || { echo "run-mrclam.sh: omnislam-eval failed on $res" >&2; exit 1; }
+    ali=$("$BIN/omnislam-eval" "$res" --planar --json --no-tum --align --plot "$run.aligned") \
+      || { echo "run-mrclam.sh: omnislam-eval --align failed on $res" >&2; exit 1; }
     echo "$raw" > "$run.eval.json"; echo "$ali" > "$run.eval-aligned.json"
     [ "$MULTI" = 1 ] && continue
-    rows+=("$(printf "| %d | %s | %s / %s | %s / %s | %s / %s | %s/15 | %s | %s / %s |" "$r" \
+    rows+=("$(printf "| %d | %s | %s / %s | %s / %s | %s / %s | %s/%s | %s | %s / %s |" "$r" \
       "$(key "$raw" frames)" \
       "$(fmt "$(key "$raw" dr_ate_rmse_m)")" "$(fmt "$(key "$raw" dr_ate_rmse_aligned_m)")" \
       "$(fmt "$(key "$raw" ate_rmse_m)")" "$(fmt "$(key "$ali" ate_rmse_m)")" \
       "$(fmt "$(key "$ali" landmark_mean_err_m)")" "$(fmt "$(key "$ali" landmark_max_err_m)")" \
-      "$(key "$ali" landmarks_matched)" "$(key "$ali" landmarks_spurious)" \
+      "$(key "$ali" landmarks_matched)" "$(key "$ali" landmarks_truth)" "$(key "$ali" landmarks_spurious)" \
       "$(assoc_cell "$ali" assoc_precision)" "$(assoc_cell "$ali" assoc_recall)")")
   done
 done
+# The dataset's name in the headings: "dataset N" for MRCLAM_DatasetN, else the folder's name.
+DATASET="$(basename "$DATA")"
+[[ "$DATASET" =~ ^MRCLAM_Dataset([0-9]+)$ ]] && DATASET="dataset ${BASH_REMATCH[1]}"
 OPTS="${IMPORT_ARGS:+, importer $IMPORT_ARGS}${SLAM_ARGS:+, slam $SLAM_ARGS}$( [ "$LOCALISE" = 1 ] && echo ", localised in the true map" || true)${SMOOTH:+, smoothed with the $SMOOTH associations}${SMOOTH_ARGS:+ $SMOOTH_ARGS}"
 if [ "$MULTI" = 1 ]; then
-  echo "MRCLAM dataset 6, config $(basename "$CONFIG"), seeds $SEEDS$OPTS (after --align; median [min, max] over the seeds)"
+  echo "MRCLAM $DATASET, config $(basename "$CONFIG"), seeds $SEEDS$OPTS (after --align; median [min, max] over the seeds)"
   python3 "$ROOT/scripts/mrclam_seed_table.py" "$OUT" --robots "$ROBOTS" --seeds "$SEEDS"
   echo "(logs, configs, JSON and plots in $OUT)"
   exit 0
 fi
-echo "MRCLAM dataset 6, config $(basename "$CONFIG"), seed $SEED$OPTS (ATE RMSE in m; landmarks and association after --align)"
+echo "MRCLAM $DATASET, config $(basename "$CONFIG"), seed $SEED$OPTS (ATE RMSE in m; landmarks and association after --align)"
 echo "| robot | frames | DR ATE raw / aligned | SLAM ATE raw / aligned | landmark mean / max | matched | spurious | assoc precision / recall |"
 echo "|---|---|---|---|---|---|---|---|"
 printf '%s\n' "${rows[@]}"

@@ -14,17 +14,19 @@ SPEEDUP=5
 OUT=""
 KEEP=0
 SETS=()
+source "$ROOT/scripts/lib/options.sh"
 while [ $# -gt 0 ]; do
   case "$1" in
-    --seeds) SEEDS="$2"; shift 2 ;;
-    --speedup) SPEEDUP="$2"; shift 2 ;;
-    --out) OUT="$2"; shift 2 ;;
+    --seeds) opt_need reproduce-room "$@"; SEEDS="$2"; shift 2 ;;
+    --speedup) opt_need reproduce-room "$@"; SPEEDUP="$2"; shift 2 ;;
+    --out) opt_need reproduce-room "$@"; OUT="$2"; shift 2 ;;
     --keep-recordings) KEEP=1; shift ;;
-    --set) SETS+=(--set "$2"); shift 2 ;;
+    --set) opt_need reproduce-room "$@"; SETS+=(--set "$2"); shift 2 ;;
     -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
     *) echo "reproduce-room: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
+opt_integers reproduce-room --seeds "$SEEDS"
 source "$ROOT/scripts/lib/reproduce.sh"
 reproduce_prepare reproduce-room
 CFG="$ROOT/config/slam/room.yaml"
@@ -35,8 +37,9 @@ for s in $SEEDS; do
     extra=()
     [ "$method" = ours ] && extra=(--set filter.proposal=fastslam2 --set filter.association=hungarian)
     res="$OUT/slam-$method-seed$s.lcm"
-    "$BIN/omnislam-slam" --config "$CFG" --seed "$s" "${extra[@]}" ${SETS[@]+"${SETS[@]}"} --replay "$rec" --out "$res" \
-      --no-progress 2> "$OUT/slam-$method-seed$s.txt"
+    run_step reproduce-room "omnislam-slam, $method, seed $s" "$OUT/slam-$method-seed$s.txt" \
+      "$BIN/omnislam-slam" --config "$CFG" --seed "$s" "${extra[@]}" ${SETS[@]+"${SETS[@]}"} --replay "$rec" --out "$res" \
+      --no-progress
     "$BIN/omnislam-eval" --planar --json --no-tum "$res" > "$OUT/eval-$method-seed$s.json"
     rm -f "$res"
   done

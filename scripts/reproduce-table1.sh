@@ -18,18 +18,21 @@ PARTICLES=10
 OUT=""
 KEEP=0
 SETS=()
+source "$ROOT/scripts/lib/options.sh"
 while [ $# -gt 0 ]; do
   case "$1" in
-    --seeds) SEEDS="$2"; shift 2 ;;
-    --speedup) SPEEDUP="$2"; shift 2 ;;
-    --particles) PARTICLES="$2"; shift 2 ;;
-    --out) OUT="$2"; shift 2 ;;
+    --seeds) opt_need reproduce-table1 "$@"; SEEDS="$2"; shift 2 ;;
+    --speedup) opt_need reproduce-table1 "$@"; SPEEDUP="$2"; shift 2 ;;
+    --particles) opt_need reproduce-table1 "$@"; PARTICLES="$2"; shift 2 ;;
+    --out) opt_need reproduce-table1 "$@"; OUT="$2"; shift 2 ;;
     --keep-recordings) KEEP=1; shift ;;
-    --set) SETS+=(--set "$2"); shift 2 ;;
+    --set) opt_need reproduce-table1 "$@"; SETS+=(--set "$2"); shift 2 ;;
     -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
     *) echo "reproduce-table1: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
+opt_integers reproduce-table1 --seeds "$SEEDS"
+opt_integers reproduce-table1 --particles "$PARTICLES"
 source "$ROOT/scripts/lib/reproduce.sh"
 reproduce_prepare reproduce-table1
 SLAM_CFG="$ROOT/config/slam/sports_hall.yaml"
@@ -40,8 +43,9 @@ for s in $SEEDS; do
     "the features pipeline"
   for assoc in hungarian ml; do
     res="$OUT/slam-$assoc-seed$s.lcm"
-    "$BIN/omnislam-slam" --config "$SLAM_CFG" --seed "$s" --particles "$PARTICLES" --association "$assoc" \
-      ${SETS[@]+"${SETS[@]}"} --replay "$rec" --out "$res" --no-progress 2> "$OUT/slam-$assoc-seed$s.txt"
+    run_step reproduce-table1 "omnislam-slam, $assoc, seed $s" "$OUT/slam-$assoc-seed$s.txt" \
+      "$BIN/omnislam-slam" --config "$SLAM_CFG" --seed "$s" --particles "$PARTICLES" --association "$assoc" \
+      ${SETS[@]+"${SETS[@]}"} --replay "$rec" --out "$res" --no-progress
     "$BIN/omnislam-eval" --json --tum-out "$OUT/slam-$assoc-seed$s" "$res" > "$OUT/eval-$assoc-seed$s.json"
   done
   [ "$KEEP" = 1 ] || rm -f "$rec"

@@ -39,22 +39,21 @@ LOCALISE=0
 SMOOTH=""
 SMOOTH_ARGS=""
 CONFIG="$ROOT/config/slam/mrclam.yaml"
-# An option's value, or a stop naming the option when it has none.
-need() { [ $# -ge 2 ] || { echo "run-mrclam.sh: $1 needs a value (--help lists the options)" >&2; exit 2; }; }
+source "$ROOT/scripts/lib/options.sh"
 while [ $# -gt 0 ]; do
   case "$1" in
-    --build) need "$@"; BUILD="$2"; shift 2 ;;
-    --data) need "$@"; DATA="$2"; shift 2 ;;
-    --out) need "$@"; OUT="$2"; shift 2 ;;
-    --seed) need "$@"; SEED="$2"; SEED_GIVEN=1; shift 2 ;;
-    --seeds) need "$@"; SEEDS="$2"; shift 2 ;;
-    --robots) need "$@"; ROBOTS="$2"; shift 2 ;;
-    --config) need "$@"; CONFIG="$2"; shift 2 ;;
-    --import-args) need "$@"; IMPORT_ARGS="$2"; shift 2 ;;
-    --slam-args) need "$@"; SLAM_ARGS="$2"; shift 2 ;;
+    --build) opt_need run-mrclam.sh "$@"; BUILD="$2"; shift 2 ;;
+    --data) opt_need run-mrclam.sh "$@"; DATA="$2"; shift 2 ;;
+    --out) opt_need run-mrclam.sh "$@"; OUT="$2"; shift 2 ;;
+    --seed) opt_need run-mrclam.sh "$@"; SEED="$2"; SEED_GIVEN=1; shift 2 ;;
+    --seeds) opt_need run-mrclam.sh "$@"; SEEDS="$2"; shift 2 ;;
+    --robots) opt_need run-mrclam.sh "$@"; ROBOTS="$2"; shift 2 ;;
+    --config) opt_need run-mrclam.sh "$@"; CONFIG="$2"; shift 2 ;;
+    --import-args) opt_need run-mrclam.sh "$@"; IMPORT_ARGS="$2"; shift 2 ;;
+    --slam-args) opt_need run-mrclam.sh "$@"; SLAM_ARGS="$2"; shift 2 ;;
     --localise-in-truth) LOCALISE=1; shift ;;
-    --smooth) need "$@"; SMOOTH="$2"; shift 2 ;;
-    --smooth-args) need "$@"; SMOOTH_ARGS="$2"; shift 2 ;;
+    --smooth) opt_need run-mrclam.sh "$@"; SMOOTH="$2"; shift 2 ;;
+    --smooth-args) opt_need run-mrclam.sh "$@"; SMOOTH_ARGS="$2"; shift 2 ;;
     -h|--help) sed -n '2,/^set -e/{/^set -e/!p}' "$0"; exit 0 ;;
     *) echo "run-mrclam.sh: unknown argument '$1' (--help lists the options)" >&2; exit 2 ;;
   esac
@@ -63,12 +62,10 @@ BIN="$BUILD/bin"
 MULTI=0
 if [ -n "$SEEDS" ]; then
   [ "$SEED_GIVEN" = 0 ] || { echo "run-mrclam.sh: give --seed or --seeds, not both" >&2; exit 2; }
-  for s in $SEEDS; do
-    [[ "$s" =~ ^[0-9]+$ ]] || { echo "run-mrclam.sh: --seeds takes non-negative integers, got '$s'" >&2; exit 2; }
-  done
+  opt_integers run-mrclam.sh --seeds "$SEEDS"
   MULTI=1
 else
-  [[ "$SEED" =~ ^[0-9]+$ ]] || { echo "run-mrclam.sh: --seed takes a non-negative integer, got '$SEED'" >&2; exit 2; }
+  opt_integers run-mrclam.sh --seed "$SEED"
   SEEDS="$SEED"
 fi
 [ -n "${ROBOTS// /}" ] || { echo "run-mrclam.sh: --robots needs at least one robot number (1-5 in dataset 6)" >&2; exit 2; }
@@ -83,17 +80,6 @@ done
 [ -d "$DATA" ] || { echo "run-mrclam.sh: dataset not found at $DATA" >&2; exit 1; }
 mkdir -p "$OUT"
 
-# Runs one step with its standard error in ERR_FILE; a failure stops the script with the step's name
-# and the end of its messages, rather than silently (set -e).
-step() {
-  local what="$1" err="$2"; shift 2
-  local rc=0
-  "$@" 2> "$err" || rc=$?
-  [ "$rc" = 0 ] && return 0
-  echo "run-mrclam.sh: $what failed (exit $rc); the end of its messages ($err):" >&2
-  tail -n 5 "$err" >&2
-  exit 1
-}
 # One JSON key of a one-line JSON object.
 key() { sed -n "s/.*\"$2\": \([^,}]*\).*/\1/p" <<< "$1"; }
 fmt() { printf "%.${2:-2}f" "$1"; }
@@ -107,17 +93,17 @@ for r in $ROBOTS; do
   if [ "$LOCALISE" = 1 ]; then
     loc_import=(--truth-map-out "$OUT/truthmap.yaml"); loc_slam=(--load-map "$OUT/truthmap.yaml" --localise)
   fi
-  step "omnislam-import-mrclam, robot $r" "$OUT/robot$r.import.txt" \
+  run_step run-mrclam.sh "omnislam-import-mrclam, robot $r" "$OUT/robot$r.import.txt" \
     "$BIN/omnislam-import-mrclam" "$DATA" --robot "$r" --out "$log" --duplicate-times keep-last \
     --slam-config-template "$CONFIG" --slam-config-out "$cfg" "${loc_import[@]}" $IMPORT_ARGS
   for seed in $SEEDS; do
     # One seed: robotN.*, as before; several: robotN.seedS.*.
     run="$OUT/robot$r"; [ "$MULTI" = 1 ] && run="$OUT/robot$r.seed$seed"
     res="$run.slam.lcm"
-    step "omnislam-slam, robot $r, seed $seed" "$run.slam.txt" \
+    run_step run-mrclam.sh "omnislam-slam, robot $r, seed $seed" "$run.slam.txt" \
       "$BIN/omnislam-slam" --replay "$log" --out "$res" --config "$cfg" --seed "$seed" "${loc_slam[@]}" $SLAM_ARGS
     if [ -n "$SMOOTH" ]; then
-      step "omnislam-smooth, robot $r, seed $seed" "$run.smooth.txt" \
+      run_step run-mrclam.sh "omnislam-smooth, robot $r, seed $seed" "$run.smooth.txt" \
         "$BIN/omnislam-smooth" "$res" --out "$run.smooth.lcm" --config "$cfg" --associations "$SMOOTH" $SMOOTH_ARGS
       res="$run.smooth.lcm"
     fi

@@ -89,7 +89,7 @@ TEST(MrclamRunScript, BadFlagsStopAtOnceNamingTheFlag) {
   const Case cases[] = {
       {{"--out", o, "--seeds"}, "--seeds needs a value"},
       {{"--out", o, "--robots"}, "--robots needs a value"},
-      {{"--out", o, "--seed", "x"}, "--seed takes a non-negative integer, got 'x'"},
+      {{"--out", o, "--seed", "x"}, "--seed takes non-negative integers, got 'x'"},
       {{"--out", o, "--seeds", "1 -2"}, "--seeds takes non-negative integers, got '-2'"},
       {{"--out", o, "--seed", "1", "--seeds", "1 2"}, "give --seed or --seeds, not both"},
       {{"--out", o, "--robots", "1,2"}, "--robots takes robot numbers (1-5 in dataset 6), got '1,2'"},

@@ -55,7 +55,7 @@ while [ $# -gt 0 ]; do
     --smooth) opt_need run-mrclam.sh "$@"; SMOOTH="$2"; shift 2 ;;
     --smooth-args) opt_need run-mrclam.sh "$@"; SMOOTH_ARGS="$2"; shift 2 ;;
     -h|--help) sed -n '2,/^set -e/{/^set -e/!p}' "$0"; exit 0 ;;
-    *) echo "run-mrclam.sh: unknown argument '$1' (--help lists the options)" >&2; exit 2 ;;
+    *) echo "run-mrclam.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
 BIN="$BUILD/bin"

@@ -16,6 +16,7 @@
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "mrclam_files.h"
 #include "proc_util.h"
 
 using namespace omnislam;
@@ -23,30 +24,23 @@ namespace t = omnislam::testing;
 
 namespace {
 
-const char* kHeader = "# UTIAS Multi-Robot Cooperative Localization and Mapping Dataset\n# test\n# format\n# columns\n";
-
-void writeFile(const std::string& path, const std::string& body) {
-  std::ofstream f(path);
-  f << kHeader << body;
-}
-
 /// A tiny dataset for robot 1: odometry 1 m/s straight for 1 s, then turning; truth; 3 frames.
 void writeDataset(const t::TempDir& d, const std::string& odometry = "") {
-  writeFile(d.file("Barcodes.dat"), "1 5\n2 14\n6 63\n7 81\n");
-  writeFile(d.file("Landmark_Groundtruth.dat"), "6 1.0 2.0 0.001 0.002\n7 -1.0 0.5 0.001 0.001\n");
-  writeFile(d.file("Robot1_Odometry.dat"), odometry.empty() ? "100.0 1.0 0.0\n100.5 1.0 0.0\n101.0 0.5 0.5\n102.0 0.0 0.0\n"
-                                                            : odometry);
+  t::writeMrclamFile(d.file("Barcodes.dat"), "1 5\n2 14\n6 63\n7 81\n");
+  t::writeMrclamFile(d.file("Landmark_Groundtruth.dat"), "6 1.0 2.0 0.001 0.002\n7 -1.0 0.5 0.001 0.001\n");
+  t::writeMrclamFile(d.file("Robot1_Odometry.dat"),
+                     odometry.empty() ? "100.0 1.0 0.0\n100.5 1.0 0.0\n101.0 0.5 0.5\n102.0 0.0 0.0\n" : odometry);
   std::string truth;
   for (int k = 0; k <= 30; ++k) {
     char line[128];
     std::snprintf(line, sizeof line, "%.3f %.4f 3.0 0.1\n", 99.9 + 0.1 * k, 2.0 + 0.1 * k);
     truth += line;
   }
-  writeFile(d.file("Robot1_Groundtruth.dat"), truth);
+  t::writeMrclamFile(d.file("Robot1_Groundtruth.dat"), truth);
   // Frame 1 at 100.2: landmark 63 and robot 2 (barcode 14); frame 2 at 100.7: unknown code 43;
   // frame 3 at 101.5: landmark 81 and the robot's own barcode 5.
-  writeFile(d.file("Robot1_Measurement.dat"),
-            "100.2 63 3.0 0.25\n100.2 14 2.0 -0.30\n100.7 43 4.0 0.1\n101.5 81 2.5 -0.5\n101.5 5 1.0 0.05\n");
+  t::writeMrclamFile(d.file("Robot1_Measurement.dat"),
+                     "100.2 63 3.0 0.25\n100.2 14 2.0 -0.30\n100.7 43 4.0 0.1\n101.5 81 2.5 -0.5\n101.5 5 1.0 0.05\n");
 }
 
 struct Decoded {
@@ -207,7 +201,7 @@ TEST(MrclamImport, TruthLandmarksForLocalisationInTheTrueMap) {
   EXPECT_EQ(back.landmarks[1].p_LinW_m, L[1].p_LinW_m);
   EXPECT_EQ(back.landmarks[1].cov_LinW_m2, L[1].cov_LinW_m2);
   // A malformed landmark file names file and line.
-  writeFile(d.file("Landmark_Groundtruth.dat"), "6 1.0 2.0 0.001\n");
+  t::writeMrclamFile(d.file("Landmark_Groundtruth.dat"), "6 1.0 2.0 0.001\n");
   EXPECT_NE(errorOf([&] { mrclam::truthLandmarks(d.path()); }).find("Landmark_Groundtruth.dat:5"), std::string::npos);
 }
 
@@ -245,7 +239,7 @@ TEST(MrclamImport, MalformedFilesNameFileAndLine) {
   t::TempDir d;
   const std::string p = d.file("Robot1_Odometry.dat");
   auto odo = [&](const std::string& body) {
-    writeFile(p, body);
+    t::writeMrclamFile(p, body);
     return errorOf([&] { mrclam::readOdometry(p, mrclam::DuplicateTimes::kError); });
   };
   // Missing column (line 6: 4 header lines, then two data lines).
@@ -283,20 +277,20 @@ TEST(MrclamImport, MalformedFilesNameFileAndLine) {
 
   // Measurements: times may repeat (one frame) but not go back; the code must be an integer.
   const std::string m = d.file("Robot1_Measurement.dat");
-  writeFile(m, "1.0 63 2.0 0.1\n1.0 81 2.0 0.2\n0.5 63 2.0 0.1\n");
+  t::writeMrclamFile(m, "1.0 63 2.0 0.1\n1.0 81 2.0 0.2\n0.5 63 2.0 0.1\n");
   e = errorOf([&] { mrclam::readMeasurements(m); });
   EXPECT_NE(e.find(m + ":7:"), std::string::npos) << e;
-  writeFile(m, "1.0 63.5 2.0 0.1\n");
+  t::writeMrclamFile(m, "1.0 63.5 2.0 0.1\n");
   e = errorOf([&] { mrclam::readMeasurements(m); });
   EXPECT_NE(e.find(m + ":5:"), std::string::npos) << e;
   EXPECT_NE(e.find("must be an integer"), std::string::npos) << e;
   // Barcodes and landmarks: duplicates refused.
   const std::string b = d.file("Barcodes.dat");
-  writeFile(b, "1 5\n2 5\n");
+  t::writeMrclamFile(b, "1 5\n2 5\n");
   e = errorOf([&] { mrclam::readBarcodes(b); });
   EXPECT_NE(e.find(b + ":6: duplicated barcode 5"), std::string::npos) << e;
   const std::string l = d.file("Landmark_Groundtruth.dat");
-  writeFile(l, "6 1 2 0 0\n6 1 2 0 0\n");
+  t::writeMrclamFile(l, "6 1 2 0 0\n6 1 2 0 0\n");
   e = errorOf([&] { mrclam::readLandmarks(l); });
   EXPECT_NE(e.find(l + ":6: duplicated subject 6"), std::string::npos) << e;
   // The import stops on the first bad file, naming it.
@@ -308,7 +302,7 @@ TEST(MrclamImport, MalformedFilesNameFileAndLine) {
 TEST(MrclamImport, DuplicatedTimesKeepLastIsCounted) {
   t::TempDir d;
   const std::string p = d.file("odo.dat");
-  writeFile(p, "\n1.0 0.1 0.0\n2.0 0.1 0.0\n2.0 0.2 0.3\n3.0 0.1 0.0\n   \n");
+  t::writeMrclamFile(p, "\n1.0 0.1 0.0\n2.0 0.1 0.0\n2.0 0.2 0.3\n3.0 0.1 0.0\n   \n");
   mrclam::FileStats st;
   const auto v = mrclam::readOdometry(p, mrclam::DuplicateTimes::kKeepLast, &st);
   ASSERT_EQ(v.size(), 3u);

@@ -6,33 +6,28 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <string>
 
+#include "mrclam_files.h"
 #include "proc_util.h"
 
 namespace {
 
 namespace t = omnislam::testing;
 
-const char* kHeader = "# UTIAS Multi-Robot Cooperative Localization and Mapping Dataset\n# test\n# format\n# columns\n";
-
-void writeFile(const std::string& path, const std::string& body) {
-  std::ofstream f(path);
-  f << kHeader << body;
-}
-
 /// Robot 1 for 60 s: 0.1 m/s, turning at 0.05 rad/s, odometry and truth at 10 Hz (the truth is the
 /// odometry integrated exactly), four landmarks, and a frame every 0.5 s with the exact bearing of each
 /// landmark within +-0.6 rad and 0.9-8 m, plus a sighting of robot 2 (clutter) in every fourth frame.
 /// Returns the number of frames (times with at least one sighting).
 int writeDataset(const t::TempDir& d) {
-  writeFile(d.file("Barcodes.dat"), "1 5\n2 14\n6 63\n7 81\n8 27\n9 54\n");
+  t::writeMrclamFile(d.file("Barcodes.dat"), "1 5\n2 14\n6 63\n7 81\n8 27\n9 54\n");
   const double lm[4][2] = {{4.0, 1.5}, {4.5, -1.0}, {3.0, 3.5}, {1.0, 4.0}};
   const int code[4] = {63, 81, 27, 54};
   std::string lms;
-  for (int j = 0; j < 4; ++j) lms += std::to_string(6 + j) + " " + std::to_string(lm[j][0]) + " " + std::to_string(lm[j][1]) + " 0.001 0.001\n";
-  writeFile(d.file("Landmark_Groundtruth.dat"), lms);
+  for (int j = 0; j < 4; ++j) {
+    lms += std::to_string(6 + j) + " " + std::to_string(lm[j][0]) + " " + std::to_string(lm[j][1]) + " 0.001 0.001\n";
+  }
+  t::writeMrclamFile(d.file("Landmark_Groundtruth.dat"), lms);
   std::string odo, truth, meas;
   double x = 0.0, y = 0.0, th = 0.0;
   const double v = 0.1, w = 0.05, dt = 0.1;
@@ -65,9 +60,9 @@ int writeDataset(const t::TempDir& d) {
     y += v * dt * std::sin(th + 0.5 * w * dt);
     th += w * dt;
   }
-  writeFile(d.file("Robot1_Odometry.dat"), odo);
-  writeFile(d.file("Robot1_Groundtruth.dat"), truth);
-  writeFile(d.file("Robot1_Measurement.dat"), meas);
+  t::writeMrclamFile(d.file("Robot1_Odometry.dat"), odo);
+  t::writeMrclamFile(d.file("Robot1_Groundtruth.dat"), truth);
+  t::writeMrclamFile(d.file("Robot1_Measurement.dat"), meas);
   return frames;
 }
 

@@ -24,7 +24,11 @@ import os
 import sys
 
 
-def load(path):
+def load(path, columns=3, timed=True, merge_equal_times=True):
+    """The numeric rows of an MRCLAM text file (comment and blank lines skipped; exits naming file and
+    line on a bad one). With `timed`, column 0 is a time that must not decrease; with
+    `merge_equal_times` a repeated time keeps its last line (as the importer's --duplicate-times
+    keep-last), otherwise every line is kept (a measurement file has several per frame)."""
     rows = []
     duplicates = 0
     try:
@@ -36,12 +40,12 @@ def load(path):
                     row = [float(x) for x in line.split()]
                 except ValueError:
                     sys.exit(f'{path}:{number}: a field is not a number')
-                if len(row) < 3 or not all(math.isfinite(x) for x in row):
-                    sys.exit(f'{path}:{number}: expected at least 3 finite numbers')
-                if rows and row[0] < rows[-1][0]:
+                if len(row) < columns or not all(math.isfinite(x) for x in row):
+                    sys.exit(f'{path}:{number}: expected at least {columns} finite numbers')
+                if timed and rows and row[0] < rows[-1][0]:
                     sys.exit(f'{path}:{number}: time {row[0]} before the previous line')
-                if rows and row[0] == rows[-1][0]:
-                    rows[-1] = row  # the importer's --duplicate-times keep-last
+                if timed and merge_equal_times and rows and row[0] == rows[-1][0]:
+                    rows[-1] = row
                     duplicates += 1
                 else:
                     rows.append(row)

@@ -35,7 +35,7 @@ def residuals(dataset, robot, subject_of_barcode, landmarks):
     gt_t = [g[0] for g in gt]
     out = []
     sightings = load(os.path.join(dataset, f'Robot{robot}_Measurement.dat'), columns=4, merge_equal_times=False)
-    for t, barcode, _range, bearing in sightings:
+    for t, barcode, _range, bearing in (row[:4] for row in sightings):  # load() keeps extra columns
         subject = subject_of_barcode.get(int(barcode))
         if subject not in landmarks:
             continue  # another robot, or an unknown barcode
@@ -69,7 +69,7 @@ def main():
     if not os.path.exists(os.path.join(args.dataset, 'Barcodes.dat')):
         sys.exit(f'{args.dataset}: no Barcodes.dat here (is the MRCLAM dataset present?)')
     barcodes = load(os.path.join(args.dataset, 'Barcodes.dat'), columns=2, timed=False)
-    subject_of_barcode = {int(b): int(s) for s, b in barcodes}
+    subject_of_barcode = {int(row[1]): int(row[0]) for row in barcodes}
     landmarks = {int(r[0]): (r[1], r[2])
                  for r in load(os.path.join(args.dataset, 'Landmark_Groundtruth.dat'), columns=3, timed=False)}
 

@@ -22,7 +22,7 @@ while [ $# -gt 0 ]; do
     --out) opt_need reproduce-room "$@"; OUT="$2"; shift 2 ;;
     --keep-recordings) KEEP=1; shift ;;
     --set) opt_need reproduce-room "$@"; SETS+=(--set "$2"); shift 2 ;;
-    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    -h|--help) opt_usage "$0"; exit 0 ;;
     *) echo "reproduce-room: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done

@@ -27,7 +27,7 @@ while [ $# -gt 0 ]; do
     --out) opt_need reproduce-table1 "$@"; OUT="$2"; shift 2 ;;
     --keep-recordings) KEEP=1; shift ;;
     --set) opt_need reproduce-table1 "$@"; SETS+=(--set "$2"); shift 2 ;;
-    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+    -h|--help) opt_usage "$0"; exit 0 ;;
     *) echo "reproduce-table1: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done

@@ -54,7 +54,7 @@ while [ $# -gt 0 ]; do
     --localise-in-truth) LOCALISE=1; shift ;;
     --smooth) opt_need run-mrclam.sh "$@"; SMOOTH="$2"; shift 2 ;;
     --smooth-args) opt_need run-mrclam.sh "$@"; SMOOTH_ARGS="$2"; shift 2 ;;
-    -h|--help) sed -n '2,/^set -e/{/^set -e/!p}' "$0"; exit 0 ;;
+    -h|--help) opt_usage "$0"; exit 0 ;;
     *) echo "run-mrclam.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done

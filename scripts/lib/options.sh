@@ -1,11 +1,17 @@
 # Shared by the scripts under scripts/ (sourced, not run): option values and steps that fail loudly.
 # Each function takes the calling script's name first, for its messages.
 #
+#   opt_usage FILE                  prints FILE's header comment (from line 2 to the first line that is
+#                                   not a comment) without the leading "# ": the script's --help
 #   opt_need NAME "$@"              inside the option loop, before reading "$2": stops (exit 2) with
 #                                   "NAME: OPTION needs a value" when the option is the last argument
 #   opt_integers NAME OPTION LIST   stops (exit 2) unless every word of LIST is a non-negative integer
 #   run_step NAME WHAT ERR CMD...   runs CMD with its standard error in the file ERR; a failure stops
 #                                   the script (exit 1) naming WHAT, with the last lines of ERR
+
+opt_usage() {
+  awk 'NR == 1 { next } !/^#/ { exit } { sub(/^# ?/, ""); print }' "$1"
+}
 
 opt_need() {
   local name="$1"; shift

@@ -1,6 +1,7 @@
 // scripts/run-mrclam.sh, the documented MRCLAM command: every bad flag stops it at once with the flag
 // named (exit 2), it runs importer, filter and evaluation end to end on a small MRCLAM-format dataset
 // the test writes (one seed and several), and a failing step stops it with the step and its message.
+// Also the --help of the scripts that share scripts/lib/options.sh: their header comment, all of it.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -100,6 +101,26 @@ TEST(MrclamRunScript, BadFlagsStopAtOnceNamingTheFlag) {
   }
   // Nothing was run: no output file was written.
   EXPECT_TRUE(std::filesystem::is_empty(o));
+}
+
+TEST(MrclamRunScript, HelpIsTheWholeHeaderCommentOfEachScript) {
+  struct Case {
+    std::string script, first_line, usage;
+  };
+  const Case cases[] = {
+      {"scripts/run-mrclam.sh", "Bearing-only SLAM on the five robots", "scripts/run-mrclam.sh [--build DIR]"},
+      {"scripts/reproduce-room.sh", "Paper 002 end to end", "scripts/reproduce-room.sh [--seeds"},
+      {"scripts/reproduce-table1.sh", "Reproduces paper 000's table I", "Takes about 45 s per seed"},
+  };
+  for (const auto& c : cases) {
+    const auto r = t::run({"bash", t::sourcePath(c.script), "--help"}, 30.0);
+    EXPECT_EQ(r.exit_code, 0) << c.script << "\n" << r.output;
+    EXPECT_EQ(r.output.rfind(c.first_line, 0), 0u) << c.script << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.usage), std::string::npos) << c.script << "\n" << r.output;
+    // Comment markers stripped, and no code after the header (the old fixed line ranges printed some).
+    EXPECT_EQ(r.output.find("\n#"), std::string::npos) << c.script << "\n" << r.output;
+    EXPECT_EQ(r.output.find("set -euo pipefail"), std::string::npos) << c.script << "\n" << r.output;
+  }
 }
 
 TEST(MrclamRunScript, RunsEndToEndOnASmallDatasetAndNamesAFailingStep) {

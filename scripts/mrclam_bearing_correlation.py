@@ -25,7 +25,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from mrclam_odometry_heading import load, wrap  # noqa: E402  (same folder)
+from mrclam_odometry_heading import add_dataset_argument, load, wrap  # noqa: E402  (same folder)
 
 LAG_EDGES_S = [0.0, 0.01, 0.35, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0, 32.0, 48.0, 64.0]
 
@@ -58,9 +58,7 @@ def residuals(dataset, robot, subject_of_barcode, landmarks):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    datasets = os.environ.get('OMNISLAM_DATASETS') or os.path.join(root, '..', 'shared', 'datasets')
-    ap.add_argument('dataset', nargs='?', default=os.path.join(datasets, 'mrclam', 'MRCLAM_Dataset6'))
+    add_dataset_argument(ap)
     ap.add_argument('--max-lag-s', type=float, default=48.0)
     ap.add_argument('--fit-max-lag-s', type=float, default=32.0)
     args = ap.parse_args()

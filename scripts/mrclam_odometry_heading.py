@@ -58,6 +58,14 @@ def load(path, columns=3, timed=True, merge_equal_times=True):
     return rows
 
 
+def add_dataset_argument(parser):
+    """The optional DATASET_DIR positional of the MRCLAM scripts, defaulting as scripts/run-mrclam.sh
+    does: $OMNISLAM_DATASETS/mrclam/MRCLAM_Dataset6, $OMNISLAM_DATASETS defaulting to ../shared/datasets."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    datasets = os.environ.get('OMNISLAM_DATASETS') or os.path.join(root, '..', 'shared', 'datasets')
+    parser.add_argument('dataset', nargs='?', default=os.path.join(datasets, 'mrclam', 'MRCLAM_Dataset6'))
+
+
 def wrap(a):
     return (a + math.pi) % (2 * math.pi) - math.pi
 
@@ -80,7 +88,9 @@ def fit(rows):
     return a, b, rms0, rms1
 
 
-def windows(odo, gt, window_s):
+def truth_heading(gt):
+    """The Vicon heading of ground-truth rows (time, x, y, theta), unwrapped, as a function of time
+    (linear between samples, extrapolated from the first or last two outside them)."""
     gt_t = [g[0] for g in gt]
     heading = [gt[0][3]]
     for i in range(1, len(gt)):
@@ -90,7 +100,12 @@ def windows(odo, gt, window_s):
         i = max(1, min(bisect.bisect_left(gt_t, t), len(gt_t) - 1))
         s = (t - gt_t[i - 1]) / (gt_t[i] - gt_t[i - 1])
         return heading[i - 1] + s * (heading[i] - heading[i - 1])
+    return heading_at
 
+
+def windows(odo, gt, window_s):
+    gt_t = [g[0] for g in gt]
+    heading_at = truth_heading(gt)
     t0 = odo[0][0]
     sums = {}
     for i in range(len(odo) - 1):
@@ -112,10 +127,7 @@ def windows(odo, gt, window_s):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    datasets = os.environ.get('OMNISLAM_DATASETS') or os.path.join(root, '..', 'shared', 'datasets')
-    ap.add_argument('dataset', nargs='?',
-                    default=os.path.join(datasets, 'mrclam', 'MRCLAM_Dataset6'))
+    add_dataset_argument(ap)
     ap.add_argument('--window-s', type=float, default=5.0)
     ap.add_argument('--block-s', type=float, default=150.0)
     args = ap.parse_args()

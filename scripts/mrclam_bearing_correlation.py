@@ -40,7 +40,7 @@ def residuals(dataset, robot, subject_of_barcode, landmarks):
         if subject not in landmarks:
             continue  # another robot, or an unknown barcode
         i = bisect.bisect_left(gt_t, t)
-        if i <= 0 or i >= len(gt) or gt_t[i] - gt_t[i - 1] > 0.1:
+        if i <= 0 or i >= len(gt) or gt_t[i] - gt_t[i - 1] > 0.1 + 1e-6:  # 1e-6: samples 0.1 s apart in the file's decimals
             continue
         s = (t - gt_t[i - 1]) / (gt_t[i] - gt_t[i - 1])
         x = gt[i - 1][1] + s * (gt[i][1] - gt[i - 1][1])
@@ -77,6 +77,8 @@ def main():
     if not pooled:
         sys.exit(f'{args.dataset}: no landmark sighting with a truth pose')
     var = sum(e * e for e in pooled) / len(pooled)
+    if var == 0.0:
+        sys.exit(f'{args.dataset}: every residual is zero after removing each robot\'s mean; no correlation to compute')
     print(f'{len(pooled)} landmark sightings of {len(per_robot)} robots; residual RMS {math.sqrt(var):.4f} rad '
           f'(each robot\'s mean removed)')
 

@@ -1,8 +1,11 @@
 // Tests of one association level: Hungarian (global) versus Maximum Likelihood (greedy), the
-// P_new columns, and impossible pairs.
+// P_new columns, and impossible pairs; sampled association against brute-force enumeration.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
+#include <map>
+#include <random>
 
 #include "omnislam/core/slam/data_association.h"
 
@@ -46,6 +49,139 @@ TEST(slam_DataAssociation, MoreMeasurementsThanLandmarks) {
   const std::vector<double> cost_new(4, 5.0);
   EXPECT_EQ(associate(cost, cost_new, AssociationMethod::kHungarian), (std::vector<int>{-1, 0, -1, -1}));
   EXPECT_EQ(associate(cost, cost_new, AssociationMethod::kMaximumLikelihood), (std::vector<int>{0, -1, -1, -1}));
+}
+
+// Brute force: every joint assignment of a small ratio matrix with its product of ratios.
+std::map<std::vector<int>, double> allAssignments(const Eigen::MatrixXd& log_r) {
+  std::map<std::vector<int>, double> out;
+  const int nz = static_cast<int>(log_r.rows()), n = static_cast<int>(log_r.cols());
+  std::vector<int> a(nz, -1);
+  // Odometer over {-1, 0..n-1}^nz; keep the assignments that use no landmark twice and no impossible pair.
+  while (true) {
+    bool ok = true;
+    double prod = 1.0;
+    for (int l = 0; l < nz && ok; ++l) {
+      if (a[l] < 0) continue;
+      if (!std::isfinite(log_r(l, a[l]))) ok = false;
+      for (int k = 0; k < l && ok; ++k) ok = a[k] != a[l];
+      if (ok) prod *= std::exp(log_r(l, a[l]));
+    }
+    if (ok) out[a] = prod;
+    int l = 0;
+    while (l < nz && ++a[l] == n) a[l++] = -1;
+    if (l == nz) break;
+  }
+  return out;
+}
+
+double sumOf(const std::map<std::vector<int>, double>& assignments) {
+  double z = 0.0;
+  for (const auto& [a, p] : assignments) z += p;
+  return z;
+}
+
+Eigen::MatrixXd threeByThree() {
+  Eigen::MatrixXd log_r(3, 3);
+  log_r << std::log(2.0), std::log(0.5), -kInf,  //
+      std::log(3.0), -kInf, std::log(0.2),         //
+      -kInf, std::log(1.5), std::log(4.0);
+  return log_r;
+}
+
+// Exact draw: the normaliser is the brute-force sum and each assignment is drawn with its share.
+TEST(slam_DataAssociation, SampledDrawsEachAssignmentWithItsProbability) {
+  const Eigen::MatrixXd log_r = threeByThree();
+  const auto truth = allAssignments(log_r);
+  const double z = sumOf(truth);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::map<std::vector<int>, int> count;
+  const int n = 200000;
+  for (int k = 0; k < n; ++k) {
+    const SampledAssociation s = sampleAssociation(log_r, [&] { return u(rng); });
+    ASSERT_TRUE(s.enumerated);
+    ASSERT_NEAR(s.log_normaliser, std::log(z), 1e-12);
+    ++count[s.landmark_of_measurement];
+  }
+  EXPECT_EQ(count.size(), truth.size()) << "every possible assignment is drawn, nothing else";
+  for (const auto& [a, c] : count) {
+    ASSERT_TRUE(truth.count(a)) << "an impossible assignment was drawn";
+    const double p = truth.at(a) / z;
+    EXPECT_NEAR(static_cast<double>(c) / n, p, 4.0 * std::sqrt(p * (1.0 - p) / n) + 1e-4);
+  }
+}
+
+// Sequential draw (forced by max_enumerated = 1): exp(log_normaliser) is an importance weight, so
+// its mean over draws is the exact normaliser Z, and weighting the draws by it recovers each
+// assignment's probability.
+TEST(slam_DataAssociation, SampledSequentialDrawIsAnUnbiasedImportanceSampler) {
+  const Eigen::MatrixXd log_r = threeByThree();
+  const auto truth = allAssignments(log_r);
+  const double z = sumOf(truth);
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::map<std::vector<int>, double> weight_of;
+  double sum_w = 0.0;
+  const int n = 200000;
+  for (int k = 0; k < n; ++k) {
+    const SampledAssociation s = sampleAssociation(log_r, [&] { return u(rng); }, 1);
+    ASSERT_FALSE(s.enumerated);
+    ASSERT_TRUE(truth.count(s.landmark_of_measurement));
+    const double w = std::exp(s.log_normaliser);
+    weight_of[s.landmark_of_measurement] += w;
+    sum_w += w;
+  }
+  EXPECT_NEAR(sum_w / n, z, 0.01 * z);
+  for (const auto& [a, p] : truth) EXPECT_NEAR(weight_of[a] / sum_w, p / z, 0.01) << "assignment " << a[0] << a[1] << a[2];
+}
+
+// Two independent blocks (no landmark gated by measurements of both) with one measurement of no
+// possible pair between them: each block is drawn exactly on its own, Z is the product of the
+// blocks' brute-force sums, although the whole problem has more assignments than max_enumerated.
+TEST(slam_DataAssociation, SampledDrawsIndependentClustersExactly) {
+  const Eigen::MatrixXd block = threeByThree();
+  Eigen::MatrixXd log_r = Eigen::MatrixXd::Constant(7, 6, -kInf);
+  log_r.block(0, 0, 3, 3) = block;
+  log_r.block(4, 3, 3, 3) = block;  // row 3: no possible pair
+  const double z_block = sumOf(allAssignments(block));
+  ASSERT_GT(allAssignments(log_r).size(), 100u);
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int both_first_pairs = 0;
+  const int n = 20000;
+  for (int k = 0; k < n; ++k) {
+    const SampledAssociation s = sampleAssociation(log_r, [&] { return u(rng); }, 100);
+    ASSERT_TRUE(s.enumerated) << "each block has 27 assignments at most";
+    ASSERT_NEAR(s.log_normaliser, 2.0 * std::log(z_block), 1e-12);
+    const auto& a = s.landmark_of_measurement;
+    ASSERT_EQ(a[3], -1);
+    for (int l : {0, 1, 2}) ASSERT_TRUE(a[l] < 3) << "block 1 takes block 1's landmarks";
+    for (int l : {4, 5, 6}) ASSERT_TRUE(a[l] == -1 || a[l] >= 3) << "block 2 takes block 2's landmarks";
+    both_first_pairs += (a[0] == 0 && a[4] == 3) ? 1 : 0;
+  }
+  // The blocks are drawn independently: P(both take their first pair) = P(one does)^2.
+  double p_first = 0.0;
+  for (const auto& [a, p] : allAssignments(block)) p_first += a[0] == 0 ? p / z_block : 0.0;
+  EXPECT_NEAR(static_cast<double>(both_first_pairs) / n, p_first * p_first, 0.015);
+}
+
+TEST(slam_DataAssociation, SampledEdgeCases) {
+  const auto u0 = [] { return 0.0; };
+  // No measurements: nothing drawn, Z = 1.
+  const SampledAssociation none = sampleAssociation(Eigen::MatrixXd(0, 2), u0);
+  EXPECT_TRUE(none.landmark_of_measurement.empty());
+  EXPECT_EQ(none.log_normaliser, 0.0);
+  // No possible pair: all unassigned, Z = 1.
+  const SampledAssociation free = sampleAssociation(Eigen::MatrixXd::Constant(2, 2, -kInf), u0);
+  EXPECT_EQ(free.landmark_of_measurement, (std::vector<int>{-1, -1}));
+  EXPECT_EQ(free.log_normaliser, 0.0);
+  // A ratio of e^40: u just below 1 takes the pair; u = 0 the first assignment (unassigned).
+  Eigen::MatrixXd big(1, 1);
+  big << 40.0;
+  EXPECT_EQ(sampleAssociation(big, [] { return 0.999; }).landmark_of_measurement, (std::vector<int>{0}));
+  EXPECT_EQ(sampleAssociation(big, u0).landmark_of_measurement, (std::vector<int>{-1}));
+  EXPECT_NEAR(sampleAssociation(big, u0).log_normaliser, 40.0, 1e-12);
+  EXPECT_EQ(sampleAssociation(big, [] { return 0.999; }, 1).landmark_of_measurement, (std::vector<int>{0}));
 }
 
 }  // namespace

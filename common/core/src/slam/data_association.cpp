@@ -1,7 +1,9 @@
-// Hungarian and Maximum-Likelihood association of one level (see data_association.h).
+// Hungarian, Maximum-Likelihood and sampled association of one level (see data_association.h).
 #include "omnislam/core/slam/data_association.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "omnislam/core/slam/hungarian.h"
 
@@ -33,6 +35,160 @@ std::vector<int> associate(const Eigen::MatrixXd& cost, const std::vector<double
   const AssignmentResult r = solveAssignment(full);
   for (int l = 0; l < nz; ++l) {
     if (r.col_of_row[l] >= 0 && r.col_of_row[l] < n) out[l] = r.col_of_row[l];
+  }
+  return out;
+}
+
+namespace {
+
+double logAdd(double a, double b) {
+  if (a == -std::numeric_limits<double>::infinity()) return b;
+  if (b == -std::numeric_limits<double>::infinity()) return a;
+  const double m = std::max(a, b);
+  return m + std::log1p(std::exp(-std::abs(a - b)));
+}
+
+// Every joint assignment in depth-first order: measurement l unassigned first, then its free
+// landmarks in column order.
+void enumerateAssignments(const Eigen::MatrixXd& log_ratio, int l, std::vector<int>& current, std::vector<char>& taken,
+                          double log_prod, std::vector<std::vector<int>>& all, std::vector<double>& log_of) {
+  if (l == static_cast<int>(log_ratio.rows())) {
+    all.push_back(current);
+    log_of.push_back(log_prod);
+    return;
+  }
+  current[l] = -1;
+  enumerateAssignments(log_ratio, l + 1, current, taken, log_prod, all, log_of);
+  for (int j = 0; j < log_ratio.cols(); ++j) {
+    if (taken[j] || !std::isfinite(log_ratio(l, j))) continue;
+    taken[j] = 1;
+    current[l] = j;
+    enumerateAssignments(log_ratio, l + 1, current, taken, log_prod + log_ratio(l, j), all, log_of);
+    taken[j] = 0;
+  }
+  current[l] = -1;
+}
+
+}  // namespace
+
+namespace {
+
+// One cluster: exact enumeration when it has at most max_enumerated assignments, else the
+// sequential draw. Writes the cluster's columns into `out` and returns its log normaliser.
+double sampleCluster(const Eigen::MatrixXd& log_ratio, const std::function<double()>& u01, int max_enumerated,
+                     std::vector<int>& out, bool& enumerated) {
+  const int nz = static_cast<int>(log_ratio.rows());
+  const int n = static_cast<int>(log_ratio.cols());
+  out.assign(nz, -1);
+  double bound = 1.0;  // an upper bound of the number of assignments: prod (1 + possible pairs of l)
+  for (int l = 0; l < nz; ++l) {
+    int k = 0;
+    for (int j = 0; j < n; ++j) k += std::isfinite(log_ratio(l, j)) ? 1 : 0;
+    bound *= 1.0 + k;
+  }
+  if (bound <= static_cast<double>(max_enumerated)) {
+    std::vector<std::vector<int>> all;
+    std::vector<double> log_of;
+    std::vector<int> current(nz, -1);
+    std::vector<char> taken(n, 0);
+    enumerateAssignments(log_ratio, 0, current, taken, 0.0, all, log_of);
+    double log_z = -std::numeric_limits<double>::infinity();
+    for (double v : log_of) log_z = logAdd(log_z, v);
+    const double u = u01();
+    double cum = 0.0;
+    std::size_t pick = all.size() - 1;
+    for (std::size_t k = 0; k < all.size(); ++k) {
+      cum += std::exp(log_of[k] - log_z);
+      if (u < cum) {
+        pick = k;
+        break;
+      }
+    }
+    out = all[pick];
+    return log_z;
+  }
+  enumerated = false;
+  double log_z = 0.0;
+  std::vector<char> taken(n, 0);
+  for (int l = 0; l < nz; ++l) {
+    double log_s = 0.0;  // "unassigned" has ratio 1
+    for (int j = 0; j < n; ++j) {
+      if (!taken[j] && std::isfinite(log_ratio(l, j))) log_s = logAdd(log_s, log_ratio(l, j));
+    }
+    const double u = u01();
+    double cum = std::exp(-log_s);  // unassigned first
+    int pick = -1;
+    if (!(u < cum)) {
+      for (int j = 0; j < n; ++j) {
+        if (taken[j] || !std::isfinite(log_ratio(l, j))) continue;
+        cum += std::exp(log_ratio(l, j) - log_s);
+        pick = j;
+        if (u < cum) break;
+      }
+    }
+    if (pick >= 0) taken[pick] = 1;
+    out[l] = pick;
+    log_z += log_s;
+  }
+  return log_z;
+}
+
+int findRoot(std::vector<int>& parent, int i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+}  // namespace
+
+SampledAssociation sampleAssociation(const Eigen::MatrixXd& log_ratio, const std::function<double()>& u01,
+                                     int max_enumerated) {
+  const int nz = static_cast<int>(log_ratio.rows());
+  const int n = static_cast<int>(log_ratio.cols());
+  SampledAssociation out;
+  out.landmark_of_measurement.assign(nz, -1);
+  // Measurements that can share a landmark form a cluster; the clusters are independent, so each is
+  // drawn on its own and Z is the product of theirs (a frame of many well separated landmarks stays
+  // exact).
+  std::vector<int> parent(nz);
+  for (int l = 0; l < nz; ++l) parent[l] = l;
+  std::vector<int> first_row_of_col(n, -1);
+  for (int l = 0; l < nz; ++l) {
+    for (int j = 0; j < n; ++j) {
+      if (!std::isfinite(log_ratio(l, j))) continue;
+      if (first_row_of_col[j] < 0) {
+        first_row_of_col[j] = l;
+      } else {
+        parent[findRoot(parent, l)] = findRoot(parent, first_row_of_col[j]);
+      }
+    }
+  }
+  std::vector<char> done(nz, 0);
+  for (int l0 = 0; l0 < nz; ++l0) {
+    if (done[l0]) continue;
+    const int root = findRoot(parent, l0);
+    std::vector<int> rows, cols;
+    for (int l = l0; l < nz; ++l) {
+      if (!done[l] && findRoot(parent, l) == root) {
+        rows.push_back(l);
+        done[l] = 1;
+      }
+    }
+    for (int j = 0; j < n; ++j) {
+      for (int l : rows) {
+        if (std::isfinite(log_ratio(l, j))) {
+          cols.push_back(j);
+          break;
+        }
+      }
+    }
+    if (cols.empty()) continue;  // no possible pair: unassigned, Z = 1
+    Eigen::MatrixXd sub(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(cols.size()));
+    for (std::size_t a = 0; a < rows.size(); ++a)
+      for (std::size_t b = 0; b < cols.size(); ++b) sub(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = log_ratio(rows[a], cols[b]);
+    std::vector<int> picked;
+    out.log_normaliser += sampleCluster(sub, u01, max_enumerated, picked, out.enumerated);
+    for (std::size_t a = 0; a < rows.size(); ++a)
+      out.landmark_of_measurement[rows[a]] = picked[a] < 0 ? -1 : cols[picked[a]];
   }
   return out;
 }

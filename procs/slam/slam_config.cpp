@@ -95,11 +95,13 @@ void parseCandidates(const Node& n, slam::CandidateOptions& c) {
 void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   n.rejectUnknownKeys({"particles", "association", "proposal", "descriptor_gate", "descriptor_update_rate", "p_new_mahalanobis_sq", "resample_ess_fraction",
                        "inflate_azimuth_near_zenith", "weight_at_predicted_pose", "weight_unassociated_with_p_new",
-                       "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
+                       "clutter_density", "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
                        "perception", "candidates"});
   f.num_particles = static_cast<int>(n.getInt("particles", 1, 100000, f.num_particles));
-  const std::string assoc = n.getEnum("association", {"hungarian", "ml"}, "hungarian");
-  f.association = assoc == "ml" ? slam::AssociationMethod::kMaximumLikelihood : slam::AssociationMethod::kHungarian;
+  const std::string assoc = n.getEnum("association", {"hungarian", "ml", "sampled"}, "hungarian");
+  f.association = assoc == "ml"        ? slam::AssociationMethod::kMaximumLikelihood
+                  : assoc == "sampled" ? slam::AssociationMethod::kSampled
+                                       : slam::AssociationMethod::kHungarian;
   const std::string proposal = n.getEnum("proposal", {"fastslam2", "fastslam1"}, "fastslam2");
   f.proposal = proposal == "fastslam1" ? slam::ProposalKind::kFastSlam1 : slam::ProposalKind::kFastSlam2;
   f.descriptor_gate = n.getDouble("descriptor_gate", 0.0, 1e4, f.descriptor_gate);
@@ -109,6 +111,7 @@ void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   f.inflate_azimuth_near_zenith = n.getBool("inflate_azimuth_near_zenith", f.inflate_azimuth_near_zenith);
   f.weight_at_predicted_pose = n.getBool("weight_at_predicted_pose", f.weight_at_predicted_pose);
   f.weight_unassociated_with_p_new = n.getBool("weight_unassociated_with_p_new", f.weight_unassociated_with_p_new);
+  f.clutter_density = n.getDouble("clutter_density", 1e-6, 1e6, f.clutter_density);
   f.map_cell_size_m = n.getDouble("map_cell_size_m", 0.01, 1e4, f.map_cell_size_m);
   f.odometry_scale_correction = n.getBool("odometry_scale_correction", f.odometry_scale_correction);
   f.scale_correction_max_step = n.getDouble("scale_correction_max_step", 1e-6, 1.0, f.scale_correction_max_step);
@@ -203,7 +206,11 @@ std::string describe(const SlamProcessOptions& o) {
   const auto& f = o.filter;
   s << "filter: " << f.num_particles << " particles, "
     << (f.proposal == slam::ProposalKind::kFastSlam2 ? "FastSLAM 2.0" : "FastSLAM 1.0") << ", association "
-    << (f.association == slam::AssociationMethod::kHungarian ? "hungarian" : "ml") << ", motion noise "
+    << (f.association == slam::AssociationMethod::kHungarian ? "hungarian"
+        : f.association == slam::AssociationMethod::kSampled ? "sampled, clutter density "
+                                                              : "ml");
+  if (f.association == slam::AssociationMethod::kSampled) s << f.clutter_density;
+  s << ", motion noise "
     << (f.motion.model == slam::MotionNoiseModel::kChord ? "chord" : "translate-then-rotate") << ", P_new at Mahalanobis^2 "
     << f.p_new_mahalanobis_sq << ", NZ_min " << f.candidates.nz_min << ", NCROSS_valid " << f.candidates.ncross_valid
     << ", ANG_min " << rad2deg(f.candidates.min_parallax_rad) << " deg, D_min " << f.candidates.d_min_m

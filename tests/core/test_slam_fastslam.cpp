@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <iostream>
+#include <limits>
 #include <random>
 #include <set>
 #include <stdexcept>
@@ -77,6 +78,23 @@ TEST(slam_FastSlam, OptionsValidate) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("resample_ess_fraction"), std::string::npos);
   }
+  o = FastSlamOptions{};
+  o.association = AssociationMethod::kSampled;  // with the default FastSLAM 2.0 proposal
+  EXPECT_NE(o.validate().find("association kSampled needs proposal kFastSlam1"), std::string::npos) << o.validate();
+  o.proposal = ProposalKind::kFastSlam1;
+  EXPECT_EQ(o.validate(), "");
+  o.perception.detection_probability = 0.0;
+  EXPECT_NE(o.validate().find("perception.detection_probability must be in (0, 1) with association kSampled"),
+            std::string::npos)
+      << o.validate();
+  o.perception.detection_probability = 0.5;
+  o.weight_unassociated_with_p_new = true;
+  EXPECT_NE(o.validate().find("weight_unassociated_with_p_new must be false with association kSampled"),
+            std::string::npos)
+      << o.validate();
+  o.weight_unassociated_with_p_new = false;
+  o.clutter_density = 0.0;
+  EXPECT_NE(o.validate().find("clutter_density must be in (0, "), std::string::npos) << o.validate();
   // Paper defaults.
   const FastSlamOptions d;
   EXPECT_EQ(d.num_particles, 10);
@@ -541,21 +559,66 @@ TEST(slam_FastSlam, LocalisationOnlyKeepsThePriorMapFixed) {
 }
 
 // FastSLAM 1.0 (paper 002): poses from the motion model, association and weight at the sampled
-// pose. With the prior map it still localises (more particles: the proposal is not corrected).
+// pose. With the prior map it still localises (more particles: the proposal is not corrected), with
+// the paper's ML association and with sampled association (a clutter density of 0.1 / rad).
 TEST(slam_FastSlam, FastSlam1LocalisesAndAssociates) {
-  FastSlamOptions o;
-  o.proposal = ProposalKind::kFastSlam1;
-  o.association = AssociationMethod::kMaximumLikelihood;
-  o.num_particles = 200;
-  Pose2 truth;
-  std::vector<Landmark> prior;
-  const FastSlam f = runPriorMapScenario(o, &truth, &prior);
-  const Pose2 m = f.meanPose();
-  EXPECT_LT(std::hypot(m.x_m - truth.x_m, m.y_m - truth.y_m), 0.15);  // odometry alone: 0.45 m off
-  EXPECT_LT(std::abs(wrapAngle(m.theta_rad - truth.theta_rad)), 0.02);
-  const auto map = f.bestMap();
-  for (std::uint64_t id = 100; id < 106; ++id)
-    EXPECT_TRUE(std::any_of(map.begin(), map.end(), [&](const Landmark& L) { return L.id == id; })) << id;
+  for (const auto method : {AssociationMethod::kMaximumLikelihood, AssociationMethod::kSampled}) {
+    FastSlamOptions o;
+    o.proposal = ProposalKind::kFastSlam1;
+    o.association = method;
+    o.clutter_density = 0.1;
+    o.num_particles = 200;
+    Pose2 truth;
+    std::vector<Landmark> prior;
+    const FastSlam f = runPriorMapScenario(o, &truth, &prior);
+    const Pose2 m = f.meanPose();
+    const int k = static_cast<int>(method);
+    EXPECT_LT(std::hypot(m.x_m - truth.x_m, m.y_m - truth.y_m), 0.15) << "method " << k;  // odometry: 0.45 m off
+    EXPECT_LT(std::abs(wrapAngle(m.theta_rad - truth.theta_rad)), 0.02) << "method " << k;
+    const auto map = f.bestMap();
+    for (std::uint64_t id = 100; id < 106; ++id)
+      EXPECT_TRUE(std::any_of(map.begin(), map.end(), [&](const Landmark& L) { return L.id == id; }))
+          << id << ", method " << k;
+  }
+}
+
+/// One step of two FastSLAM 1.0 particles with a deterministic motion (x_t = x_hat up to 1e-12),
+/// spread about the origin by start_var, one prior landmark (id 7, with a covariance) and one
+/// measurement of it from near the true pose. Per particle: x_t, and the closed-form
+/// log N(z; h(L, x_t), Q + H_m Sigma H_m^T); and the filter's weights before resampling.
+struct TwoParticleStep {
+  std::vector<Pose2> x_t;
+  std::vector<double> log_n;
+  std::vector<double> w;
+};
+TwoParticleStep twoParticleStep(FastSlamOptions o, std::uint64_t seed, const Eigen::Vector3d& start_var) {
+  o.num_particles = 2;
+  o.motion.min_sigma_xy_m = 1e-12;
+  o.motion.min_sigma_theta_rad = 1e-12;
+  o.motion.trans_sigma_per_m = o.motion.lateral_sigma_per_m = o.motion.trans_sigma_per_rad = 0.0;
+  o.motion.rot_sigma_per_rad = o.motion.rot_sigma_per_m = 0.0;
+  FastSlam f(o, seed);
+  Landmark L = priorLandmark(7, Eigen::Vector3d(3.0, 1.0, 6.5));
+  L.cov_LinW_m2 = Eigen::Vector3d(0.04, 0.02, 0.01).asDiagonal();
+  f.initialise(Pose2{0, 0, 0}, {L}, start_var.asDiagonal());
+  const Pose2 u{0.2, 0.0, 0.05};
+  const BearingMeasurement z = measure(L.p_LinW_m, Pose2{0.2, 0.05, 0.06});
+  TwoParticleStep out;
+  for (const Particle& p : f.particles()) out.x_t.push_back(p.pose.compose(u));
+  f.step(Pose2{0, 0, 0}, u, {z});
+  for (const Pose2& x_t : out.x_t) {
+    MeasJac Hx, Hm;
+    const auto zhat = predictMeasurement(LandmarkKind::kPoint3D, L.p_LinW_m, x_t, kCam, &Hx, &Hm);
+    const MeasMat Qt = measurementCovariance(z, o.inflate_azimuth_near_zenith) + Hm * L.cov_LinW_m2 * Hm.transpose();
+    out.log_n.push_back(zhat ? logGaussian(innovation(measurementVector(z), *zhat), Qt) : -std::numeric_limits<double>::infinity());
+  }
+  out.w = f.weightsBeforeResampling();
+  // The sampled poses are reported before resampling.
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_NEAR(f.posesBeforeResampling()[k].x_m, out.x_t[k].x_m, 1e-9);
+    EXPECT_NEAR(f.posesBeforeResampling()[k].y_m, out.x_t[k].y_m, 1e-9);
+  }
+  return out;
 }
 
 // FastSLAM 1.0's weight is N(z; h(L, x_t), Q + H_m Sigma H_m^T) at the sampled pose: two particles
@@ -564,39 +627,34 @@ TEST(slam_FastSlam, FastSlam1LocalisesAndAssociates) {
 TEST(slam_FastSlam, FastSlam1WeightIsTheMeasurementLikelihoodAtTheSampledPose) {
   FastSlamOptions o;
   o.proposal = ProposalKind::kFastSlam1;
-  o.num_particles = 2;
-  o.motion.min_sigma_xy_m = 1e-12;
-  o.motion.min_sigma_theta_rad = 1e-12;
-  o.motion.trans_sigma_per_m = o.motion.lateral_sigma_per_m = o.motion.trans_sigma_per_rad = 0.0;
-  o.motion.rot_sigma_per_rad = o.motion.rot_sigma_per_m = 0.0;  // x_t = x_hat up to 1e-12
-  FastSlam f(o, 1);
-  Landmark L = priorLandmark(7, Eigen::Vector3d(3.0, 1.0, 6.5));
-  L.cov_LinW_m2 = Eigen::Vector3d(0.04, 0.02, 0.01).asDiagonal();
-  f.initialise(Pose2{0, 0, 0}, {L}, Eigen::Vector3d(0.05, 0.05, 0.01).asDiagonal());
-  std::vector<Pose2> start;
-  for (const Particle& p : f.particles()) start.push_back(p.pose);
-  ASSERT_NE(start[0].x_m, start[1].x_m);
-  const Pose2 u{0.2, 0.0, 0.05};
-  const BearingMeasurement z = measure(L.p_LinW_m, Pose2{0.2, 0.05, 0.06});
-  f.step(Pose2{0, 0, 0}, u, {z});
-  std::vector<double> log_lik;
-  for (const Pose2& x0 : start) {
-    const Pose2 x_t = x0.compose(u);
-    MeasJac Hx, Hm;
-    const auto zhat = predictMeasurement(LandmarkKind::kPoint3D, L.p_LinW_m, x_t, kCam, &Hx, &Hm);
-    ASSERT_TRUE(zhat.has_value());
-    const MeasMat Qt = measurementCovariance(z, o.inflate_azimuth_near_zenith) + Hm * L.cov_LinW_m2 * Hm.transpose();
-    log_lik.push_back(logGaussian(innovation(measurementVector(z), *zhat), Qt));
-  }
-  const auto& w = f.weightsBeforeResampling();
-  ASSERT_EQ(w.size(), 2u);
-  EXPECT_NEAR(std::log(w[0] / w[1]), log_lik[0] - log_lik[1], 1e-6);
-  EXPECT_GT(std::abs(log_lik[0] - log_lik[1]), 0.1) << "the two poses must be distinguishable";
-  // The sampled poses are reported before resampling.
-  for (int k = 0; k < 2; ++k) {
-    const Pose2 x_t = start[k].compose(u);
-    EXPECT_NEAR(f.posesBeforeResampling()[k].x_m, x_t.x_m, 1e-9);
-    EXPECT_NEAR(f.posesBeforeResampling()[k].y_m, x_t.y_m, 1e-9);
+  const TwoParticleStep s = twoParticleStep(o, 1, Eigen::Vector3d(0.05, 0.05, 0.01));
+  ASSERT_NE(s.x_t[0].x_m, s.x_t[1].x_m);
+  ASSERT_EQ(s.w.size(), 2u);
+  EXPECT_NEAR(std::log(s.w[0] / s.w[1]), s.log_n[0] - s.log_n[1], 1e-6);
+  EXPECT_GT(std::abs(s.log_n[0] - s.log_n[1]), 0.1) << "the two poses must be distinguishable";
+}
+
+// Sampled association: a particle's weight is the likelihood of the frame summed over the
+// assignments; with one landmark in range and one measurement, w = (1 - p_in) lambda (the
+// measurement is clutter, the landmark missed) + p_in N(z; h(L, x_t), Qt) (it is the landmark).
+// Two particles at different poses: the ratio of their weights is the closed form's, for a clutter
+// density below, near and above N (54 and 91 here), and whichever assignment each particle draws
+// (eight filter seeds).
+TEST(slam_FastSlam, SampledAssociationWeightSumsOverTheAssignments) {
+  for (int run = 0; run < 24; ++run) {
+    const double lambda = std::vector<double>{0.05, 80.0, 400.0}[run / 8];
+    const std::uint64_t seed = 1 + run % 8;
+    FastSlamOptions o;
+    o.proposal = ProposalKind::kFastSlam1;
+    o.association = AssociationMethod::kSampled;
+    o.clutter_density = lambda;
+    o.perception.detection_probability = 0.6;
+    const TwoParticleStep s = twoParticleStep(o, seed, Eigen::Vector3d(0.02, 0.02, 0.004));
+    ASSERT_EQ(s.w.size(), 2u);
+    std::vector<double> w_closed;
+    for (double log_n : s.log_n) w_closed.push_back((1.0 - 0.6) * lambda + 0.6 * std::exp(log_n));
+    EXPECT_NEAR(std::log(s.w[0] / s.w[1]), std::log(w_closed[0] / w_closed[1]), 1e-6)
+        << "lambda " << lambda << ", seed " << seed;
   }
 }
 

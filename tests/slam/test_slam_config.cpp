@@ -77,6 +77,14 @@ TEST(SlamConfig, MlAssociationFixedStartAndSeed) {
   EXPECT_NEAR(o.start_pose_W.theta_rad, kPi / 2, 1e-12);
 }
 
+TEST(SlamConfig, SampledAssociationAndClutterDensity) {
+  const SlamProcessOptions o = parseSlamOptions(config::Node::loadString(
+      "filter: {association: sampled, proposal: fastslam1, clutter_density: 0.31}\n", "x"));
+  EXPECT_EQ(o.filter.association, slam::AssociationMethod::kSampled);
+  EXPECT_DOUBLE_EQ(o.filter.clutter_density, 0.31);
+  EXPECT_NE(describe(o).find("association sampled, clutter density 0.31, "), std::string::npos) << describe(o);
+}
+
 TEST(SlamConfig, MistakesNameTheKey) {
   const std::string hall = readFile(kHall);
   struct Case {
@@ -85,6 +93,9 @@ TEST(SlamConfig, MistakesNameTheKey) {
   const Case cases[] = {
       {"particles: 10", "particles: 0", "filter.particles"},
       {"association: hungarian", "association: greedy", "filter.association"},
+      // the sports hall file has FastSLAM 2.0, which samples its pose from the association
+      {"association: hungarian", "association: sampled", "association kSampled needs proposal kFastSlam1"},
+      {"association: hungarian", "association: hungarian\n  clutter_density: 0", "filter.clutter_density"},
       {"nz_min: 3", "nz_min: three", "filter.candidates.nz_min"},
       {"min_parallax_deg: 7.0", "min_parallax_deg: 120", "filter.candidates.min_parallax_deg"},
       {"detection_probability: 0.9", "detection_probability: 1.5", "filter.perception.detection_probability"},

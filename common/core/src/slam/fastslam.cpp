@@ -86,8 +86,18 @@ bool candidateInsideRange(const Candidate& c, const Pose2& x_t, const Perception
 std::string FastSlamOptions::validate() const {
   detail::FieldChecker c;
   c.inClosed("num_particles", num_particles, 1, 1e6)
-      .require(association == AssociationMethod::kHungarian || association == AssociationMethod::kMaximumLikelihood,
-               "association", "must be kHungarian or kMaximumLikelihood")
+      .require(association == AssociationMethod::kHungarian || association == AssociationMethod::kMaximumLikelihood ||
+                   association == AssociationMethod::kSampled,
+               "association", "must be kHungarian, kMaximumLikelihood or kSampled")
+      .require(association != AssociationMethod::kSampled || proposal == ProposalKind::kFastSlam1, "association",
+               "kSampled needs proposal kFastSlam1 (FastSLAM 2.0 samples the pose from the association)")
+      .require(association != AssociationMethod::kSampled ||
+                   (perception.detection_probability > 0.0 && perception.detection_probability < 1.0),
+               "perception.detection_probability", "must be in (0, 1) with association kSampled")
+      .require(association != AssociationMethod::kSampled || !weight_unassociated_with_p_new,
+               "weight_unassociated_with_p_new", "must be false with association kSampled (the clutter density "
+               "already weighs the unassigned measurements)")
+      .inLeftOpen("clutter_density", clutter_density, 0.0, 1e6)
       .require(proposal == ProposalKind::kFastSlam2 || proposal == ProposalKind::kFastSlam1, "proposal",
                "must be kFastSlam2 or kFastSlam1")
       .inLeftOpen("p_new_mahalanobis_sq", p_new_mahalanobis_sq, 0.0, kInf)
@@ -284,8 +294,29 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
   std::vector<double> cost_new(nz);
   for (int l = 0; l < nz; ++l) cost_new[l] = Z[l].neg_log_p_new;
 
-  // Alg. 1 line 5, first level: measurements against map landmarks.
-  const std::vector<int> lm_of_meas = associate(cost, cost_new, o.association);
+  // Alg. 1 line 5, first level: measurements against map landmarks. Sampled: one joint assignment
+  // drawn with probability proportional to its likelihood ratio against "all clutter, all missed";
+  // the pairs beyond the P_new gate (8 sigma by default) are left out, as by the other methods.
+  const bool sampled = o.association == AssociationMethod::kSampled;
+  std::vector<int> lm_of_meas;
+  double log_w_association = 0.0;
+  if (sampled) {
+    const double pd = per.detection_probability;
+    Eigen::MatrixXd log_r = Eigen::MatrixXd::Constant(nz, nv, -kInf);
+    for (int j = 0; j < nv; ++j) {
+      const Landmark& L = *vis[j].landmark;
+      const bool in_range = insidePerceptualRange(L.p_LinW_m, L.kind, x_t, p_CinR_vis_m, per);
+      const double log_base = std::log(pd) - std::log(o.clutter_density) - (in_range ? std::log1p(-pd) : 0.0);
+      for (int l = 0; l < nz; ++l) {
+        if (std::isfinite(cost(l, j)) && cost(l, j) < cost_new[l]) log_r(l, j) = log_base - cost(l, j);
+      }
+    }
+    const SampledAssociation draw = sampleAssociation(log_r, [this] { return rng_.uniform01(); });
+    lm_of_meas = draw.landmark_of_measurement;
+    log_w_association = draw.log_normaliser;
+  } else {
+    lm_of_meas = associate(cost, cost_new, o.association);
+  }
 
   // Alg. 3: FastSLAM 2.0 proposal from the type I landmarks, ordered by covariance then azimuth.
   struct ProposalTerm {
@@ -367,7 +398,9 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
         const Eigen::Matrix3d P = IKH * L.cov_LinW_m2 * IKH.transpose() + K * m.Q * K.transpose();
         e.value.cov_LinW_m2 = 0.5 * (P + P.transpose());
         if (L.type == LandmarkType::kTypeI) {  // lines 11-14
-          if (fs1) {
+          if (sampled) {
+            // the weight is the sum over assignments (log_w_association), added below
+          } else if (fs1) {
             log_w += logGaussian(nu, Qt);  // FastSLAM 1.0: w = N(z; h(L, x_t), Qt)
           } else if (o.weight_at_predicted_pose) {
             MeasJac Hxp, Hmp;
@@ -397,9 +430,11 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
     p.map.collectNear(c.x(), c.y(), horizontalReach_m(per), near);
     const double log_miss = std::log1p(-per.detection_probability);
     for (const auto& r : near) {
-      if (std::binary_search(updated.begin(), updated.end(), r.landmark)) continue;
+      const bool seen = std::binary_search(updated.begin(), updated.end(), r.landmark);
+      if (seen && !sampled) continue;
       if (!insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, x_t, p_CinR_vis_m, per)) continue;
-      log_w += log_miss;  // w_hat = 1 - p_in
+      log_w += log_miss;  // w_hat = 1 - p_in (sampled: for every landmark in range, r divides it out)
+      if (seen) continue;
       LandmarkMap::Edit e;
       e.ref = r;
       e.value = *r.landmark;
@@ -425,7 +460,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
   p.map.apply(edits, inserts);
   p.pose = x_t;
   if (scale_anchored_) anchorScale(p, x_prev, u, p_CinR_vis_m);
-  info.log_w = log_w;
+  info.log_w = log_w + log_w_association;
   return info;
 }
 
@@ -504,7 +539,10 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
                                            std::min(o.candidates.max_range_m, o.perception.max_range_m));
     }
   }
-  const std::vector<int> cand_of_meas = associate(cost, cost_new, o.association);
+  // Candidates do not weigh the particle, so a draw here would have no weight to go with it: under
+  // sampled association at the map level, this level keeps the Hungarian method.
+  const std::vector<int> cand_of_meas = associate(
+      cost, cost_new, o.association == AssociationMethod::kSampled ? AssociationMethod::kHungarian : o.association);
   std::vector<int> meas_of_cand(nc, -1);
   for (int r = 0; r < nl; ++r) {
     if (cand_of_meas[r] >= 0) meas_of_cand[cand_of_meas[r]] = leftover[r];

@@ -63,6 +63,12 @@ struct FastSlamOptions {
   /// Multiply the weight by P_new for each measurement not associated with a map landmark
   /// (FastSLAM's new-landmark likelihood; the paper does not, false).
   bool weight_unassociated_with_p_new = false;
+  /// association = kSampled only: the density of clutter measurements (features of no map landmark:
+  /// moving objects, false detections, landmarks not yet mapped) per frame and per unit of the
+  /// measurement space [1/rad for azimuth-only features, 1/rad^2 for azimuth + elevation]. A pair
+  /// (l, j) has the likelihood ratio r = p_in N(z_l; h(L_j, x_t), Q_t) / (density (1 - p_in)) against
+  /// "l is clutter and j is missed" (docs/slam-core.md, "Sampled association").
+  double clutter_density = 1.0;
   /// Odometry scale anchoring (deviation, off by default = the paper): bearings do not observe the
   /// scale of map + path, so each particle keeps the maximum-likelihood factor s between its path and
   /// the odometry (ratio of their lengths along the direction of travel, for a random-walk odometry

@@ -1,6 +1,7 @@
 // Google Benchmark of the FastSLAM core: time per filter step for M particles and maps of N
 // landmarks (~10 measurements per step), copy-on-write maps against deep-copy resampling in the
-// same run, and memory per particle. The world is a grid of ceiling lights 4.5 m apart at 6.5 m;
+// same run, and memory per particle; FastSLAM 1.0 with sampled association against the Hungarian
+// method and ML on the same frames. The world is a grid of ceiling lights 4.5 m apart at 6.5 m;
 // the robot drives a 2 m circle in the middle; the perceptual range is 9.5 m.
 #include <benchmark/benchmark.h>
 
@@ -85,15 +86,13 @@ const World& world(int n_landmarks) {
   return w;
 }
 
-// One filter step per iteration (resampling every step, as the paper).
-void BM_FilterStep(benchmark::State& state, bool deep_copy) {
+// One filter step per iteration (resampling every step, as the paper), over the lap's frames.
+void runSteps(benchmark::State& state, FastSlamOptions o) {
   const int m = static_cast<int>(state.range(0));
   const int n = static_cast<int>(state.range(1));
   const World& w = world(n);
-  FastSlamOptions o;
   o.num_particles = m;
   o.perception.max_range_m = kRange_m;
-  o.resample_deep_copy = deep_copy;
   FastSlam f(o, 1);
   f.initialise(w.start, w.prior);
   std::size_t k = 0;
@@ -107,6 +106,22 @@ void BM_FilterStep(benchmark::State& state, bool deep_copy) {
   state.counters["meas_per_step"] = w.mean_measurements;
   state.counters["bytes_per_particle"] = s.bytesPerParticle();
   state.counters["flat_bytes_per_particle"] = static_cast<double>(s.deep_copy_bytes) / m;
+}
+
+void BM_FilterStep(benchmark::State& state, bool deep_copy) {
+  FastSlamOptions o;
+  o.resample_deep_copy = deep_copy;
+  runSteps(state, o);
+}
+
+// FastSLAM 1.0 with each map-level association method (sampled: clutter density 0.1 / rad^2, the
+// default p_in 0.9).
+void BM_FilterStepFastSlam1(benchmark::State& state, AssociationMethod method) {
+  FastSlamOptions o;
+  o.proposal = ProposalKind::kFastSlam1;
+  o.association = method;
+  o.clutter_density = 0.1;
+  runSteps(state, o);
 }
 
 // What any design that deep-copies flat landmark vectors pays on resampling alone (a lower bound
@@ -137,6 +152,14 @@ void stepArgs(benchmark::internal::Benchmark* b) {
 BENCHMARK_CAPTURE(BM_FilterStep, cow, false)->Apply(stepArgs);
 BENCHMARK_CAPTURE(BM_FilterStep, deep_copy, true)->Apply(stepArgs);
 BENCHMARK(BM_FlatVectorResampleCopy)->Apply(stepArgs);
+
+void fastSlam1Args(benchmark::internal::Benchmark* b) {
+  for (int m : {10, 100}) b->Args({m, 256});
+  b->ArgNames({"M", "N"})->Unit(benchmark::kMillisecond);
+}
+BENCHMARK_CAPTURE(BM_FilterStepFastSlam1, hungarian, AssociationMethod::kHungarian)->Apply(fastSlam1Args);
+BENCHMARK_CAPTURE(BM_FilterStepFastSlam1, ml, AssociationMethod::kMaximumLikelihood)->Apply(fastSlam1Args);
+BENCHMARK_CAPTURE(BM_FilterStepFastSlam1, sampled, AssociationMethod::kSampled)->Apply(fastSlam1Args);
 
 }  // namespace
 

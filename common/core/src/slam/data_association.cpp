@@ -69,10 +69,6 @@ void enumerateAssignments(const Eigen::MatrixXd& log_ratio, int l, std::vector<i
   current[l] = -1;
 }
 
-}  // namespace
-
-namespace {
-
 // One cluster: exact enumeration when it has at most max_enumerated assignments, else the
 // sequential draw. Writes the cluster's columns into `out` and returns its log normaliser.
 double sampleCluster(const Eigen::MatrixXd& log_ratio, const std::function<double()>& u01, int max_enumerated,
@@ -147,8 +143,8 @@ SampledAssociation sampleAssociation(const Eigen::MatrixXd& log_ratio, const std
   SampledAssociation out;
   out.landmark_of_measurement.assign(nz, -1);
   // Measurements that can share a landmark form a cluster; the clusters are independent, so each is
-  // drawn on its own and Z is the product of theirs (a frame of many well separated landmarks stays
-  // exact).
+  // drawn on its own and Z is the product of theirs (a frame of many measurements stays exact while
+  // each cluster has at most max_enumerated assignments).
   std::vector<int> parent(nz);
   for (int l = 0; l < nz; ++l) parent[l] = l;
   std::vector<int> first_row_of_col(n, -1);
@@ -182,13 +178,13 @@ SampledAssociation sampleAssociation(const Eigen::MatrixXd& log_ratio, const std
       }
     }
     if (cols.empty()) continue;  // no possible pair: unassigned, Z = 1
-    Eigen::MatrixXd sub(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(cols.size()));
-    for (std::size_t a = 0; a < rows.size(); ++a)
-      for (std::size_t b = 0; b < cols.size(); ++b) sub(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = log_ratio(rows[a], cols[b]);
+    const auto nr = static_cast<Eigen::Index>(rows.size()), nc = static_cast<Eigen::Index>(cols.size());
+    Eigen::MatrixXd sub(nr, nc);
+    for (Eigen::Index a = 0; a < nr; ++a)
+      for (Eigen::Index b = 0; b < nc; ++b) sub(a, b) = log_ratio(rows[a], cols[b]);
     std::vector<int> picked;
     out.log_normaliser += sampleCluster(sub, u01, max_enumerated, picked, out.enumerated);
-    for (std::size_t a = 0; a < rows.size(); ++a)
-      out.landmark_of_measurement[rows[a]] = picked[a] < 0 ? -1 : cols[picked[a]];
+    for (Eigen::Index a = 0; a < nr; ++a) out.landmark_of_measurement[rows[a]] = picked[a] < 0 ? -1 : cols[picked[a]];
   }
   return out;
 }

@@ -48,25 +48,25 @@ double logAdd(double a, double b) {
   return m + std::log1p(std::exp(-std::abs(a - b)));
 }
 
-// Every joint assignment in depth-first order: measurement l unassigned first, then its free
-// landmarks in column order.
-void enumerateAssignments(const Eigen::MatrixXd& log_ratio, int l, std::vector<int>& current, std::vector<char>& taken,
-                          double log_prod, std::vector<std::vector<int>>& all, std::vector<double>& log_of) {
-  if (l == static_cast<int>(log_ratio.rows())) {
-    all.push_back(current);
-    log_of.push_back(log_prod);
-    return;
-  }
+// Walks every joint assignment in depth-first order (measurement l unassigned first, then its free
+// landmarks in column order) and calls leaf(assignment, log prod r) at each; stops when it returns
+// true.
+template <class Leaf>
+bool walkAssignments(const Eigen::MatrixXd& log_ratio, int l, std::vector<int>& current, std::vector<char>& taken,
+                     double log_prod, Leaf& leaf) {
+  if (l == static_cast<int>(log_ratio.rows())) return leaf(current, log_prod);
   current[l] = -1;
-  enumerateAssignments(log_ratio, l + 1, current, taken, log_prod, all, log_of);
+  if (walkAssignments(log_ratio, l + 1, current, taken, log_prod, leaf)) return true;
   for (int j = 0; j < log_ratio.cols(); ++j) {
     if (taken[j] || !std::isfinite(log_ratio(l, j))) continue;
     taken[j] = 1;
     current[l] = j;
-    enumerateAssignments(log_ratio, l + 1, current, taken, log_prod + log_ratio(l, j), all, log_of);
+    const bool stop = walkAssignments(log_ratio, l + 1, current, taken, log_prod + log_ratio(l, j), leaf);
     taken[j] = 0;
+    if (stop) return true;
   }
   current[l] = -1;
+  return false;
 }
 
 // One cluster: exact enumeration when it has at most max_enumerated assignments, else the
@@ -83,24 +83,24 @@ double sampleCluster(const Eigen::MatrixXd& log_ratio, const std::function<doubl
     bound *= 1.0 + k;
   }
   if (bound <= static_cast<double>(max_enumerated)) {
-    std::vector<std::vector<int>> all;
-    std::vector<double> log_of;
+    // Two walks, nothing stored: the first sums Z, the second stops at the drawn assignment (or
+    // keeps the last one if rounding leaves the cumulative sum below u).
     std::vector<int> current(nz, -1);
     std::vector<char> taken(n, 0);
-    enumerateAssignments(log_ratio, 0, current, taken, 0.0, all, log_of);
     double log_z = -std::numeric_limits<double>::infinity();
-    for (double v : log_of) log_z = logAdd(log_z, v);
+    auto sum = [&](const std::vector<int>&, double log_prod) {
+      log_z = logAdd(log_z, log_prod);
+      return false;
+    };
+    walkAssignments(log_ratio, 0, current, taken, 0.0, sum);
     const double u = u01();
     double cum = 0.0;
-    std::size_t pick = all.size() - 1;
-    for (std::size_t k = 0; k < all.size(); ++k) {
-      cum += std::exp(log_of[k] - log_z);
-      if (u < cum) {
-        pick = k;
-        break;
-      }
-    }
-    out = all[pick];
+    auto draw = [&](const std::vector<int>& a, double log_prod) {
+      out = a;
+      cum += std::exp(log_prod - log_z);
+      return u < cum;
+    };
+    walkAssignments(log_ratio, 0, current, taken, 0.0, draw);
     return log_z;
   }
   enumerated = false;

@@ -8,9 +8,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <gtest/gtest.h>
+
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <iostream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -27,7 +30,8 @@ inline std::string privateUdpUrl(int salt = 0) {
 inline std::string binPath(const std::string& name) { return std::string(OMNISLAM_BIN_DIR) + "/" + name; }
 inline std::string sourcePath(const std::string& rel) { return std::string(OMNISLAM_SOURCE_DIR) + "/" + rel; }
 
-/// A fresh temporary folder, removed at destruction.
+/// A fresh temporary folder, removed at destruction; kept (and its path printed) when the test has
+/// failed and OMNISLAM_KEEP_FAILED_TEST_DIRS is set, so that a failure's recordings can be read.
 class TempDir {
  public:
   TempDir() {
@@ -35,6 +39,10 @@ class TempDir {
     path_ = mkdtemp(tmpl.data());
   }
   ~TempDir() {
+    if (std::getenv("OMNISLAM_KEEP_FAILED_TEST_DIRS") != nullptr && ::testing::Test::HasFailure()) {
+      std::cerr << "kept the failed test's folder " << path_ << "\n";
+      return;
+    }
     std::error_code ec;
     std::filesystem::remove_all(path_, ec);
   }

@@ -25,7 +25,7 @@ using omnislam::testing::jsonNumber;
 namespace {
 
 TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
-  t::LaunchedRun run("config/launch/sports_hall_slam.yaml", 13, {"speedup=25", "odometry_only_after_s=75", "seed=2", "slam_seed=2"}, 180.0);
+  t::LaunchedRun run("config/launch/sports_hall_slam.yaml", 13, {"speedup=25", "odometry_only_after_s=75", "odometry_wait_s=75", "seed=2", "slam_seed=2"}, 180.0);
   ASSERT_EQ(run.result.exit_code, 0) << run.result.output;
   EXPECT_EQ(run.result.output.find("died"), std::string::npos) << run.result.output;
   const size_t num_frames = t::expectEveryFrameAnswered(run.log);
@@ -47,14 +47,16 @@ TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
   std::cout << "ATE RMSE: SLAM " << slam_rmse << " m, dead reckoning " << dr_rmse << " m\n";
   EXPECT_LT(slam_rmse, 0.5 * dr_rmse);
 
-  // The recording replayed offline twice with the live run's seed: identical outputs, and the same
-  // bars as live (the replay sees the recorder's message order, which may differ from what the
-  // live SLAM process received, so its figures need not equal the live ones).
+  // The recording replayed offline twice with the live run's seed and waits: identical outputs, and
+  // the same bars as live (the replay sees the recorder's message order, which may differ from what
+  // the live SLAM process received, so its figures need not equal the live ones). The recorder keeps
+  // a stalled process's lag, so the replay waits for odometry as long as the live process did.
   const std::string cfg = t::sourcePath("config/slam/sports_hall.yaml");
   const std::string out1 = run.dir.file("replay1.lcm"), out2 = run.dir.file("replay2.lcm");
   for (const auto& out : {out1, out2}) {
     const auto r = t::run({t::binPath("omnislam-slam"), "--config", cfg, "--seed", "2", "--replay", run.log, "--out", out,
-                           "--no-progress"},
+                           "--no-progress", "--set", "output.odometry_only_after_s=75", "--set", "pairing.max_wait_s=75",
+                           "--set", "pairing.odometry_buffer_s=75", "--set", "pairing.max_pending_frames=1000"},
                           120);
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }

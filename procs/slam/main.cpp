@@ -243,7 +243,7 @@ int main(int argc, char** argv) {
   cli.add_option("--save-map", save_map, "write the best particle's map here on exit (atomic; overrides map.save_path)");
   cli.add_option("--load-map", load_map, "start from this saved map (overrides map.load_path)");
   cli.add_flag("--localise", localise, "localisation only: keep the loaded map fixed (needs a map to load)");
-  cli.add_option("--association", association, "override filter.association")->check(CLI::IsMember({"hungarian", "ml", "sampled"}));
+  cli.add_option("--association", association, "override filter.association")->check(CLI::IsMember(slamproc::associationNames()));
   cli.add_option("--particles", particles, "override filter.particles")->check(CLI::Range(1, 100000));
   cli.add_flag("--progress", progress, "offline: print progress (frames, rate, time left) every 2 s (default when stderr is a terminal)");
   cli.add_flag("--no-progress", no_progress, "offline: no progress lines");
@@ -260,9 +260,7 @@ int main(int argc, char** argv) {
     if (!load_map.empty()) opt.load_map_path = load_map;
     if (localise) opt.localisation_only = true;
     if (!association.empty())
-      opt.filter.association = association == "ml"        ? slam::AssociationMethod::kMaximumLikelihood
-                               : association == "sampled" ? slam::AssociationMethod::kSampled
-                                                          : slam::AssociationMethod::kHungarian;
+      opt.filter.association = slamproc::associationFromName(association);
     if (particles > 0) opt.filter.num_particles = particles;
     if (const std::string err = opt.validate(); !err.empty()) throw std::invalid_argument(err);
     std::vector<slam::Landmark> prior;

@@ -1,9 +1,11 @@
 // SLAM process config parsing: see slam_config.h and docs/slam-process.md.
 #include "slam_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <sstream>
+#include <stdexcept>
 
 #include "omnislam/core/angles.h"
 
@@ -98,10 +100,7 @@ void parseFilter(const Node& n, slam::FastSlamOptions& f) {
                        "clutter_density", "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
                        "perception", "candidates"});
   f.num_particles = static_cast<int>(n.getInt("particles", 1, 100000, f.num_particles));
-  const std::string assoc = n.getEnum("association", {"hungarian", "ml", "sampled"}, "hungarian");
-  f.association = assoc == "ml"        ? slam::AssociationMethod::kMaximumLikelihood
-                  : assoc == "sampled" ? slam::AssociationMethod::kSampled
-                                       : slam::AssociationMethod::kHungarian;
+  f.association = associationFromName(n.getEnum("association", associationNames(), associationNames()[0]));
   const std::string proposal = n.getEnum("proposal", {"fastslam2", "fastslam1"}, "fastslam2");
   f.proposal = proposal == "fastslam1" ? slam::ProposalKind::kFastSlam1 : slam::ProposalKind::kFastSlam2;
   f.descriptor_gate = n.getDouble("descriptor_gate", 0.0, 1e4, f.descriptor_gate);
@@ -195,6 +194,18 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
   return o;
 }
 
+const std::vector<std::string>& associationNames() {
+  static const std::vector<std::string> names{"hungarian", "ml", "sampled"};  // index = AssociationMethod
+  return names;
+}
+
+slam::AssociationMethod associationFromName(const std::string& name) {
+  const auto& names = associationNames();
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) throw std::invalid_argument("unknown association method '" + name + "'");
+  return static_cast<slam::AssociationMethod>(it - names.begin());
+}
+
 SlamProcessOptions loadSlamOptions(const std::string& path) { return parseSlamOptions(Node::loadFile(path)); }
 
 SlamProcessOptions loadSlamOptions(const std::string& path, const std::vector<std::string>& overrides) {
@@ -206,10 +217,8 @@ std::string describe(const SlamProcessOptions& o) {
   const auto& f = o.filter;
   s << "filter: " << f.num_particles << " particles, "
     << (f.proposal == slam::ProposalKind::kFastSlam2 ? "FastSLAM 2.0" : "FastSLAM 1.0") << ", association "
-    << (f.association == slam::AssociationMethod::kHungarian ? "hungarian"
-        : f.association == slam::AssociationMethod::kSampled ? "sampled, clutter density "
-                                                              : "ml");
-  if (f.association == slam::AssociationMethod::kSampled) s << f.clutter_density;
+    << associationNames().at(static_cast<std::size_t>(f.association));
+  if (f.association == slam::AssociationMethod::kSampled) s << ", clutter density " << f.clutter_density;
   s << ", motion noise "
     << (f.motion.model == slam::MotionNoiseModel::kChord ? "chord" : "translate-then-rotate") << ", P_new at Mahalanobis^2 "
     << f.p_new_mahalanobis_sq << ", NZ_min " << f.candidates.nz_min << ", NCROSS_valid " << f.candidates.ncross_valid

@@ -55,4 +55,10 @@ SlamProcessOptions loadSlamOptions(const std::string& path, const std::vector<st
 /// One line per option group, for the start-up echo.
 std::string describe(const SlamProcessOptions& o);
 
+/// The names of filter.association and of omnislam-slam --association, in the order of
+/// slam::AssociationMethod: "hungarian", "ml", "sampled".
+const std::vector<std::string>& associationNames();
+/// The method of one of associationNames(); throws std::invalid_argument for any other name.
+slam::AssociationMethod associationFromName(const std::string& name);
+
 }  // namespace omnislam::slamproc

@@ -77,6 +77,17 @@ TEST(SlamConfig, MlAssociationFixedStartAndSeed) {
   EXPECT_NEAR(o.start_pose_W.theta_rad, kPi / 2, 1e-12);
 }
 
+// One name table serves the config key, --association and the start-up echo.
+TEST(SlamConfig, AssociationNamesRoundTrip) {
+  EXPECT_EQ(associationNames(), (std::vector<std::string>{"hungarian", "ml", "sampled"}));
+  EXPECT_EQ(associationFromName("hungarian"), slam::AssociationMethod::kHungarian);
+  EXPECT_EQ(associationFromName("ml"), slam::AssociationMethod::kMaximumLikelihood);
+  EXPECT_EQ(associationFromName("sampled"), slam::AssociationMethod::kSampled);
+  EXPECT_THROW(associationFromName("greedy"), std::invalid_argument);
+  const SlamProcessOptions o = parseSlamOptions(config::Node::loadString("{}", "x"));
+  EXPECT_NE(describe(o).find("association hungarian, motion noise"), std::string::npos) << describe(o);
+}
+
 TEST(SlamConfig, SampledAssociationAndClutterDensity) {
   const SlamProcessOptions o = parseSlamOptions(config::Node::loadString(
       "filter: {association: sampled, proposal: fastslam1, clutter_density: 0.31}\n", "x"));

@@ -16,7 +16,7 @@ camera's yaw offset) is removed. Prints:
     rho0 * RMS^2 of the correlated part.
 A filter that takes the sightings as independent counts the same information several times when
 the correlation is high. Standard library only; read-only on the dataset. Figures quoted in
-docs/mrclam.md ("Diagnosis").
+docs/mrclam-diagnosis.md.
 """
 import argparse
 import bisect

@@ -19,7 +19,7 @@ what such a measurement can give. Prints, per robot:
     rotations. Commanded variance: 0.12^2 rad^2/rad * |turn| + 0.10^2 rad^2/m * distance (the
     motion model of config/slam/mrclam.yaml); visual variance: 2 * bearing sigma^2 (the importer's
     bearing sigma of 1 deg by default).
-Standard library only; read-only on the dataset. Figures quoted in docs/mrclam.md ("Diagnosis").
+Standard library only; read-only on the dataset. Figures quoted in docs/mrclam-diagnosis.md.
 """
 import argparse
 import bisect

@@ -12,7 +12,6 @@
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/features_t.hpp"
 #include "omnislam/core/eval/metrics.h"
-#include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "eval_json.h"
 #include "proc_util.h"
@@ -38,13 +37,8 @@ TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
   std::cout << ev.output;
   t::expectHallMapWithinPaper000Bars(ev.output);
   EXPECT_LE(jsonNumber(ev.output, "heading_max_rad"), 0.087) << ev.output;
-  // Dead reckoning in the world frame: the known start pose composed with the cumulative odometry.
-  std::vector<eval::TimedPose> dr, truth;
-  const Pose2 start{6.0, -3.25, 0.0};  // config/worlds/sports_hall.yaml trajectory.start
-  for (const auto& o : lcmio::readChannel<odometry_t>(run.log, channels::kOdometry))
-    dr.push_back({o.utime, start.compose(Pose2{o.x_m, o.y_m, o.theta_rad})});
-  for (const auto& p : lcmio::readChannel<pose_t>(run.log, channels::kGroundTruthPose))
-    truth.push_back({p.utime, Pose2{p.x_m, p.y_m, p.theta_rad}});
+  const auto dr = t::deadReckoning(run.log, t::kSportsHallStartW);
+  const auto truth = t::timedPoses(run.log, channels::kGroundTruthPose);
   const double dr_rmse = eval::trajectoryErrors(eval::pairByTime(dr, truth)).ate_rmse_m;
   const double slam_rmse = jsonNumber(ev.output, "ate_rmse_m");
   std::cout << "ATE RMSE: SLAM " << slam_rmse << " m, dead reckoning " << dr_rmse << " m\n";

@@ -157,11 +157,6 @@ void writeLog(const std::string& path, const std::vector<Event>& events) {
   for (const auto& e : events) log.write(e.log_utime, e.channel, e.data.data(), static_cast<int32_t>(e.data.size()));
 }
 
-std::string readBytes(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
-
 // ---- replay ---------------------------------------------------------------------------------
 
 TEST(SlamReplay, SameSeedGivesByteIdenticalOutputAndBoundedPoseError) {
@@ -181,7 +176,7 @@ TEST(SlamReplay, SameSeedGivesByteIdenticalOutputAndBoundedPoseError) {
                           kConfig, "--seed", "5"},
                          60.0);
   ASSERT_EQ(r2.exit_code, 0) << r2.output;
-  const std::string b1 = readBytes(dir.file("out1.lcm")), b2 = readBytes(dir.file("out2.lcm"));
+  const std::string b1 = t::readFile(dir.file("out1.lcm")), b2 = t::readFile(dir.file("out2.lcm"));
   ASSERT_FALSE(b1.empty());
   EXPECT_TRUE(b1 == b2) << "two replays with the same seed must give byte-identical logs";
   std::cout << "[ replay   ] " << events.size() << " input events, " << b1.size() << " bytes out, " << replay_s
@@ -269,7 +264,7 @@ TEST(SlamReplay, SameSeedGivesByteIdenticalOutputAndBoundedPoseError) {
                           kConfig, "--seed", "6"},
                          60.0);
   ASSERT_EQ(r3.exit_code, 0) << r3.output;
-  EXPECT_NE(readBytes(dir.file("out3.lcm")), b1);
+  EXPECT_NE(t::readFile(dir.file("out3.lcm")), b1);
 }
 
 TEST(SlamReplay, DegradedLogIsHandledByRuleAndReplayIsStillDeterministic) {
@@ -309,7 +304,7 @@ TEST(SlamReplay, DegradedLogIsHandledByRuleAndReplayIsStillDeterministic) {
                           "--config", kConfig},
                          60.0);
   ASSERT_EQ(r2.exit_code, 0) << r2.output;
-  EXPECT_TRUE(readBytes(dir.file("a.lcm")) == readBytes(dir.file("b.lcm")));
+  EXPECT_TRUE(t::readFile(dir.file("a.lcm")) == t::readFile(dir.file("b.lcm")));
   std::cout << "[ degraded ] " << r1.output;
   EXPECT_NE(r1.output.find("decode_errors 1 "), std::string::npos) << r1.output;
   EXPECT_NE(r1.output.find("odometry_gap 2 "), std::string::npos) << r1.output;

@@ -20,8 +20,6 @@
 #include "omnislam/core/eval/metrics.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
-#include "omnislam/odometry_t.hpp"
-#include "omnislam/pose_t.hpp"
 #include "eval_json.h"
 #include "proc_util.h"
 #include "slam_log.h"
@@ -66,47 +64,37 @@ std::string repeatedHallWorld(int laps) {
 /// URL in LCM_DEFAULT_URL; the recorder gets it on its command line), sampled on a thread.
 class MemoryMonitor {
  public:
-  struct Sample {
-    double t_s;
-    long rss_kb;
-  };
   explicit MemoryMonitor(std::string url) : url_(std::move(url)), thread_([this] { loop(); }) {}
   ~MemoryMonitor() { stop(); }
   void stop() {
     stop_ = true;
     if (thread_.joinable()) thread_.join();
   }
-  /// Per process (comm name and pid), its samples in time order.
-  std::map<std::string, std::vector<Sample>> series() const {
+  /// Per process (comm name and pid), its resident memory [kB], one sample per 0.5 s in time order.
+  std::map<std::string, std::vector<long>> series() const {
     std::lock_guard<std::mutex> lock(mu_);
     return series_;
   }
 
  private:
-  static std::string readAll(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
-  }
   void loop() {
-    const auto t0 = std::chrono::steady_clock::now();
     while (!stop_) {
-      const double now_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       std::error_code ec;
       for (const auto& e : fs::directory_iterator("/proc", ec)) {
         const std::string pid = e.path().filename().string();
         if (pid.empty() || !std::all_of(pid.begin(), pid.end(), ::isdigit)) continue;
-        const std::string env = readAll(e.path() / "environ"), cmd = readAll(e.path() / "cmdline");
+        const std::string env = t::readFile(e.path() / "environ"), cmd = t::readFile(e.path() / "cmdline");
         if (env.find("LCM_DEFAULT_URL=" + url_) == std::string::npos && cmd.find(url_) == std::string::npos) continue;
-        std::string comm = readAll(e.path() / "comm");
+        std::string comm = t::readFile(e.path() / "comm");
         if (!comm.empty() && comm.back() == '\n') comm.pop_back();
         if (comm.rfind("omnislam-", 0) != 0) continue;  // the processes of the system, not a shell
-        std::istringstream status(readAll(e.path() / "status"));
+        std::istringstream status(t::readFile(e.path() / "status"));
         std::string l;
         while (std::getline(status, l))
           if (l.rfind("VmRSS:", 0) == 0) {
             const long kb = std::stol(l.substr(6));
             std::lock_guard<std::mutex> lock(mu_);
-            series_[comm + " " + pid].push_back({now_s, kb});
+            series_[comm + " " + pid].push_back(kb);
           }
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -115,7 +103,7 @@ class MemoryMonitor {
   std::string url_;
   std::atomic<bool> stop_{false};
   mutable std::mutex mu_;
-  std::map<std::string, std::vector<Sample>> series_;
+  std::map<std::string, std::vector<long>> series_;
   std::thread thread_;
 };
 
@@ -132,8 +120,8 @@ TEST(Soak, SportsHallTenLapsLive) {
   t::TempDir d;
   const std::string world = d.file("sports_hall_x10.yaml");
   std::ofstream(world) << repeatedHallWorld(kLaps);
-  // As the full-system test: 3 s of wall time at speedup 25 before a stalled process counts as dead.
   MemoryMonitor mem(t::privateUdpUrl(kUrlSalt));
+  // As the full-system test: 3 s of wall time at speedup 25 before a stalled process counts as dead.
   t::LaunchedRun run("config/launch/sports_hall_slam.yaml", kUrlSalt,
                      {"world=" + world, "speedup=25", "odometry_only_after_s=75", "seed=3", "slam_seed=3"}, 900.0);
   mem.stop();
@@ -153,8 +141,8 @@ TEST(Soak, SportsHallTenLapsLive) {
     ASSERT_GE(s.size(), 40u) << proc << ": too few memory samples";
     const size_t q = s.size() / 4;
     long peak2 = 0, peak4 = 0;
-    for (size_t i = q; i < 2 * q; ++i) peak2 = std::max(peak2, s[i].rss_kb);
-    for (size_t i = 3 * q; i < s.size(); ++i) peak4 = std::max(peak4, s[i].rss_kb);
+    for (size_t i = q; i < 2 * q; ++i) peak2 = std::max(peak2, s[i]);
+    for (size_t i = 3 * q; i < s.size(); ++i) peak4 = std::max(peak4, s[i]);
     std::cout << proc << ": resident memory peak " << peak2 / 1024.0 << " MB in the second quarter of the run, "
               << peak4 / 1024.0 << " MB in the last\n";
     // 2 MB of allocator slack; a leak of 1 kB per frame adds 0.8 MB per quarter of the run.
@@ -169,14 +157,9 @@ TEST(Soak, SportsHallTenLapsLive) {
   ASSERT_EQ(ev.exit_code, 0) << ev.output;
   std::cout << ev.output;
   t::expectHallMapWithinPaper000Bars(ev.output);
-  std::vector<eval::TimedPose> slam, dr, truth;
-  const Pose2 start{6.0, -3.25, 0.0};  // config/worlds/sports_hall.yaml trajectory.start
-  for (const auto& o : lcmio::readChannel<odometry_t>(run.log, channels::kOdometry))
-    dr.push_back({o.utime, start.compose(Pose2{o.x_m, o.y_m, o.theta_rad})});
-  for (const auto& p : lcmio::readChannel<pose_t>(run.log, channels::kGroundTruthPose))
-    truth.push_back({p.utime, Pose2{p.x_m, p.y_m, p.theta_rad}});
-  for (const auto& p : lcmio::readChannel<pose_t>(run.log, channels::kSlamPose))
-    slam.push_back({p.utime, Pose2{p.x_m, p.y_m, p.theta_rad}});
+  const auto slam = t::timedPoses(run.log, channels::kSlamPose);
+  const auto dr = t::deadReckoning(run.log, t::kSportsHallStartW);
+  const auto truth = t::timedPoses(run.log, channels::kGroundTruthPose);
   ASSERT_FALSE(truth.empty());
   const int64_t t0 = truth.front().utime, lap_us = (truth.back().utime - t0) / kLaps;
   std::vector<eval::TrajectoryErrors> slam_lap, dr_lap;

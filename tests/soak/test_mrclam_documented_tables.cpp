@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include "datasets.h"
@@ -16,11 +15,6 @@
 namespace t = omnislam::testing;
 
 namespace {
-
-std::string readFile(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
-}
 
 /// The lines of `text` that start with `prefix`.
 std::vector<std::string> linesStartingWith(const std::string& text, const std::string& prefix) {
@@ -49,7 +43,7 @@ TEST(SoakMrclam, RunScriptReproducesTheDocumentedTables) {
   const std::string data = t::datasetPath("mrclam/MRCLAM_Dataset6");
   if (!std::filesystem::exists(data + "/Robot1_Odometry.dat"))
     GTEST_SKIP() << "MRCLAM dataset 6 not found at " << data << " (set OMNISLAM_DATASETS)";
-  const std::string doc = readFile(t::sourcePath("docs/mrclam.md"));
+  const std::string doc = t::readFile(t::sourcePath("docs/mrclam.md"));
   ASSERT_FALSE(doc.empty());
   t::TempDir d;
   const std::vector<std::string> env{"OMNISLAM_BUILD_DIR=" + std::string(OMNISLAM_BUILD_DIR)};
@@ -68,10 +62,10 @@ TEST(SoakMrclam, RunScriptReproducesTheDocumentedTables) {
               one + "/robot4.yaml", "--seed", "1", "--no-progress"},
              300);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const std::string first = readFile(one + "/robot4.slam.lcm");
+  const std::string first = t::readFile(one + "/robot4.slam.lcm");
   ASSERT_FALSE(first.empty());
   // The log's own receive times are the messages' utimes in a replay, so the whole file must match.
-  EXPECT_TRUE(first == readFile(again)) << "two replays of robot 4 with seed 1 differ";
+  EXPECT_TRUE(first == t::readFile(again)) << "two replays of robot 4 with seed 1 differ";
 
   // "Over seeds": seeds 1-10.
   r = t::run({"bash", script, "--data", data, "--out", d.file("seeds"), "--seeds", "1 2 3 4 5 6 7 8 9 10"}, 1200,

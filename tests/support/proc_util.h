@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <string>
 #include <thread>
@@ -29,6 +30,12 @@ inline std::string privateUdpUrl(int salt = 0) {
 
 inline std::string binPath(const std::string& name) { return std::string(OMNISLAM_BIN_DIR) + "/" + name; }
 inline std::string sourcePath(const std::string& rel) { return std::string(OMNISLAM_SOURCE_DIR) + "/" + rel; }
+
+/// A whole file's bytes (empty when it cannot be read).
+inline std::string readFile(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
 
 /// A fresh temporary folder, removed at destruction; kept (and its path printed) when the test has
 /// failed and OMNISLAM_KEEP_FAILED_TEST_DIRS is set, so that a failure's recordings can be read.

@@ -10,10 +10,12 @@
 #include <utility>
 #include <vector>
 
+#include "omnislam/core/eval/metrics.h"
 #include "omnislam/features_t.hpp"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/map_t.hpp"
+#include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "eval_json.h"
 
@@ -41,6 +43,21 @@ inline map_t makeLineMap(const std::vector<std::pair<int64_t, Eigen::Vector2d>>&
   return m;
 }
 
+/// The poses of one pose_t channel (SLAM_POSE, GROUND_TRUTH_POSE) of a log, in log order.
+inline std::vector<eval::TimedPose> timedPoses(const std::string& log, const std::string& channel) {
+  std::vector<eval::TimedPose> out;
+  for (const auto& p : lcmio::readChannel<pose_t>(log, channel)) out.push_back({p.utime, Pose2{p.x_m, p.y_m, p.theta_rad}});
+  return out;
+}
+
+/// Dead reckoning in the world frame: the known start pose composed with the log's cumulative ODOMETRY.
+inline std::vector<eval::TimedPose> deadReckoning(const std::string& log, const Pose2& start_W) {
+  std::vector<eval::TimedPose> out;
+  for (const auto& o : lcmio::readChannel<odometry_t>(log, channels::kOdometry))
+    out.push_back({o.utime, start_W.compose(Pose2{o.x_m, o.y_m, o.theta_rad})});
+  return out;
+}
+
 /// Every OMNI_FEATURES frame of the log has its SLAM_POSE, in order (input_seq = the frame's seq).
 /// Returns the number of feature frames.
 inline size_t expectEveryFrameAnswered(const std::string& log) {
@@ -51,6 +68,9 @@ inline size_t expectEveryFrameAnswered(const std::string& log) {
     EXPECT_EQ(poses[i].input_seq, frames[i].seq) << "SLAM_POSE " << i;
   return frames.size();
 }
+
+/// The sports hall's start pose (config/worlds/sports_hall.yaml, trajectory.start), the known start.
+inline const Pose2 kSportsHallStartW{6.0, -3.25, 0.0};
 
 /// The sports hall's map against paper 000's table I, from `omnislam-eval --json` output: every one
 /// of the 16 lights mapped once, nothing spurious, landmark mean <= 0.48 m and max <= 1.05 m.

@@ -97,6 +97,8 @@ std::string FastSlamOptions::validate() const {
       .require(association != AssociationMethod::kSampled || !weight_unassociated_with_p_new,
                "weight_unassociated_with_p_new", "must be false with association kSampled (the clutter density "
                "already weighs the unassigned measurements)")
+      .require(!association_predictive || proposal == ProposalKind::kFastSlam2, "association_predictive",
+               "needs proposal kFastSlam2 (FastSLAM 1.0 already scores each pairing at its sampled pose)")
       .inLeftOpen("clutter_density", clutter_density, 0.0, 1e6)
       .require(proposal == ProposalKind::kFastSlam2 || proposal == ProposalKind::kFastSlam1, "proposal",
                "must be kFastSlam2 or kFastSlam1")
@@ -280,9 +282,19 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
       MeasMat Qjl_inv;
       double log_det_Qjl = 0.0;
       if (!smallSpdInverse(Qjl, Qjl_inv, log_det_Qjl)) continue;
+      const MeasVec nu = innovation(m.z, *zbar);
+      if (o.association_predictive) {
+        // Deviation (option): the predictive density N(z; h(mu_j, xhat), H_x R H_x^T + Q_jl), which
+        // charges a pairing for the pose correction it needs; Alg. 2 scores it after the correction.
+        const MeasMat S = Hx * R * Hx.transpose() + Qjl;
+        MeasMat S_inv;
+        double log_det_S = 0.0;
+        if (!smallSpdInverse(S, S_inv, log_det_S)) continue;
+        cost(l, j) = 0.5 * (static_cast<double>(nu.size()) * kLog2Pi + log_det_S + nu.dot(S_inv * nu));
+        continue;
+      }
       const MeasJac QinvHx = Qjl_inv * Hx;
       const Eigen::Matrix3d Sx = (Hx.transpose() * QinvHx + R_inv).inverse();  // line 7 (SPD 3x3, closed form)
-      const MeasVec nu = innovation(m.z, *zbar);
       const Eigen::Vector3d dmu = Sx * (QinvHx.transpose() * nu);  // line 8: Sx H^T Q^-1 (z - zbar)
       const Pose2 mu_x{x_hat.x_m + dmu(0), x_hat.y_m + dmu(1), wrapAngle(x_hat.theta_rad + dmu(2))};
       const auto zhat = predictMeasurement(L.kind, L.p_LinW_m, mu_x, m.p_CinR_m);  // line 10

@@ -60,6 +60,11 @@ struct FastSlamOptions {
   /// Alg. 4 line 14 evaluates the weight at the sampled pose x_t (paper, false). true: at the
   /// predicted pose xhat_t as in FastSLAM 2.0 (Probabilistic Robotics Table 13.3).
   bool weight_at_predicted_pose = false;
+  /// FastSLAM 2.0 only. false (the paper, Alg. 2): a pairing's likelihood is N(z; h(mu_j, mu_x,j,l),
+  /// Q_jl) after the pose has been corrected by that pairing's own measurement, so the correction
+  /// itself costs nothing. true (deviation): the predictive density N(z; h(mu_j, xhat), H_x R H_x^T +
+  /// Q_jl) at the predicted pose, which charges the correction against the motion noise.
+  bool association_predictive = false;
   /// Multiply the weight by P_new for each measurement not associated with a map landmark
   /// (FastSLAM's new-landmark likelihood; the paper does not, false).
   bool weight_unassociated_with_p_new = false;

@@ -94,10 +94,10 @@ SavedMap loadMap(const std::string& path) {
     const bool symmetric = (L.cov_LinW_m2 - L.cov_LinW_m2.transpose()).cwiseAbs().maxCoeff() <=
                            1e-9 * (1.0 + L.cov_LinW_m2.cwiseAbs().maxCoeff());
     if (!symmetric || Eigen::LLT<Eigen::Matrix3d>(L.cov_LinW_m2).info() != Eigen::Success)
-      throw ConfigError(n.where("covariance_m2") + "of landmark " + std::to_string(L.id) +
+      throw ConfigError(n.where("covariance_m2") + " of landmark " + std::to_string(L.id) +
                         " must be symmetric positive definite");
     for (const auto& other : m.landmarks)
-      if (other.id == L.id) throw ConfigError(n.where("id") + "duplicate landmark id " + std::to_string(L.id));
+      if (other.id == L.id) throw ConfigError(n.where("id") + ": duplicate landmark id " + std::to_string(L.id));
     m.landmarks.push_back(L);
   }
   return m;

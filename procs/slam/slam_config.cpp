@@ -54,14 +54,14 @@ void parsePerception(const Node& n, slam::PerceptionOptions& p) {
   p.min_elevation_rad = deg2rad(n.getDouble("min_elevation_deg", -90.0, 90.0, rad2deg(p.min_elevation_rad)));
   p.max_elevation_rad = deg2rad(n.getDouble("max_elevation_deg", -90.0, 90.0, rad2deg(p.max_elevation_rad)));
   if (p.max_elevation_rad < p.min_elevation_rad)
-    throw ConfigError(n.where("max_elevation_deg") + "must be >= min_elevation_deg");
+    throw ConfigError(n.where("max_elevation_deg") + " must be >= min_elevation_deg");
   p.azimuth_centre_rad = deg2rad(n.getDouble("azimuth_centre_deg", -180.0, 180.0, rad2deg(p.azimuth_centre_rad)));
   p.azimuth_half_width_rad =
       deg2rad(n.getDouble("azimuth_half_width_deg", 0.0, 180.0, rad2deg(p.azimuth_half_width_rad)));
   p.min_range_m = n.getDouble("min_range_m", 0.0, 1e6, p.min_range_m);
   if (n.has("max_range_m")) {  // absent: unlimited
     p.max_range_m = n.getDouble("max_range_m", 0.0, 1e6);
-    if (p.max_range_m <= p.min_range_m) throw ConfigError(n.where("max_range_m") + "must be > min_range_m");
+    if (p.max_range_m <= p.min_range_m) throw ConfigError(n.where("max_range_m") + " must be > min_range_m");
   }
   p.detection_probability = n.getDouble("detection_probability", 0.0, 1.0, p.detection_probability);
   p.association_margin_rad =
@@ -94,6 +94,14 @@ void parseCandidates(const Node& n, slam::CandidateOptions& c) {
   c.max_observations = static_cast<int>(n.getInt("max_observations", 2, 1000, c.max_observations));
 }
 
+// An options struct's validate() message starts with the field it names ("proposal needs ...",
+// "motion.min_sigma_xy_m must be ..."): reported against that key of the file, like a bad value.
+ConfigError validationError(const Node& n, const std::string& err) {
+  const auto sp = err.find(' ');
+  if (sp == std::string::npos) return ConfigError(n.where("") + " " + err);
+  return ConfigError(n.where(err.substr(0, sp)) + err.substr(sp));
+}
+
 void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   n.rejectUnknownKeys({"particles", "association", "proposal", "descriptor_gate", "descriptor_update_rate", "p_new_mahalanobis_sq", "resample_ess_fraction",
                        "inflate_azimuth_near_zenith", "weight_at_predicted_pose", "association_predictive", "weight_unassociated_with_p_new",
@@ -119,7 +127,7 @@ void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   if (auto p = n.optChild("perception")) parsePerception(*p, f.perception);
   if (auto c = n.optChild("candidates")) parseCandidates(*c, f.candidates);
   const std::string err = f.validate();
-  if (!err.empty()) throw ConfigError(n.where("") + "invalid filter options: " + err);
+  if (!err.empty()) throw validationError(n, err);
 }
 
 void parsePairing(const Node& n, PairingOptions& p) {
@@ -137,7 +145,7 @@ void parsePairing(const Node& n, PairingOptions& p) {
   p.max_odometry_yaw_rate_radps =
       deg2rad(n.getDouble("max_odometry_yaw_rate_degps", 1e-3, 1e5, rad2deg(p.max_odometry_yaw_rate_radps)));
   const std::string err = p.validate();
-  if (!err.empty()) throw ConfigError(n.where("") + "invalid pairing options: " + err);
+  if (!err.empty()) throw validationError(n, err);
 }
 
 }  // namespace
@@ -174,7 +182,7 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
     o.use_ceiling_lights = f->getBool("use_ceiling_lights", o.use_ceiling_lights);
     o.use_vertical_lines = f->getBool("use_vertical_lines", o.use_vertical_lines);
     if (!o.use_ceiling_lights && !o.use_vertical_lines)
-      throw ConfigError(f->where("use_ceiling_lights") + "and use_vertical_lines cannot both be false");
+      throw ConfigError(f->where("use_ceiling_lights") + " and use_vertical_lines cannot both be false");
   }
   if (auto out = root.optChild("output")) {
     out->rejectUnknownKeys({"map_every_n_frames", "odometry_only_after_s", "odometry_only_period_s"});
@@ -188,7 +196,7 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
     if (m->has("load_path")) o.load_map_path = m->getPath("load_path");
     o.localisation_only = m->getBool("localisation_only", false);
     if (o.localisation_only && o.load_map_path.empty())
-      throw ConfigError(m->where("localisation_only") + "needs map.load_path (a map to localise in)");
+      throw ConfigError(m->where("localisation_only") + " needs map.load_path (a map to localise in)");
   }
   if (auto p = root.optChild("pairing")) parsePairing(*p, o.pairing);
   if (auto f = root.optChild("filter")) parseFilter(*f, o.filter);

@@ -105,7 +105,10 @@ TEST(SlamConfig, MistakesNameTheKey) {
       {"particles: 10", "particles: 0", "filter.particles"},
       {"association: hungarian", "association: greedy", "filter.association"},
       // the sports hall file has FastSLAM 2.0, which samples its pose from the association
-      {"association: hungarian", "association: sampled", "association kSampled needs proposal kFastSlam1"},
+      {"association: hungarian", "association: sampled", "key 'filter.association' kSampled needs proposal kFastSlam1"},
+      // FastSLAM 1.0 already scores each pairing at its sampled pose
+      {"association_predictive: true", "association_predictive: true\n  proposal: fastslam1",
+       "key 'filter.association_predictive' needs proposal kFastSlam2"},
       {"association: hungarian", "association: hungarian\n  clutter_density: 0", "filter.clutter_density"},
       {"nz_min: 3", "nz_min: three", "filter.candidates.nz_min"},
       {"min_parallax_deg: 7.0", "min_parallax_deg: 120", "filter.candidates.min_parallax_deg"},

@@ -144,6 +144,13 @@ void parsePairing(const Node& n, PairingOptions& p) {
   p.max_odometry_speed_mps = n.getDouble("max_odometry_speed_mps", 1e-3, 1e3, p.max_odometry_speed_mps);
   p.max_odometry_yaw_rate_radps =
       deg2rad(n.getDouble("max_odometry_yaw_rate_degps", 1e-3, 1e5, rad2deg(p.max_odometry_yaw_rate_radps)));
+  // The one check across keys, in the file's units (PairingOptions::validate() speaks microseconds).
+  if (p.odometry_buffer_us < p.max_wait_us) {
+    std::ostringstream msg;
+    msg << n.where("odometry_buffer_s") << " must be >= max_wait_s (" << p.max_wait_us * 1e-6 << " s), got "
+        << p.odometry_buffer_us * 1e-6 << " s";
+    throw ConfigError(msg.str());
+  }
   const std::string err = p.validate();
   if (!err.empty()) throw validationError(n, err);
 }

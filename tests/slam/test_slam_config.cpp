@@ -115,7 +115,7 @@ TEST(SlamConfig, MistakesNameTheKey) {
       {"detection_probability: 0.9", "detection_probability: 1.5", "filter.perception.detection_probability"},
       {"max_wait_s: 2.0", "max_wait_s: -1", "pairing.max_wait_s"},
       {"restart_confirm_messages: 2", "restart_confirm_messages: 0", "pairing.restart_confirm_messages"},
-      {"odometry_buffer_s: 10.0", "odometry_buffer_s: 1.0", "odometry_buffer_us"},
+      {"odometry_buffer_s: 10.0", "odometry_buffer_s: 1.0", "key 'pairing.odometry_buffer_s' must be >= max_wait_s (2 s), got 1 s"},
       {"trans_sigma_per_sqrt_m: 0.05", "trans_sigm_per_sqrt_m: 0.05", "trans_sigm_per_sqrt_m"},
       {"source: fixed", "source: gps", "start_pose.source"},
       {"y_m: -3.25", "y_m: south", "start_pose.y_m"},

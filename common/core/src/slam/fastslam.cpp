@@ -279,9 +279,6 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
       }
       if (!zbar) continue;
       const MeasMat Qjl = m.Q + Hm * L.cov_LinW_m2 * Hm.transpose();  // line 6
-      MeasMat Qjl_inv;
-      double log_det_Qjl = 0.0;
-      if (!smallSpdInverse(Qjl, Qjl_inv, log_det_Qjl)) continue;
       const MeasVec nu = innovation(m.z, *zbar);
       if (o.association_predictive) {
         // Deviation (option): the predictive density N(z; h(mu_j, xhat), H_x R H_x^T + Q_jl), which
@@ -293,6 +290,9 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
         cost(l, j) = 0.5 * (static_cast<double>(nu.size()) * kLog2Pi + log_det_S + nu.dot(S_inv * nu));
         continue;
       }
+      MeasMat Qjl_inv;
+      double log_det_Qjl = 0.0;
+      if (!smallSpdInverse(Qjl, Qjl_inv, log_det_Qjl)) continue;
       const MeasJac QinvHx = Qjl_inv * Hx;
       const Eigen::Matrix3d Sx = (Hx.transpose() * QinvHx + R_inv).inverse();  // line 7 (SPD 3x3, closed form)
       const Eigen::Vector3d dmu = Sx * (QinvHx.transpose() * nu);  // line 8: Sx H^T Q^-1 (z - zbar)

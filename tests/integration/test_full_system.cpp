@@ -10,9 +10,7 @@
 
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
-#include "omnislam/features_t.hpp"
 #include "omnislam/core/eval/metrics.h"
-#include "omnislam/pose_t.hpp"
 #include "eval_json.h"
 #include "proc_util.h"
 #include "slam_log.h"

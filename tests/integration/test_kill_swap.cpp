@@ -6,18 +6,24 @@
 // and once it reports running the first one stops (a short overlap: the SLAM process refuses the
 // duplicate frames by utime). The SLAM
 // process is never touched until the end, when SIGTERM must make it save its map atomically.
-// Checks: SLAM_POSE keeps coming during the outage (odometry-only poses, input_seq -1), frames are
-// answered again after it, the final map and path meet paper 000's bars, and the saved map then
-// localises a replay of the same recording with the map held fixed (localisation-only mode).
+// Checks: SLAM_POSE keeps coming during the outage (odometry-only poses, input_seq -1) by the
+// liveness rule, frames are answered again after it, the second configuration alone feeds the SLAM
+// process once the first one stops, the final map and path meet paper 000's bars, and the saved map
+// then localises a replay of the same recording with the map held fixed (localisation-only mode).
+// Nothing here depends on how fast a process starts or how loaded the machine is (CI runs it beside
+// other tests on two cores): the recording says what each process received and when, in log order.
 #include <gtest/gtest.h>
 
 #include <lcm/lcm-cpp.hpp>
 
-#include <cmath>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <optional>
 #include <regex>
-#include <sstream>
+#include <set>
+#include <utility>
 
 #include "bus_util.h"
 #include "omnislam/features_t.hpp"
@@ -37,17 +43,10 @@ using omnislam::testing::jsonNumber;
 
 namespace {
 
-std::string readFile(const std::string& p) {
-  std::ifstream f(p);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
 /// The second detector configuration: the shipped one with another threshold and connectivity
 /// (and the world path made absolute, since the copy lives in a temporary folder).
 std::string writeDetectorB(const t::TempDir& dir) {
-  std::string text = readFile(t::sourcePath("config/features/ceiling_lights.yaml"));
+  std::string text = t::readFile(t::sourcePath("config/features/ceiling_lights.yaml"));
   text = std::regex_replace(text, std::regex("threshold_grey: *[0-9.]+"), "threshold_grey: 70");
   text = std::regex_replace(text, std::regex("connectivity: *8"), "connectivity: 4");
   text = std::regex_replace(text, std::regex("world: *\\.\\./worlds/"), "world: " + t::sourcePath("config/worlds/"));
@@ -117,30 +116,158 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
   for (t::Child* c : {&features_b, &cap, &odo, &rec}) c->signal(SIGINT);
   for (t::Child* c : {&features_b, &cap, &odo, &rec}) EXPECT_EQ(c->wait(20).exit_code, 0);
 
-  // The outage: odometry-only poses fill it; frames are answered before and after it.
-  const auto poses = lcmio::readChannel<pose_t>(log, channels::kSlamPose);
-  const auto frames = lcmio::readChannel<features_t>(log, channels::kOmniFeatures);
-  ASSERT_GT(poses.size(), 250u);
+  // What happened, read from the recording in log order. The recorder and the SLAM process receive
+  // the same multicast packets in the same order, so a message logged before a SLAM_POSE had reached
+  // the SLAM process when it published that pose. Every check below follows from a rule of the
+  // software, not from how fast the processes start or how busy the machine is: at 10 x a process
+  // that takes 1 s of wall time to start misses 10 frames, and 30 ms of latency is 0.3 s of
+  // simulated time. Those load-dependent figures are printed, not bounded.
   const int64_t start = clock.first;
-  int odo_only_in_gap = 0, frames_after = 0;
-  int64_t max_gap_us = 0;
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    const double ts = (poses[i].utime - start) * 1e-6;
-    if (poses[i].input_seq < 0 && ts > 230.0 && ts < 245.0) ++odo_only_in_gap;
-    if (poses[i].input_seq >= 0 && ts > 245.0) ++frames_after;
-    if (i > 0) max_gap_us = std::max(max_gap_us, poses[i].utime - poses[i - 1].utime);
-  }
+  const auto sim_s = [&](int64_t utime) { return (utime - start) * 1e-6; };
+
+  // Frames, split into the three features processes by their own sequence numbers: each process
+  // numbers its frames 0, 1, 2, ... (the first detector, its restart, the second configuration).
+  struct Frame {
+    int64_t utime, seq;
+    int stream;
+    int64_t newest_odometry_at_arrival;
+  };
+  std::vector<Frame> frames;
+  std::vector<int64_t> stream_last_seq;
+  int unassigned = 0;
+  // The liveness rule (docs/slam-process.md, SlamDriver::maybePredict): the first odometry-only pose
+  // comes once odometry_only_after_s (3 s, the shipped default) of odometry time has passed since
+  // the last frame *arrived*, i.e. since the newer of its utime and the newest odometry utime at its
+  // arrival (a late frame still shows the features process alive); then one every
+  // odometry_only_period_s (1 s). The slack is five odometry periods (50 Hz), for odometry messages
+  // the SLAM process may drop.
+  constexpr int64_t kAfterUs = 3'000'000, kPeriodUs = 1'000'000, kSlackUs = 100'000;
+  int64_t newest_odometry = 0, alive_since = 0, max_silence_us = 0, max_latency_us = 0;
+  std::optional<pose_t> prev;
+  std::set<std::pair<int64_t, int64_t>> answered;  // (utime, input_seq) of the frames answered
+  std::set<int64_t> answered_utime, odometry_only_utime;
+  int onsets = 0, odo_only_in_gap = 0, frames_after = 0;
+  std::size_t n_poses = 0;
+  lcmio::forEachEvent(log, [&](const lcmio::LogEvent& ev) {
+    if (ev.channel == channels::kOdometry) {
+      if (auto m = lcmio::decodeAs<odometry_t>(ev)) newest_odometry = std::max(newest_odometry, m->utime);
+    } else if (ev.channel == channels::kOmniFeatures) {
+      const auto m = lcmio::decodeAs<features_t>(ev);
+      if (!m) return;
+      alive_since = std::max({alive_since, m->utime, newest_odometry});
+      int stream = -1;
+      if (m->seq == 0) {
+        stream = static_cast<int>(stream_last_seq.size());
+        stream_last_seq.push_back(0);
+      } else {
+        for (std::size_t k = 0; k < stream_last_seq.size(); ++k)
+          if (stream_last_seq[k] == m->seq - 1) stream = static_cast<int>(k);
+        if (stream >= 0) stream_last_seq[static_cast<std::size_t>(stream)] = m->seq;
+      }
+      if (stream < 0) ++unassigned;
+      frames.push_back({m->utime, m->seq, stream, newest_odometry});
+    } else if (ev.channel == channels::kSlamPose) {
+      const auto p = lcmio::decodeAs<pose_t>(ev);
+      if (!p) return;
+      ++n_poses;
+      const double ts = sim_s(p->utime);
+      if (p->input_seq < 0 && ts > 230.0 && ts < 245.0) ++odo_only_in_gap;
+      if (p->input_seq < 0) odometry_only_utime.insert(p->utime);
+      if (p->input_seq >= 0) {
+        answered.insert({p->utime, p->input_seq});
+        answered_utime.insert(p->utime);
+        if (ts > 245.0) ++frames_after;
+      }
+      if (prev) {
+        const int64_t gap = p->utime - prev->utime;
+        max_silence_us = std::max(max_silence_us, gap);
+        if (p->input_seq < 0 && prev->input_seq < 0) {
+          EXPECT_LE(gap, kPeriodUs + kSlackUs) << "odometry-only poses every second, at " << sim_s(prev->utime) << " s";
+        } else if (p->input_seq < 0) {
+          ++onsets;
+          max_latency_us = std::max(max_latency_us, alive_since - prev->utime);
+          EXPECT_LE(p->utime, std::max(alive_since, prev->utime) + kAfterUs + kSlackUs)
+              << "first odometry-only pose after the frame answered at " << sim_s(prev->utime) << " s: it came "
+              << (p->utime - alive_since) * 1e-6 << " s after the last frame arrived";
+        }
+      }
+      prev = *p;
+    }
+  });
   std::cout << "odometry-only poses in the outage: " << odo_only_in_gap << ", frames answered after it: "
-            << frames_after << ", largest gap between SLAM_POSEs: " << max_gap_us * 1e-6 << " s\n";
+            << frames_after << ", odometry-only onsets: " << onsets << ", largest gap between SLAM_POSEs: "
+            << max_silence_us * 1e-6 << " s, largest frame latency at an onset: " << max_latency_us * 1e-6
+            << " s of simulated time\n";
+  ASSERT_GT(n_poses, 250u);
+  EXPECT_GE(onsets, 1) << "the outage starts odometry-only poses";
+  // From 3 s after the last frame (233 s + its latency) to the restarted process's first frame
+  // (240 s + the same latency at least): one a second, whatever the latency.
   EXPECT_GE(odo_only_in_gap, 6) << "one per second from 3 s after the last frame";
-  EXPECT_LE(max_gap_us, 3'500'000) << "never silent longer than odometry_only_after_s + a frame period";
-  EXPECT_GE(frames_after, 60) << "frames 245..320 s, less the features process's start-up";
-  // Both detector configurations fed the same SLAM process: the second one reported frames.
+
+  // Three processes fed the bus, each numbering its frames without a gap.
+  ASSERT_EQ(stream_last_seq.size(), 3u) << "the first detector, its restart and the second configuration";
+  EXPECT_EQ(unassigned, 0) << "frames that continue no process's numbering";
+  // Every image has a frame, from one process or another, except in the outage: the only hole in
+  // the frames' times spans the kill (230 s) to the restarted process's first frame (after 240 s).
+  std::set<int64_t> frame_utimes;
+  for (const Frame& f : frames) frame_utimes.insert(f.utime);
+  int holes = 0;
+  for (auto it = std::next(frame_utimes.begin()); it != frame_utimes.end(); ++it) {
+    const int64_t before = *std::prev(it);
+    if (*it - before <= 1'500'000) continue;  // images at 1 Hz
+    ++holes;
+    EXPECT_LE(sim_s(before), 231.0) << "a hole in the frames from " << sim_s(before) << " s to " << sim_s(*it) << " s";
+    EXPECT_GE(sim_s(*it), 240.0) << "a hole in the frames from " << sim_s(before) << " s to " << sim_s(*it) << " s";
+  }
+  EXPECT_EQ(holes, 1) << "the outage, and nothing else";
+
+  // Every image is answered, once (in the swap's overlap the duplicate of an image is refused by
+  // its utime), before the outage and after it, except a frame that reached the SLAM process after
+  // an odometry-only step had passed its time: it is dropped behind the prediction, by the rule.
+  // That step has a utime at or after the frame's and at or before the newest odometry when the
+  // frame arrived (the SLAM process handles the messages in the order they arrive).
+  int behind = 0;
+  for (const int64_t u : frame_utimes) {
+    if (answered_utime.count(u)) continue;
+    bool was_behind = false;
+    for (const Frame& f : frames)
+      if (f.utime == u) {
+        const auto step = odometry_only_utime.lower_bound(u);
+        was_behind = was_behind || (step != odometry_only_utime.end() && *step <= f.newest_odometry_at_arrival);
+      }
+    behind += was_behind ? 1 : 0;
+    EXPECT_TRUE(was_behind) << "the frame of " << sim_s(u) << " s was never answered";
+  }
+  std::cout << "frames dropped behind an odometry-only step: " << behind << "\n";
+
+  // The swap: once the first detector stopped, the second configuration alone fed the SLAM process
+  // to the end of the run, and its frames were answered as its own (every one, by the check above,
+  // unless dropped behind a prediction).
+  int64_t last_of_first = 0;
+  int b_frames = 0, b_alone = 0, b_alone_answered = 0;
+  for (const Frame& f : frames) {
+    if (f.stream == 1) last_of_first = std::max(last_of_first, f.utime);
+    if (f.stream == 2) ++b_frames;
+  }
+  for (const Frame& f : frames)
+    if (f.stream == 2 && f.utime > last_of_first) {
+      ++b_alone;
+      const bool as_its_own = answered.count({f.utime, f.seq}) > 0;
+      b_alone_answered += as_its_own ? 1 : 0;
+      if (answered_utime.count(f.utime)) {
+        EXPECT_TRUE(as_its_own) << "the frame of " << sim_s(f.utime) << " s";
+      }
+    }
+  std::cout << "second configuration: " << b_frames << " frames, " << b_alone << " after the first one stopped, "
+            << b_alone_answered << " of them answered\n";
+  EXPECT_GE(b_alone_answered, 1) << "the first detector stopped before the run ended";
+  EXPECT_EQ(frames.back().stream, 2) << "the run's last frame came from the second configuration";
+  EXPECT_EQ(*frame_utimes.rbegin(), frames.back().utime);
+  // Its own status agrees: it reported every frame it published.
   int64_t b_out = 0;
   for (const auto& st : lcmio::readChannel<process_status_t>(log, channels::kProcessStatus))
     if (st.name == "features_b") b_out = std::max(b_out, st.messages_out);
-  EXPECT_GE(b_out, 30) << "frames from 280 s to 320 s came from the second configuration";
-  EXPECT_GE(frames.size(), 290u);
+  EXPECT_EQ(b_out, b_frames);
 
   // The run finishes within paper 000's bars.
   const auto ev = t::run({t::binPath("omnislam-eval"), log, "--json", "--no-tum"}, 60);
@@ -150,7 +277,7 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
 
   // The saved map: complete and atomic (no temporary left), and it localises a replay of the same
   // recording with the map fixed: every answered frame's map is the saved one, no landmark added.
-  const std::string saved = readFile(map);
+  const std::string saved = t::readFile(map);
   EXPECT_NE(saved.find("format: omnislam-map"), std::string::npos);
   std::size_t n_saved = 0;
   for (std::size_t p = saved.find("- {id:"); p != std::string::npos; p = saved.find("- {id:", p + 1)) ++n_saved;

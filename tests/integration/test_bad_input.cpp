@@ -9,7 +9,6 @@
 #include <cmath>
 #include <fstream>
 #include <map>
-#include <sstream>
 
 #include "omnislam/config/world_config.h"
 #include "omnislam/image_t.hpp"
@@ -25,17 +24,10 @@ namespace t = omnislam::testing;
 
 namespace {
 
-std::string readFile(const std::string& p) {
-  std::ifstream f(p);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 void writeFile(const std::string& p, const std::string& s) { std::ofstream(p) << s; }
 
 std::string worldWith(const std::string& from, const std::string& to) {
-  std::string w = readFile(t::sourcePath("config/worlds/sports_hall.yaml"));
+  std::string w = t::readFile(t::sourcePath("config/worlds/sports_hall.yaml"));
   const auto pos = w.find(from);
   EXPECT_NE(pos, std::string::npos) << "test setup: '" << from << "' not in the world file";
   if (pos != std::string::npos) w.replace(pos, from.size(), to);

@@ -156,9 +156,11 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
       if (!m) return;
       alive_since = std::max({alive_since, m->utime, newest_odometry});
       int stream = -1;
-      if (m->seq == 0) {
+      // The first frame logged starts the first stream whatever its number: the simulator does not
+      // wait for the recorder, which may miss the first frames on a loaded machine.
+      if (m->seq == 0 || stream_last_seq.empty()) {
         stream = static_cast<int>(stream_last_seq.size());
-        stream_last_seq.push_back(0);
+        stream_last_seq.push_back(m->seq);
       } else {
         for (std::size_t k = 0; k < stream_last_seq.size(); ++k)
           if (stream_last_seq[k] == m->seq - 1) stream = static_cast<int>(k);

@@ -208,9 +208,11 @@ TEST(Viewer, LiveHeadlessDrawsTheBusCountsGarbageAndWritesTheFinalViewOnSigterm)
   ASSERT_TRUE(bus.lcm.good());
   t::Child viewer({t::binPath("omnislam-viewer"), "--headless", "--url", url, "--out-dir", out, "--every", "1"});
   ASSERT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status.count("viewer") > 0; }, 10)) << viewer.output();
+  int64_t published = 0;
   auto publishStep = [&](int k) {
     for (const auto& [ch, data] : makeStep(k).events) {
       bus.lcm.publish(ch, data.data(), static_cast<unsigned>(data.size()));
+      ++published;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
   };
@@ -218,13 +220,16 @@ TEST(Viewer, LiveHeadlessDrawsTheBusCountsGarbageAndWritesTheFinalViewOnSigterm)
   publishStep(1);
   const std::vector<uint8_t> garbage(53, 0x5a);
   bus.lcm.publish(channels::kSlamMap, garbage.data(), static_cast<unsigned>(garbage.size()));
+  ++published;
   EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status["viewer"].decode_errors >= 1; }, 5))
       << "the viewer does not count the garbage SLAM_MAP\n" << viewer.output();
   EXPECT_TRUE(viewer.alive()) << viewer.output();
   for (int k = 2; k < 4; ++k) publishStep(k);
   // Steps 1..3 are complete (step 4 is still open): frame_000001..3.
   EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return fs::exists(out + "/frame_000003.png"); }, 10)) << viewer.output();
-  t::handleFor(bus.lcm, 0.3);
+  // Every message handled (its status counts them) before SIGTERM: a fixed pause here was a timing.
+  EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status["viewer"].messages_in >= published; }, 20))
+      << bus.status["viewer"].messages_in << " of " << published << " messages handled\n" << viewer.output();
   viewer.signal(SIGTERM);
   const auto r = viewer.wait(15);
   ASSERT_FALSE(r.timed_out) << r.output;

@@ -190,10 +190,7 @@ TEST(SlamConfig, OverridesApplyOnTopOfTheFile) {
 // A bad value in the file itself still names its line when other keys are overridden.
 TEST(SlamConfig, FileErrorsKeepTheirLineBesideOverrides) {
   const std::string src = std::string(OMNISLAM_SOURCE_DIR) + "/config/slam/sports_hall.yaml";
-  std::ifstream in(src);
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string body = text.str();
+  std::string body = readFile(src);
   const auto at = body.find("  particles: ");
   ASSERT_NE(at, std::string::npos);
   const auto eol = body.find('\n', at);

@@ -3,6 +3,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <pthread.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -137,13 +138,33 @@ Child spawn(const std::string& name, const std::vector<std::string>& argv, const
             const std::string& bin_dir) {
   int fds[2];
   if (pipe(fds) != 0) throw std::runtime_error("pipe failed: " + std::string(std::strerror(errno)));
+  // SIGINT and SIGTERM are blocked across the fork: a stop sent to a child before its exec would
+  // otherwise be caught by the launcher's own handler, inherited by the fork, and lost, leaving the
+  // program to run until SIGKILL. The child restores the default actions before it unblocks them,
+  // so a stop that is already pending ends it at once.
+  sigset_t stops, old_mask;
+  sigemptyset(&stops);
+  sigaddset(&stops, SIGINT);
+  sigaddset(&stops, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stops, &old_mask);
+  const pid_t parent = getpid();
   const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error("fork failed: " + std::string(std::strerror(errno)));
+  if (pid < 0) {
+    const int err = errno;
+    pthread_sigmask(SIG_SETMASK, &old_mask, nullptr);
+    close(fds[0]);
+    close(fds[1]);
+    throw std::runtime_error("fork failed: " + std::string(std::strerror(err)));
+  }
   if (pid == 0) {
     // Child: own process group (so a terminal's Ctrl-C reaches only the launcher, which stops
     // the children in order), die with the launcher, output into the pipe.
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
     setpgid(0, 0);
     prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() != parent) _exit(127);  // the launcher died before prctl took effect
+    pthread_sigmask(SIG_SETMASK, &old_mask, nullptr);
     dup2(fds[1], STDOUT_FILENO);
     dup2(fds[1], STDERR_FILENO);
     close(fds[0]);
@@ -158,6 +179,7 @@ Child spawn(const std::string& name, const std::vector<std::string>& argv, const
     std::fprintf(stderr, "cannot start '%s': %s\n", cargs[0], std::strerror(errno));
     _exit(127);
   }
+  pthread_sigmask(SIG_SETMASK, &old_mask, nullptr);
   close(fds[1]);
   fcntl(fds[0], F_SETFL, O_NONBLOCK);
   Child c;
@@ -249,7 +271,9 @@ class Supervisor {
     }
     for (auto& c : children)
       if (!c.exited && c.is_logger == loggers) {
-        print("launch", c.name + " did not stop within " + std::to_string(grace_s) + " s: killing it");
+        std::ostringstream o;
+        o << c.name << " did not stop within " << grace_s << " s: killing it";
+        print("launch", o.str());
         kill(c.pid, SIGKILL);
       }
     for (int i = 0; i < 40; ++i) pump(50);

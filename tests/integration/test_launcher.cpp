@@ -5,6 +5,8 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <thread>
 
 #include "proc_util.h"
 
@@ -63,7 +65,12 @@ TEST(Launcher, SigintStopsEveryProcessCleanly) {
                                "  - {name: a, cmd: [sleep, '60']}\n"
                                "  - {name: b, cmd: [sleep, '60']}\n");
   t::Child launcher({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"});
-  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  // Its stop handlers are installed before it starts anything (a fixed pause here was a timing).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (launcher.output().find("started b") == std::string::npos && launcher.alive() &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_NE(launcher.output().find("started b"), std::string::npos) << launcher.output();
   ASSERT_TRUE(launcher.alive()) << launcher.output();
   launcher.signal(SIGINT);
   const auto r = launcher.wait(10);

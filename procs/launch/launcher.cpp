@@ -15,10 +15,14 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <thread>
 
+#include <lcm/lcm-cpp.hpp>
+
 #include "omnislam/config/yaml_node.h"
+#include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/signals.h"
 
 namespace omnislam::launch {
@@ -46,12 +50,14 @@ std::string substitute(const std::string& s, const std::map<std::string, std::st
 Plan loadPlan(const std::string& path, const std::map<std::string, std::string>& overrides, const std::string& url,
               const std::string& log_dir, const std::string& log_file, bool no_log) {
   const config::Node root = config::Node::loadFile(path);
-  root.rejectUnknownKeys({"name", "lcm_url", "variables", "logger", "processes", "stop_grace_s", "drain_s"});
+  root.rejectUnknownKeys(
+      {"name", "lcm_url", "variables", "logger", "processes", "stop_grace_s", "drain_s", "drain_quiet_s"});
   Plan plan;
   plan.name = root.getString("name", "run");
   plan.lcm_url = url.empty() ? root.getString("lcm_url", "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304") : url;
   plan.stop_grace_s = root.getDouble("stop_grace_s", 0.1, 120.0, 5.0);
-  plan.drain_s = root.getDouble("drain_s", 0.0, 60.0, 1.0);
+  plan.drain_s = root.getDouble("drain_s", 0.0, 600.0, 1.0);
+  plan.drain_quiet_s = root.getDouble("drain_quiet_s", 0.0, 60.0, 1.0);
 
   std::map<std::string, std::string> vars{{"config_dir", fs::absolute(root.sourceDir()).lexically_normal().string()}};
   if (auto v = root.optChild("variables")) {
@@ -283,6 +289,55 @@ class Supervisor {
   size_t width_;
 };
 
+/// The end of a run: the processes work through what they have queued (a loaded machine, a slow
+/// filter) before they are stopped, since a process stopped by SIGINT leaves its queue unprocessed.
+/// The bus is quiet once no message but PROCESS_STATUS (published once a second by every process,
+/// busy or idle) has been seen for drain_quiet_s; drain_s bounds the wait.
+void drainUntilQuiet(Supervisor& sup, const Plan& plan) {
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  const auto until = start + std::chrono::duration<double>(plan.drain_s);
+  std::unique_ptr<lcm::LCM> bus;
+  if (plan.drain_quiet_s > 0) {
+    bus = std::make_unique<lcm::LCM>(plan.lcm_url);
+    if (!bus->good()) {
+      sup.print("launch", "cannot listen on " + plan.lcm_url + " for the drain: waiting the whole drain_s");
+      bus.reset();
+    }
+  }
+  struct Activity {
+    Clock::time_point last;
+    int64_t messages = 0;
+    void on(const lcm::ReceiveBuffer*, const std::string& channel) {
+      if (channel == channels::kProcessStatus) return;
+      last = Clock::now();
+      ++messages;
+    }
+  } activity{start};
+  if (bus) bus->subscribe(".*", &Activity::on, &activity)->setQueueCapacity(100000);
+  const auto quiet = std::chrono::duration<double>(plan.drain_quiet_s);
+  while (Clock::now() < until && !lcmio::stopRequested()) {
+    sup.pump(bus ? 20 : 50);
+    if (!bus) continue;
+    while (bus->handleTimeout(0) > 0) {
+    }
+    if (Clock::now() - activity.last >= quiet) {
+      const double s = std::chrono::duration<double>(Clock::now() - start).count();
+      std::ostringstream o;
+      o << std::fixed << std::setprecision(1) << "bus quiet after " << s << " s (" << activity.messages
+        << " messages since the scenario ended)";
+      sup.print("launch", o.str());
+      return;
+    }
+  }
+  if (bus) {
+    std::ostringstream o;
+    o << "drain_s (" << plan.drain_s << " s) reached before the bus was quiet for " << plan.drain_quiet_s << " s ("
+      << activity.messages << " messages since the scenario ended): stopping anyway";
+    sup.print("launch", o.str());
+  }
+}
+
 }  // namespace
 
 int runPlan(const Plan& plan, const std::string& bin_dir) {
@@ -353,10 +408,7 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
     if (reason.empty() && !any_running) reason = "every process has ended";
   }
   sup.print("launch", "stopping: " + reason);
-  if (!lcmio::stopRequested() && plan.drain_s > 0) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(plan.drain_s);
-    while (std::chrono::steady_clock::now() < until) sup.pump(50);
-  }
+  if (!lcmio::stopRequested() && plan.drain_s > 0) drainUntilQuiet(sup, plan);
   sup.stop(false, plan.stop_grace_s);
   // The logger goes last, after a moment for the final messages (status, last frame) to land.
   const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);

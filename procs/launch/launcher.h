@@ -24,7 +24,11 @@ struct Plan {
   std::string log_file;  ///< full path of the lcm-logger output
   std::vector<ProcessSpec> processes;
   double stop_grace_s = 5.0;   ///< SIGINT, then SIGKILL after this
-  double drain_s = 1.0;        ///< after the scenario ends, let messages in flight arrive
+  /// After the scenario ends, the processes work through what they have queued before they are
+  /// stopped: the wait ends once no message but PROCESS_STATUS has crossed the bus for
+  /// drain_quiet_s, and at the latest after drain_s. drain_quiet_s 0 waits the whole drain_s.
+  double drain_s = 1.0;
+  double drain_quiet_s = 1.0;
 };
 
 /// Parses a launch file. `overrides` replace variables (--set k=v); `url`, `log_dir`,

@@ -1,12 +1,15 @@
 // omnislam-launch: prefixes output, reports a process that dies, ends the run when an ends_run
-// process finishes, stops everything on SIGINT, and records with lcm-logger.
+// process finishes (after the bus has gone quiet), stops everything on SIGINT, and records with
+// lcm-logger or omnislam-record.
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "proc_util.h"
 
@@ -94,6 +97,59 @@ TEST(Launcher, RecordsTheBusWithLcmLoggerOrOmnislamRecord) {
   const auto stat = t::run({t::binPath("omnislam-logstat"), log}, 10);
   EXPECT_NE(stat.output.find("SLAM_MAP"), std::string::npos) << stat.output;
   EXPECT_NE(stat.output.find("OMNI_FEATURES"), std::string::npos) << stat.output;
+  }
+}
+
+// The end of a run waits for the bus to go quiet: a process still publishing when the scenario ends
+// (here the sample publisher, 2 s after the scenario's instant end) finishes its work and is
+// recorded whole; drain_s only bounds the wait. drain_quiet_s 0 keeps the fixed wait of drain_s.
+TEST(Launcher, TheDrainWaitsUntilTheBusIsQuiet) {
+  const auto launch = [](const t::TempDir& dir, const std::string& drain, const std::string& duration) {
+    const std::string path = dir.file("launch.yaml");
+    std::ofstream(path) << "name: unit\nstop_grace_s: 5\n" << drain << "processes:\n"
+                        << "  - {name: scenario, cmd: [sh, -c, 'exit 0'], ends_run: true}\n"
+                        << "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '" << duration
+                        << "', --period, '0.05']}\n";
+    const std::string log = dir.file("rec.lcm");
+    auto r = t::run({t::binPath("omnislam-launch"), path, "--log-file", log, "--url", t::privateUdpUrl(21)}, 120);
+    return std::make_pair(r, log);
+  };
+  const auto rounds = [](const std::string& out) {
+    const auto at = out.find("published ");
+    return at == std::string::npos ? -1L : std::stol(out.substr(at + 10));
+  };
+  const auto poses_recorded = [](const std::string& log) {
+    const auto stat = t::run({t::binPath("omnislam-logstat"), log}, 10).output;
+    const auto at = stat.find("SLAM_POSE");
+    return at == std::string::npos ? std::string() : stat.substr(at, stat.find('\n', at) - at);
+  };
+  {  // quiet after the publisher ends by itself: every round recorded
+    t::TempDir dir;
+    const auto [r, log] = launch(dir, "drain_s: 60\ndrain_quiet_s: 0.5\n", "2");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    // The publisher ended by itself (its 2 s), before the bus was found quiet.
+    ASSERT_NE(r.output.find("bus quiet after"), std::string::npos) << r.output;
+    EXPECT_LT(r.output.find("published "), r.output.find("bus quiet after")) << r.output;
+    const long n = rounds(r.output);
+    EXPECT_GT(n, 1) << r.output;
+    std::cout << "quiet drain: " << n << " rounds published; logstat: " << poses_recorded(log) << "\n";
+    EXPECT_NE(poses_recorded(log).find(" " + std::to_string(n) + " "), std::string::npos) << poses_recorded(log);
+  }
+  {  // never quiet: drain_s bounds the wait and says so
+    t::TempDir dir;
+    const auto [r, log] = launch(dir, "drain_s: 1\ndrain_quiet_s: 0.5\n", "60");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    ASSERT_NE(r.output.find("drain_s (1 s) reached before the bus was quiet for 0.5 s"), std::string::npos) << r.output;
+    EXPECT_GT(r.output.find("published "), r.output.find("drain_s (1 s) reached")) << "stopped by SIGINT\n" << r.output;
+  }
+  {  // drain_quiet_s 0: the fixed wait of drain_s, then SIGINT stops the publisher early
+    t::TempDir dir;
+    const auto [r, log] = launch(dir, "drain_s: 0.2\ndrain_quiet_s: 0\n", "60");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output.find("bus quiet"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("drain_s ("), std::string::npos) << r.output;
+    EXPECT_GT(rounds(r.output), 0) << r.output;
+    EXPECT_GT(r.output.find("published "), r.output.find("stopping: scenario finished")) << r.output;
   }
 }
 

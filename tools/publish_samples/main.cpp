@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <iostream>
 #include <thread>
 
 #include "omnislam/features_t.hpp"
@@ -30,7 +31,8 @@ int main(int argc, char** argv) {
   return app::runMain("omnislam-publish-samples", [&]() -> int {
     lcmio::Node node("publish-samples", app::lcmUrl(url));
     const auto t_end = std::chrono::steady_clock::now() + std::chrono::duration<double>(duration_s);
-    for (int64_t k = 0; std::chrono::steady_clock::now() < t_end && !lcmio::stopRequested(); ++k) {
+    int64_t k = 0;
+    for (; std::chrono::steady_clock::now() < t_end && !lcmio::stopRequested(); ++k) {
       const int64_t utime = 1'700'000'000'000'000 + k * 1'000'000;
       image_t img{};
       img.utime = utime, img.seq = k, img.camera_name = "sample", img.width = 4, img.height = 2;
@@ -68,6 +70,7 @@ int main(int argc, char** argv) {
       node.publishStatus();
       node.handleFor(period_s);
     }
+    std::cerr << "published " << k << " rounds" << std::endl;  // what a recording of the bus must hold
     return 0;
   });
 }

@@ -14,7 +14,12 @@ command -v xvfb-run >/dev/null || { echo "check-lcm-spy: xvfb-run missing (bash 
 xvfb-run -a -s "-screen 0 1400x700x24" bash -c "
   '$root/scripts/lcm-spy.sh' --lcm-url='$url' > '$log' 2>&1 &
   spy=\$!
-  sleep 4
+  # lcm-spy prints 'Found N LCM types' once the JVM has scanned its class path: wait for that line
+  # (up to 60 s on a loaded machine) rather than a fixed pause.
+  for _ in \$(seq 1 600); do
+    grep -q '^Found [0-9]* LCM types' '$log' && break
+    sleep 0.1
+  done
   '$build/bin/omnislam-publish-samples' --url '$url' --duration 5 --period 0.2
   if command -v xwd >/dev/null && command -v convert >/dev/null; then
     xwd -root -silent | convert xwd:- png:'$shot'

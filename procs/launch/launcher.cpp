@@ -126,6 +126,7 @@ struct Child {
   pid_t pid = -1;
   int fd = -1;  ///< read end of its stdout+stderr
   std::string partial;
+  int64_t lines = 0;  ///< lines of output printed so far
   bool ends_run = false;
   bool required = true;
   bool is_logger = false;
@@ -232,6 +233,7 @@ class Supervisor {
         size_t nl;
         while ((nl = c.partial.find('\n')) != std::string::npos) {
           print(c.name, c.partial.substr(0, nl));
+          ++c.lines;
           c.partial.erase(0, nl + 1);
         }
         continue;
@@ -358,8 +360,14 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
     lg.is_logger = true;
     sup.children.push_back(lg);
     sup.print("launch", "recording every channel into " + plan.log_file + " (" + plan.log_tool + ")");
-    // Give the logger time to subscribe before anyone publishes.
-    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(700);
+    // The logger must be subscribed before anyone publishes. omnislam-record prints its first line
+    // once it has subscribed; lcm-logger prints 'Opening log file' just before it subscribes. Wait
+    // for that line (a loaded machine starts processes slowly, up to 20 s), then a short margin.
+    const Child& logger = sup.children.back();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (logger.lines == 0 && !logger.exited && std::chrono::steady_clock::now() < deadline) sup.pump(20);
+    if (logger.lines == 0 && !logger.exited) sup.print("launch", plan.log_tool + " has not said it is recording after 20 s");
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);
     while (std::chrono::steady_clock::now() < until) sup.pump(50);
   }
   for (const auto& p : plan.processes) {

@@ -22,13 +22,18 @@ using omnislam::testing::jsonNumber;
 namespace {
 
 TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
-  // 3 s of wall time at speedup 25 before a stalled process counts as dead (the launch file's rule);
-  // the launch file's odometry_wait_s follows odometry_only_after_s.
-  const std::string stall_s = "75";
+  // 10 s of wall time at speedup 25 before a stalled process counts as dead (the launch file's
+  // rule; its odometry_wait_s follows odometry_only_after_s). It was 3 s, the launch file's default:
+  // with four integration tests at once on two cores (ctest -j4), 63 frames in a row went
+  // unanswered, live and in the replay of the recording, so a pairing rule dropped them as a
+  // process lagged. The test checks the pipeline and the paper's figures, not how fast a loaded
+  // machine runs it.
+  const std::string stall_s = "250";
   t::LaunchedRun run("config/launch/sports_hall_slam.yaml", 13, {"speedup=25", "odometry_only_after_s=" + stall_s, "seed=2", "slam_seed=2"}, 180.0);
   ASSERT_EQ(run.result.exit_code, 0) << run.result.output;
   EXPECT_EQ(run.result.output.find("died"), std::string::npos) << run.result.output;
   const size_t num_frames = t::expectEveryFrameAnswered(run.log);
+  if (HasFailure()) std::cout << "the run's output:\n" << run.result.output;
   ASSERT_EQ(num_frames, 321u);
   const auto ev = t::run({t::binPath("omnislam-eval"), run.log, "--json", "--no-tum"}, 60);
   ASSERT_EQ(ev.exit_code, 0) << ev.output;

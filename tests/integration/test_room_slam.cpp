@@ -26,10 +26,15 @@ void expectWithinTheTile(const std::string& eval_json) {
 TEST(RoomSlam, LiveAndReplayWithinOneFloorTile) {
   // Seed 6 of docs/room-scenario.md (seeds 1-10 all pass there; seed 6 is the third best of the ten,
   // path 0.086 m: the test guards the pipeline, the tables measure the method).
-  t::LaunchedRun run("config/launch/room_slam.yaml", 17, {"speedup=4", "seed=6", "slam_seed=6"}, 240.0);
+  // 10 s of wall time at speedup 4 before a stalled process counts as dead (the launch file's 3 s,
+  // as in the full-system test: the test checks the method, not how fast a loaded machine runs it).
+  t::LaunchedRun run("config/launch/room_slam.yaml", 17,
+                     {"speedup=4", "odometry_only_after_s=40", "seed=6", "slam_seed=6"}, 240.0);
   ASSERT_EQ(run.result.exit_code, 0) << run.result.output;
   EXPECT_EQ(run.result.output.find("died"), std::string::npos) << run.result.output;
-  ASSERT_GE(t::expectEveryFrameAnswered(run.log), 200u) << "2 Hz over the 101 s trajectory";
+  const size_t num_frames = t::expectEveryFrameAnswered(run.log);
+  if (HasFailure()) std::cout << "the run's output:\n" << run.result.output;
+  ASSERT_GE(num_frames, 200u) << "2 Hz over the 101 s trajectory";
   const auto ev = t::run({t::binPath("omnislam-eval"), run.log, "--planar", "--json", "--no-tum"}, 60);
   ASSERT_EQ(ev.exit_code, 0) << ev.output;
   std::cout << "live: " << ev.output;

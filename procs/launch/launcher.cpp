@@ -224,6 +224,12 @@ class Supervisor {
     reap();
   }
 
+  /// Pumps the children's output for `d` of wall time.
+  void pumpFor(std::chrono::milliseconds d) {
+    const auto until = std::chrono::steady_clock::now() + d;
+    while (std::chrono::steady_clock::now() < until) pump(50);
+  }
+
   void drain(Child& c) {
     char buf[4096];
     while (true) {
@@ -367,8 +373,7 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
     while (logger.lines == 0 && !logger.exited && std::chrono::steady_clock::now() < deadline) sup.pump(20);
     if (logger.lines == 0 && !logger.exited) sup.print("launch", plan.log_tool + " has not said it is recording after 20 s");
-    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);
-    while (std::chrono::steady_clock::now() < until) sup.pump(50);
+    sup.pumpFor(std::chrono::milliseconds(300));
   }
   for (const auto& p : plan.processes) {
     Child c = spawn(p.name, p.argv, plan.lcm_url, bin_dir);
@@ -419,8 +424,7 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
   if (!lcmio::stopRequested() && plan.drain_s > 0) drainUntilQuiet(sup, plan);
   sup.stop(false, plan.stop_grace_s);
   // The logger goes last, after a moment for the final messages (status, last frame) to land.
-  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);
-  while (std::chrono::steady_clock::now() < until) sup.pump(50);
+  sup.pumpFor(std::chrono::milliseconds(300));
   sup.stop(true, plan.stop_grace_s);
 
   for (size_t i = 0; i < sup.children.size(); ++i) {

@@ -214,13 +214,22 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
   // Every image has a frame, from one process or another, except in the outage: the only hole in
   // the frames' times runs from the killed process's last frame to its restart's first frame, which
   // is after 240 s (the restart began once the test's clock, never ahead of the simulator, said so).
+  // Per features process (stream): its first and last frame's utime and its number of frames.
+  struct Extent {
+    int64_t first = INT64_MAX, last = 0;
+    int frames = 0;
+  };
+  std::vector<Extent> extent(stream_last_seq.size());
   std::set<int64_t> frame_utimes;
-  int64_t last_killed = 0, first_restarted = INT64_MAX;
   for (const Frame& f : frames) {
     frame_utimes.insert(f.utime);
-    if (f.stream == 0) last_killed = std::max(last_killed, f.utime);
-    if (f.stream == 1) first_restarted = std::min(first_restarted, f.utime);
+    if (f.stream < 0) continue;
+    Extent& e = extent[static_cast<std::size_t>(f.stream)];
+    e.first = std::min(e.first, f.utime);
+    e.last = std::max(e.last, f.utime);
+    ++e.frames;
   }
+  const int64_t last_killed = extent[0].last, first_restarted = extent[1].first;
   std::cout << "outage: last frame of the killed process at " << sim_s(last_killed)
             << " s, first frame of its restart at " << sim_s(first_restarted) << " s\n";
   EXPECT_GE(sim_s(first_restarted), 240.0);
@@ -257,12 +266,9 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
   // The swap: once the first detector stopped, the second configuration alone fed the SLAM process
   // to the end of the run, and its frames were answered as its own (every one, by the check above,
   // unless dropped behind a prediction).
-  int64_t last_of_first = 0;
-  int b_frames = 0, b_alone = 0, b_alone_answered = 0;
-  for (const Frame& f : frames) {
-    if (f.stream == 1) last_of_first = std::max(last_of_first, f.utime);
-    if (f.stream == 2) ++b_frames;
-  }
+  const int64_t last_of_first = extent[1].last;
+  const int b_frames = extent[2].frames;
+  int b_alone = 0, b_alone_answered = 0;
   for (const Frame& f : frames)
     if (f.stream == 2 && f.utime > last_of_first) {
       ++b_alone;

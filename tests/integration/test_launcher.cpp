@@ -132,8 +132,9 @@ TEST(Launcher, TheDrainWaitsUntilTheBusIsQuiet) {
     EXPECT_LT(r.output.find("published "), r.output.find("bus quiet after")) << r.output;
     const long n = rounds(r.output);
     EXPECT_GT(n, 1) << r.output;
-    std::cout << "quiet drain: " << n << " rounds published; logstat: " << poses_recorded(log) << "\n";
-    EXPECT_NE(poses_recorded(log).find(" " + std::to_string(n) + " "), std::string::npos) << poses_recorded(log);
+    const std::string recorded = poses_recorded(log);
+    std::cout << "quiet drain: " << n << " rounds published; logstat: " << recorded << "\n";
+    EXPECT_NE(recorded.find(" " + std::to_string(n) + " "), std::string::npos) << recorded;
   }
   {  // never quiet: drain_s bounds the wait and says so
     t::TempDir dir;

@@ -1,8 +1,9 @@
 // estimatePanoramaRotation: synthetic omnidirectional images of a textured scene turned about the
 // centre by known angles (sub-column values), with the panorama's top/bottom clipped by the image
 // border (masked) and a high-contrast checkerboard that does NOT turn with the scene (it moves,
-// like the checkerboard of the VMR images); plus a plain panorama shifted by a fraction of a column,
-// and bad inputs.
+// like the checkerboard of the VMR images); an image turned about a shifted point, whose rotation and
+// shift fitPanoramaMotion must recover; a plain panorama shifted by a fraction of a column; and bad
+// inputs.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
@@ -125,6 +126,46 @@ TEST(PanoramaRotation, SyntheticSceneTurnedByKnownAnglesWithAMovingCheckerboard)
   const auto back = vision::estimatePanoramaRotation(img, ref, ro, mask, mask);
   ASSERT_TRUE(back.has_value());
   EXPECT_NEAR(rad2deg(back->rotation_rad), -37.31, 0.05);
+}
+
+// The image turned about a point other than the panorama's centre: x' - c = R(rot) (x - c) + t, what
+// a small shift or tilt of the camera between two images looks like. fitPanoramaMotion must recover
+// rot and t from the sectors' own peaks (the pure-rotation cases above only check that t stays 0).
+TEST(PanoramaRotation, MotionFitRecoversARotationAboutAShiftedPoint) {
+  const Scene scene = randomScene(23);
+  const vision::Panorama pano(panoOptions(), 640, 480);
+  const cv::Mat mask = pano.validMask();
+  vision::PanoramaRotationOptions ro;
+  ro.pad_columns = pano.options().pad_columns;
+  const cv::Mat ref = pano.unwarp(render(scene, 0.0, -1e4, -1e4));  // the board far outside the image
+  const double cases[][3] = {{12.4, 2.5, -1.5}, {-63.0, -3.0, 0.0}, {0.8, 0.0, 2.0}, {151.7, 1.2, 1.9}};
+  for (const auto& c : cases) {
+    vision::PanoramaMotion truth;
+    truth.rotation_rad = deg2rad(c[0]);
+    truth.shift_px = Eigen::Vector2d(c[1], c[2]);
+    const Eigen::Vector2d centre(kCu, kCv);
+    cv::Mat img(480, 640, CV_8U);
+    for (int v = 0; v < img.rows; ++v)
+      for (int u = 0; u < img.cols; ++u) {
+        const Eigen::Vector2d x = truth.toReference(Eigen::Vector2d(u, v), centre) - centre;
+        const double r = x.norm();
+        const double g = (r >= 30 && r <= 300) ? sceneGrey(scene, std::atan2(x.y(), x.x()), r, 0.0) : 8.0;
+        img.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(g);
+      }
+    const auto r = vision::estimatePanoramaRotation(ref, pano.unwarp(img), ro, mask, mask);
+    ASSERT_TRUE(r.has_value()) << c[0];
+    const auto m = vision::fitPanoramaMotion(*r, pano);
+    ASSERT_TRUE(m.has_value()) << c[0];
+    std::cout << "true " << c[0] << " deg, (" << c[1] << ", " << c[2] << ") px; rotation-only peak "
+              << rad2deg(r->rotation_rad) << " deg; motion fit " << rad2deg(m->rotation_rad) << " deg, ("
+              << m->shift_px.x() << ", " << m->shift_px.y() << ") px, rms " << rad2deg(m->rms_rad) << " deg over "
+              << m->sectors << " of " << r->sectors_used << " sectors\n";
+    EXPECT_NEAR(rad2deg(wrapAngle(m->rotation_rad - truth.rotation_rad)), 0.0, 0.05) << c[0];
+    EXPECT_LT((m->shift_px - truth.shift_px).norm(), 0.3) << c[0];
+    // The fitted motion maps an image point back to where it was in the reference.
+    const Eigen::Vector2d p(kCu + 150.0, kCv - 80.0);
+    EXPECT_LT((m->toReference(p, centre) - truth.toReference(p, centre)).norm(), 0.5) << c[0];
+  }
 }
 
 TEST(PanoramaRotation, PlainPanoramaShiftedByAFractionOfAColumn) {

@@ -57,13 +57,13 @@ void parsePerception(const Node& n, slam::PerceptionOptions& p) {
     throw ConfigError(n.where("max_elevation_deg") + " must be >= min_elevation_deg");
   p.azimuth_centre_rad = deg2rad(n.getDouble("azimuth_centre_deg", -180.0, 180.0, rad2deg(p.azimuth_centre_rad)));
   p.azimuth_half_width_rad =
-      deg2rad(n.getDouble("azimuth_half_width_deg", 0.0, 180.0, rad2deg(p.azimuth_half_width_rad)));
+      deg2rad(n.getDouble("azimuth_half_width_deg", 0.0, 180.0, rad2deg(p.azimuth_half_width_rad), Node::Open::kLow));
   p.min_range_m = n.getDouble("min_range_m", 0.0, 1e6, p.min_range_m);
   if (n.has("max_range_m")) {  // absent: unlimited
     p.max_range_m = n.getDouble("max_range_m", 0.0, 1e6);
     if (p.max_range_m <= p.min_range_m) throw ConfigError(n.where("max_range_m") + " must be > min_range_m");
   }
-  p.detection_probability = n.getDouble("detection_probability", 0.0, 1.0, p.detection_probability);
+  p.detection_probability = n.getDouble("detection_probability", 0.0, 1.0, p.detection_probability, Node::Open::kHigh);
   p.association_margin_rad =
       deg2rad(n.getDouble("association_margin_deg", 0.0, 90.0, rad2deg(p.association_margin_rad)));
   p.association_margin_m = n.getDouble("association_margin_m", 0.0, 1e3, p.association_margin_m);

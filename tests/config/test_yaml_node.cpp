@@ -27,6 +27,14 @@ TEST(YamlNode, GettersCheckTypeAndRangeAndNameTheKey) {
   const std::string range = errorOf([&] { a.getDouble("b", 0, 1); });
   EXPECT_NE(range.find("cfg.yaml: key 'a.b' must be a number in [0, 1], got 3.5 (line 2)"), std::string::npos) << range;
   EXPECT_NE(errorOf([&] { a.getDouble("c", 0, 1); }).find("got 'text'"), std::string::npos);
+  // Open ends: the end itself is refused and the message prints the range as it is.
+  EXPECT_DOUBLE_EQ(a.getDouble("b", 0, 3.5, Node::Open::kLow), 3.5);
+  EXPECT_DOUBLE_EQ(a.getDouble("b", 3.5, 10, Node::Open::kHigh), 3.5);
+  EXPECT_NE(errorOf([&] { a.getDouble("b", 3.5, 10, Node::Open::kLow); }).find("must be a number in (3.5, 10], got 3.5"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { a.getDouble("b", 0, 3.5, Node::Open::kHigh); }).find("must be a number in [0, 3.5), got 3.5"),
+            std::string::npos);
+  EXPECT_DOUBLE_EQ(a.getDouble("missing", 0, 1, 1.0, Node::Open::kHigh), 1.0);  // a default is not checked
   EXPECT_NE(errorOf([&] { a.getInt("b", 0, 10); }).find("whole number"), std::string::npos);
   EXPECT_NE(errorOf([&] { a.getBool("flag"); }).find("true or false"), std::string::npos);
   EXPECT_NE(errorOf([&] { a.getDouble("nothere", 0, 1); }).find("'a.nothere' is missing"), std::string::npos);

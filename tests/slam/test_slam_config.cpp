@@ -113,6 +113,11 @@ TEST(SlamConfig, MistakesNameTheKey) {
       {"nz_min: 3", "nz_min: three", "filter.candidates.nz_min"},
       {"min_parallax_deg: 7.0", "min_parallax_deg: 120", "filter.candidates.min_parallax_deg"},
       {"detection_probability: 0.9", "detection_probability: 1.5", "filter.perception.detection_probability"},
+      // the core needs p_in < 1 and a half width > 0: refused at the file's own key, with the open end
+      {"detection_probability: 0.9", "detection_probability: 1.0",
+       "key 'filter.perception.detection_probability' must be a number in [0, 1), got 1.0"},
+      {"azimuth_half_width_deg: 180.0", "azimuth_half_width_deg: 0",
+       "key 'filter.perception.azimuth_half_width_deg' must be a number in (0, 180], got 0"},
       {"max_wait_s: 2.0", "max_wait_s: -1", "pairing.max_wait_s"},
       {"restart_confirm_messages: 2", "restart_confirm_messages: 0", "pairing.restart_confirm_messages"},
       {"odometry_buffer_s: 10.0", "odometry_buffer_s: 1.0", "key 'pairing.odometry_buffer_s' must be >= max_wait_s (2 s), got 1 s"},

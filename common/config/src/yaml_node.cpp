@@ -147,21 +147,23 @@ YAML::Node Node::scalar(const std::string& key) const {
   return n;
 }
 
-double Node::getDouble(const std::string& key, double lo, double hi) const {
+double Node::getDouble(const std::string& key, double lo, double hi, Open open) const {
   const YAML::Node n = scalar(key);
-  const std::string range = "a number in [" + fmt(lo) + ", " + fmt(hi) + "]";
+  const std::string range = std::string("a number in ") + (open == Open::kLow ? "(" : "[") + fmt(lo) + ", " + fmt(hi) +
+                            (open == Open::kHigh ? ")" : "]");
   double v = 0.0;
   try {
     v = n.as<double>();
   } catch (const YAML::Exception&) {
     fail(key, "must be " + range + ", got '" + n.Scalar() + "'");
   }
-  if (!std::isfinite(v) || v < lo || v > hi) fail(key, "must be " + range + ", got " + n.Scalar());
+  const bool outside = v < lo || v > hi || (open == Open::kLow && v == lo) || (open == Open::kHigh && v == hi);
+  if (!std::isfinite(v) || outside) fail(key, "must be " + range + ", got " + n.Scalar());
   return v;
 }
 
-double Node::getDouble(const std::string& key, double lo, double hi, double def) const {
-  return has(key) ? getDouble(key, lo, hi) : def;
+double Node::getDouble(const std::string& key, double lo, double hi, double def, Open open) const {
+  return has(key) ? getDouble(key, lo, hi, open) : def;
 }
 
 int64_t Node::getInt(const std::string& key, int64_t lo, int64_t hi) const {

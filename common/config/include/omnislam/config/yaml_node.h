@@ -49,8 +49,11 @@ class Node {
   /// Items of a required sequence of maps.
   std::vector<Node> items(const std::string& key) const;
 
-  double getDouble(const std::string& key, double lo, double hi) const;
-  double getDouble(const std::string& key, double lo, double hi, double def) const;
+  /// Which end of a range is excluded: a value that must be strictly above lo (kLow: (lo, hi]) or
+  /// strictly below hi (kHigh: [lo, hi)); messages print the range so.
+  enum class Open { kNone, kLow, kHigh };
+  double getDouble(const std::string& key, double lo, double hi, Open open = Open::kNone) const;
+  double getDouble(const std::string& key, double lo, double hi, double def, Open open = Open::kNone) const;
   int64_t getInt(const std::string& key, int64_t lo, int64_t hi) const;
   int64_t getInt(const std::string& key, int64_t lo, int64_t hi, int64_t def) const;
   bool getBool(const std::string& key) const;

@@ -47,8 +47,9 @@ bool account(const lcmio::LogEvent& ev, ChannelStats& s, SeqTrack& t, int64_t ut
 
 }  // namespace
 
-std::map<std::string, ChannelStats> logStats(const std::string& path) {
-  std::map<std::string, ChannelStats> out;
+LogSummary logStats(const std::string& path) {
+  LogSummary summary;
+  std::map<std::string, ChannelStats>& out = summary.channels;
   std::map<std::string, SeqTrack> tracks;
   lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
     ChannelStats& s = out[ev.channel];
@@ -70,13 +71,26 @@ std::map<std::string, ChannelStats> logStats(const std::string& path) {
       const auto m = lcmio::decodeAs<process_status_t>(ev);
       ok = m.has_value();
       if (ok) ok = account<process_status_t>(ev, s, tracks[c + "/" + m->name]);
+      if (ok) {
+        ProcessSummary& p = summary.processes[m->name];
+        p.pid = m->pid;
+        p.state = m->state;
+        ++p.statuses;
+        p.messages_in = m->messages_in;
+        p.messages_out = m->messages_out;
+        p.decode_errors = m->decode_errors;
+        p.rejected_inputs = m->rejected_inputs;
+        p.sequence_gaps = m->sequence_gaps;
+        p.last_error = m->last_error;
+        p.detail = m->detail;
+      }
     } else {
       s.type = "?";
       return;
     }
     if (!ok) ++s.undecodable;
   });
-  return out;
+  return summary;
 }
 
 std::string formatStats(const std::map<std::string, ChannelStats>& stats) {
@@ -93,6 +107,27 @@ std::string formatStats(const std::map<std::string, ChannelStats>& stats) {
                   s.type.c_str(), static_cast<long long>(s.events), static_cast<long long>(s.seq_gaps),
                   static_cast<long long>(s.undecodable), status ? 0.0 : span, status ? 0.0 : rate, s.bytes / 1e6);
     os << line;
+  }
+  return os.str();
+}
+
+std::string formatProcesses(const std::map<std::string, ProcessSummary>& processes) {
+  if (processes.empty()) return "";
+  static const char* const kStates[] = {"starting", "running", "stopping", "finished", "error"};
+  std::ostringstream os;
+  char line[512];
+  std::snprintf(line, sizeof line, "%-21s %7s %-9s %8s %10s %10s %7s %8s %8s\n", "process (last status)", "pid",
+                "state", "statuses", "in", "out", "decode", "rejected", "gaps");
+  os << line;
+  for (const auto& [name, p] : processes) {
+    const std::string state = p.state >= 0 && p.state <= 4 ? kStates[p.state] : "state " + std::to_string(p.state);
+    std::snprintf(line, sizeof line, "%-21s %7d %-9s %8lld %10lld %10lld %7lld %8lld %8lld\n", name.c_str(), p.pid,
+                  state.c_str(), static_cast<long long>(p.statuses), static_cast<long long>(p.messages_in),
+                  static_cast<long long>(p.messages_out), static_cast<long long>(p.decode_errors),
+                  static_cast<long long>(p.rejected_inputs), static_cast<long long>(p.sequence_gaps));
+    os << line;
+    if (!p.detail.empty()) os << "  " << name << " detail: " << p.detail << "\n";
+    if (!p.last_error.empty()) os << "  " << name << " last error: " << p.last_error << "\n";
   }
   return os.str();
 }

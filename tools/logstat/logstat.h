@@ -1,5 +1,6 @@
 // Per-channel statistics of an LCM log in the omnislam contract: counts, decode failures,
-// sequence gaps, and the span and rate of the messages' own utime.
+// sequence gaps, and the span and rate of the messages' own utime; and each process's last
+// PROCESS_STATUS (what it received, published, refused and missed, its detail and last error).
 #pragma once
 
 #include <cstdint>
@@ -19,10 +20,28 @@ struct ChannelStats {
   int64_t bytes = 0;
 };
 
-/// Reads the whole log. Throws std::runtime_error if it cannot be opened.
-std::map<std::string, ChannelStats> logStats(const std::string& path);
+/// The last PROCESS_STATUS of one process (by name) in the log.
+struct ProcessSummary {
+  int32_t pid = 0;
+  int state = 0;  ///< process_status_t::STATE_*
+  int64_t statuses = 0;  ///< PROCESS_STATUS messages of this name in the log
+  int64_t messages_in = 0, messages_out = 0, decode_errors = 0, rejected_inputs = 0, sequence_gaps = 0;
+  std::string last_error, detail;
+};
+
+struct LogSummary {
+  std::map<std::string, ChannelStats> channels;
+  std::map<std::string, ProcessSummary> processes;
+};
+
+/// Reads the whole log once. Throws std::runtime_error if it cannot be opened.
+LogSummary logStats(const std::string& path);
 
 /// A printable table (one line per channel).
 std::string formatStats(const std::map<std::string, ChannelStats>& stats);
+
+/// A printable table (one line per process, then its detail and last error when not empty); ""
+/// when the log holds no PROCESS_STATUS.
+std::string formatProcesses(const std::map<std::string, ProcessSummary>& processes);
 
 }  // namespace omnislam::tools

@@ -1,5 +1,6 @@
 // omnislam-logstat: prints what an LCM log holds, channel by channel (counts, sequence gaps,
-// undecodable events, span and rate in the messages' own time).
+// undecodable events, span and rate in the messages' own time), then each process's last
+// PROCESS_STATUS (received, published, undecodable, refused, missed; its detail and last error).
 #include <CLI/CLI.hpp>
 
 #include <iostream>
@@ -22,8 +23,10 @@ int main(int argc, char** argv) {
   cli.add_option("--export-images", export_dir, "also write every OMNI_IMAGE frame as PNG into this folder");
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return omnislam::app::runMain("omnislam-logstat", [&]() -> int {
-    const auto stats = omnislam::tools::logStats(path);
-    std::cout << path << "\n" << omnislam::tools::formatStats(stats);
+    const auto summary = omnislam::tools::logStats(path);
+    std::cout << path << "\n" << omnislam::tools::formatStats(summary.channels);
+    const std::string processes = omnislam::tools::formatProcesses(summary.processes);
+    if (!processes.empty()) std::cout << "\n" << processes;
     if (!export_dir.empty()) {
       std::filesystem::create_directories(export_dir);
       int n = 0;

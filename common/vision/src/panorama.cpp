@@ -144,7 +144,7 @@ std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref
   for (int i = 0; i < 2 * n; ++i) cum[static_cast<size_t>(i) + 1] = cum[static_cast<size_t>(i)] + eb.at<double>(0, i % n);
 
   struct Curve {
-    std::vector<double> ncc, row_energy;
+    std::vector<double> ncc, row_peak_weight;
     double energy = 0.0, centre = 0.0, row = 0.0;
   };
   std::vector<Curve> curves;
@@ -172,8 +172,8 @@ std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref
       cv::subtract(a.colRange(x0 + 1, x1), a.colRange(x0, x1 - 1), d);
       cv::multiply(d, d, d2);
       cv::reduce(d2, ed, 1, cv::REDUCE_SUM, CV_64F);
-      cu.row_energy.resize(static_cast<size_t>(ed.rows));
-      for (int r = 0; r < ed.rows; ++r) cu.row_energy[static_cast<size_t>(r)] = ed.at<double>(r, 0);
+      cu.row_peak_weight.resize(static_cast<size_t>(ed.rows));
+      for (int r = 0; r < ed.rows; ++r) cu.row_peak_weight[static_cast<size_t>(r)] = ed.at<double>(r, 0);
     }
     cu.centre = 0.5 * (x0 + x1);
     if (ea <= 0.0) {
@@ -221,7 +221,7 @@ std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref
     res.sector_centre_rad.push_back(wrapAngle(-kPiD + cu->centre * 2.0 * kPiD / n));
     res.sector_rotation_rad.push_back(wrapShift(sj) * 2.0 * kPiD / n);
     res.sector_row.push_back(cu->row);
-    res.sector_row_energy.push_back(cu->row_energy);
+    res.sector_row_peak_weight.push_back(cu->row_peak_weight);
     if (std::abs(wrapShift(sj - peak)) <= gate_cols) {
       ++res.inliers;
       for (int s = 0; s < n; ++s) inlier_sum[static_cast<size_t>(s)] += cu->ncc[static_cast<size_t>(s)];
@@ -242,15 +242,15 @@ std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref
 std::optional<PanoramaMotion> fitPanoramaMotion(const PanoramaRotation& r, const Panorama& pano, double outlier_floor_rad) {
   const size_t m = r.sector_centre_rad.size();
   if (m != r.sector_rotation_rad.size() || m != r.sector_row.size()) return std::nullopt;
-  // Per sector, the energy-weighted mean of 1 / rho over its rows (1 / rho of its mean row when the
-  // per-row energies are absent, e.g. a PanoramaRotation filled by hand).
+  // Per sector, the mean of 1 / rho over its rows with their peak weights (1 / rho of its mean row
+  // when the weights are absent, e.g. a PanoramaRotation filled by hand).
   std::vector<double> inv_rho(m);
   for (size_t j = 0; j < m; ++j) {
     double se = 0.0, sw = 0.0;
-    if (j < r.sector_row_energy.size())
-      for (size_t row = 0; row < r.sector_row_energy[j].size(); ++row) {
-        se += r.sector_row_energy[j][row];
-        sw += r.sector_row_energy[j][row] / pano.radiusOfRow(static_cast<double>(row));
+    if (j < r.sector_row_peak_weight.size())
+      for (size_t row = 0; row < r.sector_row_peak_weight[j].size(); ++row) {
+        se += r.sector_row_peak_weight[j][row];
+        sw += r.sector_row_peak_weight[j][row] / pano.radiusOfRow(static_cast<double>(row));
       }
     inv_rho[j] = se > 0.0 ? sw / se : 1.0 / pano.radiusOfRow(r.sector_row[j]);
   }

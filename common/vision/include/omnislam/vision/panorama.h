@@ -102,9 +102,10 @@ struct PanoramaRotation {
   std::vector<double> sector_centre_rad;  ///< per used sector: its centre angle in pano_ref
   std::vector<double> sector_rotation_rad;  ///< and its own (sub-column) peak, wrapped
   std::vector<double> sector_row;  ///< and its gradient-energy-weighted mean panorama row in pano_ref
-  /// and that energy per panorama row (the weights of sector_row): a sector's peak is about the
-  /// energy-weighted mean of its rows' own shifts, which fitPanoramaMotion needs per radius
-  std::vector<std::vector<double>> sector_row_energy;
+  /// and each panorama row's weight in the sector's peak, which is about the weighted mean of its
+  /// rows' own shifts: the curvature of the row's autocorrelation at zero lag, i.e. the energy of the
+  /// feature's derivative along the columns (fitPanoramaMotion needs the shifts per radius)
+  std::vector<std::vector<double>> sector_row_peak_weight;
 };
 /// nullopt when the inputs differ in size, are empty or have no texture. Masks (optional): CV_8U of
 /// the panoramas' size (e.g. Panorama::validMask()); an empty Mat = all valid. Throws
@@ -119,8 +120,8 @@ std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref
 /// another point, which is what a small tilt or shift of the camera between the images looks like
 /// to first order. Fitted by least squares to the sectors' own peaks (a sector at angle a turns by
 /// rotation + (-sin b, cos b) . shift x mean(1 / rho), b = a + rotation, the mean of 1 / rho over the
-/// sector's rows weighted by their energy, as its peak averages its rows' shifts; 1 / mean(rho)
-/// instead overstates the shift by 15-20 % over a band of 40-290 px), sectors beyond
+/// sector's rows with the weights of sector_row_peak_weight, as its peak averages its rows' shifts;
+/// 1 / rho of the mean row instead overstates the shift by 15-20 % over a band of 40-290 px), sectors beyond
 /// max(outlier_floor_rad, 3 x 1.4826 x median |residual|) rejected, 5 rounds.
 struct PanoramaMotion {
   double rotation_rad = 0.0;

@@ -1,6 +1,6 @@
 // omnislam-slam: bearing-only FastSLAM (paper 000) on the bus. Subscribes OMNI_FEATURES and
 // ODOMETRY, pairs each frame with the odometry interpolated at its utime, runs one filter step and
-// publishes SLAM_POSE, SLAM_MAP and SLAM_PARTICLES stamped with the frame's utime.
+// publishes SLAM_POSE, SLAM_MAP, SLAM_PARTICLES and SLAM_ASSOCIATIONS stamped with the frame's utime.
 //   live    on an LCM URL, with PROCESS_STATUS;
 //   replay  --replay IN.lcm --out OUT.lcm: the same driver fed with the log's events in order;
 //           OUT.lcm holds every input event and the outputs, each output logged with the timestamp

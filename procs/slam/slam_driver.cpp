@@ -208,7 +208,9 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   a.landmark_id.assign(static_cast<std::size_t>(frame.num_features), +associations_t::NOT_USED);
   for (std::size_t k = 0; k < frame.feature_index.size(); ++k) {
     const std::int64_t id = k < sr.landmark_of_measurement.size() ? sr.landmark_of_measurement[k] : -1;
-    a.landmark_id[static_cast<std::size_t>(frame.feature_index[k])] = id >= 0 ? id : +associations_t::NOT_ASSOCIATED;
+    const bool refused = k < sr.measurement_refused.size() && sr.measurement_refused[k];
+    a.landmark_id[static_cast<std::size_t>(frame.feature_index[k])] =
+        refused ? +associations_t::NOT_USED : id >= 0 ? id : +associations_t::NOT_ASSOCIATED;
   }
   out.associations = std::move(a);
   return out;

@@ -390,6 +390,8 @@ TEST(slam_FastSlam, RejectsBadMeasurements) {
   EXPECT_EQ(r.num_rejected, 3);
   EXPECT_EQ(r.num_measurements, 1);
   EXPECT_EQ(r.landmark_of_measurement.size(), 4u);
+  // Which ones were refused (SLAM_ASSOCIATIONS reports them as NOT_USED, not as gone to candidates).
+  EXPECT_EQ(r.measurement_refused, (std::vector<char>{1, 1, 1, 0}));
   EXPECT_EQ(f.bestCandidateCount(), 1u);
 }
 

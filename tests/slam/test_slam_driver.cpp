@@ -348,6 +348,11 @@ TEST(SlamDriver, OdometryOnlyPosesWhileFramesAreMissingThenRecovers) {
     EXPECT_EQ(pred[i].pose.seq, outs.back().pose.seq + 1 + static_cast<int64_t>(i));
     const Pose2 truth = truthAt(pred[i].pose.utime);
     EXPECT_LT(std::hypot(pred[i].pose.x_m - truth.x_m, pred[i].pose.y_m - truth.y_m), 0.2);
+    // The pose's ESS is that of the weights its SLAM_PARTICLES carries (the prediction keeps the
+    // weights), not the last frame step's.
+    double sum_w2 = 0.0;
+    for (double w : pred[i].particles.weight) sum_w2 += w * w;
+    EXPECT_NEAR(pred[i].pose.effective_sample_size, 1.0 / sum_w2, 1e-9);
   }
   EXPECT_EQ(d.stats().odometry_only_steps, 8);
   // A late frame from before the last prediction is dropped, not stepped backwards.
@@ -386,7 +391,9 @@ TEST(SlamDriver, OdometryOnlyPosesWhileFramesAreMissingThenRecovers) {
 }
 
 // SLAM_ASSOCIATIONS has one entry per feature of the message: features the filter does not use
-// (a kind turned off) are NOT_USED, the others a landmark id or NOT_ASSOCIATED.
+// (a kind turned off, or refused by the core: here a covariance that is not positive definite,
+// which the process's own validation would have stopped earlier) are NOT_USED, the others a
+// landmark id or NOT_ASSOCIATED.
 TEST(SlamDriver, AssociationsCoverEveryFeatureOfTheFrame) {
   SlamProcessOptions o;
   o.use_vertical_lines = false;
@@ -398,6 +405,9 @@ TEST(SlamDriver, AssociationsCoverEveryFeatureOfTheFrame) {
   line.kind = feature_t::KIND_VERTICAL_LINE;
   line.covariance[0][0] = 1e-4;
   m.features.insert(m.features.begin() + 3, line);  // an unused kind in the middle
+  feature_t bad = m.features[5];
+  bad.covariance[0][1] = bad.covariance[1][0] = 1.0;  // not positive definite: refused by the core
+  m.features.insert(m.features.begin() + 6, bad);
   m.num_features = static_cast<int32_t>(m.features.size());
   auto r = d.onFeatures(m);
   for (auto& f : d.onOdometry(odo(t + 20'000, 99999)).outputs) r.outputs.push_back(std::move(f));
@@ -406,12 +416,13 @@ TEST(SlamDriver, AssociationsCoverEveryFeatureOfTheFrame) {
   const associations_t& a = *r.outputs[0].associations;
   EXPECT_EQ(a.utime, t);
   EXPECT_EQ(a.input_seq, 50);
-  ASSERT_EQ(a.num_features, 17);
-  ASSERT_EQ(a.landmark_id.size(), 17u);
+  ASSERT_EQ(a.num_features, 18);
+  ASSERT_EQ(a.landmark_id.size(), 18u);
   EXPECT_EQ(a.landmark_id[3], +associations_t::NOT_USED);
+  EXPECT_EQ(a.landmark_id[6], +associations_t::NOT_USED);
   std::set<int64_t> ids;
-  for (int i = 0; i < 17; ++i) {
-    if (i == 3) continue;
+  for (int i = 0; i < 18; ++i) {
+    if (i == 3 || i == 6) continue;
     EXPECT_GE(a.landmark_id[i], +associations_t::NOT_ASSOCIATED);
     if (a.landmark_id[i] >= 0) {
       EXPECT_TRUE(ids.insert(a.landmark_id[i]).second) << "one landmark per feature";

@@ -166,6 +166,7 @@ void FastSlam::predictOnly(const Pose2& odom_prev, const Pose2& odom_now) {
   }
   poses_before_resampling_ = particlePoses();
   weights_before_resampling_ = weights_;
+  ess_ = effectiveSampleSize(weights_);  // this step's weights: the last step's, after its resampling
   ++num_steps_;
 }
 
@@ -177,6 +178,7 @@ StepResult FastSlam::step(const Pose2& odom_prev, const Pose2& odom_now, const s
   // Validate and prepare the measurements (a bad one is skipped and counted, never thrown).
   std::vector<Meas> Z;
   Z.reserve(z.size());
+  result.measurement_refused.assign(z.size(), 0);
   for (std::size_t i = 0; i < z.size(); ++i) {
     const BearingMeasurement& m = z[i];
     Meas q;
@@ -192,6 +194,7 @@ StepResult FastSlam::step(const Pose2& odom_prev, const Pose2& odom_now, const s
     const Eigen::LLT<MeasMat> llt(q.Q);
     if (!kind_ok || !finite || !el_ok || llt.info() != Eigen::Success) {
       ++result.num_rejected;
+      result.measurement_refused[i] = 1;
       continue;
     }
     q.z(0) = wrapAngle(q.z(0));

@@ -113,6 +113,7 @@ struct StepResult {
   int best_particle = 0;            ///< index of the best particle after this step
   // Of the best particle (highest weight before resampling):
   std::vector<std::int64_t> landmark_of_measurement;  ///< per input measurement: landmark id, -1 otherwise
+  std::vector<char> measurement_refused;  ///< per input measurement: 1 = rejected (see num_rejected), never used
   int num_associated = 0;      ///< measurements associated with map landmarks
   int num_to_candidates = 0;   ///< measurements associated with existing candidates
   int num_new_candidates = 0;  ///< candidates created
@@ -158,7 +159,7 @@ class FastSlam {
   /// Weighted mean of the particle poses (circular mean for theta) and its 3x3 covariance.
   Pose2 meanPose() const;
   Eigen::Matrix3d poseCovariance() const;
-  double ess() const { return ess_; }  ///< ESS of the last step's weights
+  double ess() const { return ess_; }  ///< ESS of the last step's weights before resampling (predictOnly: the current weights)
   std::vector<Pose2> particlePoses() const;
   const std::vector<double>& particleWeights() const { return weights_; }  ///< normalised
   /// The particle set of the last step before resampling: sampled poses and their normalised weights

@@ -55,6 +55,55 @@ TEST(Validate, PosesAndOdometryMustBeFinite) {
   EXPECT_TRUE(lcmio::validate(o).has_value());
 }
 
+// The contract's enums and covariances: a covariance must be symmetric (to rounding) with no negative
+// variance (zero, as ground truth has it, is fine); a landmark's kind and type, a status's state and
+// a particle's weight must be values the contract defines.
+TEST(Validate, CovariancesEnumsAndWeightsAsTheContractDefinesThem) {
+  pose_t p{};
+  p.covariance[0][0] = 0.04;
+  p.covariance[0][1] = p.covariance[1][0] = 0.01 + 1e-18;  // rounding
+  EXPECT_FALSE(lcmio::validate(p).has_value());
+  p.covariance[1][0] = 0.02;
+  EXPECT_NE(lcmio::validate(p).value_or("").find("not symmetric"), std::string::npos);
+  p.covariance[1][0] = p.covariance[0][1];
+  p.covariance[2][2] = -1e-6;
+  EXPECT_NE(lcmio::validate(p).value_or("").find("negative variance"), std::string::npos);
+  p.covariance[2][2] = 0.0;
+  p.effective_sample_size = -1.0;
+  EXPECT_NE(lcmio::validate(p).value_or("").find("effective_sample_size"), std::string::npos);
+
+  map_t m{};
+  m.num_landmarks = 1;
+  m.landmarks.resize(1);
+  m.landmarks[0].kind = feature_t::KIND_CEILING_LIGHT;
+  EXPECT_FALSE(lcmio::validate(m).has_value());  // truth: type 0, covariance 0
+  m.landmarks[0].type = 2;
+  EXPECT_FALSE(lcmio::validate(m).has_value());
+  m.landmarks[0].type = 3;
+  EXPECT_NE(lcmio::validate(m).value_or("").find("landmark 0: type 3"), std::string::npos);
+  m.landmarks[0].type = 1;
+  m.landmarks[0].kind = 7;
+  EXPECT_NE(lcmio::validate(m).value_or("").find("landmark 0: unknown kind 7"), std::string::npos);
+  m.landmarks[0].kind = feature_t::KIND_VERTICAL_LINE;
+  m.landmarks[0].covariance[1][1] = -0.5;
+  EXPECT_NE(lcmio::validate(m).value_or("").find("landmark 0: covariance has a negative variance"),
+            std::string::npos);
+
+  process_status_t st{};
+  st.state = process_status_t::STATE_ERROR;
+  EXPECT_FALSE(lcmio::validate(st).has_value());
+  st.state = 9;
+  EXPECT_NE(lcmio::validate(st).value_or("").find("unknown state 9"), std::string::npos);
+
+  particles_t ps{};
+  ps.num_particles = 2;
+  ps.x_m = ps.y_m = ps.theta_rad = {0.0, 0.0};
+  ps.weight = {1.0, 0.0};
+  EXPECT_FALSE(lcmio::validate(ps).has_value());
+  ps.weight = {1.5, -0.5};
+  EXPECT_NE(lcmio::validate(ps).value_or("").find("particle 1: negative weight"), std::string::npos);
+}
+
 TEST(ImageMsg, RawAndLosslessRoundTripsAreExact) {
   cv::Mat grey(48, 64, CV_8UC1);
   cv::randu(grey, 0, 255);

@@ -1,6 +1,7 @@
 // Validation of decoded messages: see validate.h.
 #include "omnislam/lcmio/validate.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace omnislam::lcmio {
@@ -55,6 +56,22 @@ std::optional<std::string> validate(const image_t& m, const Limits& lim) {
   return std::nullopt;
 }
 
+/// A covariance matrix as the contract allows it: finite, symmetric (to rounding) and with no
+/// negative variance (all zero for ground truth). "" when it is.
+template <size_t N>
+std::string covarianceProblem(const double (&c)[N][N]) {
+  if (!allFinite(c)) return "non-finite covariance";
+  double scale = 0.0;
+  for (size_t i = 0; i < N; ++i)
+    for (size_t j = 0; j < N; ++j) scale = std::max(scale, std::abs(c[i][j]));
+  for (size_t i = 0; i < N; ++i) {
+    if (c[i][i] < 0.0) return "covariance has a negative variance";
+    for (size_t j = i + 1; j < N; ++j)
+      if (std::abs(c[i][j] - c[j][i]) > 1e-9 * scale) return "covariance not symmetric";
+  }
+  return "";
+}
+
 std::optional<std::string> validate(const features_t& m, const Limits& lim) {
   if (auto e = checkTime(m.utime, m.seq)) return e;
   if (m.num_features < 0 || m.num_features > lim.max_features)
@@ -89,8 +106,10 @@ std::optional<std::string> validate(const odometry_t& m, const Limits&) {
 std::optional<std::string> validate(const pose_t& m, const Limits&) {
   if (auto e = checkTime(m.utime, m.seq)) return e;
   if (!finite(m.x_m) || !finite(m.y_m) || !finite(m.theta_rad)) return "non-finite pose";
-  if (!allFinite(m.covariance)) return "non-finite covariance";
-  if (!finite(m.effective_sample_size)) return "non-finite effective_sample_size";
+  if (const std::string c = covarianceProblem(m.covariance); !c.empty()) return c;
+  if (!finite(m.effective_sample_size) || m.effective_sample_size < 0.0)
+    return "effective_sample_size must be finite and >= 0";
+  if (m.num_particles < 0) return "negative num_particles";
   return std::nullopt;
 }
 
@@ -99,8 +118,12 @@ std::optional<std::string> validate(const map_t& m, const Limits& lim) {
   if (m.num_landmarks < 0 || m.num_landmarks > lim.max_landmarks) return "num_landmarks out of range";
   for (int i = 0; i < m.num_landmarks; ++i) {
     const landmark_t& l = m.landmarks[static_cast<size_t>(i)];
-    if (!allFinite(l.position_m) || !allFinite(l.covariance))
-      return "landmark " + std::to_string(i) + ": non-finite value";
+    const std::string at = "landmark " + std::to_string(i) + ": ";
+    if (!allFinite(l.position_m)) return at + "non-finite position";
+    if (const std::string c = covarianceProblem(l.covariance); !c.empty()) return at + c;
+    if (l.kind != feature_t::KIND_CEILING_LIGHT && l.kind != feature_t::KIND_VERTICAL_LINE)
+      return at + "unknown kind " + std::to_string(l.kind);
+    if (l.type < 0 || l.type > 2) return at + "type " + std::to_string(l.type) + " outside 0..2";
   }
   return std::nullopt;
 }
@@ -108,14 +131,18 @@ std::optional<std::string> validate(const map_t& m, const Limits& lim) {
 std::optional<std::string> validate(const particles_t& m, const Limits& lim) {
   if (auto e = checkTime(m.utime, m.seq)) return e;
   if (m.num_particles < 0 || m.num_particles > lim.max_particles) return "num_particles out of range";
-  for (size_t i = 0; i < static_cast<size_t>(m.num_particles); ++i)
+  for (size_t i = 0; i < static_cast<size_t>(m.num_particles); ++i) {
     if (!finite(m.x_m[i]) || !finite(m.y_m[i]) || !finite(m.theta_rad[i]) || !finite(m.weight[i]))
       return "particle " + std::to_string(i) + ": non-finite value";
+    if (m.weight[i] < 0.0) return "particle " + std::to_string(i) + ": negative weight";
+  }
   return std::nullopt;
 }
 
 std::optional<std::string> validate(const process_status_t& m, const Limits&) {
   if (m.seq < 0) return "negative seq";
+  if (m.state < process_status_t::STATE_STARTING || m.state > process_status_t::STATE_ERROR)
+    return "unknown state " + std::to_string(m.state);
   return std::nullopt;
 }
 

@@ -6,6 +6,8 @@
 #include <iostream>
 #include <thread>
 
+#include "omnislam/associations_t.hpp"
+#include "omnislam/feature_labels_t.hpp"
 #include "omnislam/features_t.hpp"
 #include "omnislam/image_t.hpp"
 #include "omnislam/lcmio/app.h"
@@ -62,11 +64,18 @@ int main(int argc, char** argv) {
       m.num_landmarks = 1;
       node.publish(channels::kSlamMap, m);
       m.input_seq = -1, m.num_candidates = 0;
+      m.landmarks[0].type = 0;  // truth: no reliability type (landmark_t)
       node.publish(channels::kGroundTruthMap, m);
       particles_t ps{};
       ps.utime = utime, ps.seq = k, ps.input_seq = k, ps.num_particles = 2;
       ps.x_m = {0.0, 0.1}, ps.y_m = {0.0, 0.0}, ps.theta_rad = {0.0, 0.0}, ps.weight = {0.5, 0.5};
       node.publish(channels::kSlamParticles, ps);
+      associations_t as{};
+      as.utime = utime, as.seq = k, as.input_seq = k, as.num_features = 1, as.landmark_id = {1};
+      node.publish(channels::kSlamAssociations, as);
+      feature_labels_t lb{};
+      lb.utime = utime, lb.seq = k, lb.features_seq = k, lb.num_features = 1, lb.landmark_id = {1}, lb.source_code = {1};
+      node.publish(channels::kGroundTruthFeatureLabels, lb);
       node.publishStatus();
       node.handleFor(period_s);
     }

@@ -3,7 +3,6 @@
 // as bad and not taken for a process.
 #include <gtest/gtest.h>
 
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -35,20 +34,6 @@ process_status_t status(const std::string& name, int64_t seq, int8_t state, int6
   return s;
 }
 
-/// The whitespace-separated words of the output line that starts with `first` + " ".
-std::vector<std::string> wordsOfLine(const std::string& out, const std::string& first) {
-  std::istringstream lines(out);
-  std::string line;
-  while (std::getline(lines, line))
-    if (line.rfind(first + " ", 0) == 0) {
-      std::istringstream words(line);
-      std::vector<std::string> w;
-      for (std::string x; words >> x;) w.push_back(x);
-      return w;
-    }
-  return {};
-}
-
 TEST(Logstat, PrintsEachProcesssLastStatus) {
   t::TempDir dir;
   const std::string path = dir.file("status.lcm");
@@ -66,13 +51,13 @@ TEST(Logstat, PrintsEachProcesssLastStatus) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   // Channel table: 5 events, no gap in either process's own sequence, 1 undecodable.
   const std::vector<std::string> channel{"PROCESS_STATUS", "process_status_t", "5", "0", "1", "0.00", "0.00", "0.00"};
-  EXPECT_EQ(wordsOfLine(r.output, "PROCESS_STATUS"), channel) << r.output;
+  EXPECT_EQ(t::wordsOfLine(r.output, "PROCESS_STATUS"), channel) << r.output;
   // The last status of each process (pid, state, statuses, in, out, decode, rejected, gaps), not the
   // first; the undecodable event is no process.
   const std::vector<std::string> capture{"capture", "4242", "finished", "2", "77", "154", "1", "3", "12"};
   const std::vector<std::string> slam{"slam", "4242", "error", "2", "6", "12", "1", "3", "0"};
-  EXPECT_EQ(wordsOfLine(r.output, "capture"), capture) << r.output;
-  EXPECT_EQ(wordsOfLine(r.output, "slam"), slam) << r.output;
+  EXPECT_EQ(t::wordsOfLine(r.output, "capture"), capture) << r.output;
+  EXPECT_EQ(t::wordsOfLine(r.output, "slam"), slam) << r.output;
   EXPECT_NE(r.output.find("  capture detail: frame 9\n"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("frame 1"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("  slam last error: OMNI_FEATURES: too old\n"), std::string::npos) << r.output;

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -35,6 +36,21 @@ inline std::string sourcePath(const std::string& rel) { return std::string(OMNIS
 inline std::string readFile(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+/// The whitespace-separated words of the first line of `text` that starts with `first` + " " (a row
+/// of a printed table, e.g. omnislam-logstat's); empty when there is none.
+inline std::vector<std::string> wordsOfLine(const std::string& text, const std::string& first) {
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line))
+    if (line.rfind(first + " ", 0) == 0) {
+      std::istringstream words(line);
+      std::vector<std::string> w;
+      for (std::string x; words >> x;) w.push_back(x);
+      return w;
+    }
+  return {};
 }
 
 /// A fresh temporary folder, removed at destruction; kept (and its path printed) when the test has

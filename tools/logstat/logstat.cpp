@@ -73,16 +73,8 @@ LogSummary logStats(const std::string& path) {
       if (ok) ok = account<process_status_t>(ev, s, tracks[c + "/" + m->name]);
       if (ok) {
         ProcessSummary& p = summary.processes[m->name];
-        p.pid = m->pid;
-        p.state = m->state;
+        p.last = *m;
         ++p.statuses;
-        p.messages_in = m->messages_in;
-        p.messages_out = m->messages_out;
-        p.decode_errors = m->decode_errors;
-        p.rejected_inputs = m->rejected_inputs;
-        p.sequence_gaps = m->sequence_gaps;
-        p.last_error = m->last_error;
-        p.detail = m->detail;
       }
     } else {
       s.type = "?";
@@ -119,10 +111,11 @@ std::string formatProcesses(const std::map<std::string, ProcessSummary>& process
   std::snprintf(line, sizeof line, "%-21s %7s %-9s %8s %10s %10s %7s %8s %8s\n", "process (last status)", "pid",
                 "state", "statuses", "in", "out", "decode", "rejected", "gaps");
   os << line;
-  for (const auto& [name, p] : processes) {
+  for (const auto& [name, summary] : processes) {
+    const process_status_t& p = summary.last;
     const std::string state = p.state >= 0 && p.state <= 4 ? kStates[p.state] : "state " + std::to_string(p.state);
     std::snprintf(line, sizeof line, "%-21s %7d %-9s %8lld %10lld %10lld %7lld %8lld %8lld\n", name.c_str(), p.pid,
-                  state.c_str(), static_cast<long long>(p.statuses), static_cast<long long>(p.messages_in),
+                  state.c_str(), static_cast<long long>(summary.statuses), static_cast<long long>(p.messages_in),
                   static_cast<long long>(p.messages_out), static_cast<long long>(p.decode_errors),
                   static_cast<long long>(p.rejected_inputs), static_cast<long long>(p.sequence_gaps));
     os << line;

@@ -7,6 +7,8 @@
 #include <map>
 #include <string>
 
+#include "omnislam/process_status_t.hpp"
+
 namespace omnislam::tools {
 
 struct ChannelStats {
@@ -22,11 +24,8 @@ struct ChannelStats {
 
 /// The last PROCESS_STATUS of one process (by name) in the log.
 struct ProcessSummary {
-  int32_t pid = 0;
-  int state = 0;  ///< process_status_t::STATE_*
+  process_status_t last;
   int64_t statuses = 0;  ///< PROCESS_STATUS messages of this name in the log
-  int64_t messages_in = 0, messages_out = 0, decode_errors = 0, rejected_inputs = 0, sequence_gaps = 0;
-  std::string last_error, detail;
 };
 
 struct LogSummary {

@@ -15,14 +15,19 @@ TEST(Validate, ImageSizesAndFormats) {
   m.width = 4, m.height = 2, m.row_stride = 4, m.pixel_format = image_t::FORMAT_GRAY8;
   m.data.assign(8, 0), m.size = 8;
   EXPECT_FALSE(lcmio::validate(m).has_value());
-  m.row_stride = 3;
-  EXPECT_TRUE(lcmio::validate(m).has_value());
+  m.row_stride = 3, m.size = 6, m.data.resize(6);  // only the stride rule is broken
+  EXPECT_EQ(lcmio::validate(m).value_or(""), "row_stride 3 < width * channels");
   m.row_stride = 4, m.size = 7, m.data.resize(7);
   EXPECT_TRUE(lcmio::validate(m).has_value());
   m.size = 8, m.data.resize(8), m.pixel_format = 9;
   EXPECT_NE(lcmio::validate(m)->find("pixel_format"), std::string::npos);
   m.pixel_format = image_t::FORMAT_GRAY8, m.width = 100000;
   EXPECT_NE(lcmio::validate(m)->find("image size"), std::string::npos);
+  // A compressed image has no row stride: the contract says 0.
+  m.width = 4, m.pixel_format = image_t::FORMAT_PNG, m.row_stride = 0;
+  EXPECT_FALSE(lcmio::validate(m).has_value());
+  m.row_stride = 4;
+  EXPECT_EQ(lcmio::validate(m).value_or(""), "row_stride 4 must be 0 for a compressed image");
 }
 
 TEST(Validate, FeaturesNeedFiniteAnglesAndPositiveCovariance) {
@@ -43,6 +48,18 @@ TEST(Validate, FeaturesNeedFiniteAnglesAndPositiveCovariance) {
   EXPECT_NE(lcmio::validate(f)->find("kind"), std::string::npos);
   f.features[0].kind = feature_t::KIND_CEILING_LIGHT, f.camera_position_m[0] = INFINITY;
   EXPECT_NE(lcmio::validate(f)->find("camera_position_m"), std::string::npos);
+  f.camera_position_m[0] = 0.0;
+  // Azimuths are wrapped to (-pi, pi]; -pi, atan2's answer for y = -0, is the same direction.
+  f.features[0].azimuth_rad = -M_PI;
+  EXPECT_FALSE(lcmio::validate(f).has_value());
+  f.features[0].azimuth_rad = -M_PI - 1e-6;
+  EXPECT_NE(lcmio::validate(f).value_or("").find("azimuth outside"), std::string::npos);
+  // A feature without elevation has elevation 0; anything else is a producer's error.
+  f.features[0] = ft;
+  f.features[0].kind = feature_t::KIND_VERTICAL_LINE, f.features[0].has_elevation = false;
+  EXPECT_EQ(lcmio::validate(f).value_or(""), "feature 0: elevation given with has_elevation false");
+  f.features[0].elevation_rad = 0.0;
+  EXPECT_FALSE(lcmio::validate(f).has_value());
 }
 
 TEST(Validate, PosesAndOdometryMustBeFinite) {
@@ -88,6 +105,10 @@ TEST(Validate, CovariancesEnumsAndWeightsAsTheContractDefinesThem) {
   m.landmarks[0].covariance[1][1] = -0.5;
   EXPECT_NE(lcmio::validate(m).value_or("").find("landmark 0: covariance has a negative variance"),
             std::string::npos);
+  m.landmarks[0].covariance[1][1] = 0.5;
+  EXPECT_FALSE(lcmio::validate(m).has_value());
+  m.num_candidates = -1;
+  EXPECT_EQ(lcmio::validate(m).value_or(""), "negative num_candidates -1");
 
   process_status_t st{};
   st.state = process_status_t::STATE_ERROR;

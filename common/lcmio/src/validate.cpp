@@ -52,6 +52,8 @@ std::optional<std::string> validate(const image_t& m, const Limits& lim) {
       return "size " + std::to_string(m.size) + " != row_stride * height";
   } else if (m.size == 0) {
     return "empty compressed image";
+  } else if (m.row_stride != 0) {
+    return "row_stride " + std::to_string(m.row_stride) + " must be 0 for a compressed image";
   }
   return std::nullopt;
 }
@@ -85,8 +87,11 @@ std::optional<std::string> validate(const features_t& m, const Limits& lim) {
     if (!finite(f.azimuth_rad) || !finite(f.elevation_rad) || !allFinite(f.covariance) || !finite(f.u_px) ||
         !finite(f.v_px) || !finite(f.size_px) || !finite(f.length_px) || !finite(f.strength))
       return at + "non-finite value";
+    // The contract wraps azimuths to (-pi, pi]; -pi (what atan2 returns for y = -0) names the same
+    // direction as pi and is accepted.
     if (std::abs(f.azimuth_rad) > M_PI + 1e-9) return at + "azimuth outside [-pi, pi]";
     if (std::abs(f.elevation_rad) > M_PI / 2 + 1e-9) return at + "elevation outside [-pi/2, pi/2]";
+    if (!f.has_elevation && f.elevation_rad != 0.0) return at + "elevation given with has_elevation false";
     if (!(f.covariance[0][0] > 0.0)) return at + "azimuth variance must be > 0";
     if (f.has_elevation) {
       const double det = f.covariance[0][0] * f.covariance[1][1] - f.covariance[0][1] * f.covariance[1][0];
@@ -116,6 +121,7 @@ std::optional<std::string> validate(const pose_t& m, const Limits&) {
 std::optional<std::string> validate(const map_t& m, const Limits& lim) {
   if (auto e = checkTime(m.utime, m.seq)) return e;
   if (m.num_landmarks < 0 || m.num_landmarks > lim.max_landmarks) return "num_landmarks out of range";
+  if (m.num_candidates < 0) return "negative num_candidates " + std::to_string(m.num_candidates);
   for (int i = 0; i < m.num_landmarks; ++i) {
     const landmark_t& l = m.landmarks[static_cast<size_t>(i)];
     const std::string at = "landmark " + std::to_string(i) + ": ";

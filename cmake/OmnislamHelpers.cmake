@@ -4,8 +4,13 @@
 # One GoogleTest executable per test source file, registered with CTest test by test.
 function(omnislam_add_gtest name)
   cmake_parse_arguments(T "WHOLE" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
-  add_executable(${name} ${T_SOURCES})
-  target_link_libraries(${name} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  if(T_WHOLE)
+    add_executable(${name} ${T_SOURCES} ${PROJECT_SOURCE_DIR}/tests/support/gtest_main_whole.cpp)
+    target_link_libraries(${name} PRIVATE ${T_LIBS} GTest::gtest)
+  else()
+    add_executable(${name} ${T_SOURCES})
+    target_link_libraries(${name} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  endif()
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests/support)
   target_compile_definitions(${name} PRIVATE
     OMNISLAM_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
@@ -17,8 +22,9 @@ function(omnislam_add_gtest name)
   if(T_WHOLE)
     # One CTest entry for the whole executable: its suite-level set-up (e.g. launching the
     # processes once) is shared by all of its tests.
+    # Its main (tests/support/gtest_main_whole.cpp) exits with 77 when every test it ran skipped.
     add_test(NAME ${name} COMMAND ${name})
-    set_tests_properties(${name} PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}")
+    set_tests_properties(${name} PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}" SKIP_RETURN_CODE 77)
   else()
     gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
       PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}")

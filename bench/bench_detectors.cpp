@@ -3,6 +3,10 @@
 //   BM_CeilingLightDetector   vs  BM_PlainThresholdConnectedComponents (cv::threshold +
 //                                 cv::connectedComponentsWithStats)        target ratio <= 1.5
 //   BM_VerticalLineDetector   vs  BM_PlainRemapSobel (cv::remap + cv::Sobel) target ratio <= 2
+//   BM_RoomRenderer           vs  BM_PlainRemapBgr (one cv::remap lookup per pixel of a BGR frame):
+//                                 the room scenario's simulated catadioptric camera
+//                                 (config/worlds/room.yaml, 2 x 2 rays per pixel, blur and noise);
+//                                 the capture process renders one per frame (docs/room-scenario.md)
 // Frames: the sports hall's fish-eye (default camera, 16 lights, the world's noise and blur)
 // rendered at a pose that sees all lights; a synthetic omnidirectional image of 24 grey sectors
 // (radial edges) with noise for the lines. Run: build/bench/bench_detectors (or
@@ -14,9 +18,11 @@
 #include <cmath>
 #include <random>
 
+#include "omnislam/config/world_config.h"
 #include "omnislam/core/camera/pajdla_bakstein.h"
 #include "omnislam/vision/ceiling_lights.h"
 #include "omnislam/vision/render_lights.h"
+#include "omnislam/vision/render_room.h"
 #include "omnislam/vision/vertical_lines.h"
 
 using namespace omnislam;
@@ -120,10 +126,45 @@ void BM_PlainRemapSobel(benchmark::State& st) {
   }
 }
 
+const sim::World& roomWorld() {
+  static const sim::World w = config::loadWorld(std::string(OMNISLAM_SOURCE_DIR) + "/config/worlds/room.yaml");
+  return w;
+}
+
+void BM_RoomRenderer(benchmark::State& st) {
+  const sim::World& w = roomWorld();
+  const auto cam = sim::makeCamera(w.camera);
+  const vision::RoomRenderer r(*cam, w.camera.mounting, *w.room, w.nuisance);
+  std::mt19937_64 rng(1);
+  int i = 0;
+  for (auto _ : st) {
+    const cv::Mat img = r.render(Pose2{1.5 + 0.1 * (i % 30), 1.2 + 0.05 * (i % 30), 0.3 * i}, &rng);
+    benchmark::DoNotOptimize(img.data);
+    ++i;
+  }
+  st.counters["rays_per_frame"] = static_cast<double>(r.raysPerFrame());
+}
+
+void BM_PlainRemapBgr(benchmark::State& st) {
+  const sim::World& w = roomWorld();
+  const auto cam = sim::makeCamera(w.camera);
+  std::mt19937_64 rng(1);
+  const cv::Mat src = vision::RoomRenderer(*cam, w.camera.mounting, *w.room, w.nuisance).render(Pose2{1.5, 1.2, 0.3}, &rng);
+  cv::Mat mx(src.size(), CV_32F), my(src.size(), CV_32F), dst;  // a half-pixel shift: bilinear everywhere
+  for (int v = 0; v < src.rows; ++v)
+    for (int u = 0; u < src.cols; ++u) mx.at<float>(v, u) = u + 0.5f, my.at<float>(v, u) = v + 0.5f;
+  for (auto _ : st) {
+    cv::remap(src, dst, mx, my, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    benchmark::DoNotOptimize(dst.data);
+  }
+}
+
 }  // namespace
 
 BENCHMARK(BM_CeilingLightDetector)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PlainThresholdConnectedComponents)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_VerticalLineDetector)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PlainRemapSobel)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RoomRenderer)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PlainRemapBgr)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

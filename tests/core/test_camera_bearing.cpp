@@ -157,6 +157,17 @@ TEST(camera_Mounting, RoundTripsBearingsAndJacobians) {
   EXPECT_LT((directionRobotToCamera(m, d_R, &J_dC_dR) - d_C).norm(), 1e-15);
   EXPECT_LT((J_dR_dC * J_dC_dR - Eigen::Matrix3d::Identity()).norm(), 1e-15);
   const double h = 1e-7;
+  // Each of the two against central differences of its own function (the product alone would
+  // pass a swapped pair or two identities).
+  Eigen::Matrix3d N_dR_dC, N_dC_dR;
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d e = h * Eigen::Vector3d::Unit(i);
+    N_dR_dC.col(i) = (directionCameraToRobot(m, d_C + e) - directionCameraToRobot(m, d_C - e)) / (2 * h);
+    N_dC_dR.col(i) = (directionRobotToCamera(m, d_R + e) - directionRobotToCamera(m, d_R - e)) / (2 * h);
+  }
+  EXPECT_LT((J_dR_dC - N_dR_dC).norm(), 1e-8) << J_dR_dC << "\nnum\n" << N_dR_dC;
+  EXPECT_LT((J_dC_dR - N_dC_dR).norm(), 1e-8) << J_dC_dR << "\nnum\n" << N_dC_dR;
+  EXPECT_GT((J_dR_dC - Eigen::Matrix3d::Identity()).norm(), 0.5);  // yaw 0.7 rad: not the identity
   CameraMounting mp = m, mm = m;
   mp.yaw_rad += h;
   mm.yaw_rad -= h;

@@ -152,14 +152,18 @@ TEST(slam_FastSlam, LocalisesWithPriorMapAndAssociatesById) {
     EXPECT_EQ(map[i].counter, 130);
     EXPECT_LT((map[i].p_LinW_m - lights[i]).norm(), 0.1);
   }
+  // Localised: the cloud is about a centimetre wide (measured sd 0.011 m, 0.003 rad), and six
+  // lights seen every step keep the weights from collapsing (measured ESS 9.0 of 10).
   const Eigen::Matrix3d C = f.poseCovariance();
-  EXPECT_GE(C(0, 0), 0.0);
-  EXPECT_GT(f.ess(), 0.0);
-  EXPECT_LE(f.ess(), 10.0 + 1e-9);
+  EXPECT_GT(C.diagonal().minCoeff(), 0.0);
+  EXPECT_LT(std::sqrt(C(0, 0) + C(1, 1)), 0.05);
+  EXPECT_LT(std::sqrt(C(2, 2)), 0.01);
+  EXPECT_GT(f.ess(), 5.0);
 }
 
-// Odometry scale anchoring: a map and path built 10 % too small are rescaled about the start until
-// the particle's path length matches the odometry; bearings are unchanged by the rescaling.
+// Odometry scale anchoring's bookkeeping: the option's range, the path and odometry lengths a
+// particle accumulates, and no anchoring with a prior map. (That a map built at the wrong scale is
+// rescaled is the next test's.)
 TEST(slam_FastSlam, OdometryScaleAnchoringFollowsTheOdometry) {
   FastSlamOptions o;
   o.num_particles = 1;
@@ -169,8 +173,7 @@ TEST(slam_FastSlam, OdometryScaleAnchoringFollowsTheOdometry) {
   o.scale_correction_max_step = 0.0;
   EXPECT_NE(o.validate().find("scale_correction_max_step"), std::string::npos) << o.validate();
   o.scale_correction_max_step = 0.2;
-  // A nearly exact motion model: the particle moves as the odometry says, then a map scaled by 0.9
-  // about the start is inserted by hand as if the filter had built it too small.
+  // A nearly exact motion model: the particle moves as the odometry says.
   o.motion.trans_sigma_per_m = o.motion.lateral_sigma_per_m = o.motion.rot_sigma_per_m = 0.0;
   o.motion.trans_sigma_per_rad = o.motion.rot_sigma_per_rad = 0.0;
   o.motion.min_sigma_xy_m = o.motion.min_sigma_theta_rad = 1e-6;
@@ -363,7 +366,11 @@ TEST(slam_FastSlam, CandidateCountersAndDeletion) {
 TEST(slam_FastSlam, PredictOnlySpreadsParticlesKeepsWeights) {
   FastSlam f(FastSlamOptions{}, 9);
   f.initialise(Pose2{1, 2, 0.5});
-  for (int k = 0; k < 10; ++k) f.predictOnly(Pose2{0, 0, 0}, Pose2{0.5, 0.0, 0.1});
+  // The odometry's own frame is not the map's: the step is odom_prev^-1 * odom_now = (0.5, 0, 0.1)
+  // in the robot frame, whatever odom_prev is.
+  const Pose2 odom_prev{3.0, -1.0, 1.2};
+  const Pose2 odom_now = odom_prev.compose(Pose2{0.5, 0.0, 0.1});
+  for (int k = 0; k < 10; ++k) f.predictOnly(odom_prev, odom_now);
   const auto poses = f.particlePoses();
   std::set<double> xs;
   for (const auto& p : poses) xs.insert(p.x_m);
@@ -375,8 +382,11 @@ TEST(slam_FastSlam, PredictOnlySpreadsParticlesKeepsWeights) {
     for (int k = 0; k < 10; ++k) p = p.compose(Pose2{0.5, 0.0, 0.1});
     return p;
   }();
-  EXPECT_LT(std::hypot(m.x_m - expected.x_m, m.y_m - expected.y_m), 0.6);
-  EXPECT_GT(f.poseCovariance()(0, 0), 0.0);
+  // The mean of 10 samples is within 4 standard errors of the noiseless composition (measured:
+  // 0.03 m against a bound of 0.11 m); rotating before translating would put it 0.48 m off.
+  const Eigen::Matrix3d C = f.poseCovariance();
+  EXPECT_GT(C(0, 0), 1e-4);  // spread: the noise of 5 m of motion
+  EXPECT_LT(std::hypot(m.x_m - expected.x_m, m.y_m - expected.y_m), 4.0 * std::sqrt((C(0, 0) + C(1, 1)) / 10.0));
 }
 
 TEST(slam_FastSlam, RejectsBadMeasurements) {

@@ -101,7 +101,6 @@ TEST(slam_Hungarian, MatchesBruteForceOnRandomRectangular) {
   std::uniform_int_distribution<int> dim(1, 7);
   std::uniform_real_distribution<double> val(-20.0, 40.0);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
-  int trials = 0;
   for (int t = 0; t < 300; ++t) {
     int rows = dim(rng), cols = dim(rng) + 2;  // up to 7 x 9
     if (t % 3 == 0) std::swap(rows, cols);     // tall matrices too (up to 9 x 7)
@@ -117,9 +116,7 @@ TEST(slam_Hungarian, MatchesBruteForceOnRandomRectangular) {
     const Best b = bruteForce(c);
     EXPECT_EQ(r.num_assigned, b.count) << "trial " << t;
     EXPECT_NEAR(r.total_cost, b.cost, 1e-9) << "trial " << t;
-    ++trials;
   }
-  EXPECT_EQ(trials, 300);
 }
 
 TEST(slam_Hungarian, AssociationShapeWithNewColumns) {

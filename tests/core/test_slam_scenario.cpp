@@ -250,11 +250,22 @@ TEST(slam_Scenario, HallHungarianSeveralFilterSeeds) {
 }
 
 TEST(slam_Scenario, HallMaximumLikelihood) {
-  // The paper's comparison: figures are printed; the run must only complete and build a map.
+  // The ML baseline maps the hall as well as the Hungarian method (same bars as
+  // HallHungarianSeveralFilterSeeds; measured: 16/16, map mean 0.11-0.27 m). The paper's finding that
+  // ML loses loop closures does not reproduce in this hall (docs/slam-results.md, "Hungarian vs ML").
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const RunFigures r = runHall(AssociationMethod::kMaximumLikelihood, seed, 2024);
     print(("ML seed " + std::to_string(seed)).c_str(), r);
-    EXPECT_GT(r.num_landmarks, 0);
+    EXPECT_EQ(r.num_matched, 16) << seed;
+    EXPECT_EQ(r.num_duplicates, 0) << seed;
+    EXPECT_EQ(r.num_spurious, 0) << seed;
+    EXPECT_LE(r.map_mean_err_m, 0.48) << seed;
+    EXPECT_LE(r.map_max_err_m, 1.05) << seed;
+    EXPECT_LE(r.max_theta_err_rad, 0.087) << seed;
+    // ML decides each measurement alone and so at times gives two of one frame to one landmark
+    // (measured: 2 per run; the joint assignment never does): the baseline is not the Hungarian
+    // method under another name.
+    EXPECT_GT(r.num_inconsistent, 0) << seed;
   }
 }
 

@@ -18,9 +18,11 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <optional>
 #include <regex>
 #include <set>
@@ -299,9 +301,19 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
   // recording with the map fixed: every answered frame's map is the saved one, no landmark added.
   const std::string saved = t::readFile(map);
   EXPECT_NE(saved.find("format: omnislam-map"), std::string::npos);
-  std::size_t n_saved = 0;
-  for (std::size_t p = saved.find("- {id:"); p != std::string::npos; p = saved.find("- {id:", p + 1)) ++n_saved;
-  EXPECT_EQ(n_saved, 16u) << saved;
+  std::map<int64_t, Eigen::Vector3d> saved_landmarks;  // id -> position_m, as written (%.17g)
+  for (std::size_t p = saved.find("- {id:"); p != std::string::npos; p = saved.find("- {id:", p + 1)) {
+    const int64_t id = std::strtoll(saved.c_str() + p + 6, nullptr, 10);
+    const char* s = saved.c_str() + saved.find("position_m: [", p) + 13;
+    Eigen::Vector3d x;
+    for (int i = 0; i < 3; ++i) {
+      char* end = nullptr;
+      x(i) = std::strtod(s, &end);
+      s = end + 1;  // past ','
+    }
+    saved_landmarks[id] = x;
+  }
+  EXPECT_EQ(saved_landmarks.size(), 16u) << saved;
   for (const auto& e : std::filesystem::directory_iterator(dir.path()))
     EXPECT_EQ(e.path().string().find(".tmp."), std::string::npos) << e.path();
   const std::string out = dir.file("localise.lcm");
@@ -310,9 +322,16 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
                            "--no-progress"},
                           120);
   ASSERT_EQ(loc.exit_code, 0) << loc.output;
-  for (const auto& m : lcmio::readChannel<map_t>(out, channels::kSlamMap)) {
+  const auto loc_maps = lcmio::readChannel<map_t>(out, channels::kSlamMap);
+  ASSERT_GE(loc_maps.size(), 10u) << loc.output;
+  for (const auto& m : loc_maps) {
     ASSERT_EQ(m.num_landmarks, 16);
     EXPECT_EQ(m.num_candidates, 0);
+    for (const auto& l : m.landmarks) {
+      const auto it = saved_landmarks.find(l.id);
+      ASSERT_NE(it, saved_landmarks.end()) << "landmark " << l.id << " is not in the saved map";
+      EXPECT_EQ(Eigen::Vector3d(l.position_m[0], l.position_m[1], l.position_m[2]), it->second) << "landmark " << l.id;
+    }
   }
   const auto ev2 = t::run({t::binPath("omnislam-eval"), out, "--json", "--no-tum"}, 60);
   ASSERT_EQ(ev2.exit_code, 0) << ev2.output;

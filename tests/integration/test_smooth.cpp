@@ -177,6 +177,7 @@ TEST(Smooth, LabelsGiveTheTruthIdsAndDropTheFilterAssociations) {
   EXPECT_LT(rmseToTruth(lcmio::readChannel<pose_t>(out, channels::kSlamPose)), 0.05);
   const auto maps = lcmio::readChannel<map_t>(out, channels::kSlamMap);
   ASSERT_EQ(maps.size(), 1u);
+  ASSERT_EQ(maps[0].num_landmarks, 5);
   ASSERT_NO_FATAL_FAILURE(expectLandmarksNearTruth(maps[0], 0));
   EXPECT_TRUE(lcmio::readChannel<associations_t>(out, channels::kSlamAssociations).empty());
 }

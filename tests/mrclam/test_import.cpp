@@ -162,7 +162,10 @@ TEST(MrclamImport, SubjectAsColourOnlyOnRequest) {
   t::TempDir d;
   writeDataset(d);
   mrclam::ImportOptions o;
-  for (const feature_t& f : decode(mrclam::importRobot(d.path(), o)).features[0].features) {
+  const Decoded plain = decode(mrclam::importRobot(d.path(), o));  // named: a temporary would die before the loop
+  ASSERT_EQ(plain.features.size(), 3u);
+  ASSERT_EQ(plain.features[0].features.size(), 2u);
+  for (const feature_t& f : plain.features[0].features) {
     EXPECT_EQ(f.colour_a[0], 0.0f);  // no appearance by default: the filter sees bearings only
   }
   o.subject_as_colour = true;
@@ -319,10 +322,10 @@ TEST(MrclamImport, DuplicatedTimesKeepLastIsCounted) {
 TEST(MrclamImport, BadOptionsRefused) {
   mrclam::ImportOptions o;
   o.bearing_sigma_rad = 0.0;
-  EXPECT_FALSE(o.validate().empty());
+  EXPECT_EQ(o.validate(), "bearing sigma must be in (0, 1) rad, got 0.000000");
   o = {};
   o.robot = 0;
-  EXPECT_FALSE(o.validate().empty());
+  EXPECT_EQ(o.validate(), "robot must be in 1..99, got 0");
   EXPECT_THROW(mrclam::importRobot("/nonexistent", o), std::invalid_argument);
 }
 

@@ -138,7 +138,8 @@ TEST(RoomWorld, BadValuesNameTheKey) {
               "room.walls[0].panels[1].rgb");
   expectError(replace(ok, "- {width_m: 1.0, rgb: [200, 200, 200]}", "- {width_m: 3.5, rgb: [200, 200, 200]}"),
               "room.walls[0].panels");
-  expectError(replace(ok, "- {width_m: 1.0, rgb: [200, 200, 200]}", "- {width: 1.0, rgb: [200, 200, 200]}"), "width");
+  expectError(replace(ok, "- {width_m: 1.0, rgb: [200, 200, 200]}", "- {width: 1.0, rgb: [200, 200, 200]}"),
+              "room.walls[0].panels[0].width' is not a known key");
   expectError(replace(ok, "height_m: 2.5", "height_m: 0.5"), "room.height_m");
   expectError(replace(ok, "z_max_m: 1.5", "z_max_m: 3.5"), "room.boxes[0].z_max_m");
   expectError(replace(ok, "size_x_m: 0.5, size_y_m: 0.3, z_max_m: 1.5", "size_x_m: 0.0, size_y_m: 0.3, z_max_m: 1.5"),

@@ -84,7 +84,7 @@ TEST(Trajectory, InvalidSegmentsAreRejectedWithAMessage) {
   ASSERT_TRUE(err.has_value());
   EXPECT_NE(err->find("segment 0"), std::string::npos);
   o.speed_mps = 0;
-  EXPECT_TRUE(sim::Trajectory::validate(o, {}).has_value());
+  EXPECT_EQ(sim::Trajectory::validate(o, {}).value_or(""), "speed_mps must be in (0, 5]");
   EXPECT_THROW(sim::Trajectory(o, {}), std::invalid_argument);
 }
 

@@ -117,7 +117,9 @@ TEST(PanoramaRotation, SyntheticSceneTurnedByKnownAnglesWithAMovingCheckerboard)
               << m->shift_px.y() << ") px, rms " << rad2deg(m->rms_rad) << " deg over " << m->sectors << " sectors\n";
     EXPECT_NEAR(rad2deg(wrapAngle(m->rotation_rad - deg2rad(c[0]))), 0.0, 0.05);
     EXPECT_LT(m->shift_px.norm(), 0.3);
-    EXPECT_LT(r->inliers, r->sectors_used + 1);
+    // The moving board's sectors disagree and are left out; the rest agree (measured: 18-20 of 24).
+    EXPECT_LT(r->inliers, r->sectors_used);
+    EXPECT_GE(r->inliers, 2 * r->sectors_used / 3);
     worst = std::max(worst, std::abs(err));
   }
   std::cout << "worst error " << worst << " deg (one column = 0.25 deg)\n";

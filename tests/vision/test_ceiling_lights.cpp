@@ -39,7 +39,8 @@ sim::ImageNuisance quiet() {
 
 }  // namespace
 
-TEST(CeilingLights, OneRenderedLightGivesItsBearingAndAnHonestCovariance) {
+// The covariance's honesty against the errors (NEES) is SportsHallDetectionRateAndBearingRms's.
+TEST(CeilingLights, OneRenderedLightGivesItsBearingAndTheCameraPropagatedCovariance) {
   const camera::PajdlaBaksteinCamera cam;
   for (double yaw_deg : {0.0, 30.0, -120.0}) {
     camera::CameraMounting m;
@@ -63,7 +64,6 @@ TEST(CeilingLights, OneRenderedLightGivesItsBearingAndAnHonestCovariance) {
     ASSERT_TRUE(cov.has_value());
     EXPECT_TRUE(f.covariance.isApprox(*cov, 1e-12));
     EXPECT_GT(f.covariance.determinant(), 0.0);
-    EXPECT_GE(f.sigma_px, 0.3);
   }
 }
 
@@ -154,7 +154,8 @@ TEST(CeilingLights, SportsHallDetectionRateAndBearingRms) {
             << " deg (field of view edge 95 deg)\n";
   EXPECT_GE(rate, 0.98);
   EXPECT_GE(worst_light_rate, 0.98) << "light " << worst_id;
-  EXPECT_LT(rms_deg, 0.3);
+  // Measured 0.028 deg; a centroid rounded to whole pixels (0.24-0.42 deg each) would give 0.1-0.17.
+  EXPECT_LT(rms_deg, 0.06);
   EXPECT_LT(nees / found, 2.0 * 2.0) << "covariance too optimistic";
   EXPECT_LT(nees_tuned / found, 2.0 * 2.0) << "covariance too optimistic";
   EXPECT_GT(nees_tuned / found, 2.0 / 4.0) << "covariance too pessimistic";

@@ -158,7 +158,11 @@ TEST(Launcher, TheDrainWaitsUntilTheBusIsQuiet) {
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(r.output.find("bus quiet"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("drain_s ("), std::string::npos) << r.output;
-    EXPECT_GT(rounds(r.output), 0) << r.output;
+    // Stopped by the SIGINT long before its 60 s (1200 rounds); whether its first round came before
+    // the signal, 0.2 s after the scenario ended, depends on the machine's load.
+    const long n = rounds(r.output);
+    EXPECT_GE(n, 0) << "no final report from the publisher\n" << r.output;
+    EXPECT_LT(n, 100) << r.output;
     EXPECT_GT(r.output.find("published "), r.output.find("stopping: scenario finished")) << r.output;
   }
 }

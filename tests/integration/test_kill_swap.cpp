@@ -222,6 +222,7 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
     int frames = 0;
   };
   std::vector<Extent> extent(stream_last_seq.size());
+  ASSERT_GE(frames.size(), 2u) << "no OMNI_FEATURES recorded";
   std::set<int64_t> frame_utimes;
   for (const Frame& f : frames) {
     frame_utimes.insert(f.utime);

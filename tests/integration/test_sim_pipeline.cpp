@@ -127,6 +127,7 @@ TEST_F(SimPipeline, OdometryDriftsFromTruthByTheConfiguredNoise) {
   std::map<int64_t, pose_t> truth;
   for (const auto& p : lcmio::readChannel<pose_t>(log_, channels::kGroundTruthPose)) truth[p.utime] = p;
   const auto odo = lcmio::readChannel<odometry_t>(log_, channels::kOdometry);
+  ASSERT_FALSE(odo.empty()) << "no ODOMETRY recorded";
   struct W {
     double ds_t, dth_t, ds_o, dth_o;
   };

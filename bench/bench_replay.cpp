@@ -32,6 +32,7 @@
 
 #include "bench_util.h"
 #include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/decode.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/validate.h"
 #include "slam_config.h"
@@ -76,8 +77,7 @@ double threadCpuSeconds() {
 
 template <class Msg>
 bool decodeValid(const Event& ev, Msg& m) {
-  const int n = m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size()));
-  if (n < 0 || static_cast<size_t>(n) != ev.data.size()) return false;
+  if (lcmio::decode(ev.data.data(), ev.data.size(), m)) return false;
   return !lcmio::validate(m).has_value();
 }
 

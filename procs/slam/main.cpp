@@ -20,6 +20,7 @@
 
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
+#include "omnislam/lcmio/decode.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_writer.h"
 #include "omnislam/lcmio/node.h"
@@ -159,11 +160,10 @@ struct ReplayReport {
 template <class Msg>
 std::optional<Msg> decodeChecked(const lcm::LogEvent& ev, ReplayReport& rep) {
   Msg m;
-  const int n = m.decode(ev.data, 0, ev.datalen);
-  if (n < 0 || n != ev.datalen) {
+  if (auto why = lcmio::decode(ev.data, static_cast<size_t>(ev.datalen), m)) {
     ++rep.decode_errors;
     rep.line("decode error: " + ev.channel + ": cannot decode " + std::to_string(ev.datalen) + " bytes as " +
-             Msg::getTypeName() + " (wrong type or corrupt)");
+             Msg::getTypeName() + ": " + *why);
     return std::nullopt;
   }
   if (auto why = lcmio::validate(m)) {

@@ -9,10 +9,13 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <vector>
+#include <algorithm>
 
 #include "omnislam/config/world_config.h"
 #include "omnislam/image_t.hpp"
 #include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/decode.h"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
@@ -42,8 +45,8 @@ struct Listener {
   static void onAny(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Listener* self) {
     ++self->counts[channel];
     if (channel == channels::kProcessStatus) {
-      process_status_t st;
-      if (st.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) > 0) self->status[st.name] = st;
+      process_status_t st;  // lcmio::decode: this test sends lying lengths on this channel too
+      if (!lcmio::decode(rbuf->data, rbuf->data_size, st)) self->status[st.name] = st;
     }
   }
   void spinFor(double s) { t::handleFor(lcm, s); }
@@ -131,6 +134,18 @@ TEST(BadInput, SimulatorCountsGarbageOnItsStatusInput) {
   const std::string garbage(100, '\x7f');
   bus.lcm.publish(channels::kProcessStatus, garbage.data(), static_cast<unsigned>(garbage.size()));
   ASSERT_TRUE(bus.waitFor([&] { return bus.status["sim"].decode_errors >= 1; }, 5.0)) << sim.output();
+  // The right fingerprint with a string length of -5: lcm-gen's decode alone throws
+  // std::length_error out of the LCM callback, which ended the process.
+  process_status_t lie{};
+  lie.name = "liar", lie.last_error = "", lie.detail = "";
+  std::vector<uint8_t> bytes(static_cast<size_t>(lie.getEncodedSize()));
+  lie.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  const uint8_t minus5[4] = {0xff, 0xff, 0xff, 0xfb};
+  std::copy(minus5, minus5 + 4, bytes.begin() + 8 + 2 * 8);  // after the fingerprint, utime and seq
+  bus.lcm.publish(channels::kProcessStatus, bytes.data(), static_cast<unsigned>(bytes.size()));
+  ASSERT_TRUE(bus.waitFor([&] { return bus.status["sim"].decode_errors >= 2; }, 5.0)) << sim.output();
+  EXPECT_NE(bus.status["sim"].last_error.find("name length -5 outside 1.."), std::string::npos)
+      << bus.status["sim"].last_error;
   EXPECT_TRUE(sim.alive());
   sim.signal(SIGTERM);
   EXPECT_EQ(sim.wait(5.0).exit_code, 0);

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "omnislam/lcmio/decode.h"
+
 namespace omnislam::lcmio {
 
 struct LogEvent {
@@ -19,12 +21,12 @@ struct LogEvent {
 /// Calls fn for every event of the log in order. Throws std::runtime_error if it cannot be opened.
 void forEachEvent(const std::string& path, const std::function<void(const LogEvent&)>& fn);
 
-/// Decodes an event as Msg; nothing if the bytes are not a Msg.
+/// Decodes an event as Msg (lcmio::decode, safe against lying sizes); nothing if the bytes are
+/// not a Msg.
 template <class Msg>
 std::optional<Msg> decodeAs(const LogEvent& ev) {
   Msg m;
-  const int n = m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size()));
-  if (n < 0 || static_cast<size_t>(n) != ev.data.size()) return std::nullopt;
+  if (decode(ev.data.data(), ev.data.size(), m)) return std::nullopt;
   return m;
 }
 

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "omnislam/lcmio/decode.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/process_status_t.hpp"
 
@@ -118,11 +119,10 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
   sub->fn = [this, channel, handler = std::move(handler), opt](const lcm::ReceiveBuffer* rbuf) {
     ++counters_.messages_in;
     Msg msg;
-    const int n = msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size));
-    if (n < 0 || static_cast<uint32_t>(n) != rbuf->data_size) {
+    if (auto why = lcmio::decode(rbuf->data, rbuf->data_size, msg)) {
       ++counters_.decode_errors;
       counters_.last_error = channel + ": cannot decode " + std::to_string(rbuf->data_size) +
-                             " bytes as " + Msg::getTypeName() + " (wrong type or corrupt)";
+                             " bytes as " + Msg::getTypeName() + ": " + *why;
       report("decode error: " + counters_.last_error);
       return;
     }

@@ -59,6 +59,17 @@ class Walk {
 constexpr size_t kFeatureBytes = 1 + 8 + 8 + 1 + 4 * 8 + 2 * 8 + 3 * 8 + 2 * 3 * 4;  // feature_t: 114
 constexpr size_t kLandmarkBytes = 8 + 3 * 8 + 9 * 8 + 1 + 4 + 1;                      // landmark_t: 110
 
+/// utime, seq and another int64, then an int32 count of elements of `elem_bytes` (the arrays of
+/// map_t, particles_t, associations_t and feature_labels_t; what follows is fixed-size).
+std::optional<std::string> countAfterThreeInt64s(const uint8_t* body, size_t size, const char* count_field,
+                                                 size_t elem_bytes) {
+  Walk w(body, size);
+  w.skip(3 * 8);
+  const int32_t n = w.i32();
+  w.array(count_field, n, elem_bytes);
+  return w.error;
+}
+
 }  // namespace
 
 std::optional<std::string> checkEncodedLengths(const image_t*, const uint8_t* body, size_t size) {
@@ -78,35 +89,19 @@ std::optional<std::string> checkEncodedLengths(const features_t*, const uint8_t*
 }
 
 std::optional<std::string> checkEncodedLengths(const map_t*, const uint8_t* body, size_t size) {
-  Walk w(body, size);
-  w.skip(8 + 8 + 8);
-  const int32_t n = w.i32();
-  w.array("num_landmarks", n, kLandmarkBytes);
-  return w.error;
+  return countAfterThreeInt64s(body, size, "num_landmarks", kLandmarkBytes);
 }
 
 std::optional<std::string> checkEncodedLengths(const particles_t*, const uint8_t* body, size_t size) {
-  Walk w(body, size);
-  w.skip(8 + 8 + 8);
-  const int32_t n = w.i32();
-  w.array("num_particles", n, 4 * 8);  // x_m, y_m, theta_rad, weight
-  return w.error;
+  return countAfterThreeInt64s(body, size, "num_particles", 4 * 8);  // x_m, y_m, theta_rad, weight
 }
 
 std::optional<std::string> checkEncodedLengths(const associations_t*, const uint8_t* body, size_t size) {
-  Walk w(body, size);
-  w.skip(8 + 8 + 8);
-  const int32_t n = w.i32();
-  w.array("num_features", n, 8);  // landmark_id
-  return w.error;
+  return countAfterThreeInt64s(body, size, "num_features", 8);  // landmark_id
 }
 
 std::optional<std::string> checkEncodedLengths(const feature_labels_t*, const uint8_t* body, size_t size) {
-  Walk w(body, size);
-  w.skip(8 + 8 + 8);
-  const int32_t n = w.i32();
-  w.array("num_features", n, 8 + 4);  // landmark_id, source_code
-  return w.error;
+  return countAfterThreeInt64s(body, size, "num_features", 8 + 4);  // landmark_id, source_code
 }
 
 std::optional<std::string> checkEncodedLengths(const process_status_t*, const uint8_t* body, size_t size) {

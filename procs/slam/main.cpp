@@ -19,9 +19,9 @@
 #include <stdexcept>
 
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/decode.h"
-#include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_writer.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"

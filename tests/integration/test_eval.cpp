@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <regex>
 #include <sstream>
 
@@ -31,6 +32,7 @@ map_t mapOf(const std::vector<Eigen::Vector3d>& pts) {
   for (size_t i = 0; i < pts.size(); ++i) {
     landmark_t l{};
     l.id = static_cast<int64_t>(i);
+    l.kind = feature_t::KIND_CEILING_LIGHT;
     for (int k = 0; k < 3; ++k) l.position_m[k] = pts[i][k];
     m.landmarks.push_back(l);
   }
@@ -39,7 +41,9 @@ map_t mapOf(const std::vector<Eigen::Vector3d>& pts) {
 }
 
 // Truth: a circle of radius 5 m; SLAM: the same rotated by 0.2 rad about the origin and shifted.
-void makeLogs(const std::string& slam_path, const std::string& truth_path, bool one_log) {
+// `extra` writes more events at the end of the SLAM log.
+void makeLogs(const std::string& slam_path, const std::string& truth_path, bool one_log,
+              const std::function<void(lcmio::LogWriter&)>& extra = {}) {
   lcmio::LogWriter slam(slam_path);
   lcmio::LogWriter truth_file(truth_path);
   lcmio::LogWriter& truth = one_log ? slam : truth_file;
@@ -66,6 +70,7 @@ void makeLogs(const std::string& slam_path, const std::string& truth_path, bool 
   };
   slam.write(2, channels::kSlamMap, mapOf({toSlam(lights[0]), toSlam(lights[1] + Eigen::Vector3d(0.5, 0, 0)), toSlam(lights[0] + Eigen::Vector3d(0, 0.3, 0)),
                toSlam({40, 40, 6.5})}));
+  if (extra) extra(slam);
 }
 
 TEST(Eval, AlignedFiguresAreExactAndRawOnesShowTheOffset) {
@@ -118,6 +123,28 @@ TEST(Eval, TruthFromASecondLog) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NEAR(jsonNumber(r.output, "ate_rmse_m"), 0.0, 1e-6) << r.output;
   EXPECT_EQ(jsonNumber(r.output, "landmarks_matched"), 2);
+}
+
+// A non-finite pose and a truncated one are left out, counted and named, not averaged into the figures.
+TEST(Eval, BadMessagesAreSkippedCountedAndNamed) {
+  t::TempDir dir;
+  makeLogs(dir.file("run.lcm"), dir.file("unused.lcm"), true, [](lcmio::LogWriter& log) {
+    const int64_t u = 1'000'000 + 25 * 20'000;  // between two good SLAM poses
+    log.write(u, channels::kSlamPose, t::makePose(u, std::nan(""), 0, 0));
+    const pose_t whole = t::makePose(u + 1, 0, 0, 0);
+    std::vector<uint8_t> bytes(static_cast<size_t>(whole.getEncodedSize()));
+    whole.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    log.write(u + 1, channels::kSlamPose, bytes.data(), static_cast<int32_t>(bytes.size() - 3));
+  });
+  const auto r = t::run({t::binPath("omnislam-eval"), dir.file("run.lcm"), "--json", "--align", "--no-tum"}, 30);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NEAR(jsonNumber(r.output, "ate_rmse_m"), 0.0, 1e-6) << r.output;
+  EXPECT_EQ(jsonNumber(r.output, "frames_with_pose"), 11) << r.output;
+  EXPECT_EQ(jsonNumber(r.output, "messages_skipped"), 2) << r.output;
+  EXPECT_NE(r.output.find("skipped 1 message of " + dir.file("run.lcm") + ": SLAM_POSE: non-finite pose"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("SLAM_POSE: undecodable (corrupt)"), std::string::npos) << r.output;
 }
 
 TEST(Eval, ALogWithoutSlamOutputIsAClearError) {

@@ -24,6 +24,7 @@
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
+#include "omnislam/lcmio/validate.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
@@ -45,7 +46,30 @@ struct LogContent {
   std::vector<eval::TimedPose> odometry;                     ///< ODOMETRY (of the first log that has it)
   std::map<int64_t, std::vector<int64_t>> associations;      ///< SLAM_ASSOCIATIONS by frame utime
   std::map<int64_t, std::vector<int64_t>> labels;            ///< GROUND_TRUTH_FEATURE_LABELS by frame utime
+  std::map<std::string, int64_t> skipped;  ///< "LOG: CHANNEL: reason" -> messages left out (undecodable, invalid)
+  int64_t skippedTotal() const {
+    int64_t n = 0;
+    for (const auto& [why, count] : skipped) n += count;
+    return n;
+  }
 };
+
+/// The event as Msg if it decodes and passes lcmio::validate (finite, in range); otherwise counted in
+/// c.skipped with the log, the channel and the reason, and nothing.
+template <class Msg>
+std::optional<Msg> decodeValid(const std::string& path, const lcmio::LogEvent& ev, LogContent& c) {
+  std::string why_not;
+  auto m = lcmio::decodeAs<Msg>(ev, &why_not);
+  if (!m) {
+    ++c.skipped[path + ": " + ev.channel + ": undecodable (" + why_not + ")"];
+    return std::nullopt;
+  }
+  if (auto why = lcmio::validate(*m)) {
+    ++c.skipped[path + ": " + ev.channel + ": " + *why];
+    return std::nullopt;
+  }
+  return m;
+}
 
 /// Poses by utime (a later message with the same utime replaces the earlier one), sorted.
 std::vector<eval::TimedPose> posesOf(const std::map<int64_t, Pose2>& m) {
@@ -58,23 +82,23 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
   std::map<int64_t, Pose2> slam, truth, odom;
   lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
     if (ev.channel == channels::kOdometry) {
-      if (auto m = lcmio::decodeAs<odometry_t>(ev)) odom[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+      if (auto m = decodeValid<odometry_t>(path, ev, c)) odom[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
       return;
     }
     if (want_slam && ev.channel == channels::kSlamAssociations) {
-      if (auto m = lcmio::decodeAs<associations_t>(ev)) c.associations[m->utime] = m->landmark_id;
+      if (auto m = decodeValid<associations_t>(path, ev, c)) c.associations[m->utime] = m->landmark_id;
       return;
     }
     if (want_truth && ev.channel == channels::kGroundTruthFeatureLabels) {
-      if (auto m = lcmio::decodeAs<feature_labels_t>(ev)) c.labels[m->utime] = m->landmark_id;
+      if (auto m = decodeValid<feature_labels_t>(path, ev, c)) c.labels[m->utime] = m->landmark_id;
       return;
     }
     if (want_slam && ev.channel == channels::kSlamPose) {
-      if (auto m = lcmio::decodeAs<pose_t>(ev)) slam[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+      if (auto m = decodeValid<pose_t>(path, ev, c)) slam[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
     } else if (want_truth && ev.channel == channels::kGroundTruthPose) {
-      if (auto m = lcmio::decodeAs<pose_t>(ev)) truth[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+      if (auto m = decodeValid<pose_t>(path, ev, c)) truth[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
     } else if (want_slam && ev.channel == channels::kSlamMap) {
-      if (auto m = lcmio::decodeAs<map_t>(ev)) {
+      if (auto m = decodeValid<map_t>(path, ev, c)) {
         c.slam_map.clear();
         c.slam_map_cov_xy.clear();
         c.slam_map_ids.clear();
@@ -88,7 +112,7 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
         c.have_slam_map = true;
       }
     } else if (want_truth && ev.channel == channels::kGroundTruthMap) {
-      if (auto m = lcmio::decodeAs<map_t>(ev)) {
+      if (auto m = decodeValid<map_t>(path, ev, c)) {
         c.truth_map.clear();
         c.truth_map_ids.clear();
         for (const auto& l : m->landmarks) {
@@ -179,6 +203,8 @@ int main(int argc, char** argv) {
       read(log, true, false, c);
       read(truth_log, false, true, c);
     }
+    for (const auto& [why, count] : c.skipped)
+      std::cerr << "omnislam-eval: skipped " << count << " message" << (count == 1 ? "" : "s") << " of " << why << "\n";
     if (c.slam.empty()) throw std::invalid_argument(log + ": no SLAM_POSE message");
     if (c.truth.empty()) throw std::invalid_argument((truth_log.empty() ? log : truth_log) + ": no GROUND_TRUTH_POSE message");
     auto pairs = eval::pairByTime(c.slam, c.truth);
@@ -261,7 +287,8 @@ int main(int argc, char** argv) {
         << ", \"landmarks_matched\": " << me.matched << ", \"landmarks_truth\": " << me.truth
         << ", \"landmarks_estimated\": " << me.estimated << ", \"landmarks_spurious\": " << me.spurious
         << ", \"frames\": " << frames << ", \"frames_with_pose\": " << c.slam.size()
-        << ", \"poses_compared\": " << te.pairs << ", \"aligned\": " << (T ? "true" : "false");
+        << ", \"poses_compared\": " << te.pairs << ", \"messages_skipped\": " << c.skippedTotal()
+        << ", \"aligned\": " << (T ? "true" : "false");
       if (T) o << ", \"align_theta_rad\": " << T->theta_rad << ", \"align_tx_m\": " << T->t_m.x() << ", \"align_ty_m\": " << T->t_m.y();
       o << ", \"map_available\": " << (c.have_slam_map && c.have_truth_map ? "true" : "false");
       o << ", \"dr_available\": " << (dr.available ? "true" : "false");
@@ -281,6 +308,8 @@ int main(int argc, char** argv) {
       o << "}\n";
     } else {
       o << "omnislam-eval " << log << (T ? "  (aligned)" : "") << "\n";
+      if (c.skippedTotal() > 0)
+        o << "  skipped " << c.skippedTotal() << " undecodable or invalid messages (listed on stderr)\n";
       o << "  trajectory: " << te.pairs << " poses compared of " << c.slam.size() << " (" << frames << " frames)\n";
       o << "    ATE RMSE " << te.ate_rmse_m << " m, max " << te.ate_max_m << " m\n";
       o << "    heading RMSE " << te.heading_rmse_rad << " rad, max " << te.heading_max_rad << " rad\n";

@@ -35,9 +35,10 @@ struct Counter {
 /// channel and the reason.
 template <class Msg>
 std::optional<Msg> decodeValid(const lcmio::LogEvent& ev, Counter& bad) {
-  auto m = lcmio::decodeAs<Msg>(ev);
+  std::string why_not;
+  auto m = lcmio::decodeAs<Msg>(ev, &why_not);
   if (!m) {
-    bad.add(ev.channel + ": undecodable");
+    bad.add(ev.channel + ": undecodable (" + why_not + ")");
     return std::nullopt;
   }
   if (auto why = lcmio::validate(*m)) {

@@ -22,11 +22,14 @@ struct LogEvent {
 void forEachEvent(const std::string& path, const std::function<void(const LogEvent&)>& fn);
 
 /// Decodes an event as Msg (lcmio::decode, safe against lying sizes); nothing if the bytes are
-/// not a Msg.
+/// not a Msg, and then, if `why` is given, decode's one-line reason in *why.
 template <class Msg>
-std::optional<Msg> decodeAs(const LogEvent& ev) {
+std::optional<Msg> decodeAs(const LogEvent& ev, std::string* why = nullptr) {
   Msg m;
-  if (decode(ev.data.data(), ev.data.size(), m)) return std::nullopt;
+  if (auto reason = decode(ev.data.data(), ev.data.size(), m)) {
+    if (why) *why = std::move(*reason);
+    return std::nullopt;
+  }
   return m;
 }
 

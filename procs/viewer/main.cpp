@@ -166,13 +166,11 @@ class LogDispatcher {
   void on(const std::string& channel, std::function<void(const Msg&)> fn) {
     handlers_[channel] = [this, channel, fn = std::move(fn)](const lcmio::LogEvent& ev) {
       ++in_;
-      auto m = lcmio::decodeAs<Msg>(ev);
-      if (!m) return refuse(decode_errors_, channel + ": cannot decode as " + Msg::getTypeName());
+      std::string why_not;
+      auto m = lcmio::decodeAs<Msg>(ev, &why_not);
+      if (!m) return refuse(decode_errors_, channel + ": cannot decode as " + Msg::getTypeName() + ": " + why_not);
       if (auto why = lcmio::validate(*m)) return refuse(rejected_, channel + ": " + *why);
-      auto& last = last_utime_[channel];
-      if (last.first && m->utime <= last.second)
-        return refuse(rejected_, channel + ": utime not after the previous one (duplicate or out of order)");
-      last = {true, m->utime};
+      if (auto why = time_order_[channel].admit(m->utime)) return refuse(rejected_, channel + ": " + *why);
       fn(*m);
     };
   }
@@ -191,7 +189,7 @@ class LogDispatcher {
     if (++reports_ <= 20 || reports_ % 100 == 0) std::cerr << "[viewer] rejected " << why << std::endl;
   }
   std::map<std::string, std::function<void(const lcmio::LogEvent&)>> handlers_;
-  std::map<std::string, std::pair<bool, int64_t>> last_utime_;
+  std::map<std::string, lcmio::UtimeOrder> time_order_;  ///< as lcmio::Node's default InputOptions
   int64_t in_ = 0, decode_errors_ = 0, rejected_ = 0, reports_ = 0;
 };
 

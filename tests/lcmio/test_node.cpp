@@ -8,6 +8,7 @@
 #include "omnislam/lcmio/node.h"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "omnislam/process_status_t.hpp"
 
 using namespace omnislam;
 
@@ -49,6 +50,41 @@ TEST(LcmioNode, CountsEveryKindOfBadInputAndPassesOnlyGoodOnes) {
   EXPECT_EQ(c.rejected_inputs, 3);
   EXPECT_EQ(c.sequence_gaps, 4);
   EXPECT_NE(c.last_error.find("ODOMETRY"), std::string::npos);
+}
+
+// One far-future utime is refused and the good messages after it pass (it used to become the
+// channel's "previous utime" and lock out every later message); a replay started again is taken
+// after its confirming messages, counted, and shown in PROCESS_STATUS.detail.
+TEST(LcmioNode, AStrayFutureStampDoesNotLockAChannelAndARestartIsTaken) {
+  lcmio::Node node("unit", "memq://");
+  std::vector<int64_t> seen;
+  node.subscribe<odometry_t>(channels::kOdometry, [&](const odometry_t& m) { seen.push_back(m.seq); });
+  std::vector<process_status_t> status;
+  lcmio::InputOptions status_opt;
+  status_opt.require_increasing_utime = false;
+  status_opt.track_sequence = false;
+  node.subscribe<process_status_t>(channels::kProcessStatus, [&](const process_status_t& s) { status.push_back(s); },
+                                   status_opt);
+  lcm::LCM& bus = node.lcm();
+  const int64_t t0 = 1'700'000'000'000'000;
+  const std::vector<std::pair<int64_t, int64_t>> sent{
+      {t0, 0}, {t0 + 20'000, 1}, {9'000'000'000'000'000'000, 2}, {t0 + 40'000, 3}, {t0 + 60'000, 4},
+      {t0 - 100'000'000, 0}, {t0 - 99'980'000, 1}, {t0 - 99'960'000, 2}, {t0 - 99'940'000, 3}};
+  for (const auto& [u, q] : sent) {
+    auto m = odo(u, q);
+    bus.publish(channels::kOdometry, &m);
+  }
+  while (node.lcm().handleTimeout(0) > 0) {
+  }
+  EXPECT_EQ(seen, (std::vector<int64_t>{0, 1, 3, 4, 2, 3}));
+  EXPECT_EQ(node.counters().rejected_inputs, 3);
+  EXPECT_EQ(node.counters().utime_restarts, 1);
+  node.setDetail("d");
+  node.publishStatus();
+  while (node.lcm().handleTimeout(0) > 0) {
+  }
+  ASSERT_FALSE(status.empty());
+  EXPECT_EQ(status.back().detail, "d [inputs restarted: 1 seq, 1 utime]");
 }
 
 TEST(LcmioNode, PublishesStatusWithItsCounters) {

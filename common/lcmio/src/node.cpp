@@ -71,6 +71,10 @@ void Node::publishStatus() {
   st.sequence_gaps = counters_.sequence_gaps;
   st.last_error = counters_.last_error;
   st.detail = detail_;
+  // The contract has no field for restarts of the inputs: they go with the detail, if any.
+  if (counters_.sequence_restarts > 0 || counters_.utime_restarts > 0)
+    st.detail += " [inputs restarted: " + std::to_string(counters_.sequence_restarts) + " seq, " +
+                 std::to_string(counters_.utime_restarts) + " utime]";
   lcm_.publish(channels::kProcessStatus, &st);
   next_status_ = std::chrono::steady_clock::now() + std::chrono::seconds(1);
 }

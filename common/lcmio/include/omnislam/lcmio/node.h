@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "omnislam/lcmio/decode.h"
+#include "omnislam/lcmio/utime_order.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/process_status_t.hpp"
 
@@ -21,8 +22,10 @@ namespace omnislam::lcmio {
 
 struct InputOptions {
   /// Refuse a message whose utime is not after the previous accepted one on the channel
-  /// (duplicates and time going backwards).
+  /// (duplicates and time going backwards) or jumps far ahead of it; a new timeline is accepted
+  /// after a few messages in a row continue it (utime_order.h, `time_order`).
   bool require_increasing_utime = true;
+  UtimeOrderOptions time_order;
   /// Count gaps and restarts of seq (off for channels with several publishers, e.g. PROCESS_STATUS).
   bool track_sequence = true;
   /// LCM's per-subscription queue; arrivals beyond it are dropped by LCM (default 30 is small
@@ -38,6 +41,7 @@ struct Counters {
   int64_t rejected_inputs = 0;
   int64_t sequence_gaps = 0;
   int64_t sequence_restarts = 0;
+  int64_t utime_restarts = 0;  ///< new timelines accepted on the inputs (UtimeOrder)
   std::string last_error;
 };
 
@@ -88,8 +92,7 @@ class Node {
     std::function<void(const lcm::ReceiveBuffer*)> fn;
   };
   struct ChannelState {
-    bool have_utime = false;
-    int64_t last_utime = 0;
+    UtimeOrder time;
     bool have_seq = false;
     int64_t last_seq = 0;
   };
@@ -131,14 +134,18 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
       return;
     }
     ChannelState& cs = channels_[channel];
-    if (opt.require_increasing_utime && cs.have_utime && msg.utime <= cs.last_utime) {
-      reject(channel, "utime " + std::to_string(msg.utime) + " not after previous " +
-                          std::to_string(cs.last_utime) + " (duplicate or out of order)");
-      return;
+    if (opt.require_increasing_utime) {
+      const int64_t restarts = cs.time.restarts();
+      if (auto why = cs.time.admit(msg.utime, opt.time_order)) {
+        reject(channel, *why);
+        return;
+      }
+      if (cs.time.restarts() != restarts) {
+        ++counters_.utime_restarts;
+        report(channel + ": " + cs.time.lastRestart());
+      }
     }
     if (opt.track_sequence) noteSequence(channel, msg.seq);
-    cs.have_utime = true;
-    cs.last_utime = msg.utime;
     handler(msg);
   };
   lcm::Subscription* s = lcm_.subscribeFunction(channel, &Node::dispatch, sub.get());

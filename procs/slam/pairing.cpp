@@ -19,6 +19,7 @@ std::string PairingOptions::validate() const {
   if (restart_jump_us <= 0) return "restart_jump_us must be > 0, got " + us(restart_jump_us);
   if (!(max_odometry_speed_mps > 0)) return "max_odometry_speed_mps must be > 0";
   if (!(max_odometry_yaw_rate_radps > 0)) return "max_odometry_yaw_rate_radps must be > 0";
+  if (max_forward_jump_us <= 0) return "max_forward_jump_us must be > 0, got " + us(max_forward_jump_us);
   if (restart_confirm_messages < 1)
     return "restart_confirm_messages must be >= 1, got " + std::to_string(restart_confirm_messages);
   return "";
@@ -126,10 +127,16 @@ void Pairer::restart(int64_t utime, std::vector<PairEvent>& out) {
 
 void Pairer::refuseHeld(InputResult& r) {
   for (const Input& h : held_) {
-    ++stats_.out_of_order;
-    r.refused_held.emplace_back(h.is_frame, "utime " + us(h.utime) + " jumped back and no restart followed (out of order)");
+    if (held_ahead_) {
+      ++stats_.stray_ahead;
+      r.refused_held.emplace_back(h.is_frame, "utime " + us(h.utime) + " jumped ahead and the stream went on (a stray stamp)");
+    } else {
+      ++stats_.out_of_order;
+      r.refused_held.emplace_back(h.is_frame, "utime " + us(h.utime) + " jumped back and no restart followed (out of order)");
+    }
   }
   held_.clear();
+  held_ahead_ = false;
 }
 
 InputResult Pairer::addOdometry(int64_t utime, const Pose2& pose_O, std::vector<PairEvent>& out) {
@@ -151,15 +158,22 @@ InputResult Pairer::addFrame(Frame frame, std::vector<PairEvent>& out) {
 
 InputResult Pairer::add(Input in, std::vector<PairEvent>& out) {
   StreamState& self = in.is_frame ? frame_state_ : odom_state_;
+  // utimes are validated >= 0, so neither difference overflows.
   const bool jumped_back =
       !self.awaiting_restart && self.have_last && self.last_utime - in.utime >= opt_.restart_jump_us;
+  const bool jumped_ahead =
+      !self.awaiting_restart && have_epoch_newest_ && in.utime - epoch_newest_utime_ > opt_.max_forward_jump_us;
+  if (jumped_ahead) return holdAhead(std::move(in), out);
   if (jumped_back) {
+    InputResult pre;
+    if (held_ahead_) refuseHeld(pre);  // a jump ahead then one back: the first was a stray
     const std::string why = "utime jumped back from " + us(self.last_utime) + " to " + us(in.utime);
     held_.push_back(std::move(in));
     if (static_cast<int>(held_.size()) < opt_.restart_confirm_messages) {
       InputResult r;
       r.verdict = Verdict::kDeferred;
       r.reason = why + ": held until a restart is confirmed";
+      r.refused_held = std::move(pre.refused_held);
       return r;
     }
     // Confirmed: a new epoch starts with the held messages, in their order.
@@ -169,6 +183,7 @@ InputResult Pairer::add(Input in, std::vector<PairEvent>& out) {
     InputResult r;
     r.restart = true;
     r.reason = why + ": restart";
+    r.refused_held = std::move(pre.refused_held);
     for (Input& h : held) {
       const bool is_frame = h.is_frame;
       InputResult hr = apply(std::move(h), out);
@@ -181,6 +196,44 @@ InputResult Pairer::add(Input in, std::vector<PairEvent>& out) {
   if (!held_.empty() && held_.front().is_frame == in.is_frame) refuseHeld(pre);
   InputResult r = apply(std::move(in), out);
   r.refused_held = std::move(pre.refused_held);
+  return r;
+}
+
+InputResult Pairer::holdAhead(Input in, std::vector<PairEvent>& out) {
+  InputResult pre;
+  // Held messages of a step back, or of a jump ahead that this one does not continue, are refuted.
+  const bool continues = held_ahead_ && !held_.empty() && in.utime > held_.back().utime &&
+                         in.utime - held_.back().utime <= opt_.max_forward_jump_us;
+  if (!held_.empty() && !continues) refuseHeld(pre);
+  const std::string why = "utime " + us(in.utime) + " jumps ahead of the newest input " + us(epoch_newest_utime_) +
+                          " by more than " + us(opt_.max_forward_jump_us) + " us";
+  held_ahead_ = true;
+  held_.push_back(std::move(in));
+  if (static_cast<int>(held_.size()) < opt_.restart_confirm_messages) {
+    InputResult r;
+    r.verdict = Verdict::kDeferred;
+    r.reason = why + ": held until the next messages confirm it";
+    r.refused_held = std::move(pre.refused_held);
+    return r;
+  }
+  // Confirmed: the held messages are taken in their order; this call answers for the last one.
+  ++stats_.forward_jumps;
+  std::vector<Input> held = std::move(held_);
+  held_.clear();
+  held_ahead_ = false;
+  InputResult r;
+  for (size_t i = 0; i < held.size(); ++i) {
+    const bool is_frame = held[i].is_frame;
+    InputResult hr = apply(std::move(held[i]), out);
+    if (i + 1 == held.size()) {
+      hr.refused_held.insert(hr.refused_held.begin(), r.refused_held.begin(), r.refused_held.end());
+      r = std::move(hr);
+    } else if (!hr.accepted()) {
+      r.refused_held.emplace_back(is_frame, hr.reason);
+    }
+  }
+  r.refused_held.insert(r.refused_held.begin(), pre.refused_held.begin(), pre.refused_held.end());
+  if (r.accepted() && r.reason.empty()) r.reason = why + ": confirmed, taken";
   return r;
 }
 

@@ -30,6 +30,13 @@ struct PairingOptions {
   /// message is refused as out of order); a smaller step back is refused as out of order.
   int64_t restart_jump_us = 5'000'000;
   int restart_confirm_messages = 2;
+  /// A message more than this ahead of the newest utime of either stream is a jump ahead: held
+  /// like a step back. If the stream it came on goes on as before, it was a stray stamp and is
+  /// refused (one far-future utime would otherwise become the stream's time, and the good messages
+  /// after it a "restart"); once restart_confirm_messages such messages came in a row, each
+  /// within this of the one before, they are taken, without a restart (a paused recording: the
+  /// odometry is cumulative, the filter goes on).
+  int64_t max_forward_jump_us = 600'000'000;
   /// Odometry implying a faster motion than these between consecutive samples is a discontinuity
   /// (e.g. the odometry process restarted with its cumulative pose reset): the stream is re-based
   /// so that no motion is assumed across that one interval.
@@ -93,7 +100,7 @@ struct PairEvent {
 /// Why an input was not accepted.
 enum class Verdict {
   kAccepted,
-  kDeferred,  ///< jumped back by >= restart_jump_us: held until the restart is confirmed or refuted
+  kDeferred,  ///< jumped back by >= restart_jump_us, or ahead by > max_forward_jump_us: held until confirmed or refuted
   kDuplicate,
   kOutOfOrder,
   kStaleAfterRestart,
@@ -119,11 +126,14 @@ struct PairingStats {
   int64_t dropped_restart = 0;       ///< pending when a restart happened
   int64_t duplicates = 0, out_of_order = 0, stale_after_restart = 0;  ///< per stream added up
   int64_t restarts = 0;
+  int64_t forward_jumps = 0;   ///< jumps ahead confirmed and taken
+  int64_t stray_ahead = 0;     ///< jumps ahead refused because their stream went on (stray stamps)
   int64_t odometry_jumps = 0;  ///< discontinuities of the cumulative odometry pose (re-based)
 };
 
 /// The pairing rules. Each input is checked for order (duplicates and small steps back are
-/// refused; a step back >= restart_jump_us restarts), then every pending frame that can be decided
+/// refused; a step back >= restart_jump_us restarts; a jump ahead > max_forward_jump_us is held
+/// until confirmed), then every pending frame that can be decided
 /// is: paired with the interpolated odometry, or dropped.
 class Pairer {
  public:
@@ -153,6 +163,7 @@ class Pairer {
   };
   InputResult add(Input in, std::vector<PairEvent>& out);
   InputResult apply(Input in, std::vector<PairEvent>& out);
+  InputResult holdAhead(Input in, std::vector<PairEvent>& out);
   InputResult checkOrder(StreamState& self, int64_t utime);
   void restart(int64_t utime, std::vector<PairEvent>& out);
   void refuseHeld(InputResult& r);
@@ -162,7 +173,8 @@ class Pairer {
   PairingOptions opt_;
   OdometryBuffer odom_;
   std::deque<Frame> pending_;
-  std::vector<Input> held_;  ///< messages that jumped back, waiting for the restart to be confirmed
+  std::vector<Input> held_;  ///< messages that jumped back (or ahead), waiting to be confirmed or refuted
+  bool held_ahead_ = false;  ///< held_ jumped ahead (else back)
   Pose2 T_OfromIn_;           ///< re-basing of incoming odometry after a discontinuity (identity until one)
   bool have_last_odom_ = false;
   int64_t last_odom_utime_ = 0;

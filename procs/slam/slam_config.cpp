@@ -132,7 +132,7 @@ void parseFilter(const Node& n, slam::FastSlamOptions& f) {
 
 void parsePairing(const Node& n, PairingOptions& p) {
   n.rejectUnknownKeys({"max_wait_s", "max_odometry_gap_s", "odometry_buffer_s", "max_pending_frames",
-                       "restart_jump_s", "restart_confirm_messages", "max_odometry_speed_mps",
+                       "restart_jump_s", "restart_confirm_messages", "max_forward_jump_s", "max_odometry_speed_mps",
                        "max_odometry_yaw_rate_degps"});
   p.max_wait_us = seconds_us(n, "max_wait_s", 0.0, 3600.0, p.max_wait_us);
   p.max_odometry_gap_us = seconds_us(n, "max_odometry_gap_s", 1e-6, 3600.0, p.max_odometry_gap_us);
@@ -141,6 +141,7 @@ void parsePairing(const Node& n, PairingOptions& p) {
   p.restart_jump_us = seconds_us(n, "restart_jump_s", 1e-6, 1e6, p.restart_jump_us);
   p.restart_confirm_messages =
       static_cast<int>(n.getInt("restart_confirm_messages", 1, 1000, p.restart_confirm_messages));
+  p.max_forward_jump_us = seconds_us(n, "max_forward_jump_s", 1e-3, 1e6, p.max_forward_jump_us);
   p.max_odometry_speed_mps = n.getDouble("max_odometry_speed_mps", 1e-3, 1e3, p.max_odometry_speed_mps);
   p.max_odometry_yaw_rate_radps =
       deg2rad(n.getDouble("max_odometry_yaw_rate_degps", 1e-3, 1e5, rad2deg(p.max_odometry_yaw_rate_radps)));
@@ -243,7 +244,7 @@ std::string describe(const SlamProcessOptions& o) {
   s << "pairing: max_wait " << o.pairing.max_wait_us * 1e-6 << " s, max odometry gap "
     << o.pairing.max_odometry_gap_us * 1e-6 << " s, buffer " << o.pairing.odometry_buffer_us * 1e-6
     << " s, max pending " << o.pairing.max_pending_frames << ", restart jump " << o.pairing.restart_jump_us * 1e-6
-    << " s\n";
+    << " s, max jump ahead " << o.pairing.max_forward_jump_us * 1e-6 << " s\n";
   s << "start: " << (o.start_source == SlamProcessOptions::StartSource::kOdometry ? "odometry frame" : "fixed (")
     << (o.start_source == SlamProcessOptions::StartSource::kFixed
             ? std::to_string(o.start_pose_W.x_m) + ", " + std::to_string(o.start_pose_W.y_m) + ", " +

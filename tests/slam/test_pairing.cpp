@@ -270,6 +270,60 @@ TEST(Pairer, SmallStepBackIsOutOfOrderALargeOneIsHeldForARestart) {
   EXPECT_TRUE(q.addOdometry(kT0 + 5'000'000, odoAt(kT0), ev).restart);
 }
 
+// One stray far-future stamp must neither become the stream's time (refusing every good message
+// after it) nor, when the good ones go on, look like a restart that resets the filter.
+TEST(Pairer, AStrayFarFutureStampIsRefusedAndResetsNothing) {
+  for (const bool on_frames : {false, true}) {
+    Pairer p(PairingOptions{});
+    std::vector<PairEvent> ev;
+    int64_t t = kT0;
+    for (; t <= kT0 + 200'000; t += kOdoPeriod) p.addOdometry(t, odoAt(t), ev);
+    p.addFrame(frame(kT0 + 100'000, 0), ev);
+    const int64_t stray = 9'000'000'000'000'000'000;
+    const auto r = on_frames ? p.addFrame(frame(stray, 1), ev) : p.addOdometry(stray, odoAt(t), ev);
+    EXPECT_EQ(r.verdict, Verdict::kDeferred) << r.reason;
+    EXPECT_NE(r.reason.find("ahead"), std::string::npos) << r.reason;
+    size_t refused = 0;
+    for (int k = 0; k < 10; ++k, t += kOdoPeriod) {
+      const auto g = p.addOdometry(t, odoAt(t), ev);
+      EXPECT_TRUE(g.accepted()) << g.reason;
+      refused += g.refused_held.size();
+      if (k == 5) refused += p.addFrame(frame(t, 2), ev).refused_held.size();
+    }
+    EXPECT_EQ(refused, 1u) << "the stray is refused once the stream it was on goes on";
+    EXPECT_EQ(count(ev, PairEvent::Kind::kReset), 0);
+    EXPECT_EQ(p.stats().restarts, 0);
+    EXPECT_EQ(count(ev, PairEvent::Kind::kPaired), 2) << "both good frames were paired";
+  }
+}
+
+// A real jump ahead of both streams (a recording paused for minutes) is taken once the next
+// message confirms it, without a restart: odometry is cumulative, the filter goes on.
+TEST(Pairer, AConfirmedJumpAheadGoesOnWithoutARestart) {
+  PairingOptions o;
+  o.max_forward_jump_us = 60'000'000;
+  Pairer p(o);
+  std::vector<PairEvent> ev;
+  for (int64_t t = kT0; t <= kT0 + 200'000; t += kOdoPeriod) p.addOdometry(t, odoAt(t), ev);
+  const int64_t t1 = kT0 + 200'000'000;  // 200 s later
+  EXPECT_EQ(p.addOdometry(t1, odoAt(t1), ev).verdict, Verdict::kDeferred);
+  const auto r = p.addOdometry(t1 + kOdoPeriod, odoAt(t1 + kOdoPeriod), ev);
+  EXPECT_TRUE(r.accepted()) << r.reason;
+  EXPECT_TRUE(r.refused_held.empty());
+  EXPECT_EQ(p.stats().restarts, 0);
+  EXPECT_EQ(p.stats().forward_jumps, 1);
+  for (int64_t t = t1 + 2 * kOdoPeriod; t <= t1 + 200'000; t += kOdoPeriod) p.addOdometry(t, odoAt(t), ev);
+  p.addFrame(frame(t1 + 10'000, 0), ev);  // between the two held-then-accepted samples
+  EXPECT_EQ(count(ev, PairEvent::Kind::kPaired), 1);
+  EXPECT_EQ(count(ev, PairEvent::Kind::kReset), 0);
+  // A frame after a long blind stretch is not a jump while the odometry went on.
+  Pairer q(o);
+  std::vector<PairEvent> ev2;
+  q.addFrame(frame(kT0, 0), ev2);
+  for (int64_t t = kT0; t <= kT0 + 90'000'000; t += kOdoPeriod) q.addOdometry(t, odoAt(t), ev2);
+  EXPECT_TRUE(q.addFrame(frame(kT0 + 89'000'000, 1), ev2).accepted());
+}
+
 TEST(Pairer, JumpOfTheCumulativeOdometryPoseIsReBasedWithoutMotion) {
   Pairer p(PairingOptions{});  // 3 m/s, 6 rad/s
   std::vector<PairEvent> ev;

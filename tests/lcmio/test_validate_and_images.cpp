@@ -60,6 +60,21 @@ TEST(Validate, FeaturesNeedFiniteAnglesAndPositiveCovariance) {
   EXPECT_EQ(lcmio::validate(f).value_or(""), "feature 0: elevation given with has_elevation false");
   f.features[0].elevation_rad = 0.0;
   EXPECT_FALSE(lcmio::validate(f).has_value());
+  // A non-symmetric covariance: the filter's paths would each read another matrix (FastSLAM 2.0
+  // saw a negative determinant and never associated the measurement); rounding is tolerated.
+  f.features[0] = ft;
+  f.features[0].covariance[0][1] = 1e-3;
+  EXPECT_EQ(lcmio::validate(f).value_or(""), "feature 0: covariance not symmetric");
+  f.features[0].covariance[0][1] = 2e-5, f.features[0].covariance[1][0] = 2e-5 * (1 + 1e-12);
+  EXPECT_FALSE(lcmio::validate(f).has_value());
+  // Colours are 0..255 (a float of 3e38 would overflow a landmark's running mean to inf).
+  f.features[0] = ft;
+  f.features[0].colour_b[2] = 3e38f;
+  EXPECT_EQ(lcmio::validate(f).value_or(""), "feature 0: colour outside 0..255");
+  f.features[0].colour_b[2] = NAN;
+  EXPECT_EQ(lcmio::validate(f).value_or(""), "feature 0: colour outside 0..255");
+  f.features[0].colour_b[2] = 255.0f;
+  EXPECT_FALSE(lcmio::validate(f).has_value());
 }
 
 TEST(Validate, PosesAndOdometryMustBeFinite) {
@@ -157,12 +172,62 @@ TEST(ImageMsg, CorruptCompressedImagesAreRefusedWithAReason) {
   m.width = 64, m.height = 48, m.pixel_format = image_t::FORMAT_PNG, m.data.assign(100, 7), m.size = 100;
   std::string why;
   EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
-  EXPECT_NE(why.find("does not decode"), std::string::npos);
+  EXPECT_EQ(why, "compressed image has no readable size in its header");
   cv::Mat grey(48, 64, CV_8UC1, cv::Scalar(9));
+  lcmio::encodeImage(grey, image_t::FORMAT_PNG, m);
+  m.data.resize(m.data.size() / 2);  // a valid header, truncated image data
+  EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
+  EXPECT_NE(why.find("does not decode"), std::string::npos) << why;
   lcmio::encodeImage(grey, image_t::FORMAT_PNG, m);
   m.width = 65;  // header lies about the size
   EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
-  EXPECT_NE(why.find("differs"), std::string::npos);
+  EXPECT_EQ(why, "compressed image's own header says 64x48, the message's 65x48");
+}
+
+// CRC-32 of PNG chunks (ISO 3309), so that a doctored IHDR is otherwise a well-formed PNG.
+uint32_t crc32(const uint8_t* p, size_t n) {
+  uint32_t c = 0xFFFFFFFFu;
+  for (size_t i = 0; i < n; ++i) {
+    c ^= p[i];
+    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+  }
+  return c ^ 0xFFFFFFFFu;
+}
+
+void putBigEndian(std::vector<uint8_t>& d, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i) d[at + static_cast<size_t>(i)] = static_cast<uint8_t>(v >> (24 - 8 * i));
+}
+
+// A small PNG whose IHDR says 60000 x 60000 made cv::imdecode throw (CV_IO_MAX_IMAGE_PIXELS) out
+// of the LCM callback of omnislam-features and omnislam-viewer, which exited. It is refused with a
+// reason, whether or not the message's own size agrees with the lie; JPEG's frame header likewise.
+TEST(ImageMsg, AHeaderClaimingAHugeImageIsRefusedNotThrown) {
+  cv::Mat grey(48, 64, CV_8UC1, cv::Scalar(9));
+  image_t m{};
+  lcmio::encodeImage(grey, image_t::FORMAT_PNG, m);
+  putBigEndian(m.data, 16, 60000);
+  putBigEndian(m.data, 20, 60000);
+  putBigEndian(m.data, 29, crc32(m.data.data() + 12, 17));  // type + 13 bytes of IHDR data
+  std::string why;
+  EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
+  EXPECT_EQ(why, "compressed image's own header says 60000x60000, the message's 64x48");
+  m.width = m.height = 60000;  // a message that agrees with its image's lie reaches OpenCV
+  why.clear();
+  EXPECT_NO_THROW(EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value()));
+  EXPECT_NE(why.find("does not decode"), std::string::npos) << why;
+
+  image_t j{};
+  lcmio::encodeImage(grey, image_t::FORMAT_JPEG, j);
+  size_t sof = 2;  // find the SOF0 segment the encoder wrote
+  while (sof + 9 < j.data.size() && !(j.data[sof] == 0xFF && j.data[sof + 1] == 0xC0)) ++sof;
+  ASSERT_LT(sof + 9, j.data.size());
+  j.data[sof + 5] = j.data[sof + 6] = 0xEA;  // height 60138
+  EXPECT_FALSE(lcmio::decodeImage(j, &why).has_value());
+  EXPECT_EQ(why, "compressed image's own header says 64x60138, the message's 64x48");
+  image_t bad{};
+  bad.width = 64, bad.height = 48, bad.pixel_format = image_t::FORMAT_JPEG, bad.data = {0xFF, 0xD8, 0xFF, 0xDA, 0, 2};
+  EXPECT_FALSE(lcmio::decodeImage(bad, &why).has_value());
+  EXPECT_EQ(why, "compressed image has no readable size in its header");
 }
 
 }  // namespace

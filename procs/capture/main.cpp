@@ -15,6 +15,7 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <random>
 #include <thread>
@@ -91,8 +92,12 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
       node.setDetail("frame " + std::to_string(frames) + ": " + std::to_string(rep.lights_drawn) + " lights, " +
                      std::to_string(rep.lights_missed) + " missed, " + std::to_string(rep.false_blobs) + " false blobs");
     }
-    // Next image time: the next multiple of the period after this one (skips any gap honestly).
-    while (next_utime <= p.utime) next_utime += period_us;
+    // Next image time: the next multiple of the period after this one (skips any gap honestly), in
+    // one step: a jump of the truth's time must not become a loop of one add per period.
+    const int64_t periods = (p.utime - next_utime) / period_us + 1;
+    next_utime = periods > (std::numeric_limits<int64_t>::max() - next_utime) / period_us
+                     ? std::numeric_limits<int64_t>::max()  // past the end of time: no more images
+                     : next_utime + periods * period_us;
   }, truth_opt);
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
   std::cerr << node.tag() << "rendering '" << world.name << "' (" << (room ? "room, colour" : "ceiling lights")
@@ -175,7 +180,8 @@ int main(int argc, char** argv) {
   cli.add_option("--rate-hz", rate_hz, "frame rate (sources dir and device)")->check(CLI::Range(0.01, 1000.0));
   cli.add_option("--speedup", speedup, "source dir: replay speed-up, 0 = as fast as possible")
       ->check(CLI::Range(0.0, 1000.0));
-  cli.add_option("--start-utime", start_utime, "source dir: utime of the first image (default: now)");
+  cli.add_option("--start-utime", start_utime, "source dir: utime of the first image (default: now)")
+      ->check(CLI::Range(int64_t{0}, int64_t{4'000'000'000'000'000}));
   cli.add_option("--device", device, "camera index (source device)")->check(CLI::Range(0, 64));
   cli.add_option("--format", format_name,
                  "published pixel format: gray | bgr | rgb | png | jpeg (default: gray; bgr for a room world)")

@@ -44,6 +44,9 @@ std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::strin
       fail("non-numeric field in '" + line + "'");
     }
     if (!std::isfinite(s.v_mps) || !std::isfinite(s.omega_radps)) fail("non-finite value in '" + line + "'");
+    // The contract's utime is >= 0; the bound (year 2096) keeps every difference and sum exact.
+    if (s.utime < 0 || s.utime > kMaxCsvUtime)
+      fail("utime " + std::to_string(s.utime) + " outside 0.." + std::to_string(kMaxCsvUtime));
     if (!out.empty() && s.utime <= out.back().utime)
       fail("utime " + std::to_string(s.utime) + " does not increase (previous " + std::to_string(out.back().utime) + ")");
     out.push_back(s);

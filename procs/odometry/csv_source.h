@@ -13,9 +13,13 @@ struct WheelSample {
   double omega_radps = 0.0;
 };
 
+/// Largest utime a row may have (microseconds; 4e15 is the year 2096, the bound of world files).
+constexpr int64_t kMaxCsvUtime = 4'000'000'000'000'000;
+
 /// Parses the CSV text (header line "utime,v_mps,omega_radps", then one row per sample, '#'
 /// comments allowed). Throws std::invalid_argument naming `source` and the line for a missing
-/// column, a non-numeric or non-finite field, or a time that does not increase.
+/// column, a non-numeric or non-finite field, a utime outside 0..kMaxCsvUtime, or a time that does
+/// not increase.
 std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::string& source);
 
 }  // namespace omnislam::odometry

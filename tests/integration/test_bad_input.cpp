@@ -96,28 +96,38 @@ TEST(BadInput, CaptureAndOdometryCountAndSkipBadTruthMessages) {
   bus.spinFor(0.2);
   pose_t good2 = pose(t0 + 20'000, 3);
   bus.lcm.publish(channels::kGroundTruthPose, &good2);
+  bus.spinFor(0.2);
+  // One far-future stamp: it used to become each process's "previous utime", so the odometry
+  // refused every pose after it, and the capture counted up to it one period at a time (hung).
+  pose_t stray = pose(9'000'000'000'000'000'000, 4);
+  bus.lcm.publish(channels::kGroundTruthPose, &stray);
+  bus.spinFor(0.2);
+  pose_t good3 = pose(t0 + 40'000, 5);
+  bus.lcm.publish(channels::kGroundTruthPose, &good3);
 
   auto counted = [&](const std::string& name) {
     if (!bus.status.count(name)) return false;
     const auto& s = bus.status[name];
-    return s.decode_errors >= 2 && s.rejected_inputs >= 4 && s.messages_in >= 8;
+    return s.decode_errors >= 2 && s.rejected_inputs >= 5 && s.messages_in >= 10;
   };
   ASSERT_TRUE(bus.waitFor([&] { return counted("capture") && counted("odometry"); }, 5.0))
       << capture.output() << odometry.output();
   for (const char* name : {"capture", "odometry"}) {
     const auto& s = bus.status[name];
     EXPECT_EQ(s.decode_errors, 2) << name;
-    EXPECT_EQ(s.rejected_inputs, 4) << name << ": " << s.last_error;
+    EXPECT_EQ(s.rejected_inputs, 5) << name << ": " << s.last_error;
     EXPECT_FALSE(s.last_error.empty()) << name;
   }
   EXPECT_TRUE(capture.alive());
   EXPECT_TRUE(odometry.alive());
-  EXPECT_EQ(bus.counts[channels::kOdometry], 2) << "exactly the two good poses are turned into odometry";
+  ASSERT_TRUE(bus.waitFor([&] { return bus.counts[channels::kOdometry] >= 3; }, 5.0)) << odometry.output();
+  EXPECT_EQ(bus.counts[channels::kOdometry], 3) << "exactly the three good poses are turned into odometry";
   EXPECT_EQ(bus.counts[channels::kOmniImage], 1) << "one image for the first good pose (t = 0)";
   // The reasons are reported on one line each.
   EXPECT_NE(odometry.output().find("cannot decode"), std::string::npos) << odometry.output();
   EXPECT_NE(odometry.output().find("non-finite"), std::string::npos) << odometry.output();
   EXPECT_NE(odometry.output().find("not after previous"), std::string::npos) << odometry.output();
+  EXPECT_NE(odometry.output().find("utime 9000000000000000000 jumps ahead"), std::string::npos) << odometry.output();
 
   capture.signal(SIGINT);
   odometry.signal(SIGINT);
@@ -201,6 +211,8 @@ TEST(BadConfig, BadFlagsStopWithAMessageNamingTheFlag) {
       {{t::binPath("omnislam-capture"), "--source", "sim"}, "--world"},
       {{t::binPath("omnislam-capture"), "--source", "dir", "--dir", "/nonexistent/images"}, "--dir"},
       {{t::binPath("omnislam-odometry"), "--source", "csv"}, "--csv"},
+      {{t::binPath("omnislam-capture"), "--source", "dir", "--dir", "/tmp", "--start-utime", "9223372036854000000"},
+       "--start-utime"},
       {{t::binPath("omnislam-launch"), t::sourcePath("config/launch/sports_hall.yaml"), "--set", "nosuch=1"}, "nosuch"},
       {{t::binPath("omnislam-launch"), "/nonexistent/launch.yaml"}, "launch.yaml"},
   };
@@ -226,6 +238,8 @@ TEST(BadConfig, MalformedWheelCsvNamesFileAndLine) {
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1\n", ":3: expected 3 columns"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n1000,0.1,0.0\n", ":3: utime 1000 does not increase"},
       {"utime,v_mps,omega_radps\n1000,nan,0.0\n", ":2: non-finite"},
+      {"utime,v_mps,omega_radps\n-5000000,0.1,0.0\n-4000000,0.1,0.0\n", ":2: utime -5000000 outside 0..4000000000000000"},
+      {"utime,v_mps,omega_radps\n1000,0.1,0.0\n9223372036854775807,0.1,0.0\n", ":3: utime 9223372036854775807 outside"},
   };
   for (const auto& c : cases) {
     const std::string path = dir.file("wheels.csv");

@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <stdexcept>
 
 #include "detectors.h"
 #include "omnislam/core/angles.h"
@@ -25,6 +26,7 @@
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/node.h"
+#include "omnislam/lcmio/signals.h"
 #include "omnislam/vision/image_files.h"
 
 using namespace omnislam;
@@ -87,12 +89,18 @@ int runImages(const features::Detector& det, const std::string& dir, const std::
   if (!outdir.empty()) {
     fs::create_directories(outdir);
     csv.open(outdir + "/features.csv");
+    if (!csv) throw std::runtime_error("cannot write '" + outdir + "/features.csv'");
     csv << "file,kind,azimuth_deg,elevation_deg,sigma_azimuth_deg,u_px,v_px,size_px,length_px,strength,"
            "colour_a_r,colour_a_g,colour_a_b,colour_b_r,colour_b_g,colour_b_b\n";
   }
   std::cerr << det.describe() << std::endl;
+  // A stop (Ctrl-C, SIGTERM) ends the loop after the current image; what was written is kept.
+  lcmio::installStopHandlers();
   int skipped = 0;
+  size_t done = 0;
   for (const auto& p : files) {
+    if (lcmio::stopRequested()) break;
+    ++done;
     cv::Mat img = cv::imread(p.string(), cv::IMREAD_UNCHANGED);
     // A colour file of a grey camera (e.g. a JPEG saved with 3 channels) is read as grey when the
     // detector takes only grey.
@@ -128,10 +136,14 @@ int runImages(const features::Detector& det, const std::string& dir, const std::
             << x.v_px << "," << x.size_px << "," << x.length_px << "," << x.strength << "," << x.colour_a[0] << ","
             << x.colour_a[1] << "," << x.colour_a[2] << "," << x.colour_b[0] << "," << x.colour_b[1] << ","
             << x.colour_b[2] << "\n";
+      csv.flush();  // each image's rows are on disk with its PNG
+      if (!csv) throw std::runtime_error("cannot write '" + outdir + "/features.csv'");
     }
   }
-  std::cerr << files.size() - skipped << " images processed, " << skipped << " skipped" << std::endl;
-  return skipped == static_cast<int>(files.size()) ? app::kFailure : app::kOk;
+  std::cerr << done - skipped << " images processed, " << skipped << " skipped";
+  if (done < files.size()) std::cerr << "; stopped by a signal before the last " << files.size() - done;
+  std::cerr << std::endl;
+  return done > 0 && skipped == static_cast<int>(done) ? app::kFailure : app::kOk;
 }
 
 }  // namespace

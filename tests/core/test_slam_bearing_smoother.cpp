@@ -324,7 +324,37 @@ TEST(slam_BearingSmoother, RefusesInvalidProblemsAndOptionsNamingTheCause) {
   SmootherOptions o;
   o.cauchy_scale = -1.0;
   EXPECT_NE(smoothBearingOnly(s.problem, o).failure.find("cauchy_scale"), std::string::npos);
+  // At the solver's own ceiling no step would ever be tried, yet it reported converged.
+  o = SmootherOptions{};
+  o.initial_lambda = SmootherOptions::kMaxLambda;
+  EXPECT_NE(smoothBearingOnly(s.problem, o).failure.find("initial_lambda must be in (0, 1e+10)"), std::string::npos)
+      << smoothBearingOnly(s.problem, o).failure;
+  o.initial_lambda = 0.99 * SmootherOptions::kMaxLambda;
+  EXPECT_TRUE(smoothBearingOnly(s.problem, o).failure.empty());
   EXPECT_FALSE(SmootherProblem{}.validate().empty());
+}
+
+// A landmark seen along one ray without a prior has no depth: its "covariance" came out at ~1e12
+// and indefinite. It is refused with a reason; the estimate itself is still returned.
+TEST(slam_BearingSmoother, NoCovarianceWhereTheFactorsLeaveADirectionFree) {
+  SmootherProblem pb;
+  pb.poses = {Pose2{0.0, 0.0, 0.0}, Pose2{1.0, 0.0, 0.0}};
+  pb.odometry.push_back({0, 1, Pose2{1.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4});
+  pb.landmarks_m = {Eigen::Vector2d(5.0, 1.5)};
+  pb.bearings.push_back({1, 0, std::atan2(1.5, 4.0), 0.01, Eigen::Vector3d::Zero()});
+  SmootherOptions o;
+  o.compute_covariance = true;
+  const SmootherResult r = smoothBearingOnly(pb, o);
+  ASSERT_TRUE(r.failure.empty()) << r.failure;
+  ASSERT_EQ(r.landmarks_m.size(), 1u);
+  EXPECT_EQ(r.covariance.size(), 0);
+  EXPECT_NE(r.covariance_failure.find("information matrix is singular"), std::string::npos) << r.covariance_failure;
+  // A second ray from the other pose fixes the depth: a covariance again, positive definite.
+  pb.bearings.push_back({0, 0, std::atan2(1.5, 5.0), 0.01, Eigen::Vector3d::Zero()});
+  const SmootherResult r2 = smoothBearingOnly(pb, o);
+  EXPECT_TRUE(r2.covariance_failure.empty()) << r2.covariance_failure;
+  ASSERT_EQ(r2.covariance.rows(), 5);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(r2.covariance).eigenvalues().minCoeff(), 0.0);
 }
 
 }  // namespace

@@ -76,6 +76,11 @@ TEST(slam_FastSlam, OptionsValidate) {
   o.proposal = ProposalKind::kFastSlam1;
   EXPECT_NE(o.validate().find("association_predictive needs proposal kFastSlam2"), std::string::npos) << o.validate();
   o = FastSlamOptions{};
+  o.weight_at_predicted_pose = true;  // FastSLAM 1.0 weighs at its sampled pose: it was silently ignored
+  EXPECT_EQ(o.validate(), "");
+  o.proposal = ProposalKind::kFastSlam1;
+  EXPECT_NE(o.validate().find("weight_at_predicted_pose needs proposal kFastSlam2"), std::string::npos) << o.validate();
+  o = FastSlamOptions{};
   o.resample_ess_fraction = 1.5;
   try {
     FastSlam f(o, 1);
@@ -392,16 +397,19 @@ TEST(slam_FastSlam, PredictOnlySpreadsParticlesKeepsWeights) {
 TEST(slam_FastSlam, RejectsBadMeasurements) {
   FastSlam f(FastSlamOptions{}, 1);
   f.initialise(Pose2{});
-  std::vector<BearingMeasurement> z(4, measure({3.0, 1.0, 6.5}, Pose2{}));
+  std::vector<BearingMeasurement> z(5, measure({3.0, 1.0, 6.5}, Pose2{}));
   z[0].azimuth_rad = std::nan("");
   z[1].cov_rad2 << 1.0, 2.0, 2.0, 1.0;  // not positive definite
   z[2].elevation_rad = 2.0;
+  // Not symmetric: LLT read its lower triangle (PD), the 2x2 inverse the mean of the off-diagonals
+  // (a negative determinant: FastSLAM 2.0 never associated it), the update the whole matrix.
+  z[3].cov_rad2 << 2.7e-5, 1e-3, 0.0, 2.7e-5;
   const StepResult r = f.step(Pose2{}, Pose2{}, z);
-  EXPECT_EQ(r.num_rejected, 3);
+  EXPECT_EQ(r.num_rejected, 4);
   EXPECT_EQ(r.num_measurements, 1);
-  EXPECT_EQ(r.landmark_of_measurement.size(), 4u);
+  EXPECT_EQ(r.landmark_of_measurement.size(), 5u);
   // Which ones were refused (SLAM_ASSOCIATIONS reports them as NOT_USED, not as gone to candidates).
-  EXPECT_EQ(r.measurement_refused, (std::vector<char>{1, 1, 1, 0}));
+  EXPECT_EQ(r.measurement_refused, (std::vector<char>{1, 1, 1, 1, 0}));
   EXPECT_EQ(f.bestCandidateCount(), 1u);
 }
 

@@ -119,6 +119,39 @@ TEST(slam_Hungarian, MatchesBruteForceOnRandomRectangular) {
   }
 }
 
+// Costs near the largest double: the penalty for forbidden pairs overflowed to infinity and the
+// solver looped forever on the first matrix below; now they are scaled first, and the optimum
+// still matches exhaustive search.
+TEST(slam_Hungarian, HugeCostsNeitherHangNorLoseTheOptimum) {
+  Eigen::MatrixXd c(2, 2);
+  c << kForbiddenCost, kForbiddenCost, 5e307, 1.0;
+  auto r = solveAssignment(c);
+  EXPECT_EQ(r.col_of_row, (std::vector<int>{-1, 1}));
+  c << kForbiddenCost, kForbiddenCost, 1.7e308, -1.7e308;
+  r = solveAssignment(c);
+  EXPECT_EQ(r.col_of_row, (std::vector<int>{-1, 1}));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> val(-20.0, 40.0);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  for (int t = 0; t < 100; ++t) {
+    const int rows = 1 + t % 6, cols = 1 + (t / 6) % 6;
+    Eigen::MatrixXd h(rows, cols);
+    for (int i = 0; i < rows; ++i)
+      for (int j = 0; j < cols; ++j) h(i, j) = u01(rng) < 0.3 ? kForbiddenCost : val(rng) * 1e305;
+    const auto hr = solveAssignment(h);
+    std::vector<int> used(cols, 0);
+    for (int i = 0; i < rows; ++i) {
+      const int j = hr.col_of_row[i];
+      if (j < 0) continue;
+      EXPECT_TRUE(std::isfinite(h(i, j))) << "forbidden pair returned, trial " << t;
+      EXPECT_EQ(used[j]++, 0) << "column used twice, trial " << t;
+    }
+    const Best b = bruteForce(h);
+    EXPECT_EQ(hr.num_assigned, b.count) << "trial " << t;
+    EXPECT_NEAR(hr.total_cost, b.cost, 1e-9 * std::abs(b.cost)) << "trial " << t;
+  }
+}
+
 TEST(slam_Hungarian, AssociationShapeWithNewColumns) {
   // N_z x (N + N_z): every measurement may always go to a "new" column, so all rows are assigned.
   std::mt19937 rng(7);

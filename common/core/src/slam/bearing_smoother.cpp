@@ -134,7 +134,7 @@ std::string SmootherOptions::validate() const {
       .inClosed("cauchy_scale", cauchy_scale, 0.0, big)
       .inLeftOpen("prior_sigma_xy_m", prior_sigma_xy_m, 0.0, big)
       .inLeftOpen("prior_sigma_theta_rad", prior_sigma_theta_rad, 0.0, big)
-      .inLeftOpen("initial_lambda", initial_lambda, 0.0, big)
+      .inOpen("initial_lambda", initial_lambda, 0.0, kMaxLambda)  // at kMaxLambda no step is tried
       .inClosed("relative_tolerance", relative_tolerance, 0.0, big);
   return c.message();
 }
@@ -244,7 +244,7 @@ SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOption
 
     // Marquardt: raise lambda until a step lowers the cost (or give up).
     bool accepted = false;
-    while (!accepted && lambda < 1e10) {
+    while (!accepted && lambda < SmootherOptions::kMaxLambda) {
       Eigen::SparseMatrix<double> Hd = H;
       // A landmark seen only at rejected (undefined) bearings has a zero diagonal: keep it solvable.
       for (int k = 0; k < n; ++k) Hd.coeffRef(k, k) += lambda * diag(k) + 1e-12;
@@ -284,6 +284,15 @@ SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOption
     normalEquations(pb, s, lay, n, prior_info, odo_info, c, H, g);
     for (int k = 0; k < n; ++k) H.coeffRef(k, k) += 1e-12;  // as in the steps: unobserved landmarks stay solvable
     ldlt.compute(H);
+    // A direction the factors do not constrain (a landmark seen along one ray only, without a
+    // prior) leaves a pivot at about the 1e-12 added above: its "covariance" would be ~1e12 and
+    // indefinite. Refuse it rather than return it; 1e-9 is an sd of ~3e4 m or rad.
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9)) {
+      res.covariance_failure = "the information matrix is singular at the solution (a landmark or pose that the "
+                               "factors do not constrain, e.g. seen along a single ray): no covariance";
+    }
+  }
+  if (opt.compute_covariance && res.covariance_failure.empty()) {
     const int nl = static_cast<int>(pb.landmarks_m.size());
     std::vector<int> idx;
     for (int a = 0; a < 3; ++a) idx.push_back(lay.pose(lay.num_poses - 1) + a);

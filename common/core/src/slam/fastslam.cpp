@@ -99,6 +99,8 @@ std::string FastSlamOptions::validate() const {
                "already weighs the unassigned measurements)")
       .require(!association_predictive || proposal == ProposalKind::kFastSlam2, "association_predictive",
                "needs proposal kFastSlam2 (FastSLAM 1.0 already scores each pairing at its sampled pose)")
+      .require(!weight_at_predicted_pose || proposal == ProposalKind::kFastSlam2, "weight_at_predicted_pose",
+               "needs proposal kFastSlam2 (FastSLAM 1.0 weighs at its sampled pose; it would be ignored)")
       .inLeftOpen("clutter_density", clutter_density, 0.0, 1e6)
       .require(proposal == ProposalKind::kFastSlam2 || proposal == ProposalKind::kFastSlam1, "proposal",
                "must be kFastSlam2 or kFastSlam1")
@@ -191,8 +193,11 @@ StepResult FastSlam::step(const Pose2& odom_prev, const Pose2& odom_now, const s
     const bool kind_ok = m.kind == LandmarkKind::kPoint3D || m.kind == LandmarkKind::kVerticalLine;
     const bool finite = std::isfinite(m.azimuth_rad) && q.z.allFinite() && q.Q.allFinite() && m.p_CinR_m.allFinite();
     const bool el_ok = m.kind == LandmarkKind::kVerticalLine || std::abs(m.elevation_rad) <= kPi / 2;
+    // LLT reads the lower triangle only, the 2x2 inverse the mean of the off-diagonals, the update
+    // the whole matrix: a covariance must be symmetric (to rounding) to mean one thing to all.
+    const bool symmetric = (q.Q - q.Q.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * q.Q.cwiseAbs().maxCoeff();
     const Eigen::LLT<MeasMat> llt(q.Q);
-    if (!kind_ok || !finite || !el_ok || llt.info() != Eigen::Success) {
+    if (!kind_ok || !finite || !el_ok || !symmetric || llt.info() != Eigen::Success) {
       ++result.num_rejected;
       result.measurement_refused[i] = 1;
       continue;

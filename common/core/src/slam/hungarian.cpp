@@ -88,12 +88,19 @@ AssignmentResult solveAssignment(const Eigen::MatrixXd& cost) {
   // A forbidden pair costs more than any difference an assignment of allowed pairs can make, so
   // an optimum uses the fewest forbidden pairs (= most allowed pairs), then the least cost.
   const int n = std::min(rows, cols);
+  // Costs near the largest double would overflow the penalty or the solver's sums of potentials
+  // to infinity, and the solver would never find a column (it looped forever on [[inf, inf],
+  // [5e307, 1]]). Then they are scaled down first: a positive scale keeps the optimum.
+  const double magnitude = std::max(std::abs(lo), std::abs(hi));
+  const double scale = magnitude > 1e300 / (4.0 * (n + 2.0)) ? magnitude : 1.0;
+  lo /= scale;
+  hi /= scale;
   const double penalty = hi + (n + 1.0) * (hi - lo) + 1.0 + std::abs(hi);
   const bool transpose = rows > cols;
   Eigen::MatrixXd a = transpose ? Eigen::MatrixXd(cost.transpose()) : cost;
   for (Eigen::Index r = 0; r < a.rows(); ++r) {
     for (Eigen::Index c = 0; c < a.cols(); ++c) {
-      if (!std::isfinite(a(r, c))) a(r, c) = penalty;
+      a(r, c) = std::isfinite(a(r, c)) ? a(r, c) / scale : penalty;
     }
   }
   const std::vector<int> match = solveWide(a);

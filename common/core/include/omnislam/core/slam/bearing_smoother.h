@@ -30,9 +30,13 @@ struct SmootherOptions {
   double cauchy_scale = 3.0;         ///< robust kernel scale c in bearing sigmas, >= 0 (0: least squares)
   double prior_sigma_xy_m = 1e-3;    ///< std of the first pose's position prior [m], > 0
   double prior_sigma_theta_rad = 1e-3;  ///< std of the first pose's heading prior [rad], > 0
-  double initial_lambda = 1e-3;      ///< initial Marquardt damping (relative to the diagonal), > 0
+  /// Initial Marquardt damping (relative to the diagonal), in (0, kMaxLambda): the solver gives up
+  /// raising it at kMaxLambda, so a start there would never try a step.
+  double initial_lambda = 1e-3;
   double relative_tolerance = 1e-9;  ///< stop when an accepted step lowers the cost by less than this fraction, >= 0
   bool compute_covariance = false;   ///< fill SmootherResult::covariance (one more factorisation)
+
+  static constexpr double kMaxLambda = 1e10;  ///< damping at which no step lowers the cost: a minimum
 
   /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
   std::string validate() const;
@@ -88,6 +92,9 @@ struct SmootherResult {
   /// landmark 0 (x, y), ..., landmark L-1) [m, rad], (3 + 2L) square: the inverse of the Gauss-Newton
   /// information at the solution (bearings with their kernel weights), marginalised onto those.
   Eigen::MatrixXd covariance;
+  /// Non-empty when the covariance was asked for but the information at the solution is singular
+  /// (something the factors do not constrain): then `covariance` is empty.
+  std::string covariance_failure;
 };
 
 /// Odometry residual r = (R(theta_a)^T (p_b - p_a) - u_xy, wrap(theta_b - theta_a - u_theta)) with

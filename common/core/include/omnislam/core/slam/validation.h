@@ -25,6 +25,12 @@ class FieldChecker {
     if (!(value > lo && value <= hi)) fail(field, value, "(", lo, hi, "]");
     return *this;
   }
+  /// lo < value < hi.
+  FieldChecker& inOpen(const char* field, double value, double lo, double hi) {
+    if (!message_.empty()) return *this;
+    if (!(value > lo && value < hi)) fail(field, value, "(", lo, hi, ")");
+    return *this;
+  }
   /// lo <= value < hi.
   FieldChecker& inRightOpen(const char* field, double value, double lo, double hi) {
     if (!message_.empty()) return *this;

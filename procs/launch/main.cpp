@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
   bool no_log = false;
   cli.add_option("launch_file", file, "launch file (config/launch/*.yaml)")->required();
   cli.add_option("--url", url, "LCM URL for every process (overrides the file's lcm_url)");
-  cli.add_option("--log-dir", log_dir, "folder for the lcm-logger recording (overrides logger.dir)");
+  cli.add_option("--log-dir", log_dir, "folder for the recording (overrides logger.dir)");
   cli.add_option("--log-file", log_file, "exact path of the recording");
   cli.add_flag("--no-log", no_log, "do not record");
   cli.add_option("--set", sets, "override a variable: --set speedup=20 (repeatable)");

@@ -1,7 +1,10 @@
 // Message validation rules and image_t <-> cv::Mat round trips.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
+#include <random>
 
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/validate.h"
@@ -228,6 +231,37 @@ TEST(ImageMsg, AHeaderClaimingAHugeImageIsRefusedNotThrown) {
   bad.width = 64, bad.height = 48, bad.pixel_format = image_t::FORMAT_JPEG, bad.data = {0xFF, 0xD8, 0xFF, 0xDA, 0, 2};
   EXPECT_FALSE(lcmio::decodeImage(bad, &why).has_value());
   EXPECT_EQ(why, "compressed image has no readable size in its header");
+}
+
+// Seeded corruptions of a PNG and a JPEG (bytes changed, headers included, and truncations):
+// decodeImage never throws, and what it returns has the message's size.
+TEST(ImageMsg, CorruptedCompressedImagesNeverThrow) {
+  cv::Mat grey(48, 64, CV_8UC1);
+  cv::randu(grey, 0, 255);
+  std::mt19937 rng(20261124);
+  for (int8_t fmt : {image_t::FORMAT_PNG, image_t::FORMAT_JPEG}) {
+    image_t good{};
+    lcmio::encodeImage(grey, fmt, good);
+    int decoded = 0;
+    for (int trial = 0; trial < 400; ++trial) {  // libpng prints a line for most
+      image_t m = good;
+      std::uniform_int_distribution<size_t> head(0, std::min<size_t>(m.data.size() - 1, 200));
+      const int edits = 1 + trial % 4;
+      for (int e = 0; e < edits; ++e) m.data[head(rng)] = static_cast<uint8_t>(rng());
+      if (trial % 3 == 0) m.data.resize(std::uniform_int_distribution<size_t>(0, m.data.size())(rng));
+      std::string why;
+      std::optional<cv::Mat> img;
+      ASSERT_NO_THROW(img = lcmio::decodeImage(m, &why)) << "format " << int(fmt) << ", trial " << trial;
+      if (img) {
+        ++decoded;
+        EXPECT_EQ(img->cols, 64);
+        EXPECT_EQ(img->rows, 48);
+      } else {
+        EXPECT_FALSE(why.empty());
+      }
+    }
+    EXPECT_LT(decoded, 400) << "format " << int(fmt) << ": the corruptions must reach the refusals";
+  }
 }
 
 }  // namespace

@@ -14,14 +14,17 @@
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <stdexcept>
+#include <system_error>
 
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/decode.h"
+#include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/log_writer.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
@@ -176,9 +179,11 @@ std::optional<Msg> decodeChecked(const lcm::LogEvent& ev, ReplayReport& rep) {
 
 int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark> prior, const std::string& in_path,
               const std::string& out_path, bool show_progress) {
+  lcmio::requireDistinctFiles(in_path, out_path, "--out");
   lcm::LogFile in(in_path, "r");
   if (!in.good()) throw std::runtime_error("--replay: cannot read LCM log '" + in_path + "'");
   lcmio::LogWriter out(out_path);
+  lcmio::LogReadResult read;  // to tell a truncated or corrupt input from its end
   SlamDriver driver(opt, std::move(prior));
   Progress progress(in_path, show_progress);
   lcmio::installStopHandlers();  // SIGINT / SIGTERM: stop reading, write what was computed
@@ -202,6 +207,8 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
       interrupted = true;
       break;
     }
+    ++read.events;
+    read.bytes_read = static_cast<int64_t>(std::ftell(in.getFilePtr()));
     progress.update(in.getFilePtr(), driver.stats().frames_processed);
     last_timestamp = ev->timestamp;
     // Outputs of an earlier run in the input are replaced by this run's.
@@ -214,6 +221,12 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
     } else if (ev->channel == channels::kOmniFeatures) {
       if (auto m = decodeChecked<features_t>(*ev, rep)) handle(driver.onFeatures(*m), ev->timestamp);
     }
+  }
+  if (!interrupted) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(in_path, ec);
+    read.file_bytes = ec ? read.bytes_read : static_cast<int64_t>(size);
+    if (const auto problem = read.problem(in_path)) std::cerr << "[slam] warning: --replay " << *problem << std::endl;
   }
   handle(driver.finish(), last_timestamp);
   progress.update(nullptr, driver.stats().frames_processed, true);

@@ -216,7 +216,7 @@ int runLog(const Settings& s) {
   const double log_bytes = static_cast<double>(fs::file_size(s.log));
   double bytes = 0;
   int64_t events = 0;
-  lcmio::forEachEvent(s.log, [&](const lcmio::LogEvent& ev) {
+  const lcmio::LogReadResult got = lcmio::forEachEvent(s.log, [&](const lcmio::LogEvent& ev) {
     if (lcmio::stopRequested()) return;
     ++events;
     d.dispatch(ev);
@@ -237,6 +237,8 @@ int runLog(const Settings& s) {
             << " PNG files written to " << s.out_dir << " in " << wall << " s; " << d.decodeErrors() << " decode errors, "
             << d.rejected() << " rejected" << std::endl;
   if (st.steps() == 0) std::cerr << "[viewer] warning: no SLAM_POSE in the log" << std::endl;
+  if (const auto problem = got.problem(s.log); problem && !lcmio::stopRequested())
+    std::cerr << "[viewer] warning: " << *problem << std::endl;
   return app::kOk;
 }
 

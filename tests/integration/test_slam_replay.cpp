@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -343,6 +344,12 @@ TEST(SlamReplay, BadConfigAndFlagsStopWithAMessageNamingTheKey) {
   r = t::run({t::binPath("omnislam-slam"), "--replay", dir.file("missing.lcm"), "--out", dir.file("o.lcm")}, 10.0);
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("missing.lcm"), std::string::npos) << r.output;
+  // --out naming the input would empty it before it is read.
+  std::ofstream(dir.file("in.lcm")) << "not empty";
+  r = t::run({t::binPath("omnislam-slam"), "--replay", dir.file("in.lcm"), "--out", dir.file("in.lcm")}, 10.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("is the input log"), std::string::npos) << r.output;
+  EXPECT_EQ(std::filesystem::file_size(dir.file("in.lcm")), 9u);
   // A bad flag value is a bad config too: exit 2, naming the flag and its accepted range.
   r = t::run({t::binPath("omnislam-slam"), "--particles", "0"}, 10.0);
   EXPECT_EQ(r.exit_code, 2) << r.output;

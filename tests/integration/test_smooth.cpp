@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include <Eigen/Core>
@@ -240,6 +241,15 @@ TEST(Smooth, CountsAnUndecodableMessageAndRefusesBadFlagsAndLogs) {
   const auto r2 = smooth(no_slam, out, {});
   EXPECT_EQ(r2.exit_code, 2) << r2.output;  // as omnislam-eval: an unusable input log
   EXPECT_NE(r2.output.find("no SLAM_POSE message"), std::string::npos) << r2.output;
+
+  // --out naming the input emptied it before it was read, and exited 0; it is refused, untouched.
+  const auto size = std::filesystem::file_size(in);
+  const auto same = smooth(in, in, {});
+  EXPECT_EQ(same.exit_code, 2) << same.output;
+  EXPECT_NE(same.output.find("--out: '" + in + "' is the input log"), std::string::npos) << same.output;
+  EXPECT_EQ(std::filesystem::file_size(in), size);
+  // The output is written whole or not at all: no OUT.partial is left after a run that finished.
+  EXPECT_FALSE(std::filesystem::exists(out + ".partial"));
 }
 
 }  // namespace

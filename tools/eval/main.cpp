@@ -47,6 +47,7 @@ struct LogContent {
   std::map<int64_t, std::vector<int64_t>> associations;      ///< SLAM_ASSOCIATIONS by frame utime
   std::map<int64_t, std::vector<int64_t>> labels;            ///< GROUND_TRUTH_FEATURE_LABELS by frame utime
   std::map<std::string, int64_t> skipped;  ///< "LOG: CHANNEL: reason" -> messages left out (undecodable, invalid)
+  int64_t unreadable_bytes = 0;             ///< a truncated or corrupt tail of the log(s), not read
   int64_t skippedTotal() const {
     int64_t n = 0;
     for (const auto& [why, count] : skipped) n += count;
@@ -80,7 +81,7 @@ std::vector<eval::TimedPose> posesOf(const std::map<int64_t, Pose2>& m) {
 
 void read(const std::string& path, bool want_slam, bool want_truth, LogContent& c) {
   std::map<int64_t, Pose2> slam, truth, odom;
-  lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
+  const lcmio::LogReadResult got = lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
     if (ev.channel == channels::kOdometry) {
       if (auto m = decodeValid<odometry_t>(path, ev, c)) odom[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
       return;
@@ -125,6 +126,10 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
       ++c.feature_frames;
     }
   });
+  if (const auto problem = got.problem(path)) {
+    std::cerr << "omnislam-eval: warning: " << *problem << "\n";
+    c.unreadable_bytes += got.unreadable();
+  }
   if (want_slam) c.slam = posesOf(slam);
   if (want_truth) c.truth = posesOf(truth);
   if (c.odometry.empty()) c.odometry = posesOf(odom);
@@ -287,7 +292,7 @@ int main(int argc, char** argv) {
         << ", \"landmarks_matched\": " << me.matched << ", \"landmarks_truth\": " << me.truth
         << ", \"landmarks_estimated\": " << me.estimated << ", \"landmarks_spurious\": " << me.spurious
         << ", \"frames\": " << frames << ", \"frames_with_pose\": " << c.slam.size()
-        << ", \"poses_compared\": " << te.pairs << ", \"messages_skipped\": " << c.skippedTotal()
+        << ", \"poses_compared\": " << te.pairs << ", \"messages_skipped\": " << c.skippedTotal() << ", \"log_unreadable_bytes\": " << c.unreadable_bytes
         << ", \"aligned\": " << (T ? "true" : "false");
       if (T) o << ", \"align_theta_rad\": " << T->theta_rad << ", \"align_tx_m\": " << T->t_m.x() << ", \"align_ty_m\": " << T->t_m.y();
       o << ", \"map_available\": " << (c.have_slam_map && c.have_truth_map ? "true" : "false");
@@ -308,6 +313,8 @@ int main(int argc, char** argv) {
       o << "}\n";
     } else {
       o << "omnislam-eval " << log << (T ? "  (aligned)" : "") << "\n";
+      if (c.unreadable_bytes > 0)
+        o << "  the log's last " << c.unreadable_bytes << " bytes cannot be read (truncated or corrupt; stderr)\n";
       if (c.skippedTotal() > 0)
         o << "  skipped " << c.skippedTotal() << " undecodable or invalid messages (listed on stderr)\n";
       o << "  trajectory: " << te.pairs << " poses compared of " << c.slam.size() << " (" << frames << " frames)\n";

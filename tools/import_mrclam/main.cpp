@@ -21,9 +21,11 @@ using namespace omnislam;
 namespace {
 
 void writeLog(const std::string& path, const mrclam::ImportedLog& log) {
-  lcmio::LogWriter out(path);
+  // Atomic: a run stopped part-way leaves PATH.partial, never a short PATH that reads as complete.
+  lcmio::LogWriter out(path, lcmio::LogWriter::Mode::kAtomic);
   for (const auto& e : log.events)
     out.write(e.utime, e.channel, e.data.data(), static_cast<int32_t>(e.data.size()));
+  out.commit();
 }
 
 /// The template config with start_pose set to the truth at the first processed frame.

@@ -18,6 +18,7 @@
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/log_writer.h"
+#include "omnislam/lcmio/utime_order.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
@@ -28,6 +29,7 @@ namespace {
 
 struct Counter {
   std::map<std::string, int64_t> n;
+  std::map<std::string, lcmio::UtimeOrder> order;  ///< per channel, as lcmio::Node checks a live input
   void add(const std::string& why) { ++n[why]; }
 };
 
@@ -43,6 +45,11 @@ std::optional<Msg> decodeValid(const lcmio::LogEvent& ev, Counter& bad) {
   }
   if (auto why = lcmio::validate(*m)) {
     bad.add(ev.channel + ": " + *why);
+    return std::nullopt;
+  }
+  // Inputs are kept by utime: a duplicate or a step back would silently replace or re-sort one.
+  if (bad.order[ev.channel].admit(m->utime)) {
+    bad.add(ev.channel + ": utime duplicated, out of order or jumping (lcmio::UtimeOrder)");
     return std::nullopt;
   }
   return m;
@@ -100,6 +107,7 @@ std::string SmoothLogOptions::validate() const {
 
 SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log, const SmoothLogOptions& opt) {
   if (const std::string why = opt.validate(); !why.empty()) throw std::invalid_argument(why);
+  lcmio::requireDistinctFiles(in_log, out_log, "--out");
   SmoothLogReport rep;
   Counter bad;
   std::map<int64_t, Pose2> odo;
@@ -109,7 +117,7 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
   std::map<int64_t, Eigen::Vector2d> last_map_position;
   const char* assoc_channel = opt.associations == AssociationSource::kSlam ? channels::kSlamAssociations
                                                                             : channels::kGroundTruthFeatureLabels;
-  lcmio::forEachEvent(in_log, [&](const lcmio::LogEvent& ev) {
+  const lcmio::LogReadResult got = lcmio::forEachEvent(in_log, [&](const lcmio::LogEvent& ev) {
     const std::string& ch = ev.channel;
     if (ch == channels::kOdometry) {
       if (const auto m = decodeValid<odometry_t>(ev, bad)) odo[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
@@ -128,6 +136,7 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
       }
     }
   });
+  if (const auto problem = got.problem(in_log)) rep.problems.push_back(*problem);
   if (slam_pose.empty()) throw std::invalid_argument(in_log + ": no SLAM_POSE message");
   if (odo.size() < 2) throw std::invalid_argument(in_log + ": fewer than two ODOMETRY messages");
 
@@ -265,7 +274,8 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
   }
 
   // The copy: smoothed SLAM_POSE in place, one final SLAM_MAP at the end.
-  lcmio::LogWriter out(out_log);
+  // Atomic: a run stopped part-way leaves OUT.partial, never a short OUT that reads as complete.
+  lcmio::LogWriter out(out_log, lcmio::LogWriter::Mode::kAtomic);
   int64_t last_timestamp = 0;
   lcmio::forEachEvent(in_log, [&](const lcmio::LogEvent& ev) {
     last_timestamp = ev.log_utime;
@@ -301,6 +311,7 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
   map.num_landmarks = static_cast<int32_t>(map.landmarks.size());
   map.num_candidates = 0;
   out.write(last_timestamp, channels::kSlamMap, map);
+  out.commit();
   return rep;
 }
 

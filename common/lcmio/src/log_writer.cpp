@@ -3,15 +3,35 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <unistd.h>
+
+#include <cstdio>
 #include <stdexcept>
 
 namespace omnislam::lcmio {
 
-LogWriter::LogWriter(const std::string& path) : path_(path), log_(std::make_unique<lcm::LogFile>(path, "w")) {
-  if (!log_->good()) throw std::runtime_error("cannot write LCM log '" + path + "'");
+namespace {
+std::string fileOf(const std::string& path, LogWriter::Mode mode) {
+  return mode == LogWriter::Mode::kAtomic ? path + ".partial" : path;
+}
+}  // namespace
+
+LogWriter::LogWriter(const std::string& path, Mode mode)
+    : path_(path), mode_(mode), log_(std::make_unique<lcm::LogFile>(fileOf(path, mode), "w")) {
+  if (!log_->good()) throw std::runtime_error("cannot write LCM log '" + fileOf(path, mode) + "'");
 }
 
 LogWriter::~LogWriter() = default;
+
+void LogWriter::commit() {
+  if (!log_) throw std::runtime_error("LCM log '" + path_ + "' committed twice");
+  std::FILE* f = log_->getFilePtr();
+  const bool flushed = f && std::fflush(f) == 0 && fsync(fileno(f)) == 0;
+  log_.reset();  // closes
+  if (!flushed) throw std::runtime_error("writing LCM log '" + fileOf(path_, mode_) + "' failed (flush)");
+  if (mode_ == Mode::kAtomic && std::rename(fileOf(path_, mode_).c_str(), path_.c_str()) != 0)
+    throw std::runtime_error("cannot rename '" + fileOf(path_, mode_) + "' to '" + path_ + "'");
+}
 
 void LogWriter::write(int64_t timestamp, const std::string& channel, const void* data, int32_t size) {
   lcm::LogEvent ev;
@@ -20,6 +40,7 @@ void LogWriter::write(int64_t timestamp, const std::string& channel, const void*
   ev.channel = channel;
   ev.datalen = size;
   ev.data = const_cast<void*>(data);
+  if (!log_) throw std::runtime_error("LCM log '" + path_ + "' written after commit()");
   if (log_->writeEvent(&ev) != 0) throw std::runtime_error("writing LCM log '" + path_ + "' failed");
 }
 

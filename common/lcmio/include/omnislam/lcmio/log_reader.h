@@ -18,8 +18,27 @@ struct LogEvent {
   std::vector<uint8_t> data;
 };
 
+/// What forEachEvent read. LCM's reader stops at the first event it cannot read, whether the file
+/// ends there or is truncated or corrupt; the bytes after the last good event tell them apart.
+struct LogReadResult {
+  int64_t events = 0;           ///< events read (and given to fn)
+  int64_t bytes_read = 0;       ///< file offset just after the last event read
+  int64_t file_bytes = 0;       ///< size of the file
+  int64_t unreadable() const { return file_bytes - bytes_read; }
+  /// Nothing when every byte was read; else one line for the user, naming the log, e.g.
+  /// "run.lcm: the 4120 bytes after its first 99 events (from byte 600000 of 604120) cannot be read
+  /// (truncated or corrupt): only those events were used".
+  std::optional<std::string> problem(const std::string& path) const;
+};
+
 /// Calls fn for every event of the log in order. Throws std::runtime_error if it cannot be opened.
-void forEachEvent(const std::string& path, const std::function<void(const LogEvent&)>& fn);
+/// A truncated or corrupt tail is not an error here (the events before it are good): the result
+/// says so, and every caller reports it.
+LogReadResult forEachEvent(const std::string& path, const std::function<void(const LogEvent&)>& fn);
+
+/// Throws std::invalid_argument ("FLAG: 'OUT' is the input log 'IN'") when `out` names the same
+/// file as `in` (it would be truncated before it is read). Either may not exist yet.
+void requireDistinctFiles(const std::string& in, const std::string& out, const std::string& flag);
 
 /// Decodes an event as Msg (lcmio::decode, safe against lying sizes); nothing if the bytes are
 /// not a Msg, and then, if `why` is given, decode's one-line reason in *why.

@@ -15,9 +15,17 @@ namespace omnislam::lcmio {
 
 class LogWriter {
  public:
+  /// How the file appears. kDirect: written in place (a stop part-way leaves the events so far,
+  /// which is what a replay interrupted on purpose keeps). kAtomic: written to PATH.partial and
+  /// renamed to PATH by commit(), so a run killed part-way never leaves a short file that reads as
+  /// complete; without commit() the .partial file is all there is.
+  enum class Mode { kDirect, kAtomic };
   /// Creates (truncates) the file; throws std::runtime_error naming it when it cannot be written.
-  explicit LogWriter(const std::string& path);
-  ~LogWriter();  // closes the file
+  explicit LogWriter(const std::string& path, Mode mode = Mode::kDirect);
+  ~LogWriter();  // closes the file (kAtomic: without renaming it)
+  /// kAtomic: closes the file and renames it to the path; throws std::runtime_error on failure.
+  /// kDirect: closes it. No write after it.
+  void commit();
   LogWriter(const LogWriter&) = delete;
   LogWriter& operator=(const LogWriter&) = delete;
 
@@ -34,6 +42,7 @@ class LogWriter {
 
  private:
   std::string path_;
+  Mode mode_;
   std::unique_ptr<lcm::LogFile> log_;
   int64_t n_ = 0;
 };

@@ -3,11 +3,14 @@
 // as bad and not taken for a process.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_writer.h"
+#include "omnislam/image_t.hpp"
+#include "omnislam/odometry_t.hpp"
 #include "omnislam/process_status_t.hpp"
 #include "proc_util.h"
 
@@ -62,6 +65,49 @@ TEST(Logstat, PrintsEachProcesssLastStatus) {
   EXPECT_EQ(r.output.find("frame 1"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("  slam last error: OMNI_FEATURES: too old\n"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("slam detail"), std::string::npos) << r.output;  // empty detail: no line
+}
+
+// An image whose sizes do not fit its bytes made --export-images read past the buffer (a
+// segfault, all output lost); a truncated log was listed as if complete.
+TEST(Logstat, BadImagesAndATruncatedTailAreReportedNotFatal) {
+  t::TempDir dir;
+  const std::string path = dir.file("images.lcm");
+  {
+    lcmio::LogWriter log(path);
+    for (int k = 0; k < 3; ++k) {
+      image_t m{};
+      m.utime = 1'000'000 + k * 100'000;
+      m.seq = k;
+      m.camera_name = "cam";
+      m.width = 4, m.height = 2, m.row_stride = 4, m.pixel_format = image_t::FORMAT_GRAY8;
+      m.data.assign(8, static_cast<uint8_t>(40 * k));
+      if (k == 1) m.width = m.height = m.row_stride = 20000;  // sizes that 8 bytes cannot hold
+      m.size = static_cast<int32_t>(m.data.size());
+      log.write(m.utime, channels::kOmniImage, m);
+    }
+    odometry_t o{};
+    for (int k = 0; k < 3; ++k) {
+      o.utime = 1'000'000 + (k == 2 ? 0 : k) * 20'000;  // the third repeats the first's utime
+      o.seq = k == 2 ? 0 : k;
+      log.write(o.utime, channels::kOdometry, o);
+    }
+  }
+  const auto r = t::run({t::binPath("omnislam-logstat"), path, "--export-images", dir.file("png")}, 20);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("2 images written to"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("  OMNI_IMAGE: 1 bad, the first: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("  ODOMETRY: 1 seq not after the previous one, 1 utime not after the previous one"),
+            std::string::npos)
+      << r.output;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("png/frame_000000.png")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("png/frame_000002.png")));
+  // The same log cut short: listed, with a warning that names it.
+  std::filesystem::copy_file(path, dir.file("cut.lcm"));
+  std::filesystem::resize_file(dir.file("cut.lcm"), std::filesystem::file_size(path) - 10);
+  const auto cut = t::run({t::binPath("omnislam-logstat"), dir.file("cut.lcm")}, 20);
+  EXPECT_EQ(cut.exit_code, 0) << cut.output;
+  EXPECT_NE(cut.output.find("warning: " + dir.file("cut.lcm") + ": the "), std::string::npos) << cut.output;
+  EXPECT_NE(cut.output.find("cannot be read (truncated or corrupt)"), std::string::npos) << cut.output;
 }
 
 TEST(Logstat, ALogWithoutStatusHasNoProcessTable) {

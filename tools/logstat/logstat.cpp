@@ -8,6 +8,7 @@
 #include "omnislam/image_t.hpp"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
+#include "omnislam/lcmio/validate.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/associations_t.hpp"
@@ -22,13 +23,22 @@ namespace {
 struct SeqTrack {
   bool have = false;
   int64_t last = 0;
+  int64_t last_utime = 0;
 };
 
 template <class Msg>
 bool account(const lcmio::LogEvent& ev, ChannelStats& s, SeqTrack& t, int64_t utime_override = -1) {
-  const auto m = lcmio::decodeAs<Msg>(ev);
-  if (!m) return false;
+  std::string why;
+  const auto m = lcmio::decodeAs<Msg>(ev, &why);
   s.type = Msg::getTypeName();
+  if (!m) {
+    if (s.first_bad.empty()) s.first_bad = "undecodable (" + why + ")";
+    return false;
+  }
+  if (auto invalid = lcmio::validate(*m)) {
+    if (s.first_bad.empty()) s.first_bad = *invalid;
+    return false;
+  }
   const int64_t utime = utime_override >= 0 ? utime_override : m->utime;
   if (s.first_seq < 0) {
     s.first_seq = m->seq;
@@ -37,7 +47,9 @@ bool account(const lcmio::LogEvent& ev, ChannelStats& s, SeqTrack& t, int64_t ut
   if (t.have) {
     if (m->seq > t.last + 1) s.seq_gaps += m->seq - t.last - 1;
     if (m->seq <= t.last) ++s.seq_restarts;
+    if (utime <= t.last_utime) ++s.utime_not_after;
   }
+  t.last_utime = utime;
   t.have = true;
   t.last = m->seq;
   s.last_seq = m->seq;
@@ -51,7 +63,7 @@ LogSummary logStats(const std::string& path) {
   LogSummary summary;
   std::map<std::string, ChannelStats>& out = summary.channels;
   std::map<std::string, SeqTrack> tracks;
-  lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
+  const lcmio::LogReadResult got = lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
     ChannelStats& s = out[ev.channel];
     ++s.events;
     s.bytes += static_cast<int64_t>(ev.data.size());
@@ -70,6 +82,7 @@ LogSummary logStats(const std::string& path) {
       // Several processes publish status, each with its own sequence: track per name.
       const auto m = lcmio::decodeAs<process_status_t>(ev);
       ok = m.has_value();
+      if (!ok) s.type = process_status_t::getTypeName();
       if (ok) ok = account<process_status_t>(ev, s, tracks[c + "/" + m->name]);
       if (ok) {
         ProcessSummary& p = summary.processes[m->name];
@@ -82,6 +95,7 @@ LogSummary logStats(const std::string& path) {
     }
     if (!ok) ++s.undecodable;
   });
+  summary.unreadable = got.problem(path).value_or("");
   return summary;
 }
 
@@ -92,7 +106,8 @@ std::string formatStats(const std::map<std::string, ChannelStats>& stats) {
                 "bad", "span_s", "rate_hz", "MB");
   os << line;
   for (const auto& [name, s] : stats) {
-    const double span = (s.last_utime - s.first_utime) * 1e-6;
+    // In double: two int64 utimes may be further apart than int64 holds.
+    const double span = (static_cast<double>(s.last_utime) - static_cast<double>(s.first_utime)) * 1e-6;
     const double rate = span > 0 && s.events > 1 ? (s.events - s.undecodable - 1) / span : 0.0;
     const bool status = name == channels::kProcessStatus;
     std::snprintf(line, sizeof line, "%-20s %-28s %8lld %6lld %6lld %10.2f %9.2f %10.2f\n", name.c_str(),
@@ -100,6 +115,14 @@ std::string formatStats(const std::map<std::string, ChannelStats>& stats) {
                   static_cast<long long>(s.undecodable), status ? 0.0 : span, status ? 0.0 : rate, s.bytes / 1e6);
     os << line;
   }
+  for (const auto& [name, s] : stats) {
+    if (name == channels::kProcessStatus) continue;  // several publishers: per process below
+    if (s.seq_restarts > 0 || s.utime_not_after > 0)
+      os << "  " << name << ": " << s.seq_restarts << " seq not after the previous one, " << s.utime_not_after
+         << " utime not after the previous one\n";
+  }
+  for (const auto& [name, s] : stats)
+    if (s.undecodable > 0) os << "  " << name << ": " << s.undecodable << " bad, the first: " << s.first_bad << "\n";
   return os.str();
 }
 

@@ -14,10 +14,12 @@ namespace omnislam::tools {
 struct ChannelStats {
   std::string type;          ///< decoded type name, "?" if the channel is not in the contract
   int64_t events = 0;
-  int64_t undecodable = 0;
+  int64_t undecodable = 0;   ///< "bad": not decodable, or refused by lcmio::validate
+  std::string first_bad;     ///< the reason of the first bad message ("" if none)
   int64_t first_seq = -1, last_seq = -1;
   int64_t seq_gaps = 0;      ///< messages missing according to seq (per publisher name when known)
-  int64_t seq_restarts = 0;
+  int64_t seq_restarts = 0;  ///< seq not after the previous one (a publisher restarted, or duplicates)
+  int64_t utime_not_after = 0;  ///< utime not after the previous message's (duplicate or out of order)
   int64_t first_utime = 0, last_utime = 0;
   int64_t bytes = 0;
 };
@@ -31,12 +33,14 @@ struct ProcessSummary {
 struct LogSummary {
   std::map<std::string, ChannelStats> channels;
   std::map<std::string, ProcessSummary> processes;
+  std::string unreadable;  ///< "" or why the log's tail could not be read (lcmio::LogReadResult::problem)
 };
 
 /// Reads the whole log once. Throws std::runtime_error if it cannot be opened.
 LogSummary logStats(const std::string& path);
 
-/// A printable table (one line per channel).
+/// A printable table (one line per channel), then one line per channel with sequence restarts,
+/// utimes not after the previous one, or bad messages (the first one's reason).
 std::string formatStats(const std::map<std::string, ChannelStats>& stats);
 
 /// A printable table (one line per process, then its detail and last error when not empty); ""

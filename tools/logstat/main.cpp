@@ -2,18 +2,20 @@
 // undecodable events, span and rate in the messages' own time), then each process's last
 // PROCESS_STATUS (received, published, undecodable, refused, missed; its detail and last error).
 #include <CLI/CLI.hpp>
-
-#include <iostream>
-
-#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <set>
+
 #include "logstat.h"
+#include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/log_reader.h"
-#include "omnislam/lcmio/app.h"
-#include "omnislam/lcmio/cli.h"
+#include "omnislam/lcmio/validate.h"
 
 int main(int argc, char** argv) {
   CLI::App cli{"omnislam-logstat: per-channel statistics of an omnislam LCM log"};
@@ -27,21 +29,35 @@ int main(int argc, char** argv) {
     std::cout << path << "\n" << omnislam::tools::formatStats(summary.channels);
     const std::string processes = omnislam::tools::formatProcesses(summary.processes);
     if (!processes.empty()) std::cout << "\n" << processes;
+    if (!summary.unreadable.empty()) std::cout << "\nwarning: " << summary.unreadable << "\n";
     if (!export_dir.empty()) {
       std::filesystem::create_directories(export_dir);
-      int n = 0;
+      int n = 0, failed = 0;
+      std::set<std::string> names;
       omnislam::lcmio::forEachEvent(path, [&](const omnislam::lcmio::LogEvent& ev) {
         if (ev.channel != omnislam::channels::kOmniImage) return;
         const auto msg = omnislam::lcmio::decodeAs<omnislam::image_t>(ev);
-        if (!msg) return;
-        if (const auto img = omnislam::lcmio::decodeImage(*msg)) {
-          char name[64];
-          std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(msg->seq));
-          cv::imwrite(export_dir + name, *img);
-          ++n;
+        // Only what a process would accept: decodeImage trusts the sizes that validate checks.
+        if (!msg || omnislam::lcmio::validate(*msg)) return;  // counted as bad in the table
+        std::string why;
+        const auto img = omnislam::lcmio::decodeImage(*msg, &why);
+        char name[96];
+        std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(msg->seq));
+        if (!names.insert(name).second)  // a repeated seq: keep both, named by the log's event number
+          std::snprintf(name, sizeof name, "/frame_%06lld_event_%lld.png", static_cast<long long>(msg->seq),
+                        static_cast<long long>(ev.event_number));
+        if (!img || !cv::imwrite(export_dir + name, *img)) {
+          std::cerr << "omnislam-logstat: " << (img ? "cannot write " + export_dir + name : "image seq " +
+                                                  std::to_string(msg->seq) + ": " + why) << "\n";
+          ++failed;
+          return;
         }
+        ++n;
       });
-      std::cout << n << " images written to " << export_dir << "\n";
+      std::cout << n << " images written to " << export_dir;
+      if (failed > 0) std::cout << ", " << failed << " could not be (stderr)";
+      std::cout << "\n";
+      if (failed > 0) return omnislam::app::kFailure;
     }
     return 0;
   });

@@ -97,6 +97,19 @@ std::optional<cv::Mat> decodeImage(const image_t& msg, std::string* why) {
     if (why) *why = w;
     return std::nullopt;
   };
+  // Raw rows are wrapped, not copied, before the clone: their sizes must hold (validate checks the
+  // same; a caller that skipped it must not read past the buffer).
+  const bool raw = msg.pixel_format == image_t::FORMAT_GRAY8 || msg.pixel_format == image_t::FORMAT_BGR8 ||
+                   msg.pixel_format == image_t::FORMAT_RGB8;
+  if (raw) {
+    const int64_t channels = msg.pixel_format == image_t::FORMAT_GRAY8 ? 1 : 3;
+    const int64_t row_bytes = static_cast<int64_t>(msg.width) * channels;
+    if (msg.width <= 0 || msg.height <= 0 || msg.row_stride < row_bytes ||
+        static_cast<int64_t>(msg.data.size()) <
+            static_cast<int64_t>(msg.row_stride) * (msg.height - 1) + row_bytes)
+      return fail("raw image sizes (" + std::to_string(msg.width) + "x" + std::to_string(msg.height) + ", stride " +
+                  std::to_string(msg.row_stride) + ") do not fit its " + std::to_string(msg.data.size()) + " bytes");
+  }
   switch (msg.pixel_format) {
     case image_t::FORMAT_GRAY8:
       return cv::Mat(msg.height, msg.width, CV_8UC1, const_cast<uint8_t*>(msg.data.data()), msg.row_stride).clone();

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <vector>
@@ -222,6 +223,21 @@ TEST(BadConfig, BadFlagsStopWithAMessageNamingTheFlag) {
     EXPECT_FALSE(r.timed_out);
     EXPECT_NE(r.output.find(c.must_name), std::string::npos) << "must name " << c.must_name << ", said:\n" << r.output;
   }
+}
+
+// omnislam-record opened (emptied) its file before LCM refused the channel regex, then crashed on
+// the null subscription: an existing recording was lost. Now both flags are checked first.
+TEST(BadConfig, RecorderRefusesABadRegexOrUrlBeforeTouchingItsFile) {
+  t::TempDir dir;
+  const std::string keep = dir.file("keep.lcm");
+  writeFile(keep, "an earlier recording");
+  auto r = t::run({t::binPath("omnislam-record"), "-f", keep, "--url", "memq://", "-c", "("}, 10.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--channels"), std::string::npos) << r.output;
+  r = t::run({t::binPath("omnislam-record"), "-f", keep, "--url", "bogus://x"}, 10.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--url"), std::string::npos) << r.output;
+  EXPECT_EQ(std::filesystem::file_size(keep), 20u) << "the file was emptied";
 }
 
 TEST(BadConfig, MalformedWheelCsvNamesFileAndLine) {

@@ -17,7 +17,12 @@ namespace {
 struct Recorder {
   lcm::LogFile* log = nullptr;
   int64_t events = 0, bytes = 0, failures = 0;
-  void on(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  // Through LCM's C API: its lcm_subscribe returns NULL for a regex it cannot compile, where the
+  // C++ wrapper returns an object whose use then crashes.
+  static void onC(const lcm_recv_buf_t* rbuf, const char* channel, void* self) {
+    static_cast<Recorder*>(self)->on(rbuf, channel);
+  }
+  void on(const lcm_recv_buf_t* rbuf, const std::string& channel) {
     lcm::LogEvent ev;
     ev.eventnum = events;
     ev.timestamp = rbuf->recv_utime;  // the log's own receive time, as lcm-logger writes it
@@ -45,14 +50,19 @@ int main(int argc, char** argv) {
   cli.add_option("--queue", queue, "messages queued before LCM drops")->check(CLI::Range(30, 10'000'000));
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return omnislam::app::runMain("omnislam-record", [&]() -> int {
+    // Everything that can be refused is checked before the file is opened (and so emptied).
     lcm::LCM bus(omnislam::app::lcmUrl(url));
-    if (!bus.good()) throw std::runtime_error("cannot start LCM");
+    if (!bus.good())
+      throw std::invalid_argument("--url: cannot start LCM on '" + omnislam::app::lcmUrl(url) +
+                                  "' (check the URL and multicast routing)");
+    Recorder rec;
+    lcm_subscription_t* sub = lcm_subscribe(bus.getUnderlyingLCM(), channels.c_str(), &Recorder::onC, &rec);
+    if (!sub) throw std::invalid_argument("--channels: LCM cannot compile the regular expression '" + channels + "'");
+    lcm_subscription_set_queue_capacity(sub, queue);
     lcm::LogFile log(path, "w");
     if (!log.good()) throw std::invalid_argument("--file: cannot write '" + path + "'");
     omnislam::lcmio::installStopHandlers();
-    Recorder rec;
     rec.log = &log;
-    bus.subscribe(channels, &Recorder::on, &rec)->setQueueCapacity(queue);
     std::cerr << "[record] recording '" << channels << "' into " << path << std::endl;
     while (!omnislam::lcmio::stopRequested()) bus.handleTimeout(100);
     // Drain what has already arrived, then close the file (flushes).

@@ -269,6 +269,14 @@ TEST(MrclamImport, MalformedFilesNameFileAndLine) {
   e = odo("1.0 0.1 0.0\n2.0 0.1 0.0\n2.0 0.2 0.0\n");
   EXPECT_NE(e.find(p + ":7:"), std::string::npos) << e;
   EXPECT_NE(e.find("duplicated time"), std::string::npos) << e;
+  // Two times that round to one microsecond are one utime: a duplicate too (it slipped through).
+  e = odo("1248444187.156 0.1 0.0\n1248444187.1560002 0.1 0.0\n");
+  EXPECT_NE(e.find(p + ":6: duplicated time"), std::string::npos) << e;
+  // A finite time beyond any utime (1e13 s overflowed the conversion to a negative utime).
+  e = odo("1.0 0.1 0.0\n1e13 0.1 0.0\n");
+  EXPECT_NE(e.find(p + ":6: time 10000000000000 s outside 0..4000000000 s"), std::string::npos) << e;
+  e = odo("-1.0 0.1 0.0\n");
+  EXPECT_NE(e.find(p + ":5: time -1 s outside"), std::string::npos) << e;
   // Empty: only the header, or nothing at all; a missing file.
   e = odo("");
   EXPECT_NE(e.find(p + ": no data lines (empty file)"), std::string::npos) << e;
@@ -283,6 +291,9 @@ TEST(MrclamImport, MalformedFilesNameFileAndLine) {
   t::writeMrclamFile(m, "1.0 63 2.0 0.1\n1.0 81 2.0 0.2\n0.5 63 2.0 0.1\n");
   e = errorOf([&] { mrclam::readMeasurements(m); });
   EXPECT_NE(e.find(m + ":7:"), std::string::npos) << e;
+  t::writeMrclamFile(m, "1.0 63 2.0 0.1\n1e300 63 2.0 0.1\n");
+  e = errorOf([&] { mrclam::readMeasurements(m); });
+  EXPECT_NE(e.find(m + ":6: time 1e+300 s outside"), std::string::npos) << e;
   t::writeMrclamFile(m, "1.0 63.5 2.0 0.1\n");
   e = errorOf([&] { mrclam::readMeasurements(m); });
   EXPECT_NE(e.find(m + ":5:"), std::string::npos) << e;

@@ -83,7 +83,8 @@ int main(int argc, char** argv) {
   std::vector<double> still;
   cli.add_option("--skip-still-frames", still,
                  "diagnostic: leave out frames after less than M metres and DEG degrees of motion (M DEG)")
-      ->expected(2);
+      ->expected(2)
+      ->check(CLI::Range(0.0, 1000.0));
   cli.add_option("--max-duration-s", o.max_duration_s, "import only this many seconds from the first odometry sample")
       ->check(CLI::Range(0.0, 1e7));
   cli.add_option("--slam-config-template", tmpl, "SLAM config to copy with the start pose set (e.g. config/slam/mrclam.yaml)")
@@ -109,8 +110,13 @@ int main(int argc, char** argv) {
         const YAML::Node pairing = root["pairing"];
         if (pairing && pairing["max_odometry_gap_s"]) o.max_odometry_gap_s = pairing["max_odometry_gap_s"].as<double>();
       } catch (const std::exception& e) {
-        throw std::runtime_error("--slam-config-template '" + tmpl + "': " + e.what());
+        throw std::invalid_argument("--slam-config-template '" + tmpl + "': " + e.what() +
+                                    " (pairing.max_odometry_gap_s must be a number of seconds)");
       }
+      // The SLAM process's own range for this key (docs/slam-process.md).
+      if (!(o.max_odometry_gap_s >= 1e-6 && o.max_odometry_gap_s <= 3600.0))
+        throw std::invalid_argument("--slam-config-template '" + tmpl + "': pairing.max_odometry_gap_s must be in "
+                                    "[1e-06, 3600], got " + std::to_string(o.max_odometry_gap_s));
     }
     const auto log = mrclam::importRobot(dir, o);
     writeLog(out, log);

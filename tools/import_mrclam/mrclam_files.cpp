@@ -26,17 +26,26 @@ int integral(const std::string& path, int64_t line, const std::string& name, dou
   return static_cast<int>(v);
 }
 
-/// Strictly increasing times in column 0; a repeated time is an error or replaces the earlier row.
+/// The time as the messages' utime (microseconds), as the importer rounds it.
+int64_t roundedUs(double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e6)); }
+
+/// Strictly increasing times in column 0, in 0..kMaxTimeS; a repeated time is an error or replaces
+/// the earlier row. Order and repeats are judged on the microseconds the messages will carry: two
+/// times 0.2 us apart are one utime.
 void checkTimes(Table& t, DuplicateTimes dup) {
   std::vector<std::vector<double>> rows;
   std::vector<int64_t> lines;
   for (size_t i = 0; i < t.rows.size(); ++i) {
+    const double t_s = t.rows[i][0];
+    if (!(t_s >= 0.0 && t_s <= kMaxTimeS))
+      throw ParseError(at(t.stats.path, t.line_of_row[i]) + "time " + fmtTime(t_s) + " s outside 0.." +
+                       fmtTime(kMaxTimeS) + " s");
     if (!rows.empty()) {
-      const double prev = rows.back()[0], now = t.rows[i][0];
-      if (now < prev)
+      const double prev = rows.back()[0], now = t_s;
+      if (roundedUs(now) < roundedUs(prev))
         throw ParseError(at(t.stats.path, t.line_of_row[i]) + "time " + fmtTime(now) + " s is before the previous (" +
                          fmtTime(prev) + " s at line " + std::to_string(lines.back()) + "): times must increase");
-      if (now == prev) {
+      if (roundedUs(now) == roundedUs(prev)) {
         if (dup == DuplicateTimes::kError)
           throw ParseError(at(t.stats.path, t.line_of_row[i]) + "duplicated time " + fmtTime(now) +
                            " s (same as line " + std::to_string(lines.back()) +
@@ -137,6 +146,8 @@ std::vector<Measurement> readMeasurements(const std::string& path, FileStats* st
   for (size_t i = 0; i < t.rows.size(); ++i) {
     const auto& r = t.rows[i];
     const int64_t line = t.line_of_row[i];
+    if (!(r[0] >= 0.0 && r[0] <= kMaxTimeS))
+      throw ParseError(at(path, line) + "time " + fmtTime(r[0]) + " s outside 0.." + fmtTime(kMaxTimeS) + " s");
     if (!out.empty() && r[0] < out.back().t_s)
       throw ParseError(at(path, line) + "time " + fmtTime(r[0]) + " s is before the previous (" +
                        fmtTime(out.back().t_s) + " s at line " + std::to_string(out.back().line) +

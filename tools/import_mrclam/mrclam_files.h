@@ -19,6 +19,10 @@ struct ParseError : std::runtime_error {
 };
 
 /// What to do with a data line whose time equals the previous line's (odometry, ground truth).
+/// Largest time a row may have [s since the Unix epoch]: 4e9 s (the year 2096) is 4e15 us, the
+/// bound of utimes elsewhere; MRCLAM's times are about 1.25e9 s.
+constexpr double kMaxTimeS = 4e9;
+
 enum class DuplicateTimes {
   kError,     ///< refuse the file (the default)
   kKeepLast,  ///< the later line replaces the earlier one; counted in FileStats::duplicates_replaced

@@ -67,14 +67,27 @@ Plan loadPlan(const std::string& path, const std::map<std::string, std::string>&
     if (!vars.count(k)) throw config::ConfigError(path + ": --set " + k + ": no such variable in 'variables'");
     vars[k] = val;
   }
-  // Variables may refer to ${config_dir} and to each other (one level).
-  for (auto& [k, val] : vars) {
-    try {
-      val = substitute(val, vars);
-    } catch (const std::invalid_argument& e) {
-      throw config::ConfigError(root.where("variables." + k) + ": " + e.what());
+  // Variables may refer to ${config_dir} and to each other, at any depth: substituted until nothing
+  // changes (one pass per variable at most); what still holds a ${...} then is a cycle. One pass in
+  // map order left "${config_dir}" in a variable that named one defined after it.
+  for (size_t pass = 0; pass <= vars.size(); ++pass) {
+    bool changed = false;
+    for (auto& [k, val] : vars) {
+      if (val.find("${") == std::string::npos) continue;
+      try {
+        std::string next = substitute(val, vars);
+        changed = changed || next != val;
+        val = std::move(next);
+      } catch (const std::invalid_argument& e) {
+        throw config::ConfigError(root.where("variables." + k) + ": " + e.what());
+      }
     }
+    if (!changed) break;
   }
+  for (const auto& [k, val] : vars)
+    if (val.find("${") != std::string::npos)
+      throw config::ConfigError(root.where("variables." + k) + ": variables refer to each other in a cycle ('" + val +
+                                "')");
 
   bool log_enabled = true;
   std::string dir = "logs";
@@ -371,11 +384,16 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
     // for that line (a loaded machine starts processes slowly, up to 20 s), then a short margin.
     const Child& logger = sup.children.back();
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-    while (logger.lines == 0 && !logger.exited && std::chrono::steady_clock::now() < deadline) sup.pump(20);
-    if (logger.lines == 0 && !logger.exited) sup.print("launch", plan.log_tool + " has not said it is recording after 20 s");
-    sup.pumpFor(std::chrono::milliseconds(300));
+    while (logger.lines == 0 && !logger.exited && !lcmio::stopRequested() &&
+           std::chrono::steady_clock::now() < deadline)
+      sup.pump(20);
+    if (logger.lines == 0 && !logger.exited && !lcmio::stopRequested())
+      sup.print("launch", plan.log_tool + " has not said it is recording after 20 s");
+    if (!lcmio::stopRequested()) sup.pumpFor(std::chrono::milliseconds(300));
   }
+  // A stop while waiting for the logger: start nothing (the loop below stops what runs).
   for (const auto& p : plan.processes) {
+    if (lcmio::stopRequested()) break;
     Child c = spawn(p.name, p.argv, plan.lcm_url, bin_dir);
     c.ends_run = p.ends_run;
     c.required = p.required;

@@ -11,6 +11,9 @@
 #include <thread>
 #include <utility>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "omnislam/lcmio/channels.h"
 #include "proc_util.h"
 
@@ -181,6 +184,45 @@ TEST(Launcher, BadLaunchFilesNameTheKey) {
   r = t::run({t::binPath("omnislam-launch"), typo, "--no-log"}, 10);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("processes[0].cmdd' is not a known key"), std::string::npos) << r.output;
+}
+
+// SIGTERM while the launcher waits (up to 20 s) for the recorder to say it records: it used to
+// wait the 20 s out and then start every process anyway.
+TEST(Launcher, AStopWhileWaitingForTheRecorderStartsNothing) {
+  t::TempDir dir;
+  const std::string fifo = dir.file("log.fifo");
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);  // the recorder blocks opening it: it never says it records
+  const auto path = launchFile(dir, "  - {name: s, cmd: [sleep, '30']}\n");
+  t::Child launch({t::binPath("omnislam-launch"), path, "--log-file", fifo, "--url",
+                   "udpm://239.255.76.67:" + std::to_string(7000 + getpid() % 1000) + "?ttl=0"});
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  launch.signal(SIGTERM);
+  double waited = 0;
+  t::RunResult r;
+  waited = secondsOf([&] { r = launch.wait(30.0); });
+  EXPECT_LT(waited, 10.0) << r.output;
+  EXPECT_EQ(r.output.find("started s"), std::string::npos) << r.output;
+}
+
+// Variables that name each other at any depth are resolved (one pass in map order passed
+// "${config_dir}/y/x" to the program); a cycle is a bad config naming the variable.
+TEST(Launcher, VariablesResolveAtAnyDepthAndACycleIsRefused) {
+  t::TempDir dir;
+  const std::string nested = dir.file("nested.yaml");
+  std::ofstream(nested) << "name: unit\nstop_grace_s: 2\ndrain_s: 0.2\nvariables:\n  a: \"${b}/x\"\n"
+                        << "  b: \"${config_dir}/y\"\nprocesses:\n  - {name: e, cmd: [echo, 'arg=${a}'], ends_run: true}\n";
+  auto r = t::run({t::binPath("omnislam-launch"), nested, "--no-log"}, 20);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("arg=" + std::filesystem::path(dir.path()).lexically_normal().string() + "/y/x"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("${"), std::string::npos) << r.output;
+  const std::string cycle = dir.file("cycle.yaml");
+  std::ofstream(cycle) << "name: unit\nvariables:\n  a: \"${b}\"\n  b: \"${a}\"\nprocesses:\n"
+                       << "  - {name: e, cmd: [echo, '${a}']}\n";
+  r = t::run({t::binPath("omnislam-launch"), cycle, "--no-log"}, 20);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("in a cycle"), std::string::npos) << r.output;
 }
 
 }  // namespace

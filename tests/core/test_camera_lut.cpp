@@ -172,6 +172,9 @@ TEST(camera_FisheyeLut, ByteImageRoundTripAndCorruptionIsRejected) {
   bad = bytes;
   for (int i = 0; i < 8; ++i) bad[44 + i] = 0;  // camera b = 0 (header: magic 8, u32 x 3, f64 x 2, a_px at 36, b at 44)
   rejected(bad, "camera: b must be");
+  bad = bytes;
+  for (int i = 1; i <= 4; ++i) bad[bad.size() - static_cast<size_t>(i)] = 0xFF;  // the last cell: a NaN
+  rejected(bad, "is NaN");
 }
 
 TEST(camera_FisheyeLut, OptionsOutOfRangeAreRejected) {

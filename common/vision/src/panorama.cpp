@@ -23,6 +23,8 @@ std::optional<std::string> validate(const PanoramaOptions& o) {
   if (!(o.r_max_px > o.r_min_px + 1.0) || !std::isfinite(o.r_max_px)) return "r_max_px must be > r_min_px + 1";
   if (o.columns < 36 || o.columns > 20000) return "columns must be in [36, 20000]";
   if (o.rows < 0 || o.rows > 20000 || o.rows == 1) return "rows must be 0 (auto) or in [2, 20000]";
+  if (o.rows == 0 && std::lround(o.r_max_px - o.r_min_px) + 1 > 20000)
+    return "rows 0 (auto: one per pixel of r_max_px - r_min_px) needs r_max_px - r_min_px <= 19999";
   if (o.pad_columns < 0 || o.pad_columns > o.columns / 4) return "pad_columns must be in [0, columns / 4]";
   return std::nullopt;
 }
@@ -249,8 +251,10 @@ std::optional<PanoramaMotion> fitPanoramaMotion(const PanoramaRotation& r, const
     double se = 0.0, sw = 0.0;
     if (j < r.sector_row_peak_weight.size())
       for (size_t row = 0; row < r.sector_row_peak_weight[j].size(); ++row) {
+        const double rho = pano.radiusOfRow(static_cast<double>(row));
+        if (rho < 1.0) continue;  // r_min_px 0: the centre row has no defined 1 / rho
         se += r.sector_row_peak_weight[j][row];
-        sw += r.sector_row_peak_weight[j][row] / pano.radiusOfRow(static_cast<double>(row));
+        sw += r.sector_row_peak_weight[j][row] / rho;
       }
     inv_rho[j] = se > 0.0 ? sw / se : 1.0 / pano.radiusOfRow(r.sector_row[j]);
   }

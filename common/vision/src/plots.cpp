@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 namespace omnislam::vision {
 namespace {
@@ -34,6 +35,19 @@ double niceStep(double span, int target_lines) {
   return 10 * p;
 }
 
+/// The multiples of step in [lo, hi], at most 200 of them: a loop adding step would never end for
+/// a step of inf (a value near the largest double) or one lost in rounding (grid lines 0.5 m apart
+/// at x = 1e16). Nothing when the range or step is not finite.
+std::vector<double> gridValues(double lo, double hi, double step) {
+  std::vector<double> out;
+  if (!std::isfinite(lo) || !std::isfinite(hi) || !(step > 0.0) || !std::isfinite(step)) return out;
+  const double first = std::ceil(lo / step), last = std::floor(hi / step);
+  if (!(last - first < 200.0)) return out;
+  const int n = static_cast<int>(last - first);  // counted in int: first + 1 == first beyond 2^53
+  for (int i = 0; i <= n; ++i) out.push_back((first + i) * step);
+  return out;
+}
+
 }  // namespace
 
 cv::Mat renderMapPlot(const MapPlot& plot, int W, int H) {
@@ -57,11 +71,11 @@ cv::Mat renderMapPlot(const MapPlot& plot, int W, int H) {
   auto P = [&](double x, double y) { return cv::Point(cvRound(c0.x + (x - cx) * s), cvRound(c0.y - (y - cy) * s)); };
 
   const double step = niceStep(std::max(xmax - xmin, ymax - ymin), 10);
-  for (double g = std::ceil((cx - (c0.x - left) / s) / step) * step; g <= cx + (W - right - c0.x) / s; g += step) {
+  for (const double g : gridValues(cx - (c0.x - left) / s, cx + (W - right - c0.x) / s, step)) {
     cv::line(img, P(g, cy + (c0.y - top) / s), P(g, cy - (H - bottom - c0.y) / s), kGrid, 1);
     text(img, fmt(g, "%g"), P(g, cy - (H - bottom - c0.y) / s) + cv::Point(-8, 18), 0.4);
   }
-  for (double g = std::ceil((cy - (H - bottom - c0.y) / s) / step) * step; g <= cy + (c0.y - top) / s; g += step) {
+  for (const double g : gridValues(cy - (H - bottom - c0.y) / s, cy + (c0.y - top) / s, step)) {
     cv::line(img, P(cx - (c0.x - left) / s, g), P(cx + (W - right - c0.x) / s, g), kGrid, 1);
     text(img, fmt(g, "%g"), P(cx - (c0.x - left) / s, g) + cv::Point(-40, 4), 0.4);
   }
@@ -109,7 +123,7 @@ cv::Mat renderErrorPlot(const ErrorPlot& plot, int W, int H) {
     ymax *= 1.1;
     cv::rectangle(img, {left, y0}, {W - right, y0 + ph}, kAxis, 1);
     const double step = niceStep(ymax, 4);
-    for (double g = 0; g <= ymax; g += step) {
+    for (const double g : gridValues(0.0, ymax, step)) {
       const int y = y0 + ph - cvRound(g / ymax * ph);
       cv::line(img, {left, y}, {W - right, y}, kGrid, 1);
       text(img, fmt(g, "%g"), {8, y + 4}, 0.4);
@@ -126,7 +140,7 @@ cv::Mat renderErrorPlot(const ErrorPlot& plot, int W, int H) {
   panel(plot.position_err_m, top, "position error [m]", kEst, false);
   panel(plot.heading_err_rad, top + ph + gap, "|heading error| [rad]", kLm, true);
   const double step = niceStep(tmax, 10);
-  for (double g = 0; g <= tmax; g += step)
+  for (const double g : gridValues(0.0, tmax, step))
     text(img, fmt(g, "%g"), {left + cvRound(g / tmax * (W - left - right)) - 8, H - bottom + 18}, 0.4);
   text(img, "time [s]", {W / 2, H - 8}, 0.5);
   text(img, plot.title, {left, 24}, 0.6);

@@ -29,6 +29,9 @@ int findRoot(std::vector<int>& p, int i) {
 
 std::optional<std::string> validate(const VerticalLineOptions& o) {
   if (auto why = validate(o.panorama)) return why;
+  // A line at the +-180 deg seam is found whole in the wrapped columns and its twin dropped; with
+  // fewer than 2 an edge there is cut in two (two lines 0.3 deg off) or a border ramp made a line.
+  if (o.panorama.pad_columns < 2) return "panorama pad_columns must be >= 2 for vertical lines";
   if (o.edge_threshold < 1 || o.edge_threshold > 1020) return "edge_threshold must be in [1, 1020]";
   if (o.min_run_rows < 1) return "min_run_rows must be >= 1";
   if (o.max_gap_rows < 0) return "max_gap_rows must be >= 0";

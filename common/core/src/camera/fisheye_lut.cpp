@@ -209,6 +209,8 @@ std::optional<FisheyeLut> FisheyeLut::deserialize(const std::vector<std::uint8_t
   }
   FisheyeLut lut(p, o);
   for (float& f : lut.cells_) f = rd.f32();
+  for (std::size_t i = 0; i < lut.cells_.size(); ++i)
+    if (std::isnan(lut.cells_[i])) return fail("cell value " + std::to_string(i) + " is NaN");  // +-inf: empty
   return lut;
 }
 

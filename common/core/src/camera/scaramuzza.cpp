@@ -92,6 +92,10 @@ std::optional<std::string> ScaramuzzaCamera::validate(const Params& p) {
            " px (got " + str(p.min_radius_px) + ")";
   }
   // beta(rho) = atan2(rho, -f) increases strictly  <=>  rho f'(rho) - f(rho) > 0.
+  // Four samples per pixel, capped: a near-singular affine part makes rho_hi ~1e10 px, and the
+  // count overflowed int (undefined; on x86 it became 2 and a non-monotonic polynomial passed).
+  if (!(rho_hi <= 1e6))
+    return "the usable max radius " + str(rho_hi) + " px is beyond 1e6 px (a near-singular affine c, d, e?)";
   const int n = std::max(2, static_cast<int>(std::ceil(4.0 * (rho_hi - p.min_radius_px))));
   for (int i = 0; i <= n; ++i) {
     const double rho = p.min_radius_px + (rho_hi - p.min_radius_px) * i / n;

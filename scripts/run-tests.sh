@@ -11,6 +11,8 @@ if [ -n "${OMNISLAM_SANITIZE:-}" ]; then
   export OMNISLAM_BUILD_DIR="${OMNISLAM_BUILD_DIR:-$root/build-sanitize}"
   export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:detect_stack_use_after_return=1:strict_string_checks=1}"
   export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+  # Leaks inside third-party libraries, each named with its reason in the file.
+  export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$root/tests/support/lsan.supp:print_suppressions=0}"
 fi
 bash scripts/prepare.sh
 build="${OMNISLAM_BUILD_DIR:-$root/build}"

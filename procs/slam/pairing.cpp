@@ -178,17 +178,11 @@ InputResult Pairer::add(Input in, std::vector<PairEvent>& out) {
     }
     // Confirmed: a new epoch starts with the held messages, in their order.
     restart(held_.front().utime, out);
-    std::vector<Input> held = std::move(held_);
-    held_.clear();
     InputResult r;
     r.restart = true;
     r.reason = why + ": restart";
     r.refused_held = std::move(pre.refused_held);
-    for (Input& h : held) {
-      const bool is_frame = h.is_frame;
-      InputResult hr = apply(std::move(h), out);
-      if (!hr.accepted()) r.refused_held.emplace_back(is_frame, hr.reason);
-    }
+    applyHeld(r, out);
     return r;
   }
   InputResult pre;
@@ -216,25 +210,24 @@ InputResult Pairer::holdAhead(Input in, std::vector<PairEvent>& out) {
     r.refused_held = std::move(pre.refused_held);
     return r;
   }
-  // Confirmed: the held messages are taken in their order; this call answers for the last one.
+  // Confirmed: the held messages are taken in their order, as after a restart but in the same epoch.
   ++stats_.forward_jumps;
+  InputResult r;
+  r.reason = why + ": confirmed, taken";
+  r.refused_held = std::move(pre.refused_held);
+  applyHeld(r, out);
+  return r;
+}
+
+void Pairer::applyHeld(InputResult& r, std::vector<PairEvent>& out) {
   std::vector<Input> held = std::move(held_);
   held_.clear();
   held_ahead_ = false;
-  InputResult r;
-  for (size_t i = 0; i < held.size(); ++i) {
-    const bool is_frame = held[i].is_frame;
-    InputResult hr = apply(std::move(held[i]), out);
-    if (i + 1 == held.size()) {
-      hr.refused_held.insert(hr.refused_held.begin(), r.refused_held.begin(), r.refused_held.end());
-      r = std::move(hr);
-    } else if (!hr.accepted()) {
-      r.refused_held.emplace_back(is_frame, hr.reason);
-    }
+  for (Input& h : held) {
+    const bool is_frame = h.is_frame;
+    InputResult hr = apply(std::move(h), out);
+    if (!hr.accepted()) r.refused_held.emplace_back(is_frame, hr.reason);
   }
-  r.refused_held.insert(r.refused_held.begin(), pre.refused_held.begin(), pre.refused_held.end());
-  if (r.accepted() && r.reason.empty()) r.reason = why + ": confirmed, taken";
-  return r;
 }
 
 InputResult Pairer::apply(Input in, std::vector<PairEvent>& out) {

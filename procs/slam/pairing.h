@@ -164,6 +164,9 @@ class Pairer {
   InputResult add(Input in, std::vector<PairEvent>& out);
   InputResult apply(Input in, std::vector<PairEvent>& out);
   InputResult holdAhead(Input in, std::vector<PairEvent>& out);
+  /// Applies the held messages in their order (and empties held_); each refused one is added to
+  /// r.refused_held.
+  void applyHeld(InputResult& r, std::vector<PairEvent>& out);
   InputResult checkOrder(StreamState& self, int64_t utime);
   void restart(int64_t utime, std::vector<PairEvent>& out);
   void refuseHeld(InputResult& r);

@@ -14,11 +14,9 @@
 
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 #include <map>
 #include <stdexcept>
-#include <system_error>
 
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/channels.h"
@@ -223,9 +221,7 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
     }
   }
   if (!interrupted) {
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(in_path, ec);
-    read.file_bytes = ec ? read.bytes_read : static_cast<int64_t>(size);
+    read.measureFile(in_path);
     if (const auto problem = read.problem(in_path)) std::cerr << "[slam] warning: --replay " << *problem << std::endl;
   }
   handle(driver.finish(), last_timestamp);

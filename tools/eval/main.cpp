@@ -59,16 +59,9 @@ struct LogContent {
 /// c.skipped with the log, the channel and the reason, and nothing.
 template <class Msg>
 std::optional<Msg> decodeValid(const std::string& path, const lcmio::LogEvent& ev, LogContent& c) {
-  std::string why_not;
-  auto m = lcmio::decodeAs<Msg>(ev, &why_not);
-  if (!m) {
-    ++c.skipped[path + ": " + ev.channel + ": undecodable (" + why_not + ")"];
-    return std::nullopt;
-  }
-  if (auto why = lcmio::validate(*m)) {
-    ++c.skipped[path + ": " + ev.channel + ": " + *why];
-    return std::nullopt;
-  }
+  std::string why;
+  auto m = lcmio::decodeValid<Msg>(ev, &why);
+  if (!m) ++c.skipped[path + ": " + ev.channel + ": " + why];
   return m;
 }
 

@@ -29,14 +29,10 @@ struct SeqTrack {
 template <class Msg>
 bool account(const lcmio::LogEvent& ev, ChannelStats& s, SeqTrack& t, int64_t utime_override = -1) {
   std::string why;
-  const auto m = lcmio::decodeAs<Msg>(ev, &why);
+  const auto m = lcmio::decodeValid<Msg>(ev, &why);
   s.type = Msg::getTypeName();
   if (!m) {
-    if (s.first_bad.empty()) s.first_bad = "undecodable (" + why + ")";
-    return false;
-  }
-  if (auto invalid = lcmio::validate(*m)) {
-    if (s.first_bad.empty()) s.first_bad = *invalid;
+    if (s.first_bad.empty()) s.first_bad = why;
     return false;
   }
   const int64_t utime = utime_override >= 0 ? utime_override : m->utime;

@@ -15,7 +15,6 @@
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/log_reader.h"
-#include "omnislam/lcmio/validate.h"
 
 int main(int argc, char** argv) {
   CLI::App cli{"omnislam-logstat: per-channel statistics of an omnislam LCM log"};
@@ -36,9 +35,9 @@ int main(int argc, char** argv) {
       std::set<std::string> names;
       omnislam::lcmio::forEachEvent(path, [&](const omnislam::lcmio::LogEvent& ev) {
         if (ev.channel != omnislam::channels::kOmniImage) return;
-        const auto msg = omnislam::lcmio::decodeAs<omnislam::image_t>(ev);
         // Only what a process would accept: decodeImage trusts the sizes that validate checks.
-        if (!msg || omnislam::lcmio::validate(*msg)) return;  // counted as bad in the table
+        const auto msg = omnislam::lcmio::decodeValid<omnislam::image_t>(ev);
+        if (!msg) return;  // counted as bad in the table
         std::string why;
         const auto img = omnislam::lcmio::decodeImage(*msg, &why);
         char name[96];

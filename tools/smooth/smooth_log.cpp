@@ -37,14 +37,10 @@ struct Counter {
 /// channel and the reason.
 template <class Msg>
 std::optional<Msg> decodeValid(const lcmio::LogEvent& ev, Counter& bad) {
-  std::string why_not;
-  auto m = lcmio::decodeAs<Msg>(ev, &why_not);
+  std::string why;
+  auto m = lcmio::decodeValid<Msg>(ev, &why);
   if (!m) {
-    bad.add(ev.channel + ": undecodable (" + why_not + ")");
-    return std::nullopt;
-  }
-  if (auto why = lcmio::validate(*m)) {
-    bad.add(ev.channel + ": " + *why);
+    bad.add(ev.channel + ": " + why);
     return std::nullopt;
   }
   // Inputs are kept by utime: a duplicate or a step back would silently replace or re-sort one.

@@ -32,10 +32,14 @@ LogReadResult forEachEvent(const std::string& path, const std::function<void(con
     out.data.assign(p, p + ev->datalen);
     fn(out);
   }
+  r.measureFile(path);
+  return r;
+}
+
+void LogReadResult::measureFile(const std::string& path) {
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
-  r.file_bytes = ec ? r.bytes_read : static_cast<int64_t>(size);
-  return r;
+  file_bytes = ec ? bytes_read : static_cast<int64_t>(size);
 }
 
 void requireDistinctFiles(const std::string& in, const std::string& out, const std::string& flag) {

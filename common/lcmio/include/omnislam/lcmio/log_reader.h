@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "omnislam/lcmio/decode.h"
+#include "omnislam/lcmio/validate.h"
 
 namespace omnislam::lcmio {
 
@@ -25,6 +26,8 @@ struct LogReadResult {
   int64_t bytes_read = 0;       ///< file offset just after the last event read
   int64_t file_bytes = 0;       ///< size of the file
   int64_t unreadable() const { return file_bytes - bytes_read; }
+  /// Sets file_bytes from the file at `path` (bytes_read if it cannot be sized).
+  void measureFile(const std::string& path);
   /// Nothing when every byte was read; else one line for the user, naming the log, e.g.
   /// "run.lcm: the 4120 bytes after its first 99 events (from byte 600000 of 604120) cannot be read
   /// (truncated or corrupt): only those events were used".
@@ -47,6 +50,23 @@ std::optional<Msg> decodeAs(const LogEvent& ev, std::string* why = nullptr) {
   Msg m;
   if (auto reason = decode(ev.data.data(), ev.data.size(), m)) {
     if (why) *why = std::move(*reason);
+    return std::nullopt;
+  }
+  return m;
+}
+
+/// decodeAs, then lcmio::validate (what a process would accept): the message, or nothing and, if
+/// `why` is given, "undecodable (REASON)" or validate's reason in *why.
+template <class Msg>
+std::optional<Msg> decodeValid(const LogEvent& ev, std::string* why = nullptr) {
+  std::string reason;
+  auto m = decodeAs<Msg>(ev, &reason);
+  if (!m) {
+    if (why) *why = "undecodable (" + reason + ")";
+    return std::nullopt;
+  }
+  if (auto invalid = validate(*m)) {
+    if (why) *why = std::move(*invalid);
     return std::nullopt;
   }
   return m;

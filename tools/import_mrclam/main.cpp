@@ -15,6 +15,7 @@
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/log_writer.h"
+#include "slam_config.h"
 
 using namespace omnislam;
 
@@ -104,20 +105,9 @@ int main(int argc, char** argv) {
       o.still_frame_m = still[0];
       o.still_frame_rad = deg2rad(still[1]);
     }
-    if (!tmpl.empty()) {  // the first processed frame depends on the SLAM process's pairing gap
-      try {
-        const YAML::Node root = YAML::LoadFile(tmpl);
-        const YAML::Node pairing = root["pairing"];
-        if (pairing && pairing["max_odometry_gap_s"]) o.max_odometry_gap_s = pairing["max_odometry_gap_s"].as<double>();
-      } catch (const std::exception& e) {
-        throw std::invalid_argument("--slam-config-template '" + tmpl + "': " + e.what() +
-                                    " (pairing.max_odometry_gap_s must be a number of seconds)");
-      }
-      // The SLAM process's own range for this key (docs/slam-process.md).
-      if (!(o.max_odometry_gap_s >= 1e-6 && o.max_odometry_gap_s <= 3600.0))
-        throw std::invalid_argument("--slam-config-template '" + tmpl + "': pairing.max_odometry_gap_s must be in "
-                                    "[1e-06, 3600], got " + std::to_string(o.max_odometry_gap_s));
-    }
+    if (!tmpl.empty())  // the first processed frame depends on the SLAM process's pairing gap; the
+                        // SLAM process's own parser checks the template (a bad key: exit 2, naming it)
+      o.max_odometry_gap_s = static_cast<double>(slamproc::loadSlamOptions(tmpl).pairing.max_odometry_gap_us) * 1e-6;
     const auto log = mrclam::importRobot(dir, o);
     writeLog(out, log);
     std::cerr << "[import-mrclam] robot " << o.robot << " of " << dir << " -> " << out << " (" << log.events.size()

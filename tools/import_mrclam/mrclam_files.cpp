@@ -26,9 +26,6 @@ int integral(const std::string& path, int64_t line, const std::string& name, dou
   return static_cast<int>(v);
 }
 
-/// The time as the messages' utime (microseconds), as the importer rounds it.
-int64_t roundedUs(double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e6)); }
-
 /// Strictly increasing times in column 0, in 0..kMaxTimeS; a repeated time is an error or replaces
 /// the earlier row. Order and repeats are judged on the microseconds the messages will carry: two
 /// times 0.2 us apart are one utime.
@@ -42,10 +39,10 @@ void checkTimes(Table& t, DuplicateTimes dup) {
                        fmtTime(kMaxTimeS) + " s");
     if (!rows.empty()) {
       const double prev = rows.back()[0], now = t_s;
-      if (roundedUs(now) < roundedUs(prev))
+      if (toUtime(now) < toUtime(prev))
         throw ParseError(at(t.stats.path, t.line_of_row[i]) + "time " + fmtTime(now) + " s is before the previous (" +
                          fmtTime(prev) + " s at line " + std::to_string(lines.back()) + "): times must increase");
-      if (roundedUs(now) == roundedUs(prev)) {
+      if (toUtime(now) == toUtime(prev)) {
         if (dup == DuplicateTimes::kError)
           throw ParseError(at(t.stats.path, t.line_of_row[i]) + "duplicated time " + fmtTime(now) +
                            " s (same as line " + std::to_string(lines.back()) +

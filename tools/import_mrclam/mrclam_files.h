@@ -6,6 +6,7 @@
 // through is counted in FileStats. Units as in the files: seconds, metres, radians. No LCM here.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -22,6 +23,9 @@ struct ParseError : std::runtime_error {
 /// Largest time a row may have [s since the Unix epoch]: 4e9 s (the year 2096) is 4e15 us, the
 /// bound of utimes elsewhere; MRCLAM's times are about 1.25e9 s.
 constexpr double kMaxTimeS = 4e9;
+
+/// A file's time [s] as the messages' utime [us], rounded to the nearest microsecond.
+inline int64_t toUtime(double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e6)); }
 
 enum class DuplicateTimes {
   kError,     ///< refuse the file (the default)

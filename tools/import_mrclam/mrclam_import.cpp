@@ -23,7 +23,6 @@ namespace {
 constexpr int kFirstLandmarkSubject = 6;  // Barcodes.dat: subjects 1-5 are robots, 6-20 landmarks
 constexpr int kRankMap = 0, kRankTruth = 1, kRankOdometry = 2, kRankFeatures = 3, kRankLabels = 4;
 
-int64_t toUtime(double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e6)); }
 
 template <class Msg>
 void add(ImportedLog& log, int64_t utime, int rank, const char* channel, const Msg& m) {

@@ -11,7 +11,9 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -87,8 +89,17 @@ class Child {
  public:
   Child(const std::vector<std::string>& argv, const std::vector<std::string>& env = {}) {
     int fds[2];
-    if (pipe(fds) != 0) return;
+    if (pipe(fds) != 0) {
+      failToStart("pipe");
+      return;
+    }
     pid_ = fork();
+    if (pid_ < 0) {
+      close(fds[0]);
+      close(fds[1]);
+      failToStart("fork");
+      return;
+    }
     if (pid_ == 0) {
       setpgid(0, 0);
       dup2(fds[1], 1);
@@ -126,7 +137,7 @@ class Child {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
     while (!done_ && std::chrono::steady_clock::now() < deadline) poll(50);
     RunResult r;
-    if (!done_) {
+    if (!done_) {  // done_ is set for a child that never started, so pid_ > 0 here
       r.timed_out = true;
       kill(pid_, SIGKILL);
       while (!done_) poll(50);
@@ -151,7 +162,7 @@ class Child {
     } else if (timeout_ms > 0) {
       std::this_thread::sleep_for(std::chrono::milliseconds(timeout_ms));
     }
-    if (!done_) {
+    if (!done_ && pid_ > 0) {
       int st = 0;
       if (waitpid(pid_, &st, WNOHANG) == pid_) {
         done_ = true;
@@ -161,6 +172,13 @@ class Child {
         while (fd_ >= 0 && (n = read(fd_, buf, sizeof buf)) > 0) out_.append(buf, static_cast<size_t>(n));
       }
     }
+  }
+  // A child that could not be started is done at once with exit code 127 and the reason as its
+  // output. pid_ stays -1, which must never reach kill() or waitpid(): -1 means every process.
+  void failToStart(const char* what) {
+    out_ = std::string("cannot start the child: ") + what + ": " + std::strerror(errno) + "\n";
+    done_ = true;
+    exit_code_ = 127;
   }
   pid_t pid_ = -1;
   int fd_ = -1;

@@ -7,6 +7,7 @@ PKGS=(
   build-essential cmake pkg-config
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev   # LCM 1.3.1: library, lcm-gen/logger/spy, Java jar
   default-jdk-headless libjchart2d-java               # javac for the types jar; lcm-spy's viewer needs jchart2d
+  default-jre                                         # lcm-spy is a Swing window: AWT's X11 library
   libeigen3-dev                                       # core maths
   libopencv-dev                                       # image processing, rendering, image I/O
   libyaml-cpp-dev                                     # world / config files

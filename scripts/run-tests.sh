@@ -16,14 +16,31 @@ if [ -n "${OMNISLAM_SANITIZE:-}" ]; then
 fi
 bash scripts/prepare.sh
 build="${OMNISLAM_BUILD_DIR:-$root/build}"
+excluded=()
+[ "${OMNISLAM_SOAK:-0}" = "1" ] || excluded+=(soak)
+# The sanitizers slow everything about 3x: live runs that must answer every frame at their
+# speedup (label realtime) cannot; the same processes are run by the other integration tests.
+[ -z "${OMNISLAM_SANITIZE:-}" ] || excluded+=(realtime)
+# ctest ANDs several -LE options (a test is left out only if it matches all of them), so a caller's
+# own -LE would bring the soaks back: every label exclusion goes into one alternation instead.
+args=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    -LE | --label-exclude)
+      [ $# -ge 2 ] || { echo "run-tests: $1 needs a label regex" >&2; exit 2; }
+      excluded+=("$2")
+      shift 2
+      ;;
+    *)
+      args+=("$1")
+      shift
+      ;;
+  esac
+done
 exclude=()
-if [ "${OMNISLAM_SOAK:-0}" != "1" ]; then
-  exclude=(-LE soak)
-fi
-if [ -n "${OMNISLAM_SANITIZE:-}" ]; then
-  # The sanitizers slow everything about 3x: live runs that must answer every frame at their
-  # speedup (label realtime) cannot; the same processes are run by the other integration tests.
-  if [ "${OMNISLAM_SOAK:-0}" != "1" ]; then exclude=(-LE 'soak|realtime'); else exclude=(-LE realtime); fi
+if [ ${#excluded[@]} -gt 0 ]; then
+  joined="$(IFS='|'; echo "${excluded[*]}")"
+  exclude=(-LE "$joined")
 fi
 cd "$build"
-ctest --output-on-failure -j"$(nproc)" "${exclude[@]}" "$@"
+ctest --output-on-failure -j"$(nproc)" "${exclude[@]}" "${args[@]}"

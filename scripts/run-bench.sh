@@ -23,10 +23,14 @@ features_log() {
   if [[ ! -s "$log" ]]; then
     echo "-- recording $log (config/launch/sports_hall_features.yaml at 10x on $private_url)" >&2
     local tmp="$log.part"
+    # Only a recording of the whole scenario becomes the cached log: the launcher exits non-zero
+    # when a process failed and 128 + signal when it was interrupted (the .part is then removed).
+    trap 'rm -f "'"$tmp"'"' EXIT
     "$build/bin/omnislam-launch" "$root/config/launch/sports_hall_features.yaml" --url "$private_url" \
       --set speedup=10 --log-file "$tmp" > "$build/bench/record-features.out" 2>&1 \
       || { tail -20 "$build/bench/record-features.out" >&2; rm -f "$tmp"; return 1; }
     mv "$tmp" "$log"
+    trap - EXIT
   fi
   echo "$log"
 }

@@ -10,7 +10,19 @@ cd "$root"
 bash scripts/prepare.sh
 build="${OMNISLAM_BUILD_DIR:-$root/build}"
 log="$root/logs/sports_hall_slam-$(date +%Y%m%d-%H%M%S).lcm"
-"$build/bin/omnislam-launch" config/launch/sports_hall_slam.yaml --log-file "$log" "$@"
+rc=0
+"$build/bin/omnislam-launch" config/launch/sports_hall_slam.yaml --log-file "$log" "$@" || rc=$?
+# Ctrl-C / SIGTERM: the launcher stops every process in order, closes the log and exits 128 +
+# the signal; what was recorded up to then is still summarised and evaluated below.
+case "$rc" in
+  0) ;;
+  130 | 143) echo "run-default: the run was interrupted; what it recorded until then follows" >&2 ;;
+  *) exit "$rc" ;;
+esac
+if [ ! -s "$log" ]; then
+  echo "run-default: nothing was recorded in $log" >&2
+  exit $((rc == 0 ? 1 : rc))
+fi
 echo
 echo "== what the run produced =="
 "$build/bin/omnislam-logstat" "$log"
@@ -21,3 +33,4 @@ echo "Plots: ${log%.lcm}.map.png ${log%.lcm}.errors.png; trajectories for evo: $
 echo
 echo "Replay it:  lcm-logplayer --lcm-url='udpm://239.255.76.67:7667?ttl=0' $log"
 echo "Watch it:   bash scripts/lcm-spy.sh   (in another terminal, while replaying)"
+exit "$rc"

@@ -455,6 +455,12 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
     }
   }
   if (plan.log_enabled) sup.print("launch", "log: " + plan.log_file);
+  if (lcmio::stopRequested()) {
+    // Everything was stopped in order and the recording closed, but the run did not end by
+    // itself: 128 + signal (the shell's convention) lets a script tell it from a finished run.
+    sup.print("launch", rc == 0 ? "done (interrupted)" : "done with errors (interrupted)");
+    return 128 + lcmio::stopSignal();
+  }
   sup.print("launch", rc == 0 ? "done" : "done with errors");
   return rc;
 }

@@ -9,7 +9,7 @@
 
 reproduce_prepare() {
   local name="$1" t
-  BIN="$ROOT/build/bin"
+  BIN="${OMNISLAM_BUILD_DIR:-$ROOT/build}/bin"
   for t in omnislam-launch omnislam-slam omnislam-eval omnislam-sim omnislam-capture omnislam-odometry omnislam-features omnislam-record; do
     [ -x "$BIN/$t" ] || { echo "$name: $BIN/$t missing: run scripts/build.sh first" >&2; exit 2; }
   done
@@ -25,9 +25,14 @@ reproduce_record() {
   local name="$1" launch="$2" seed="$3" speedup="$4" rec="$5" what="$6"
   [ -s "$rec" ] && return 0
   echo "$name: seed $seed: recording $what at ${speedup}x ..." >&2
-  "$BIN/omnislam-launch" "$launch" --url "$URL" --set "seed=$seed" --set "speedup=$speedup" --log-file "$rec" \
+  # Into REC.part, renamed only when the launcher says the scenario ran to its end (it exits
+  # non-zero when a process failed, 128 + signal when interrupted): a later run with the same
+  # OUT would otherwise take a partial recording for a finished one.
+  "$BIN/omnislam-launch" "$launch" --url "$URL" --set "seed=$seed" --set "speedup=$speedup" --log-file "$rec.part" \
     > "$OUT/launch-seed$seed.txt" 2>&1 || {
-    echo "$name: seed $seed: the launch failed, see $OUT/launch-seed$seed.txt" >&2
+    rm -f "$rec.part"
+    echo "$name: seed $seed: the launch failed or was interrupted, see $OUT/launch-seed$seed.txt" >&2
     exit 1
   }
+  mv "$rec.part" "$rec"
 }

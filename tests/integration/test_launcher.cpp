@@ -82,7 +82,8 @@ TEST(Launcher, SigintStopsEveryProcessCleanly) {
   launcher.signal(SIGINT);
   const auto r = launcher.wait(10);
   EXPECT_FALSE(r.timed_out);
-  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.exit_code, 128 + SIGINT) << r.output;  // stopped cleanly, but not finished
+  EXPECT_NE(r.output.find("done (interrupted)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("stopping: interrupted"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("did not stop"), std::string::npos) << r.output;
 }
@@ -201,6 +202,7 @@ TEST(Launcher, AStopWhileWaitingForTheRecorderStartsNothing) {
   t::RunResult r;
   waited = secondsOf([&] { r = launch.wait(30.0); });
   EXPECT_LT(waited, 10.0) << r.output;
+  EXPECT_EQ(r.exit_code, 128 + SIGTERM) << r.output;
   EXPECT_EQ(r.output.find("started s"), std::string::npos) << r.output;
 }
 

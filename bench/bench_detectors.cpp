@@ -9,7 +9,7 @@
 //                                 the capture process renders one per frame (docs/room-scenario.md)
 // Frames: the sports hall's fish-eye (default camera, 16 lights, the world's noise and blur)
 // rendered at a pose that sees all lights; a synthetic omnidirectional image of 24 grey sectors
-// (radial edges) with noise for the lines. Run: build/bench/bench_detectors (or
+// (radial edges) with noise for the lines. Run: build/bin/bench_detectors (or
 // scripts/run-bench.sh).
 #include <benchmark/benchmark.h>
 

@@ -109,14 +109,14 @@ def main():
             points.append((same[k][2] / same[k][0], cs, same[k][0]))
 
     fit_points = [p for p in points if p[0] < args.fit_max_lag_s]
+    if not fit_points:  # an empty sum is 0 for every (rho0, tau): the grid would "fit" nothing
+        sys.exit('no same-landmark pair below --fit-max-lag-s')
     best = None
     for rho0 in [x / 100 for x in range(5, 100)]:
         for tau in [x / 2 for x in range(1, 121)]:
             sse = sum(n * (c - rho0 * math.exp(-lag / tau)) ** 2 for lag, c, n in fit_points)
             if best is None or sse < best[0]:
                 best = (sse, rho0, tau)
-    if best is None:
-        sys.exit('no same-landmark pair below --fit-max-lag-s')
     _, rho0, tau = best
     print(f'fit over lags < {args.fit_max_lag_s:g} s: rho0 {rho0:.2f}, tau {tau:.1f} s; covariance of the '
           f'correlated part {rho0 * var:.2e} rad^2 (sd {math.sqrt(rho0 * var):.4f} rad)')

@@ -65,7 +65,8 @@ if [ -n "$SEEDS" ]; then
   opt_integers run-mrclam.sh --seeds "$SEEDS"
   MULTI=1
 else
-  opt_integers run-mrclam.sh --seed "$SEED"
+  # One seed: the single-run files (robotN.*) would be overwritten by a second one; --seeds is for lists.
+  [[ "$SEED" =~ ^[0-9]+$ ]] || { echo "run-mrclam.sh: --seed takes one non-negative integer (several: --seeds), got '$SEED'" >&2; exit 2; }
   SEEDS="$SEED"
 fi
 [ -n "${ROBOTS// /}" ] || { echo "run-mrclam.sh: --robots needs at least one robot number (1-5 in dataset 6)" >&2; exit 2; }

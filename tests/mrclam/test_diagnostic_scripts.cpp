@@ -161,6 +161,20 @@ TEST(MrclamDiagnosticScripts, BearingCorrelationOfAlternatingResidualsIsMinusOne
   EXPECT_TRUE(has(flat.output, "every residual is zero")) << flat.output;
   EXPECT_FALSE(has(flat.output, "Traceback")) << flat.output;
 
+  // Each landmark seen once: no same-landmark pair to fit. The fit's grid used to "fit" the empty
+  // sum and print rho0 0.05, tau 0.5 s.
+  writeLandmarks(d, {{3.0, 1.0}, {3.0, -1.0}});
+  meas.clear();
+  std::snprintf(line, sizeof line, "1000.5 60 3.2 %.9f\n", truth + 0.01);
+  meas += line;
+  std::snprintf(line, sizeof line, "1001.0 61 3.2 %.9f\n", -truth - 0.02);
+  meas += line;
+  t::writeMrclamFile(d.file("Robot1_Measurement.dat"), meas);
+  const auto once = script("mrclam_bearing_correlation.py", {d.path()});
+  EXPECT_NE(once.exit_code, 0) << once.output;
+  EXPECT_TRUE(has(once.output, "no same-landmark pair below --fit-max-lag-s")) << once.output;
+  EXPECT_FALSE(has(once.output, "fit over lags")) << once.output;
+
   expectRefusals("mrclam_bearing_correlation.py", d, {"--fit-max-lag-s", "0"});
 }
 

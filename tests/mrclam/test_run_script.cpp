@@ -85,7 +85,9 @@ TEST(MrclamRunScript, BadFlagsStopAtOnceNamingTheFlag) {
   const Case cases[] = {
       {{"--out", o, "--seeds"}, "--seeds needs a value"},
       {{"--out", o, "--robots"}, "--robots needs a value"},
-      {{"--out", o, "--seed", "x"}, "--seed takes non-negative integers, got 'x'"},
+      {{"--out", o, "--seed", "x"}, "--seed takes one non-negative integer (several: --seeds), got 'x'"},
+      // Two seeds into one run's files: the second overwrote the first's robotN.* files.
+      {{"--out", o, "--seed", "1 2"}, "--seed takes one non-negative integer (several: --seeds), got '1 2'"},
       {{"--out", o, "--seeds", "1 -2"}, "--seeds takes non-negative integers, got '-2'"},
       {{"--out", o, "--seed", "1", "--seeds", "1 2"}, "give --seed or --seeds, not both"},
       {{"--out", o, "--robots", "1,2"}, "--robots takes robot numbers (1-5 in dataset 6), got '1,2'"},

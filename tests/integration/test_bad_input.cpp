@@ -130,9 +130,24 @@ TEST(BadInput, CaptureAndOdometryCountAndSkipBadTruthMessages) {
   EXPECT_NE(odometry.output().find("not after previous"), std::string::npos) << odometry.output();
   EXPECT_NE(odometry.output().find("utime 9000000000000000000 jumps ahead"), std::string::npos) << odometry.output();
 
+  // A new timeline far ahead, continued by three messages in a row, is taken (a clock set, a
+  // source started again). The capture then computes its next image time in one step: it used to
+  // count up to the new time one period per loop (about 1e14 rounds here), deaf to SIGINT.
+  const int64_t far = 8'000'000'000'000'000'000;
+  for (int k = 0; k < 4; ++k) {
+    pose_t p = pose(far + k * 1'000'000, 6 + k);  // 1 s apart: every one is due for an image
+    bus.lcm.publish(channels::kGroundTruthPose, &p);
+    bus.spinFor(0.1);
+  }
+  // The third and the fourth are delivered (the first two of the row are refused): two images.
+  EXPECT_TRUE(bus.waitFor([&] { return bus.counts[channels::kOmniImage] >= 3; }, 10.0)) << capture.output();
+  EXPECT_EQ(bus.counts[channels::kOmniImage], 3) << capture.output();
+
   capture.signal(SIGINT);
   odometry.signal(SIGINT);
-  EXPECT_EQ(capture.wait(5.0).exit_code, 0);
+  const auto cap = capture.wait(5.0);
+  EXPECT_FALSE(cap.timed_out) << cap.output;
+  EXPECT_EQ(cap.exit_code, 0) << cap.output;
   EXPECT_EQ(odometry.wait(5.0).exit_code, 0);
 }
 

@@ -44,8 +44,10 @@ map_t landmarkMap(int64_t id0, const Eigen::Vector2d& offset_m) {
 /// 60 s: ODOMETRY at 20 Hz (heading drifting 0.01 rad/s), 2 Hz frames of all five landmarks with
 /// SLAM_POSE up to 0.3 m off the truth, SLAM_ASSOCIATIONS (ids 100 + j), labels (ids j), a SLAM_MAP 0.3 m
 /// off, GROUND_TRUTH_POSE; with `garbage`, one undecodable ODOMETRY event as well. `last_step`
-/// (<= 1200) ends the run early: the same events up to then.
-void writeRun(const std::string& path, bool garbage, bool with_slam_pose = true, int last_step = 1200) {
+/// (<= 1200) ends the run early: the same events up to then. With `repeat_odometry`, one
+/// ODOMETRY message is written twice.
+void writeRun(const std::string& path, bool garbage, bool with_slam_pose = true, int last_step = 1200,
+              bool repeat_odometry = false) {
   lcmio::LogWriter w(path);
   std::mt19937_64 rng(7);
   std::normal_distribution<double> n01(0.0, 1.0);
@@ -67,6 +69,7 @@ void writeRun(const std::string& path, bool garbage, bool with_slam_pose = true,
     odometry_t o{};
     o.utime = u, o.seq = seq++, o.x_m = ox, o.y_m = oy, o.theta_rad = oth, o.v_mps = 0.2, o.omega_radps = 0.11;
     w.write(u, channels::kOdometry, o);
+    if (repeat_odometry && k == 600) w.write(u, channels::kOdometry, o);  // the same utime again
     if (garbage && k == 600) {
       const uint8_t junk[5] = {1, 2, 3, 4, 5};
       w.write(u, channels::kOdometry, junk, 5);
@@ -230,6 +233,15 @@ TEST(Smooth, CountsAnUndecodableMessageAndRefusesBadFlagsAndLogs) {
   const auto r = smooth(in, out, {});
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("skipped ODOMETRY: undecodable (shorter than a fingerprint) (1)"), std::string::npos) << r.output;
+
+  // Inputs are kept by utime: a repeated message would silently replace the first. It is counted.
+  const std::string repeated = dir.file("repeated.lcm");
+  writeRun(repeated, false, true, 1200, true);
+  const auto rr = smooth(repeated, out, {});
+  ASSERT_EQ(rr.exit_code, 0) << rr.output;
+  EXPECT_NE(rr.output.find("skipped ODOMETRY: utime duplicated, out of order or jumping (lcmio::UtimeOrder) (1)"),
+            std::string::npos)
+      << rr.output;
 
   EXPECT_EQ(smooth(in, out, {"--associations", "oracle"}).exit_code, 2);
   const auto bad_key = smooth(in, out, {"--set", "filter.motion.no_such_key=1"});

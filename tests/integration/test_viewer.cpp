@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 #include <thread>
@@ -185,6 +186,22 @@ TEST(Viewer, HeadlessFromALogWritesEveryNthStepAndTheFinalView) {
   expectFullView(out + "/final.png");
   expectFullView(out + "/frame_000004.png");
   EXPECT_LT(fs::file_size(out + "/final.png"), 300u * 1024u);
+
+  // A log cut inside an event (a recorder killed mid-write): the events before the cut are drawn
+  // and the lost tail is named, where LCM's reader would just stop.
+  const auto whole = fs::file_size(log);
+  {
+    std::ofstream app(log, std::ios::binary | std::ios::app);
+    const char head[6] = {static_cast<char>(0xed), static_cast<char>(0xa1), static_cast<char>(0xda),
+                          static_cast<char>(0x01), 0, 0};  // an event's sync word, then nothing
+    app.write(head, sizeof head);
+  }
+  const auto cut = t::run({t::binPath("omnislam-viewer"), "--headless", "--log", log, "--out-dir", dir.file("png2")}, 60);
+  ASSERT_EQ(cut.exit_code, 0) << cut.output;
+  EXPECT_NE(cut.output.find("6 SLAM steps"), std::string::npos) << cut.output;
+  EXPECT_NE(cut.output.find("the 6 bytes after its first"), std::string::npos) << cut.output;
+  EXPECT_NE(cut.output.find("from byte " + std::to_string(whole)), std::string::npos) << cut.output;
+  EXPECT_NE(cut.output.find("cannot be read (truncated or corrupt)"), std::string::npos) << cut.output;
 }
 
 /// Keeps the latest PROCESS_STATUS of each process.

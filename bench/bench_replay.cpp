@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <ctime>
 #include <fstream>
 #include <iomanip>
@@ -235,6 +236,11 @@ int main(int argc, char** argv) {
     s.wall = median(w);
     s.cpu = median(cpu);
     s.frames = rs.front().frames;
+    if (s.frames <= 0) {  // every frame refused (e.g. no odometry pairs with them): no figure to give
+      std::cerr << "bench_replay: configuration " << c.name << " processed no frame of " << n_frames
+                << " in the log (check the config's pairing against the log)\n";
+      return 1;
+    }
     s.fps = s.frames / s.wall;
     s.ms_per_frame = 1e3 * s.wall / double(s.frames);
     s.cpu_ms_per_frame = 1e3 * s.cpu / double(s.frames);
@@ -297,7 +303,20 @@ int main(int argc, char** argv) {
 
   if (!json_path.empty()) {
     std::ofstream js(json_path);
-    js << "{\n  \"log\": \"" << log_path << "\",\n  \"simulated_s\": " << sim_s << ",\n  \"frames_in_log\": " << n_frames
+    std::string log_json;  // the path as a JSON string: quotes, backslashes and control bytes escaped
+    for (const char ch : log_path) {
+      if (ch == '"' || ch == '\\') {
+        log_json += '\\';
+        log_json += ch;
+      } else if (static_cast<unsigned char>(ch) < 0x20) {
+        char esc[8];
+        std::snprintf(esc, sizeof esc, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(ch)));
+        log_json += esc;
+      } else {
+        log_json += ch;
+      }
+    }
+    js << "{\n  \"log\": \"" << log_json << "\",\n  \"simulated_s\": " << sim_s << ",\n  \"frames_in_log\": " << n_frames
        << ",\n  \"reps\": " << reps << ",\n  \"configurations\": [\n";
     for (size_t i = 0; i < configs.size(); ++i) {
       const Summary& s = sum[configs[i].name];

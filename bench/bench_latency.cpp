@@ -223,10 +223,28 @@ int main(int argc, char** argv) {
   cli.add_option("--speedup", speedup, "simulated seconds per real second")->check(CLI::Range(0.1, 100.0));
   cli.add_option("--duration", duration, "simulated seconds per run")->check(CLI::Range(5.0, 100000.0));
   cli.add_option("--reps", reps, "runs per particle count, alternating")->check(CLI::Range(1, 100));
-  cli.add_option("--port", port, "UDP port of the private bus (default: from the pid)");
+  cli.add_option("--port", port, "UDP port of the first run's private bus, each next run the next port (default: from the pid)")
+      ->check(CLI::Range(1024, 60000));
   cli.add_option("--out-dir", out_dir, "the launcher's output goes to OUT_DIR/bench_latency-M<particles>-<rep>.log");
   cli.add_option("--json", json_path, "also write the figures as one JSON object here");
   CLI11_PARSE(cli, argc, argv);
+  // Runs are pooled by particle count: a count given twice would be pooled as one, and a ratio
+  // against the baseline needs a baseline and something to compare.
+  for (size_t i = 0; i < particles.size(); ++i) {
+    if (particles[i] < 1 || particles[i] > 100000) {
+      std::cerr << "bench_latency: --particles: each count must be in [1, 100000], got " << particles[i] << std::endl;
+      return 2;
+    }
+    for (size_t j = 0; j < i; ++j)
+      if (particles[j] == particles[i]) {
+        std::cerr << "bench_latency: --particles: " << particles[i] << " is given twice (runs are pooled per count)" << std::endl;
+        return 2;
+      }
+  }
+  if (particles.empty()) {
+    std::cerr << "bench_latency: --particles: give at least one count" << std::endl;
+    return 2;
+  }
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
 

@@ -1,6 +1,9 @@
 // Checked YAML access: every error names the file, the key path, the accepted range and the line.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
+
 #include "omnislam/config/world_config.h"
 #include "omnislam/config/yaml_node.h"
 
@@ -50,6 +53,51 @@ TEST(YamlNode, InvalidYamlAndMissingFilesAreConfigErrors) {
   EXPECT_NE(errorOf([] { Node::loadFile("/nonexistent/x.yaml"); }).find("file not found"), std::string::npos);
   EXPECT_NE(errorOf([] { Node::loadString("- 1\n- 2\n", "seq.yaml"); }).find("top level must be a map"),
             std::string::npos);
+}
+
+// A key given twice in one map: yaml-cpp keeps both and lookups return the first, so an override
+// appended at the end of a file was silently ignored.
+TEST(YamlNode, AKeyGivenTwiceIsRefusedWithBothLines) {
+  EXPECT_NE(errorOf([] { Node::loadString("rate: 50\nname: x\nrate: 1000\n", "w.yaml"); })
+                .find("w.yaml: key 'rate' is given twice (lines 1 and 3)"),
+            std::string::npos);
+  const std::string nested =
+      errorOf([] { Node::loadString("a:\n  list:\n    - {x: 1, y: 2}\n    - {x: 1, x: 2}\n", "n.yaml"); });
+  EXPECT_NE(nested.find("n.yaml: key 'a.list[1].x' is given twice (lines 4 and 4)"), std::string::npos) << nested;
+  // The same key in different maps is fine.
+  EXPECT_EQ(errorOf([] { Node::loadString("a: {x: 1}\nb: {x: 1}\n", "ok.yaml"); }), "");
+}
+
+// Whole numbers are decimal: YAML 1.1's octal and hexadecimal readings surprised ("0100" was 64).
+TEST(YamlNode, WholeNumbersAreDecimal) {
+  const Node root = Node::loadString("a: 0100\nb: 0x10\nc: +7\nd: 12abc\ne: -3\n", "i.yaml");
+  EXPECT_EQ(root.getInt("a", 0, 1000), 100);
+  EXPECT_NE(errorOf([&] { root.getInt("b", 0, 1000); }).find("must be a whole number in [0, 1000], got '0x10'"),
+            std::string::npos);
+  EXPECT_EQ(root.getInt("c", 0, 10), 7);
+  EXPECT_NE(errorOf([&] { root.getInt("d", 0, 1000); }).find("got '12abc'"), std::string::npos);
+  EXPECT_EQ(root.getInt("e", -5, 5), -3);
+  EXPECT_NE(errorOf([&] { root.getInt("e", 0, 5); }).find("got -3"), std::string::npos);
+}
+
+TEST(WorldConfig, ALightIdUsedTwiceIsRefused) {
+  // The grid numbers its 16 lights 1..16; a listed light with id 2 made GROUND_TRUTH_MAP hold two
+  // lights with id 2, and the evaluation's association scores ambiguous.
+  std::ifstream in(std::string(OMNISLAM_SOURCE_DIR) + "/config/worlds/sports_hall.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string w = text.str();
+  const std::string grid_y = "    y_m: [-5.5, -1.0, 3.5, 8.0]\n";
+  ASSERT_NE(w.find(grid_y), std::string::npos);
+  const std::string twice = std::string(w).replace(w.find(grid_y), grid_y.size(),
+                                                   grid_y + "  list: [{id: 2, x_m: 1.0, y_m: 1.0}]\n");
+  const std::string e = errorOf([&] { omnislam::config::parseWorld(Node::loadString(twice, "w.yaml")); });
+  EXPECT_NE(e.find("w.yaml: key 'lights.list"), std::string::npos) << e;
+  EXPECT_NE(e.find("light id 2 is used twice"), std::string::npos) << e;
+  // Without an id the listed light continues the numbering (17): accepted.
+  const std::string next = std::string(w).replace(w.find(grid_y), grid_y.size(),
+                                                  grid_y + "  list: [{x_m: 1.0, y_m: 1.0}]\n");
+  EXPECT_EQ(omnislam::config::parseWorld(Node::loadString(next, "w.yaml")).lights.back().id, 17);
 }
 
 TEST(WorldConfig, TheSportsHallParsesToThePapersExperiment) {

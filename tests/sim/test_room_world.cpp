@@ -154,4 +154,16 @@ TEST(RoomWorld, BadValuesNameTheKey) {
   expectError(replace(ok, "model: scaramuzza", "model: scaramuzza\n  a_px: 200"), "a_px");
   expectError(ok + "image: {supersample: 9}\n", "image.supersample");
   expectError(ok + "image: {shading: 1.5}\n", "image.shading");
+  // A camera above the ceiling (room height 2.5 m) saw nothing but the ceiling's colour, silently.
+  expectError(replace(ok, "mounting: {z_m: 0.5}", "mounting: {z_m: 2.6}"),
+              "key 'camera.mounting.z_m' must be inside the room, in (0, 2.500000) m (room.height_m), got 2.6");
+  expectError(replace(ok, "mounting: {z_m: 0.5}", "mounting: {z_m: 0.0}"),
+              "camera.mounting.z_m' must be inside the room");
+  // radius_m outside an arc was ignored (a turn on the spot where an arc was meant).
+  expectError(replace(ok, "segments: [{straight_m: 1.0}]", "segments: [{turn_deg: 90, radius_m: 2.0}]"),
+              "trajectory.segments[0].radius_m' belongs to an arc_deg segment");
+  // An arc turning faster than 180 deg/s (speed 0.3 m/s on 0.05 m): a truth sample's turn wrapped.
+  expectError(
+      replace(ok, "segments: [{straight_m: 1.0}]", "speed_mps: 0.3, segments: [{arc_deg: 3600, radius_m: 0.05}]"),
+      "trajectory.segments[0].radius_m' must be >= speed_mps / pi");
 }

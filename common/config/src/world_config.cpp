@@ -4,6 +4,7 @@
 #include <Eigen/QR>
 
 #include <cmath>
+#include <set>
 
 #include "omnislam/core/angles.h"
 
@@ -47,6 +48,13 @@ std::vector<sim::Light> parseLights(const Node& n) {
     }
   }
   if (out.empty()) throw ConfigError(n.where("grid") + " or 'list' must give at least one light");
+  // Ids name the lights in GROUND_TRUTH_MAP and in the evaluation's association scores.
+  std::set<int64_t> ids;
+  for (size_t i = 0; i < out.size(); ++i)
+    if (!ids.insert(out[i].id).second)
+      throw ConfigError(n.where("list") + ": light id " + std::to_string(out[i].id) +
+                        " is used twice (the grid numbers its lights 1.." + std::to_string(out.size()) +
+                        " in order, then the list continues; give each light its own id)");
   return out;
 }
 
@@ -218,6 +226,9 @@ void parseTrajectory(const Node& n, sim::World& w) {
     sim::Segment g;
     const int kinds = seg.has("straight_m") + seg.has("arc_deg") + seg.has("turn_deg");
     if (kinds != 1) throw ConfigError(seg.where("straight_m") + ": each segment needs exactly one of straight_m, arc_deg (with radius_m), turn_deg");
+    if (seg.has("radius_m") && !seg.has("arc_deg"))
+      throw ConfigError(seg.where("radius_m") + " belongs to an arc_deg segment (a turn_deg turns on the spot, a "
+                        "straight_m has no radius)");
     if (seg.has("straight_m")) {
       g.kind = sim::Segment::Kind::kStraight;
       g.length_m = seg.getDouble("straight_m", 1e-3, 1e4);
@@ -226,6 +237,11 @@ void parseTrajectory(const Node& n, sim::World& w) {
       g.angle_rad = deg2rad(seg.getDouble("arc_deg", -3600.0, 3600.0));
       g.radius_m = seg.getDouble("radius_m", 0.05, 1e3);
       if (g.angle_rad == 0.0) throw ConfigError(seg.where("arc_deg") + " must not be 0");
+      // Driven at speed_mps, an arc turns at speed / radius: at most the turn_rate_degps limit of
+      // 180 deg/s, or a truth sample's turn could exceed half a turn and wrap the wrong way.
+      if (o.speed_mps / g.radius_m > kPi)
+        throw ConfigError(seg.where("radius_m") + " must be >= speed_mps / pi = " + std::to_string(o.speed_mps / kPi) +
+                          " m (an arc turns at speed_mps / radius_m, at most 180 deg/s)");
     } else {
       g.kind = sim::Segment::Kind::kTurn;
       g.angle_rad = deg2rad(seg.getDouble("turn_deg", -3600.0, 3600.0));
@@ -309,6 +325,14 @@ sim::World parseWorld(const Node& root) {
   }
   if (w.image_rate_hz > w.truth_rate_hz)
     throw ConfigError(root.where("image_rate_hz") + " must be <= truth_rate_hz");
+  if (w.room && !(w.camera.mounting.z_m > 0.0 && w.camera.mounting.z_m < w.room->height_m)) {
+    // Above the ceiling every ray hits the ceiling's plane from outside: blank images, no error.
+    const Node cam = root.child("camera");
+    const auto mo = cam.optChild("mounting");
+    const std::string key = mo ? mo->where("z_m") : cam.where("mounting") + " (z_m 1.8 by default)";
+    throw ConfigError(key + " must be inside the room, in (0, " + std::to_string(w.room->height_m) +
+                      ") m (room.height_m), got " + std::to_string(w.camera.mounting.z_m));
+  }
   return w;
 }
 

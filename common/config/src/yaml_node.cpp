@@ -1,8 +1,10 @@
 // Checked YAML access: see yaml_node.h.
 #include "omnislam/config/yaml_node.h"
 
+#include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <sstream>
 
 namespace omnislam::config {
@@ -12,6 +14,29 @@ std::string lineOf(const YAML::Node& n) {
   const YAML::Mark m = n.Mark();
   if (m.line < 0) return "";
   return " (line " + std::to_string(m.line + 1) + ")";
+}
+
+/// Throws ConfigError for a key given twice in one map, anywhere below `n`. yaml-cpp keeps both and
+/// lookups return the first, so an override appended at the end of a file was silently ignored.
+void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const std::string& path) {
+  if (n.IsMap()) {
+    std::map<std::string, int> first_line;
+    for (auto it = n.begin(); it != n.end(); ++it) {
+      const std::string key = it->first.IsScalar() ? it->first.Scalar() : std::string("?");
+      const int line = it->first.Mark().line + 1;
+      const auto [seen, fresh] = first_line.emplace(key, line);
+      if (!fresh)
+        throw ConfigError(source + ": key '" + path + key + "' is given twice (lines " + std::to_string(seen->second) +
+                          " and " + std::to_string(line) + "); give it once");
+      rejectRepeatedKeys(it->second, source, path + key + ".");
+    }
+  } else if (n.IsSequence()) {
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      std::string p = path;
+      if (!p.empty()) p.pop_back();  // "a.b." -> "a.b"
+      rejectRepeatedKeys(n[i], source, p + "[" + std::to_string(i) + "].");
+    }
+  }
 }
 
 std::string fmt(double v) {
@@ -45,6 +70,7 @@ Node Node::loadFile(const std::string& path) {
   try {
     YAML::Node root = YAML::LoadFile(path);
     if (!root.IsMap()) throw ConfigError(path + ": the top level must be a map of keys");
+    rejectRepeatedKeys(root, path, "");
     return Node(root, std::make_shared<const std::string>(path), "");
   } catch (const YAML::Exception& e) {
     throw ConfigError(path + ": not valid YAML: " + e.what());
@@ -94,6 +120,7 @@ Node Node::loadString(const std::string& text, const std::string& source) {
   try {
     YAML::Node root = YAML::Load(text);
     if (!root.IsMap()) throw ConfigError(source + ": the top level must be a map of keys");
+    rejectRepeatedKeys(root, source, "");
     return Node(root, std::make_shared<const std::string>(source), "");
   } catch (const YAML::Exception& e) {
     throw ConfigError(source + ": not valid YAML: " + e.what());
@@ -169,13 +196,15 @@ double Node::getDouble(const std::string& key, double lo, double hi, double def,
 int64_t Node::getInt(const std::string& key, int64_t lo, int64_t hi) const {
   const YAML::Node n = scalar(key);
   const std::string range = "a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  // Decimal digits only, as a person reads them: yaml-cpp would take "0100" as octal 64 and "0x10"
+  // as 16 (doubles have no such reading, so "010" was 10 there and 8 here).
+  const std::string& text = n.Scalar();
+  const char* first = text.data() + (!text.empty() && text.front() == '+' ? 1 : 0);
+  const char* last = text.data() + text.size();
   int64_t v = 0;
-  try {
-    v = n.as<int64_t>();
-  } catch (const YAML::Exception&) {
-    fail(key, "must be " + range + ", got '" + n.Scalar() + "'");
-  }
-  if (v < lo || v > hi) fail(key, "must be " + range + ", got " + n.Scalar());
+  const auto [end, ec] = std::from_chars(first, last, v, 10);
+  if (ec != std::errc() || end != last || first == last) fail(key, "must be " + range + ", got '" + text + "'");
+  if (v < lo || v > hi) fail(key, "must be " + range + ", got " + text);
   return v;
 }
 

@@ -15,7 +15,6 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
-#include <limits>
 #include <memory>
 #include <random>
 #include <thread>
@@ -27,6 +26,7 @@
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
+#include "omnislam/sim/image_clock.h"
 #include "omnislam/vision/image_files.h"
 #include "omnislam/vision/render_lights.h"
 #include "omnislam/vision/render_room.h"
@@ -69,13 +69,12 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
     lights = std::make_unique<vision::CeilingLightRenderer>(*cam, world.camera.mounting, world.nuisance);
   }
   std::mt19937_64 rng(seed);
-  const int64_t period_us = std::llround(1e6 / world.image_rate_hz);
-  int64_t next_utime = world.start_utime;
+  sim::ImageClock clock(world.start_utime, world.image_rate_hz, world.truth_rate_hz);
   int64_t frames = 0;
   lcmio::InputOptions truth_opt;
   truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
   node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
-    if (p.utime < next_utime) return;
+    if (!clock.take(p.utime)) return;  // not an image time (the clock moves on when it is)
     const Pose2 T_RinW{p.x_m, p.y_m, p.theta_rad};
     if (room) {
       const auto t0 = std::chrono::steady_clock::now();
@@ -92,12 +91,6 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
       node.setDetail("frame " + std::to_string(frames) + ": " + std::to_string(rep.lights_drawn) + " lights, " +
                      std::to_string(rep.lights_missed) + " missed, " + std::to_string(rep.false_blobs) + " false blobs");
     }
-    // Next image time: the next multiple of the period after this one (skips any gap honestly), in
-    // one step: a jump of the truth's time must not become a loop of one add per period.
-    const int64_t periods = (p.utime - next_utime) / period_us + 1;
-    next_utime = periods > (std::numeric_limits<int64_t>::max() - next_utime) / period_us
-                     ? std::numeric_limits<int64_t>::max()  // past the end of time: no more images
-                     : next_utime + periods * period_us;
   }, truth_opt);
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
   std::cerr << node.tag() << "rendering '" << world.name << "' (" << (room ? "room, colour" : "ceiling lights")

@@ -82,7 +82,8 @@ Trajectory::Trajectory(const TrajectoryOptions& options, std::vector<Segment> se
 }
 
 TrajectorySample Trajectory::at(double t_s) const {
-  if (segments_.empty() || t_s <= opt_.start_pause_s) {
+  // NaN fails every comparison below and would index one past the end: it is the start.
+  if (segments_.empty() || !(t_s > opt_.start_pause_s)) {
     TrajectorySample s;
     s.pose = opt_.start;
     return s;

@@ -54,7 +54,7 @@ Node::Node(YAML::Node node, std::shared_ptr<const std::string> source, std::stri
 std::string Node::origin(const std::string& key, const YAML::Node& n) const {
   if (overrides_) {
     // The key itself, or a map or list above it, set by an override (e.g. "filter.motion={...}").
-    for (std::string k = keyPath(key);;) {
+    for (std::string k = keyPath(key); !k.empty();) {
       const auto it = overrides_->find(k);
       if (it != overrides_->end()) return " (from the override '" + it->second + "')";
       const auto cut = k.back() == ']' ? k.rfind('[') : k.rfind('.');

@@ -111,6 +111,14 @@ TEST(RoomWorld, RayCasterFindsTheNearestSurface) {
   h = sim::firstHit(facets, 2.5, Eigen::Vector3d(3.0, 1.5, 0.5), 0.0, 1.0, 4.0);
   EXPECT_EQ(h.facet, -2);  // ceiling at 0.5 m
   EXPECT_NEAR(h.t_h_m, 0.5, 1e-12);
+
+  // Panel widths 5 mm short of the wall (validate allows 1 cm): the wall still reaches its corner.
+  const std::string short_panels = replace(kRoom + kCamera, "        - {rgb: [200, 200, 200]}\n",
+                                           "        - {width_m: 1.895, rgb: [200, 200, 200]}\n");
+  const auto f2 = load(short_panels).room->facets();
+  h = sim::firstHit(f2, 2.5, Eigen::Vector3d(3.998, 1.0, 0.5), 0.0, -1.0, 0.0);
+  EXPECT_GE(h.facet, 0);  // before: no facet (the ceiling's colour seen through a 5 mm gap)
+  EXPECT_NEAR(h.t_h_m, 1.0, 1e-12);
 }
 
 TEST(RoomWorld, ScaramuzzaCameraFromTheWorldFile) {
@@ -145,6 +153,8 @@ TEST(RoomWorld, BadValuesNameTheKey) {
   expectError(replace(ok, "size_x_m: 0.5, size_y_m: 0.3, z_max_m: 1.5", "size_x_m: 0.0, size_y_m: 0.3, z_max_m: 1.5"),
               "room.boxes[0].size_x_m");
   expectError(replace(ok, "to: [4, 0]", "to: [0, 0.01]"), "room.walls[0]");
+  // A later wall is named by its own index, in the key and in the reason.
+  expectError(replace(ok, "to: [4, 3]", "to: [4, 0.01]"), "room.walls[1].panels': walls[1]: from and to");
   expectError(ok + "lights: {height_m: 6.5, grid: {x_m: [1.0], y_m: [1.0]}}\n", "lights");
   expectError(replace(ok, "room:", "rooms:"), "rooms");
   expectError(replace(ok, "pol: [-30.0119, 0.0, 0.012275, -1.05054e-4, 4.07406e-7]", "pol: [30.0, 0.0, 0.01]"),

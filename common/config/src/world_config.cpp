@@ -181,10 +181,10 @@ sim::Room parseRoom(const Node& n) {
       wall.panels.push_back(panel);
     }
     r.walls.push_back(wall);
-    sim::Room one;  // check this wall alone so that the message names it
-    one.height_m = r.height_m;
-    one.walls = {wall};
-    if (auto err = one.validate()) throw ConfigError(w.where("panels") + ": " + *err);
+    sim::Room so_far;  // the walls up to this one (the earlier ones passed): the message names this one
+    so_far.height_m = r.height_m;
+    so_far.walls = r.walls;
+    if (auto err = so_far.validate()) throw ConfigError(w.where("panels") + ": " + *err);
   }
   if (n.has("boxes")) {
     for (const Node& b : n.items("boxes")) {

@@ -14,13 +14,15 @@ bool finite3(const Eigen::Vector3d& v) { return v.allFinite(); }
 
 bool rgbOk(const Eigen::Vector3d& c) { return finite3(c) && c.minCoeff() >= 0.0 && c.maxCoeff() <= 255.0; }
 
-/// Panel boundaries along a wall, as distances from `from`: b[0] = 0 .. b[n] = length.
+/// Panel boundaries along a wall, as distances from `from`: b[0] = 0 .. b[n] = length. The last
+/// boundary is the wall's end even when the widths miss it by validate()'s 1 cm: a shortfall left a
+/// gap that rays passed through, an excess a wall sticking out past the corner.
 std::vector<double> panelBounds(const Wall& w) {
   const double len = (w.to_m - w.from_m).norm();
   std::vector<double> b{0.0};
   for (size_t j = 0; j < w.panels.size(); ++j) {
     const bool last = j + 1 == w.panels.size();
-    b.push_back(last && w.panels[j].width_m <= 0.0 ? len : b.back() + w.panels[j].width_m);
+    b.push_back(last ? len : b.back() + w.panels[j].width_m);
   }
   return b;
 }

@@ -34,11 +34,21 @@ std::vector<sim::Light> parseLights(const Node& n) {
       }
   }
   if (n.has("list")) {
-    int64_t id = static_cast<int64_t>(out.size()) + 1;
+    // Ids name the lights in GROUND_TRUTH_MAP and in the evaluation's association scores; the
+    // grid's are 1..N by construction, so a repeat can only come from the list.
+    const size_t in_grid = out.size();
+    std::set<int64_t> ids;
+    for (const sim::Light& L : out) ids.insert(L.id);
+    int64_t id = static_cast<int64_t>(in_grid) + 1;
     for (const Node& item : n.items("list")) {
       item.rejectUnknownKeys({"id", "x_m", "y_m", "z_m", "radius_m", "intensity"});
       sim::Light L;
       L.id = item.getInt("id", 0, 1'000'000'000, id);
+      if (!ids.insert(L.id).second)
+        throw ConfigError(item.where("id") + ": light id " + std::to_string(L.id) +
+                          " is used twice (the grid numbers its " + std::to_string(in_grid) + " lights 1.." +
+                          std::to_string(in_grid) +
+                          ", a listed light without id takes the next number; give each light its own id)");
       L.p_LinW_m = Eigen::Vector3d(item.getDouble("x_m", -1e4, 1e4), item.getDouble("y_m", -1e4, 1e4),
                                    item.getDouble("z_m", 0.5, 100.0, height));
       L.radius_m = item.getDouble("radius_m", 0.01, 2.0, radius);
@@ -48,13 +58,6 @@ std::vector<sim::Light> parseLights(const Node& n) {
     }
   }
   if (out.empty()) throw ConfigError(n.where("grid") + " or 'list' must give at least one light");
-  // Ids name the lights in GROUND_TRUTH_MAP and in the evaluation's association scores.
-  std::set<int64_t> ids;
-  for (size_t i = 0; i < out.size(); ++i)
-    if (!ids.insert(out[i].id).second)
-      throw ConfigError(n.where("list") + ": light id " + std::to_string(out[i].id) +
-                        " is used twice (the grid numbers its lights 1.." + std::to_string(out.size()) +
-                        " in order, then the list continues; give each light its own id)");
   return out;
 }
 

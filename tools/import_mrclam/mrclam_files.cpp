@@ -20,6 +20,12 @@ std::string fmtTime(double t) {
   return s.str();
 }
 
+/// Throws unless the row's time is in 0..kMaxTimeS (beyond it, or NaN, it has no utime).
+void checkTimeRange(const std::string& path, int64_t line, double t_s) {
+  if (!(t_s >= 0.0 && t_s <= kMaxTimeS))
+    throw ParseError(at(path, line) + "time " + fmtTime(t_s) + " s outside 0.." + fmtTime(kMaxTimeS) + " s");
+}
+
 int integral(const std::string& path, int64_t line, const std::string& name, double v) {
   if (v != std::floor(v) || std::abs(v) > 1e9)
     throw ParseError(at(path, line) + "column '" + name + "' must be an integer, got " + fmtTime(v));
@@ -34,9 +40,7 @@ void checkTimes(Table& t, DuplicateTimes dup) {
   std::vector<int64_t> lines;
   for (size_t i = 0; i < t.rows.size(); ++i) {
     const double t_s = t.rows[i][0];
-    if (!(t_s >= 0.0 && t_s <= kMaxTimeS))
-      throw ParseError(at(t.stats.path, t.line_of_row[i]) + "time " + fmtTime(t_s) + " s outside 0.." +
-                       fmtTime(kMaxTimeS) + " s");
+    checkTimeRange(t.stats.path, t.line_of_row[i], t_s);
     if (!rows.empty()) {
       const double prev = rows.back()[0], now = t_s;
       if (toUtime(now) < toUtime(prev))
@@ -143,8 +147,7 @@ std::vector<Measurement> readMeasurements(const std::string& path, FileStats* st
   for (size_t i = 0; i < t.rows.size(); ++i) {
     const auto& r = t.rows[i];
     const int64_t line = t.line_of_row[i];
-    if (!(r[0] >= 0.0 && r[0] <= kMaxTimeS))
-      throw ParseError(at(path, line) + "time " + fmtTime(r[0]) + " s outside 0.." + fmtTime(kMaxTimeS) + " s");
+    checkTimeRange(path, line, r[0]);
     if (!out.empty() && r[0] < out.back().t_s)
       throw ParseError(at(path, line) + "time " + fmtTime(r[0]) + " s is before the previous (" +
                        fmtTime(out.back().t_s) + " s at line " + std::to_string(out.back().line) +

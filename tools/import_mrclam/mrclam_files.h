@@ -19,7 +19,6 @@ struct ParseError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// What to do with a data line whose time equals the previous line's (odometry, ground truth).
 /// Largest time a row may have [s since the Unix epoch]: 4e9 s (the year 2096) is 4e15 us, the
 /// bound of utimes elsewhere; MRCLAM's times are about 1.25e9 s.
 constexpr double kMaxTimeS = 4e9;
@@ -27,6 +26,7 @@ constexpr double kMaxTimeS = 4e9;
 /// A file's time [s] as the messages' utime [us], rounded to the nearest microsecond.
 inline int64_t toUtime(double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e6)); }
 
+/// What to do with a data line whose time equals the previous line's (odometry, ground truth).
 enum class DuplicateTimes {
   kError,     ///< refuse the file (the default)
   kKeepLast,  ///< the later line replaces the earlier one; counted in FileStats::duplicates_replaced

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -85,10 +86,15 @@ TEST(Logstat, BadImagesAndATruncatedTailAreReportedNotFatal) {
       m.size = static_cast<int32_t>(m.data.size());
       log.write(m.utime, channels::kOmniImage, m);
     }
+    // The third repeats the first's utime and seq; the fourth's seq is corrupted far ahead (it
+    // used to count as some 9e18 missed messages, and a second such jump overflowed the count);
+    // the fifth goes on from the second.
+    const int64_t utimes[] = {1'000'000, 1'020'000, 1'000'000, 1'040'000, 1'060'000};
+    const int64_t seqs[] = {0, 1, 0, std::numeric_limits<int64_t>::max(), 2};
     odometry_t o{};
-    for (int k = 0; k < 3; ++k) {
-      o.utime = 1'000'000 + (k == 2 ? 0 : k) * 20'000;  // the third repeats the first's utime
-      o.seq = k == 2 ? 0 : k;
+    for (int k = 0; k < 5; ++k) {
+      o.utime = utimes[k];
+      o.seq = seqs[k];
       log.write(o.utime, channels::kOdometry, o);
     }
   }
@@ -96,9 +102,14 @@ TEST(Logstat, BadImagesAndATruncatedTailAreReportedNotFatal) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("2 images written to"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("  OMNI_IMAGE: 1 bad, the first: "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("  ODOMETRY: 1 seq not after the previous one, 1 utime not after the previous one"),
+  EXPECT_NE(r.output.find("  ODOMETRY: 3 seq restarts (not after the previous one, or over 1000000 ahead of "
+                          "it), 1 utime not after the previous one"),
             std::string::npos)
       << r.output;
+  const std::vector<std::string> odometry_words = t::wordsOfLine(r.output, "ODOMETRY");
+  ASSERT_GE(odometry_words.size(), 5u) << r.output;
+  EXPECT_EQ(odometry_words[2], "5") << r.output;  // messages
+  EXPECT_EQ(odometry_words[3], "0") << r.output;  // gaps: a jump is not missed messages
   EXPECT_TRUE(std::filesystem::exists(dir.file("png/frame_000000.png")));
   EXPECT_TRUE(std::filesystem::exists(dir.file("png/frame_000002.png")));
   // The same log cut short: listed, with a warning that names it.

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
@@ -50,6 +51,48 @@ TEST(LcmioNode, CountsEveryKindOfBadInputAndPassesOnlyGoodOnes) {
   EXPECT_EQ(c.rejected_inputs, 3);
   EXPECT_EQ(c.sequence_gaps, 4);
   EXPECT_NE(c.last_error.find("ODOMETRY"), std::string::npos);
+}
+
+// A seq corrupted far ahead (a flipped high bit) passes validation, as any seq >= 0 does. It used to
+// count as some 9e18 missed messages, and a second one overflowed the counter (undefined behaviour;
+// UBSan stopped every process under a flood of mutated messages). Now a jump over
+// max_sequence_gap is a restart, and a real gap is still counted as missed messages.
+TEST(LcmioNode, ASeqFarAheadIsARestartNotMissedMessages) {
+  lcmio::Node node("unit", "memq://");
+  std::vector<int64_t> seen;
+  node.subscribe<odometry_t>(channels::kOdometry, [&](const odometry_t& m) { seen.push_back(m.seq); });
+  const int64_t kHuge = std::numeric_limits<int64_t>::max();
+  const int64_t kMax = lcmio::kMaxSequenceGap;
+  const int64_t seqs[] = {0, kHuge, 1, kHuge, 2, kMax + 4, kMax + 12};  // kMax + 4: kMax + 1 missing
+  int64_t utime = 1000;
+  for (int64_t s : seqs) {
+    auto m = odo(utime += 1000, s);
+    node.lcm().publish(channels::kOdometry, &m);
+  }
+  while (node.lcm().handleTimeout(0) > 0) {
+  }
+  EXPECT_EQ(seen.size(), 7u);  // all delivered: seq is accounted, never a reason to refuse
+  const auto& c = node.counters();
+  EXPECT_EQ(c.sequence_restarts, 5);  // two jumps ahead, two steps back, one jump of max + 1
+  EXPECT_EQ(c.sequence_gaps, 7);      // the last step: 7 missing, counted
+}
+
+TEST(LcmioSequence, StepsAtTheBoundsAndASaturatingCount) {
+  const int64_t kMax = lcmio::kMaxSequenceGap, kHuge = std::numeric_limits<int64_t>::max();
+  EXPECT_EQ(lcmio::sequenceStep(5, 6).missed, 0);
+  EXPECT_FALSE(lcmio::sequenceStep(5, 6).restart);
+  EXPECT_TRUE(lcmio::sequenceStep(5, 5).restart);   // a duplicate
+  EXPECT_TRUE(lcmio::sequenceStep(5, 4).restart);   // a step back
+  EXPECT_EQ(lcmio::sequenceStep(5, 6 + kMax).missed, kMax);  // the largest gap counted as missed
+  EXPECT_FALSE(lcmio::sequenceStep(5, 6 + kMax).restart);
+  EXPECT_TRUE(lcmio::sequenceStep(5, 7 + kMax).restart);
+  EXPECT_EQ(lcmio::sequenceStep(5, 7 + kMax).missed, 0);
+  EXPECT_TRUE(lcmio::sequenceStep(0, kHuge).restart);
+  EXPECT_TRUE(lcmio::sequenceStep(kHuge, 0).restart);
+  EXPECT_EQ(lcmio::sequenceStep(0, kHuge, kHuge).missed, kHuge - 1);  // no overflow with no bound
+  EXPECT_EQ(lcmio::saturatingAdd(kHuge - 1, 5), kHuge);
+  EXPECT_EQ(lcmio::saturatingAdd(kHuge, 0), kHuge);
+  EXPECT_EQ(lcmio::saturatingAdd(3, 4), 7);
 }
 
 // One far-future utime is refused and the good messages after it pass (it used to become the

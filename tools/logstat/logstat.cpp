@@ -8,6 +8,7 @@
 #include "omnislam/image_t.hpp"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
+#include "omnislam/lcmio/sequence.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
@@ -41,8 +42,9 @@ bool account(const lcmio::LogEvent& ev, ChannelStats& s, SeqTrack& t, int64_t ut
     s.first_utime = utime;
   }
   if (t.have) {
-    if (m->seq > t.last + 1) s.seq_gaps += m->seq - t.last - 1;
-    if (m->seq <= t.last) ++s.seq_restarts;
+    const lcmio::SequenceStep step = lcmio::sequenceStep(t.last, m->seq);
+    s.seq_gaps = lcmio::saturatingAdd(s.seq_gaps, step.missed);
+    if (step.restart) ++s.seq_restarts;
     if (utime <= t.last_utime) ++s.utime_not_after;
   }
   t.last_utime = utime;
@@ -114,7 +116,8 @@ std::string formatStats(const std::map<std::string, ChannelStats>& stats) {
   for (const auto& [name, s] : stats) {
     if (name == channels::kProcessStatus) continue;  // several publishers: per process below
     if (s.seq_restarts > 0 || s.utime_not_after > 0)
-      os << "  " << name << ": " << s.seq_restarts << " seq not after the previous one, " << s.utime_not_after
+      os << "  " << name << ": " << s.seq_restarts << " seq restarts (not after the previous one, or over "
+         << lcmio::kMaxSequenceGap << " ahead of it), " << s.utime_not_after
          << " utime not after the previous one\n";
   }
   for (const auto& [name, s] : stats)

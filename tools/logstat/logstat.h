@@ -18,7 +18,8 @@ struct ChannelStats {
   std::string first_bad;     ///< the reason of the first bad message ("" if none)
   int64_t first_seq = -1, last_seq = -1;
   int64_t seq_gaps = 0;      ///< messages missing according to seq (per publisher name when known)
-  int64_t seq_restarts = 0;  ///< seq not after the previous one (a publisher restarted, or duplicates)
+  int64_t seq_restarts = 0;  ///< seq not after the previous one (a publisher restarted, or duplicates) or
+                             ///< more than lcmio::kMaxSequenceGap ahead of it (a corrupted or re-based seq)
   int64_t utime_not_after = 0;  ///< utime not after the previous message's (duplicate or out of order)
   int64_t first_utime = 0, last_utime = 0;
   int64_t bytes = 0;

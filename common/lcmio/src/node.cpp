@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/sequence.h"
 #include "omnislam/lcmio/signals.h"
 
 namespace omnislam::lcmio {
@@ -22,14 +23,16 @@ Node::~Node() = default;
 
 void Node::dispatch(const lcm::ReceiveBuffer* rbuf, const std::string&, RawSubscription* sub) { sub->fn(rbuf); }
 
-void Node::noteSequence(const std::string& channel, int64_t seq) {
+void Node::noteSequence(const std::string& channel, int64_t seq, int64_t max_gap) {
   ChannelState& cs = channels_[channel];
   if (cs.have_seq) {
-    if (seq > cs.last_seq + 1) {
-      counters_.sequence_gaps += seq - cs.last_seq - 1;
-    } else if (seq <= cs.last_seq) {
+    const SequenceStep step = sequenceStep(cs.last_seq, seq, max_gap);
+    counters_.sequence_gaps = saturatingAdd(counters_.sequence_gaps, step.missed);
+    if (step.restart) {
       ++counters_.sequence_restarts;
-      report(channel + ": sequence restarted at " + std::to_string(seq) + " after " + std::to_string(cs.last_seq));
+      report(channel + ": sequence restarted at " + std::to_string(seq) + " after " + std::to_string(cs.last_seq) +
+             (seq > cs.last_seq ? " (more than " + std::to_string(max_gap) + " ahead: not counted as missed messages)"
+                                : ""));
     }
   }
   cs.have_seq = true;

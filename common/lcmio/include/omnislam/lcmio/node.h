@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "omnislam/lcmio/decode.h"
+#include "omnislam/lcmio/sequence.h"
 #include "omnislam/lcmio/utime_order.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/process_status_t.hpp"
@@ -28,6 +29,9 @@ struct InputOptions {
   UtimeOrderOptions time_order;
   /// Count gaps and restarts of seq (off for channels with several publishers, e.g. PROCESS_STATUS).
   bool track_sequence = true;
+  /// A seq more than this ahead of the previous one counts as a restart, not as missed messages
+  /// (sequence.h: a re-based counter or a corrupted field).
+  int64_t max_sequence_gap = kMaxSequenceGap;
   /// LCM's per-subscription queue; arrivals beyond it are dropped by LCM (default 30 is small
   /// for bursts of images).
   int queue_capacity = 200;
@@ -97,7 +101,7 @@ class Node {
     int64_t last_seq = 0;
   };
   static void dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel, RawSubscription* sub);
-  void noteSequence(const std::string& channel, int64_t seq);
+  void noteSequence(const std::string& channel, int64_t seq, int64_t max_gap);
   void report(const std::string& line);
 
   std::string name_;
@@ -145,7 +149,7 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
         report(channel + ": " + cs.time.lastRestart());
       }
     }
-    if (opt.track_sequence) noteSequence(channel, msg.seq);
+    if (opt.track_sequence) noteSequence(channel, msg.seq, opt.max_sequence_gap);
     handler(msg);
   };
   lcm::Subscription* s = lcm_.subscribeFunction(channel, &Node::dispatch, sub.get());

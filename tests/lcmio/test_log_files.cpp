@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/log_writer.h"
@@ -78,6 +79,69 @@ TEST(LogFiles, ATruncatedOrCorruptTailIsNamedNotTakenForTheEnd) {
   EXPECT_LT(read, 100);
   EXPECT_GT(junk.unreadable(), static_cast<int64_t>(size / 3)) << "the rest of the file is reported";
   EXPECT_TRUE(junk.problem("junk.lcm"));
+}
+
+// One event in lcm-logger's format, with the lengths it declares given separately from the bytes.
+std::string rawEvent(int64_t number, const std::string& channel, const std::string& data, int64_t declared_data = -1,
+                     int64_t declared_channel = -1) {
+  auto be = [](uint64_t v, int n) {
+    std::string b;
+    for (int i = n - 1; i >= 0; --i) b.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+    return b;
+  };
+  return be(0xEDA1DA01u, 4) + be(static_cast<uint64_t>(number), 8) + be(1'000'000, 8) +
+         be(static_cast<uint64_t>(declared_channel >= 0 ? declared_channel : static_cast<int64_t>(channel.size())), 4) +
+         be(static_cast<uint64_t>(declared_data >= 0 ? declared_data : static_cast<int64_t>(data.size())), 4) +
+         channel + data;
+}
+
+void writeBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+
+// LCM 1.3.1's reader allocated data length + 1 bytes unchecked: 2^31 - 1 overflowed, and it read
+// into a null pointer (logstat, eval, smooth, viewer --log and slam --replay crashed on this
+// 72-byte file). Our reader checks every length against the file first.
+TEST(LogFiles, LengthsThatRunPastTheFileStopReadingWithAReason) {
+  Dir d;
+  writeBytes(d.file("huge.lcm"), rawEvent(0, "A", "good") + rawEvent(1, "A", "0123456789", 0x7fffffff));
+  lcmio::LogReadResult huge;
+  EXPECT_EQ(count(d.file("huge.lcm"), &huge), 1);
+  EXPECT_EQ(huge.file_bytes, 72);
+  EXPECT_EQ(huge.bytes_read, 33);
+  ASSERT_TRUE(huge.problem("huge.lcm"));
+  EXPECT_NE(huge.problem("huge.lcm")->find("data length 2147483647 at byte 33 runs past the end of the file"),
+            std::string::npos)
+      << *huge.problem("huge.lcm");
+  for (const int64_t bad_channel : {int64_t{0}, int64_t{1000}, int64_t{0xffffffff}}) {
+    writeBytes(d.file("ch.lcm"), rawEvent(0, "A", "good") + rawEvent(1, "A", "x", -1, bad_channel));
+    lcmio::LogReadResult ch;
+    EXPECT_EQ(count(d.file("ch.lcm"), &ch), 1) << bad_channel;
+    ASSERT_TRUE(ch.problem("ch.lcm"));
+    EXPECT_NE(ch.problem("ch.lcm")->find("outside 1..999"), std::string::npos) << *ch.problem("ch.lcm");
+  }
+  // A data length one byte too long: the event is not followed by a sync word, so it is not used.
+  writeBytes(d.file("long.lcm"), rawEvent(0, "A", "good", 5) + rawEvent(1, "A", "next"));
+  lcmio::LogReadResult lng;
+  EXPECT_EQ(count(d.file("long.lcm"), &lng), 0);
+  ASSERT_TRUE(lng.problem("long.lcm"));
+  EXPECT_NE(lng.problem("long.lcm")->find("not followed by another event"), std::string::npos) << *lng.problem("long.lcm");
+}
+
+// A data length that covers the next two events exactly and ends at a third's header: the two
+// vanished inside it without a word. The event numbers show it.
+TEST(LogFiles, EventsSwallowedByACorruptLengthAreCountedByTheirNumbers) {
+  Dir d;
+  const std::string e1 = rawEvent(1, "A", "one"), e2 = rawEvent(2, "A", "two");
+  writeBytes(d.file("swallow.lcm"), rawEvent(0, "A", "zero" + e1 + e2, 4 + static_cast<int64_t>(e1.size() + e2.size())) +
+                                        rawEvent(3, "A", "three"));
+  std::vector<int64_t> numbers;
+  const auto r = lcmio::forEachEvent(d.file("swallow.lcm"), [&](const lcmio::LogEvent& e) { numbers.push_back(e.event_number); });
+  EXPECT_EQ(numbers, (std::vector<int64_t>{0, 3}));
+  EXPECT_EQ(r.missing_event_numbers, 2);
+  EXPECT_EQ(r.unreadable(), 0);
+  ASSERT_TRUE(r.problem("swallow.lcm"));
+  EXPECT_NE(r.problem("swallow.lcm")->find("2 event numbers are missing"), std::string::npos) << *r.problem("swallow.lcm");
 }
 
 TEST(LogFiles, AnAtomicWriterShowsNothingAtThePathUntilCommit) {

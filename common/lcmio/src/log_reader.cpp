@@ -1,8 +1,6 @@
 // LCM log reading: see log_reader.h.
 #include "omnislam/lcmio/log_reader.h"
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -10,30 +8,110 @@
 
 namespace omnislam::lcmio {
 
+namespace {
+
+constexpr uint32_t kSyncWord = 0xEDA1DA01u;
+constexpr int64_t kHeaderBytes = 28;
+constexpr int32_t kMaxChannelBytes = 999;  // as LCM's reader: 1..999
+
+uint64_t bigEndian(const unsigned char* p, int n) {
+  uint64_t v = 0;
+  for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+}  // namespace
+
 std::optional<std::string> LogReadResult::problem(const std::string& path) const {
-  if (unreadable() <= 0) return std::nullopt;
-  return path + ": the " + std::to_string(unreadable()) + " bytes after its first " + std::to_string(events) +
-         " events (from byte " + std::to_string(bytes_read) + " of " + std::to_string(file_bytes) +
-         ") cannot be read (truncated or corrupt): only those events were used";
+  std::string out;
+  if (unreadable() <= 0 && !stop_reason.empty())  // a file of unknown size
+    out = "reading stopped after its first " + std::to_string(events) + " events (" + stop_reason + ")";
+  else if (unreadable() > 0)
+    out = "the " + std::to_string(unreadable()) + " bytes after its first " + std::to_string(events) +
+          " events (from byte " + std::to_string(bytes_read) + " of " + std::to_string(file_bytes) +
+          ") cannot be read (truncated or corrupt): only those events were used" +
+          (stop_reason.empty() ? "" : " (" + stop_reason + ")");
+  if (missing_event_numbers > 0)
+    out += std::string(out.empty() ? "" : "; ") + std::to_string(missing_event_numbers) +
+           " event numbers are missing between its events (events lost inside a corrupt one)";
+  if (out.empty()) return std::nullopt;
+  return path + ": " + out;
+}
+
+LogReader::LogReader(const std::string& path) : f_(std::fopen(path.c_str(), "rb")) {
+  if (f_ == nullptr) throw std::runtime_error("cannot open LCM log '" + path + "'");
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  sized_ = !ec;
+  result_.file_bytes = sized_ ? static_cast<int64_t>(size) : 0;
+}
+
+LogReader::~LogReader() {
+  if (f_ != nullptr) std::fclose(f_);
+}
+
+bool LogReader::stop(const std::string& why) {
+  done_ = true;
+  result_.stop_reason = why;
+  return false;
+}
+
+bool LogReader::next(LogEvent& ev) {
+  if (done_) return false;
+  unsigned char h[kHeaderBytes];
+  const size_t got = std::fread(h, 1, sizeof h, f_);
+  if (got == 0 && std::feof(f_)) {
+    done_ = true;
+    if (!sized_) result_.file_bytes = offset_;
+    return false;
+  }
+  const std::string at = " at byte " + std::to_string(offset_);
+  if (got != sizeof h) return stop("an event header cut short" + at);
+  if (bigEndian(h, 4) != kSyncWord) return stop("no sync word" + at);
+  const auto number = static_cast<int64_t>(bigEndian(h + 4, 8));
+  const auto timestamp = static_cast<int64_t>(bigEndian(h + 12, 8));
+  const auto channel_bytes = static_cast<int32_t>(bigEndian(h + 20, 4));
+  const auto data_bytes = static_cast<int32_t>(bigEndian(h + 24, 4));
+  if (channel_bytes < 1 || channel_bytes > kMaxChannelBytes)
+    return stop("channel length " + std::to_string(channel_bytes) + at + " outside 1.." +
+                std::to_string(kMaxChannelBytes));
+  // Unsized (not a regular file): the reads below find a short file, but a length larger than
+  // any log is refused first, so that nothing is allocated for it.
+  const int64_t left = sized_ ? result_.file_bytes - offset_ - kHeaderBytes : int64_t{1} << 30;
+  if (data_bytes < 0 || static_cast<int64_t>(channel_bytes) + data_bytes > left)
+    return stop("data length " + std::to_string(data_bytes) + at + " runs past the end of the file");
+  std::string channel(static_cast<size_t>(channel_bytes), '\0');
+  std::vector<uint8_t> data(static_cast<size_t>(data_bytes));
+  if (std::fread(channel.data(), 1, channel.size(), f_) != channel.size() ||
+      std::fread(data.data(), 1, data.size(), f_) != data.size())
+    return stop("an event cut short" + at);
+  // As LCM's reader: an event must be followed by the next one's sync word or by the end, or its
+  // lengths are not to be trusted.
+  unsigned char sync[4];
+  const size_t peek = std::fread(sync, 1, sizeof sync, f_);
+  if (peek > 0) {
+    if (peek != sizeof sync || bigEndian(sync, 4) != kSyncWord)
+      return stop("the event" + at + " is not followed by another event or the end of the file");
+    if (std::fseek(f_, -4, SEEK_CUR) != 0) return stop("cannot seek back" + at);
+  }
+  if (result_.events > 0 && number > result_.last_event_number + 1)
+    result_.missing_event_numbers += number - result_.last_event_number - 1;
+  result_.last_event_number = number;
+  offset_ += kHeaderBytes + channel_bytes + data_bytes;
+  ++result_.events;
+  result_.bytes_read = offset_;
+  ev.event_number = number;
+  ev.log_utime = timestamp;
+  ev.channel = std::move(channel);
+  ev.data = std::move(data);
+  return true;
 }
 
 LogReadResult forEachEvent(const std::string& path, const std::function<void(const LogEvent&)>& fn) {
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw std::runtime_error("cannot open LCM log '" + path + "'");
-  LogReadResult r;
-  LogEvent out;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    ++r.events;
-    r.bytes_read = static_cast<int64_t>(std::ftell(log.getFilePtr()));
-    out.event_number = ev->eventnum;
-    out.log_utime = ev->timestamp;
-    out.channel = ev->channel;
-    const auto* p = static_cast<const uint8_t*>(ev->data);
-    out.data.assign(p, p + ev->datalen);
-    fn(out);
-  }
-  r.measureFile(path);
-  return r;
+  LogReader reader(path);
+  LogEvent ev;
+  while (reader.next(ev)) fn(ev);
+  return reader.result();
 }
 
 void LogReadResult::measureFile(const std::string& path) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <optional>
 #include <string>
@@ -19,24 +20,59 @@ struct LogEvent {
   std::vector<uint8_t> data;
 };
 
-/// What forEachEvent read. LCM's reader stops at the first event it cannot read, whether the file
-/// ends there or is truncated or corrupt; the bytes after the last good event tell them apart.
+/// What a LogReader (or forEachEvent) read. Reading stops at the first event it cannot read,
+/// whether the file ends there or is truncated or corrupt; the bytes after the last good event
+/// tell them apart.
 struct LogReadResult {
   int64_t events = 0;           ///< events read (and given to fn)
   int64_t bytes_read = 0;       ///< file offset just after the last event read
   int64_t file_bytes = 0;       ///< size of the file
+  /// Event numbers missing between consecutive events. LCM's writers number the events of a file
+  /// 0, 1, 2, ...; a gap means events were lost, e.g. inside an event whose corrupt data length
+  /// still ended just before another event's header.
+  int64_t missing_event_numbers = 0;
+  int64_t last_event_number = -1;  ///< the number of the last event read
+  std::string stop_reason;      ///< why reading stopped before the end of the file ("" if it did not)
   int64_t unreadable() const { return file_bytes - bytes_read; }
   /// Sets file_bytes from the file at `path` (bytes_read if it cannot be sized).
   void measureFile(const std::string& path);
-  /// Nothing when every byte was read; else one line for the user, naming the log, e.g.
-  /// "run.lcm: the 4120 bytes after its first 99 events (from byte 600000 of 604120) cannot be read
-  /// (truncated or corrupt): only those events were used".
+  /// Nothing when every byte was read and no event number is missing; else one line for the user,
+  /// naming the log, e.g. "run.lcm: the 4120 bytes after its first 99 events (from byte 600000 of
+  /// 604120) cannot be read (truncated or corrupt): only those events were used (data length
+  /// 2147483647 at byte 600000 runs past the end of the file)".
   std::optional<std::string> problem(const std::string& path) const;
 };
 
-/// Calls fn for every event of the log in order. Throws std::runtime_error if it cannot be opened.
-/// A truncated or corrupt tail is not an error here (the events before it are good): the result
-/// says so, and every caller reports it.
+/// Reads an LCM log (lcm-logger's format: per event a 28-byte big-endian header, the sync word
+/// 0xEDA1DA01, event number, timestamp, channel length, data length; then the channel and the
+/// data) with every length checked against the file before anything is allocated or read. LCM
+/// 1.3.1's own reader allocates datalen + 1 bytes unchecked: a data length of 2^31 - 1 made it
+/// write through a null pointer (every log tool crashed on a 71-byte file).
+class LogReader {
+ public:
+  /// Opens `path`; throws std::runtime_error if it cannot.
+  explicit LogReader(const std::string& path);
+  ~LogReader();
+  LogReader(const LogReader&) = delete;
+  LogReader& operator=(const LogReader&) = delete;
+  /// The next event into `ev`; false at the end of the file or at the first event that cannot be
+  /// read (a bad sync word, a channel length outside 1..999, a data length past the end of the
+  /// file, an event not followed by another event's sync word or the end): result() says which.
+  bool next(LogEvent& ev);
+  const LogReadResult& result() const { return result_; }
+
+ private:
+  bool stop(const std::string& why);
+  std::FILE* f_ = nullptr;
+  LogReadResult result_;
+  int64_t offset_ = 0;
+  bool sized_ = false;  ///< the file's size is known (a regular file)
+  bool done_ = false;
+};
+
+/// Calls fn for every event of the log in order (a LogReader). Throws std::runtime_error if it
+/// cannot be opened. A truncated or corrupt tail is not an error here (the events before it are
+/// good): the result says so, and every caller reports it.
 LogReadResult forEachEvent(const std::string& path, const std::function<void(const LogEvent&)>& fn);
 
 /// Throws std::invalid_argument ("FLAG: 'OUT' is the input log 'IN'") when `out` names the same

@@ -7,9 +7,6 @@
 //           of the input event that produced it (byte-identical for the same input and seed).
 #include <CLI/CLI.hpp>
 
-#include <lcm/lcm-cpp.hpp>
-
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -61,17 +58,14 @@ void saveMap(const slamproc::SlamProcessOptions& opt, const SlamDriver& driver, 
 /// results never depend on it).
 class Progress {
  public:
-  Progress(const std::string& path, bool enabled) : enabled_(enabled), start_(Clock::now()), last_(start_) {
-    struct stat st {};
-    if (::stat(path.c_str(), &st) == 0) total_bytes_ = static_cast<double>(st.st_size);
-  }
-  void update(FILE* f, int64_t frames, bool final = false) {
+  explicit Progress(bool enabled) : enabled_(enabled), start_(Clock::now()), last_(start_) {}
+  /// `done`: the share of the log read so far, 0..1.
+  void update(double done, int64_t frames, bool final = false) {
     if (!enabled_) return;
     const auto now = Clock::now();
     if (!final && now - last_ < std::chrono::seconds(2)) return;
     last_ = now;
     const double t = std::chrono::duration<double>(now - start_).count();
-    const double done = (f != nullptr && total_bytes_ > 0) ? static_cast<double>(std::ftell(f)) / total_bytes_ : 1.0;
     char buf[200];
     if (final) {
       std::snprintf(buf, sizeof buf, "[slam] progress: %lld frames in %.1f s (%.1f frames/s)",
@@ -87,7 +81,6 @@ class Progress {
  private:
   using Clock = std::chrono::steady_clock;
   bool enabled_;
-  double total_bytes_ = 0.0;
   Clock::time_point start_, last_;
 };
 
@@ -151,19 +144,20 @@ struct ReplayReport {
   void seq(const std::string& channel, int64_t s) {
     auto it = last_seq.find(channel);
     if (it != last_seq.end()) {
-      if (s > it->second + 1) sequence_gaps += s - it->second - 1;
-      if (s <= it->second) ++sequence_restarts;
+      const lcmio::SequenceStep step = lcmio::sequenceStep(it->second, s);
+      sequence_gaps = lcmio::saturatingAdd(sequence_gaps, step.missed);
+      if (step.restart) ++sequence_restarts;
     }
     last_seq[channel] = s;
   }
 };
 
 template <class Msg>
-std::optional<Msg> decodeChecked(const lcm::LogEvent& ev, ReplayReport& rep) {
+std::optional<Msg> decodeChecked(const lcmio::LogEvent& ev, ReplayReport& rep) {
   Msg m;
-  if (auto why = lcmio::decode(ev.data, static_cast<size_t>(ev.datalen), m)) {
+  if (auto why = lcmio::decode(ev.data.data(), ev.data.size(), m)) {
     ++rep.decode_errors;
-    rep.line("decode error: " + ev.channel + ": cannot decode " + std::to_string(ev.datalen) + " bytes as " +
+    rep.line("decode error: " + ev.channel + ": cannot decode " + std::to_string(ev.data.size()) + " bytes as " +
              Msg::getTypeName() + ": " + *why);
     return std::nullopt;
   }
@@ -178,12 +172,10 @@ std::optional<Msg> decodeChecked(const lcm::LogEvent& ev, ReplayReport& rep) {
 int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark> prior, const std::string& in_path,
               const std::string& out_path, bool show_progress) {
   lcmio::requireDistinctFiles(in_path, out_path, "--out");
-  lcm::LogFile in(in_path, "r");
-  if (!in.good()) throw std::runtime_error("--replay: cannot read LCM log '" + in_path + "'");
+  lcmio::LogReader in(in_path);  // every length checked: a corrupt log is named, never a crash
   lcmio::LogWriter out(out_path);
-  lcmio::LogReadResult read;  // to tell a truncated or corrupt input from its end
   SlamDriver driver(opt, std::move(prior));
-  Progress progress(in_path, show_progress);
+  Progress progress(show_progress);
   lcmio::installStopHandlers();  // SIGINT / SIGTERM: stop reading, write what was computed
   ReplayReport rep;
   int64_t last_timestamp = 0, outputs = 0;
@@ -199,35 +191,39 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
       ++outputs;
     }
   };
+  auto share = [&] {
+    const auto& r = in.result();
+    return r.file_bytes > 0 ? static_cast<double>(r.bytes_read) / static_cast<double>(r.file_bytes) : 1.0;
+  };
   bool interrupted = false;
-  while (const lcm::LogEvent* ev = in.readNextEvent()) {
+  lcmio::LogEvent ev;
+  while (in.next(ev)) {
     if (lcmio::stopRequested()) {
       interrupted = true;
       break;
     }
-    ++read.events;
-    read.bytes_read = static_cast<int64_t>(std::ftell(in.getFilePtr()));
-    progress.update(in.getFilePtr(), driver.stats().frames_processed);
-    last_timestamp = ev->timestamp;
+    progress.update(share(), driver.stats().frames_processed);
+    last_timestamp = ev.log_utime;
     // Outputs of an earlier run in the input are replaced by this run's.
-    if (ev->channel == channels::kSlamPose || ev->channel == channels::kSlamMap ||
-        ev->channel == channels::kSlamParticles || ev->channel == channels::kSlamAssociations)
+    if (ev.channel == channels::kSlamPose || ev.channel == channels::kSlamMap ||
+        ev.channel == channels::kSlamParticles || ev.channel == channels::kSlamAssociations)
       continue;
-    out.write(ev->timestamp, ev->channel, ev->data, ev->datalen);
-    if (ev->channel == channels::kOdometry) {
-      if (auto m = decodeChecked<odometry_t>(*ev, rep)) handle(driver.onOdometry(*m), ev->timestamp);
-    } else if (ev->channel == channels::kOmniFeatures) {
-      if (auto m = decodeChecked<features_t>(*ev, rep)) handle(driver.onFeatures(*m), ev->timestamp);
+    out.write(ev.log_utime, ev.channel, ev.data.data(), static_cast<int>(ev.data.size()));
+    if (ev.channel == channels::kOdometry) {
+      if (auto m = decodeChecked<odometry_t>(ev, rep)) handle(driver.onOdometry(*m), ev.log_utime);
+    } else if (ev.channel == channels::kOmniFeatures) {
+      if (auto m = decodeChecked<features_t>(ev, rep)) handle(driver.onFeatures(*m), ev.log_utime);
     }
   }
   if (!interrupted) {
-    read.measureFile(in_path);
-    if (const auto problem = read.problem(in_path)) std::cerr << "[slam] warning: --replay " << *problem << std::endl;
+    if (const auto problem = in.result().problem(in_path))
+      std::cerr << "[slam] warning: --replay " << *problem << std::endl;
   }
   handle(driver.finish(), last_timestamp);
-  progress.update(nullptr, driver.stats().frames_processed, true);
+  progress.update(1.0, driver.stats().frames_processed, true);
   if (interrupted) std::cerr << "[slam] replay interrupted by signal " << lcmio::stopSignal() << ": outputs so far kept" << std::endl;
   saveMap(opt, driver, "[slam] ");
+  out.commit();  // a failed last write (a full disk) is an error, not "N events written"
   std::cerr << "[slam] replay done: " << outputs << " frames answered, " << out.events() << " events written to "
             << out_path << "; decode_errors " << rep.decode_errors << " rejected " << rep.rejected
             << " sequence_gaps " << rep.sequence_gaps << " sequence_restarts " << rep.sequence_restarts << "; "

@@ -15,6 +15,7 @@
 #include <functional>
 #include <iostream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -330,6 +331,49 @@ TEST(SlamReplay, DegradedLogIsHandledByRuleAndReplayIsStillDeterministic) {
     EXPECT_LT(std::hypot(p.x_m - x.x_m, p.y_m - x.y_m), 0.5) << "frame " << p.input_seq << " utime " << p.utime;
   }
   (void)restart_at;
+}
+
+// Three ways a replay used to go wrong on bad bytes: a log event declaring 2^31 - 1 data bytes
+// crashed LCM's reader (a write through a null pointer); an odometry seq corrupted to INT64_MAX
+// printed sequence_gaps -9223372036854775808; and --out on a full disk lost the last buffer and
+// still said "N events written", exit 0.
+TEST(SlamReplay, ACorruptLengthACorruptSeqAndAFullDiskAreReported) {
+  const Synthetic& syn = synthetic();
+  std::vector<Event> ev;
+  for (const auto& e : syn.events())
+    if (e.log_utime <= syn.t0 + 5'000'000) ev.push_back(e);
+  for (auto& e : ev)
+    if (e.channel == channels::kOdometry && e.log_utime == syn.t0 + 2'000'000) {
+      odometry_t m = syn.odometry[100];
+      ASSERT_EQ(m.utime, e.log_utime);
+      m.seq = std::numeric_limits<int64_t>::max();
+      e.data = encode(m);
+    }
+  t::TempDir dir;
+  writeLog(dir.file("in.lcm"), ev);
+  {
+    std::ofstream tail(dir.file("in.lcm"), std::ios::binary | std::ios::app);
+    const unsigned char header[28] = {0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0, 0, 99, 0, 0, 0, 0, 0, 0, 0, 1,
+                                      0, 0, 0, 8, 0x7f, 0xff, 0xff, 0xff};
+    tail.write(reinterpret_cast<const char*>(header), sizeof header);
+    tail << "ODOMETRY0123456789";
+  }
+  const auto r = t::run({t::binPath("omnislam-slam"), "--replay", dir.file("in.lcm"), "--out", dir.file("out.lcm"),
+                         "--config", kConfig, "--no-progress"},
+                        60.0);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("data length 2147483647 at byte"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("sequence_gaps 0 sequence_restarts 2"), std::string::npos) << r.output;
+  // Frames 0..4 (frame 5 is logged after 5 s): every one answered, the corrupt seq notwithstanding.
+  EXPECT_EQ(lcmio::readChannel<pose_t>(dir.file("out.lcm"), channels::kSlamPose).size(), 5u) << r.output;
+
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
+  const auto full = t::run({t::binPath("omnislam-slam"), "--replay", dir.file("in.lcm"), "--out", "/dev/full",
+                            "--config", kConfig, "--no-progress"},
+                           60.0);
+  EXPECT_NE(full.exit_code, 0) << full.output;
+  EXPECT_NE(full.output.find("'/dev/full' failed"), std::string::npos) << full.output;
+  EXPECT_EQ(full.output.find("replay done"), std::string::npos) << full.output;
 }
 
 TEST(SlamReplay, BadConfigAndFlagsStopWithAMessageNamingTheKey) {

@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <stdexcept>
 
@@ -26,7 +27,8 @@ LogWriter::~LogWriter() = default;
 void LogWriter::commit() {
   if (!log_) throw std::runtime_error("LCM log '" + path_ + "' committed twice");
   std::FILE* f = log_->getFilePtr();
-  const bool flushed = f && std::fflush(f) == 0 && fsync(fileno(f)) == 0;
+  // fsync fails with EINVAL on a pipe or a device (--out /dev/stdout): nothing to sync there.
+  const bool flushed = f && std::fflush(f) == 0 && (fsync(fileno(f)) == 0 || errno == EINVAL);
   log_.reset();  // closes
   if (!flushed) throw std::runtime_error("writing LCM log '" + fileOf(path_, mode_) + "' failed (flush)");
   if (mode_ == Mode::kAtomic && std::rename(fileOf(path_, mode_).c_str(), path_.c_str()) != 0)
@@ -35,13 +37,14 @@ void LogWriter::commit() {
 
 void LogWriter::write(int64_t timestamp, const std::string& channel, const void* data, int32_t size) {
   lcm::LogEvent ev;
-  ev.eventnum = n_++;
+  ev.eventnum = n_;
   ev.timestamp = timestamp;
   ev.channel = channel;
   ev.datalen = size;
   ev.data = const_cast<void*>(data);
   if (!log_) throw std::runtime_error("LCM log '" + path_ + "' written after commit()");
   if (log_->writeEvent(&ev) != 0) throw std::runtime_error("writing LCM log '" + path_ + "' failed");
+  ++n_;
 }
 
 }  // namespace omnislam::lcmio

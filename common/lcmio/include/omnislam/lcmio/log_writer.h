@@ -22,9 +22,10 @@ class LogWriter {
   enum class Mode { kDirect, kAtomic };
   /// Creates (truncates) the file; throws std::runtime_error naming it when it cannot be written.
   explicit LogWriter(const std::string& path, Mode mode = Mode::kDirect);
-  ~LogWriter();  // closes the file (kAtomic: without renaming it)
-  /// kAtomic: closes the file and renames it to the path; throws std::runtime_error on failure.
-  /// kDirect: closes it. No write after it.
+  ~LogWriter();  // closes the file unchecked (kAtomic: without renaming it): call commit()
+  /// Flushes and syncs the file, closes it and (kAtomic) renames it to the path; throws
+  /// std::runtime_error when any of it fails (a full disk shows here: stdio writes the last
+  /// buffer only now, and the destructor's close cannot report). No write after it.
   void commit();
   LogWriter(const LogWriter&) = delete;
   LogWriter& operator=(const LogWriter&) = delete;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
@@ -75,6 +76,27 @@ TEST(LcmioNode, ASeqFarAheadIsARestartNotMissedMessages) {
   const auto& c = node.counters();
   EXPECT_EQ(c.sequence_restarts, 5);  // two jumps ahead, two steps back, one jump of max + 1
   EXPECT_EQ(c.sequence_gaps, 7);      // the last step: 7 missing, counted
+}
+
+// A handler that threw unwound through LCM's C dispatch: LCM stayed "inside a handler" and its
+// next handle() aborted the process (assert !lcm->in_handle). Now the message is refused, named,
+// and the node goes on.
+TEST(LcmioNode, AHandlerThatThrowsRefusesThatMessageAndTheNodeGoesOn) {
+  lcmio::Node node("unit", "memq://");
+  std::vector<int64_t> seen;
+  node.subscribe<odometry_t>(channels::kOdometry, [&](const odometry_t& m) {
+    if (m.seq == 1) throw std::runtime_error("no room for it");
+    if (m.seq == 2) throw 42;
+    seen.push_back(m.seq);
+  });
+  for (int64_t k = 0; k < 4; ++k) {
+    auto m = odo(1000 * (k + 1), k);
+    node.lcm().publish(channels::kOdometry, &m);
+    EXPECT_TRUE(node.handleFor(0.0));
+  }
+  EXPECT_EQ(seen, (std::vector<int64_t>{0, 3}));
+  EXPECT_EQ(node.counters().rejected_inputs, 2);
+  EXPECT_EQ(node.counters().last_error, "ODOMETRY: handling it failed: an unknown exception");
 }
 
 TEST(LcmioSequence, StepsAtTheBoundsAndASaturatingCount) {

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <map>
 #include <memory>
@@ -62,7 +63,9 @@ class Node {
   const std::string& name() const { return name_; }
 
   /// Subscribes `handler` to `channel` for messages of type Msg. Undecodable, invalid and
-  /// out-of-order messages are counted, reported on one line and skipped.
+  /// out-of-order messages are counted, reported on one line and skipped. A handler that throws
+  /// has its message counted and reported as refused ("handling it failed: ...") and the node goes
+  /// on, so a handler must leave its state whole when it throws (check, then change).
   template <class Msg>
   void subscribe(const std::string& channel, std::function<void(const Msg&)> handler, InputOptions opt = {});
 
@@ -150,7 +153,16 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
       }
     }
     if (opt.track_sequence) noteSequence(channel, msg.seq, opt.max_sequence_gap);
-    handler(msg);
+    // An exception must not unwind through LCM's C dispatch: LCM would stay "inside a handler" and
+    // abort on its next handle() (assert !lcm->in_handle). The message counts as refused, with
+    // the exception's text as the reason, and the process goes on.
+    try {
+      handler(msg);
+    } catch (const std::exception& e) {
+      reject(channel, std::string("handling it failed: ") + e.what());
+    } catch (...) {
+      reject(channel, "handling it failed: an unknown exception");
+    }
   };
   lcm::Subscription* s = lcm_.subscribeFunction(channel, &Node::dispatch, sub.get());
   if (s) s->setQueueCapacity(opt.queue_capacity);

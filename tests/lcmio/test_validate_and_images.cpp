@@ -143,6 +143,90 @@ TEST(Validate, CovariancesEnumsAndWeightsAsTheContractDefinesThem) {
   EXPECT_NE(lcmio::validate(ps).value_or("").find("particle 1: negative weight"), std::string::npos);
 }
 
+// A count its array does not hold (a message built in code, e.g. a producer checking its own
+// output) made validate read past the array (ASan: heap-buffer-overflow in validate(particles_t)).
+TEST(Validate, ACountThatItsArrayDoesNotHoldIsRefusedNotReadPast) {
+  particles_t ps{};
+  ps.num_particles = 3;
+  ps.x_m = ps.y_m = ps.theta_rad = ps.weight = {0.0};
+  EXPECT_EQ(lcmio::validate(ps).value_or(""), "num_particles 3 != its array's size 1");
+  features_t f{};
+  f.num_features = 2;
+  EXPECT_EQ(lcmio::validate(f).value_or(""), "num_features 2 != its array's size 0");
+  map_t m{};
+  m.landmarks.resize(1);
+  EXPECT_EQ(lcmio::validate(m).value_or(""), "num_landmarks 0 != its array's size 1");
+  associations_t a{};
+  a.num_features = 1;
+  EXPECT_EQ(lcmio::validate(a).value_or(""), "num_features 1 != its array's size 0");
+  feature_labels_t l{};
+  l.num_features = 1;
+  l.landmark_id = {3};
+  EXPECT_EQ(lcmio::validate(l).value_or(""), "num_features 1 != its array's size 0");  // source_code
+}
+
+TEST(Validate, AssociationsLabelsAndTheLimitsAtTheirBounds) {
+  const lcmio::Limits lim;
+  associations_t a{};
+  a.num_features = lim.max_features;
+  a.landmark_id.assign(static_cast<size_t>(a.num_features), +associations_t::NOT_ASSOCIATED);
+  EXPECT_FALSE(lcmio::validate(a).has_value());
+  a.landmark_id[7] = -3;
+  EXPECT_EQ(lcmio::validate(a).value_or(""), "feature 7: landmark_id -3 below -2");
+  a.num_features = lim.max_features + 1;
+  a.landmark_id.push_back(0);
+  EXPECT_EQ(lcmio::validate(a).value_or(""), "num_features out of range");
+
+  feature_labels_t l{};
+  l.num_features = 2;
+  l.landmark_id = {+feature_labels_t::UNKNOWN, 12};
+  l.source_code = {9, 12};
+  EXPECT_FALSE(lcmio::validate(l).has_value());
+  l.landmark_id[0] = -3;
+  EXPECT_EQ(lcmio::validate(l).value_or(""), "feature 0: landmark_id -3 below -2");
+  l.landmark_id[0] = 1;
+  l.features_seq = -1;
+  EXPECT_EQ(lcmio::validate(l).value_or(""), "negative features_seq -1");
+  l.features_seq = 0;
+  l.seq = -1;
+  EXPECT_EQ(lcmio::validate(l).value_or(""), "negative seq -1");
+
+  map_t m{};
+  m.num_landmarks = lim.max_landmarks + 1;
+  m.landmarks.resize(static_cast<size_t>(m.num_landmarks));
+  EXPECT_EQ(lcmio::validate(m).value_or(""), "num_landmarks out of range");
+  particles_t ps{};
+  ps.num_particles = lim.max_particles + 1;
+  EXPECT_EQ(lcmio::validate(ps).value_or(""), "num_particles out of range");
+
+  image_t im{};
+  im.pixel_format = image_t::FORMAT_GRAY8;
+  im.width = lim.max_image_side_px, im.height = 1, im.row_stride = im.width;
+  im.data.assign(static_cast<size_t>(im.width), 0), im.size = im.width;
+  EXPECT_FALSE(lcmio::validate(im).has_value());
+  im.width = im.row_stride = lim.max_image_side_px + 1;
+  im.data.resize(static_cast<size_t>(im.width)), im.size = im.width;
+  EXPECT_NE(lcmio::validate(im).value_or("").find("image size"), std::string::npos);
+  im.pixel_format = image_t::FORMAT_PNG, im.width = 4, im.row_stride = 0, im.size = 0, im.data.clear();
+  EXPECT_EQ(lcmio::validate(im).value_or(""), "empty compressed image");
+  im.size = 5;
+  EXPECT_EQ(lcmio::validate(im).value_or(""), "image data size 5 invalid");
+
+  features_t f{};
+  f.num_features = 1;
+  feature_t ft{};
+  ft.kind = feature_t::KIND_VERTICAL_LINE;
+  ft.covariance[0][0] = 0.0;
+  f.features = {ft};
+  EXPECT_EQ(lcmio::validate(f).value_or(""), "feature 0: azimuth variance must be > 0");
+  f.features[0].covariance[0][0] = 1e-4;
+  EXPECT_FALSE(lcmio::validate(f).has_value());
+  f.features[0].kind = feature_t::KIND_CEILING_LIGHT, f.features[0].has_elevation = true;
+  f.features[0].covariance[1][1] = 1e-4;
+  f.features[0].elevation_rad = M_PI / 2 + 1e-6;
+  EXPECT_EQ(lcmio::validate(f).value_or(""), "feature 0: elevation outside [-pi/2, pi/2]");
+}
+
 TEST(ImageMsg, RawAndLosslessRoundTripsAreExact) {
   cv::Mat grey(48, 64, CV_8UC1);
   cv::randu(grey, 0, 255);

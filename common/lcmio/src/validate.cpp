@@ -22,6 +22,13 @@ bool allFinite(const double (&a)[N][M]) {
   return true;
 }
 
+// A message built in code (a producer checking its own output) can hold a count that its array
+// does not: decoded messages always agree, but validate must not index past the array either way.
+std::optional<std::string> countMismatch(const char* field, int64_t count, size_t array_size) {
+  if (static_cast<size_t>(count) == array_size) return std::nullopt;
+  return std::string(field) + " " + std::to_string(count) + " != its array's size " + std::to_string(array_size);
+}
+
 std::optional<std::string> checkTime(int64_t utime, int64_t seq) {
   if (utime < 0) return "negative utime " + std::to_string(utime);
   if (seq < 0) return "negative seq " + std::to_string(seq);
@@ -78,6 +85,7 @@ std::optional<std::string> validate(const features_t& m, const Limits& lim) {
   if (auto e = checkTime(m.utime, m.seq)) return e;
   if (m.num_features < 0 || m.num_features > lim.max_features)
     return "num_features " + std::to_string(m.num_features) + " outside 0.." + std::to_string(lim.max_features);
+  if (auto e = countMismatch("num_features", m.num_features, m.features.size())) return e;
   if (!allFinite(m.camera_position_m)) return "non-finite camera_position_m";
   for (int i = 0; i < m.num_features; ++i) {
     const feature_t& f = m.features[static_cast<size_t>(i)];
@@ -128,6 +136,7 @@ std::optional<std::string> validate(const pose_t& m, const Limits&) {
 std::optional<std::string> validate(const map_t& m, const Limits& lim) {
   if (auto e = checkTime(m.utime, m.seq)) return e;
   if (m.num_landmarks < 0 || m.num_landmarks > lim.max_landmarks) return "num_landmarks out of range";
+  if (auto e = countMismatch("num_landmarks", m.num_landmarks, m.landmarks.size())) return e;
   if (m.num_candidates < 0) return "negative num_candidates " + std::to_string(m.num_candidates);
   for (int i = 0; i < m.num_landmarks; ++i) {
     const landmark_t& l = m.landmarks[static_cast<size_t>(i)];
@@ -144,6 +153,8 @@ std::optional<std::string> validate(const map_t& m, const Limits& lim) {
 std::optional<std::string> validate(const particles_t& m, const Limits& lim) {
   if (auto e = checkTime(m.utime, m.seq)) return e;
   if (m.num_particles < 0 || m.num_particles > lim.max_particles) return "num_particles out of range";
+  for (const size_t n : {m.x_m.size(), m.y_m.size(), m.theta_rad.size(), m.weight.size()})
+    if (auto e = countMismatch("num_particles", m.num_particles, n)) return e;
   for (size_t i = 0; i < static_cast<size_t>(m.num_particles); ++i) {
     if (!finite(m.x_m[i]) || !finite(m.y_m[i]) || !finite(m.theta_rad[i]) || !finite(m.weight[i]))
       return "particle " + std::to_string(i) + ": non-finite value";
@@ -162,6 +173,7 @@ std::optional<std::string> validate(const process_status_t& m, const Limits&) {
 std::optional<std::string> validate(const associations_t& m, const Limits& lim) {
   if (auto e = checkTime(m.utime, m.seq)) return e;
   if (m.num_features < 0 || m.num_features > lim.max_features) return "num_features out of range";
+  if (auto e = countMismatch("num_features", m.num_features, m.landmark_id.size())) return e;
   for (size_t i = 0; i < static_cast<size_t>(m.num_features); ++i)
     if (m.landmark_id[i] < +associations_t::NOT_ASSOCIATED)
       return "feature " + std::to_string(i) + ": landmark_id " + std::to_string(m.landmark_id[i]) + " below -2";
@@ -172,6 +184,8 @@ std::optional<std::string> validate(const feature_labels_t& m, const Limits& lim
   if (auto e = checkTime(m.utime, m.seq)) return e;
   if (m.features_seq < 0) return "negative features_seq " + std::to_string(m.features_seq);
   if (m.num_features < 0 || m.num_features > lim.max_features) return "num_features out of range";
+  if (auto e = countMismatch("num_features", m.num_features, m.landmark_id.size())) return e;
+  if (auto e = countMismatch("num_features", m.num_features, m.source_code.size())) return e;
   for (size_t i = 0; i < static_cast<size_t>(m.num_features); ++i)
     if (m.landmark_id[i] < +feature_labels_t::UNKNOWN)
       return "feature " + std::to_string(i) + ": landmark_id " + std::to_string(m.landmark_id[i]) + " below -2";

@@ -6,10 +6,12 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <thread>
 #include <vector>
 #include <algorithm>
 
@@ -253,6 +255,29 @@ TEST(BadConfig, RecorderRefusesABadRegexOrUrlBeforeTouchingItsFile) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--url"), std::string::npos) << r.output;
   EXPECT_EQ(std::filesystem::file_size(keep), 20u) << "the file was emptied";
+}
+
+// omnislam-record closed its log through LCM, which ignores what fflush and fclose return: on a
+// full disk the last stdio buffer was lost at exit, and the run still ended 0 with "N events".
+TEST(BadInput, RecorderOnAFullDiskSaysSoAndFails) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
+  const std::string url = t::privateUdpUrl(41);
+  t::Child rec({t::binPath("omnislam-record"), "-f", "/dev/full", "--url", url});
+  lcm::LCM bus(url);
+  ASSERT_TRUE(bus.good());
+  // The recorder announces itself once subscribed; then a few small messages (less than a buffer).
+  for (int i = 0; i < 100 && rec.output().find("recording") == std::string::npos; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  for (int k = 0; k < 5; ++k) {
+    auto p = pose(1'000'000 + k * 20'000, k);
+    bus.publish(channels::kGroundTruthPose, &p);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  rec.signal(SIGINT);
+  const auto r = rec.wait(10.0);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("WRITE FAILURES (the first: writing LCM log '/dev/full' failed (flush))"), std::string::npos)
+      << r.output;
 }
 
 TEST(BadConfig, MalformedWheelCsvNamesFileAndLine) {

@@ -7,34 +7,33 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <iostream>
+#include <optional>
+#include <stdexcept>
 
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
+#include "omnislam/lcmio/log_writer.h"
 #include "omnislam/lcmio/signals.h"
 
 namespace {
 
 struct Recorder {
-  lcm::LogFile* log = nullptr;
-  int64_t events = 0, bytes = 0, failures = 0;
+  omnislam::lcmio::LogWriter* log = nullptr;
+  int64_t bytes = 0, failures = 0;
+  std::string first_failure;
   // Through LCM's C API: its lcm_subscribe returns NULL for a regex it cannot compile, where the
   // C++ wrapper returns an object whose use then crashes.
   static void onC(const lcm_recv_buf_t* rbuf, const char* channel, void* self) {
     static_cast<Recorder*>(self)->on(rbuf, channel);
   }
   void on(const lcm_recv_buf_t* rbuf, const std::string& channel) {
-    lcm::LogEvent ev;
-    ev.eventnum = events;
-    ev.timestamp = rbuf->recv_utime;  // the log's own receive time, as lcm-logger writes it
-    ev.channel = channel;
-    ev.datalen = static_cast<int32_t>(rbuf->data_size);
-    ev.data = rbuf->data;
-    if (log->writeEvent(&ev) != 0) {
-      ++failures;
-      return;
+    try {  // nothing may unwind through LCM's C dispatch
+      // The log's own receive time, as lcm-logger writes it.
+      log->write(rbuf->recv_utime, channel, rbuf->data, static_cast<int32_t>(rbuf->data_size));
+      bytes += rbuf->data_size;
+    } catch (const std::exception& e) {
+      if (failures++ == 0) first_failure = e.what();
     }
-    ++events;
-    bytes += rbuf->data_size;
   }
 };
 
@@ -59,17 +58,36 @@ int main(int argc, char** argv) {
     lcm_subscription_t* sub = lcm_subscribe(bus.getUnderlyingLCM(), channels.c_str(), &Recorder::onC, &rec);
     if (!sub) throw std::invalid_argument("--channels: LCM cannot compile the regular expression '" + channels + "'");
     lcm_subscription_set_queue_capacity(sub, queue);
-    lcm::LogFile log(path, "w");
-    if (!log.good()) throw std::invalid_argument("--file: cannot write '" + path + "'");
+    std::optional<omnislam::lcmio::LogWriter> opened;
+    try {
+      opened.emplace(path);
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(std::string("--file: ") + e.what());
+    }
+    omnislam::lcmio::LogWriter& log = *opened;
     omnislam::lcmio::installStopHandlers();
     rec.log = &log;
     std::cerr << "[record] recording '" << channels << "' into " << path << std::endl;
-    while (!omnislam::lcmio::stopRequested()) bus.handleTimeout(100);
-    // Drain what has already arrived, then close the file (flushes).
+    bool bus_failed = false;
+    while (!omnislam::lcmio::stopRequested())
+      if (bus.handleTimeout(100) < 0 && !omnislam::lcmio::stopRequested()) {
+        bus_failed = true;  // LCM cannot receive any more: stop rather than record nothing
+        break;
+      }
+    // Drain what has already arrived, then flush, sync and close the file: stdio writes its last
+    // buffer only now, so a full disk shows here or not at all.
     while (bus.handleTimeout(0) > 0) {
     }
-    std::cerr << "[record] " << rec.events << " events, " << rec.bytes / 1e6 << " MB"
-              << (rec.failures ? ", " + std::to_string(rec.failures) + " WRITE FAILURES" : "") << std::endl;
-    return rec.failures ? omnislam::app::kFailure : omnislam::app::kOk;
+    try {
+      log.commit();
+    } catch (const std::exception& e) {
+      if (rec.failures++ == 0) rec.first_failure = e.what();
+    }
+    std::cerr << "[record] " << log.events() << " events, " << rec.bytes / 1e6 << " MB"
+              << (rec.failures ? ", " + std::to_string(rec.failures) + " WRITE FAILURES (the first: " +
+                                     rec.first_failure + ")"
+                               : "")
+              << (bus_failed ? "; stopped: LCM failed to receive" : "") << std::endl;
+    return rec.failures || bus_failed ? omnislam::app::kFailure : omnislam::app::kOk;
   });
 }

@@ -99,6 +99,24 @@ TEST(LcmioNode, AHandlerThatThrowsRefusesThatMessageAndTheNodeGoesOn) {
   EXPECT_EQ(node.counters().last_error, "ODOMETRY: handling it failed: an unknown exception");
 }
 
+// The time order and sequence state was kept per channel name: a second subscription to the same
+// channel saw every message as a duplicate of what the first had just admitted, and got nothing.
+TEST(LcmioNode, TwoSubscriptionsToOneChannelEachGetEveryMessage) {
+  lcmio::Node node("unit", "memq://");
+  std::vector<int64_t> first, second;
+  node.subscribe<odometry_t>(channels::kOdometry, [&](const odometry_t& m) { first.push_back(m.seq); });
+  node.subscribe<odometry_t>(channels::kOdometry, [&](const odometry_t& m) { second.push_back(m.seq); });
+  for (int64_t k = 0; k < 3; ++k) {
+    auto m = odo(1000 * (k + 1), k);
+    node.lcm().publish(channels::kOdometry, &m);
+  }
+  while (node.lcm().handleTimeout(0) > 0) {
+  }
+  EXPECT_EQ(first, (std::vector<int64_t>{0, 1, 2}));
+  EXPECT_EQ(second, first);
+  EXPECT_EQ(node.counters().rejected_inputs, 0);
+}
+
 TEST(LcmioSequence, StepsAtTheBoundsAndASaturatingCount) {
   const int64_t kMax = lcmio::kMaxSequenceGap, kHuge = std::numeric_limits<int64_t>::max();
   EXPECT_EQ(lcmio::sequenceStep(5, 6).missed, 0);

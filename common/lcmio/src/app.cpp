@@ -21,6 +21,9 @@ int runMain(const std::string& prog, const std::function<int()>& body) {
   } catch (const std::exception& e) {
     std::cerr << prog << ": fatal: " << e.what() << std::endl;
     return kFailure;
+  } catch (...) {
+    std::cerr << prog << ": fatal: an unknown exception" << std::endl;
+    return kFailure;
   }
 }
 

@@ -23,8 +23,7 @@ Node::~Node() = default;
 
 void Node::dispatch(const lcm::ReceiveBuffer* rbuf, const std::string&, RawSubscription* sub) { sub->fn(rbuf); }
 
-void Node::noteSequence(const std::string& channel, int64_t seq, int64_t max_gap) {
-  ChannelState& cs = channels_[channel];
+void Node::noteSequence(ChannelState& cs, const std::string& channel, int64_t seq, int64_t max_gap) {
   if (cs.have_seq) {
     const SequenceStep step = sequenceStep(cs.last_seq, seq, max_gap);
     counters_.sequence_gaps = saturatingAdd(counters_.sequence_gaps, step.missed);

@@ -9,7 +9,6 @@
 #include <cstdint>
 #include <exception>
 #include <functional>
-#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -93,24 +92,26 @@ class Node {
   std::string tag() const { return "[" + name_ + "] "; }
 
  private:
-  struct RawSubscription {
-    Node* node = nullptr;
-    std::string channel;
-    std::function<void(const lcm::ReceiveBuffer*)> fn;
-  };
+  /// Time order and sequence of one subscription's stream (per subscription: two subscriptions
+  /// to one channel each see every message).
   struct ChannelState {
     UtimeOrder time;
     bool have_seq = false;
     int64_t last_seq = 0;
   };
+  struct RawSubscription {
+    Node* node = nullptr;
+    std::string channel;
+    ChannelState state;
+    std::function<void(const lcm::ReceiveBuffer*)> fn;
+  };
   static void dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel, RawSubscription* sub);
-  void noteSequence(const std::string& channel, int64_t seq, int64_t max_gap);
+  void noteSequence(ChannelState& cs, const std::string& channel, int64_t seq, int64_t max_gap);
   void report(const std::string& line);
 
   std::string name_;
   lcm::LCM lcm_;
   std::vector<std::unique_ptr<RawSubscription>> subs_;
-  std::map<std::string, ChannelState> channels_;
   Counters counters_;
   int8_t state_ = process_status_t::STATE_STARTING;
   std::string detail_;
@@ -126,7 +127,7 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
   auto sub = std::make_unique<RawSubscription>();
   sub->node = this;
   sub->channel = channel;
-  sub->fn = [this, channel, handler = std::move(handler), opt](const lcm::ReceiveBuffer* rbuf) {
+  sub->fn = [this, self = sub.get(), channel, handler = std::move(handler), opt](const lcm::ReceiveBuffer* rbuf) {
     ++counters_.messages_in;
     Msg msg;
     if (auto why = lcmio::decode(rbuf->data, rbuf->data_size, msg)) {
@@ -140,7 +141,7 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
       reject(channel, *why);
       return;
     }
-    ChannelState& cs = channels_[channel];
+    ChannelState& cs = self->state;
     if (opt.require_increasing_utime) {
       const int64_t restarts = cs.time.restarts();
       if (auto why = cs.time.admit(msg.utime, opt.time_order)) {
@@ -152,7 +153,7 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
         report(channel + ": " + cs.time.lastRestart());
       }
     }
-    if (opt.track_sequence) noteSequence(channel, msg.seq, opt.max_sequence_gap);
+    if (opt.track_sequence) noteSequence(cs, channel, msg.seq, opt.max_sequence_gap);
     // An exception must not unwind through LCM's C dispatch: LCM would stay "inside a handler" and
     // abort on its next handle() (assert !lcm->in_handle). The message counts as refused, with
     // the exception's text as the reason, and the process goes on.

@@ -213,24 +213,23 @@ int runLog(const Settings& s) {
   d.on<features_t>(channels::kOmniFeatures, [&](const features_t& m) { st.onFeatures(m); });
   const auto t0 = std::chrono::steady_clock::now();
   auto next_progress = t0 + std::chrono::seconds(2);
-  const double log_bytes = static_cast<double>(fs::file_size(s.log));
-  double bytes = 0;
   int64_t events = 0;
-  const lcmio::LogReadResult got = lcmio::forEachEvent(s.log, [&](const lcmio::LogEvent& ev) {
-    if (lcmio::stopRequested()) return;
+  lcmio::LogReader reader(s.log);
+  lcmio::LogEvent ev;
+  while (!lcmio::stopRequested() && reader.next(ev)) {  // SIGINT: stop reading, write the final view
     ++events;
     d.dispatch(ev);
-    // Progress every 2 s: an event takes 28 header bytes + channel + data in the file.
-    bytes += 28.0 + static_cast<double>(ev.channel.size() + ev.data.size());
     const auto now = std::chrono::steady_clock::now();
-    if (now >= next_progress && log_bytes > 0) {
+    const lcmio::LogReadResult& r = reader.result();
+    if (now >= next_progress && r.file_bytes > 0) {  // progress every 2 s
       next_progress = now + std::chrono::seconds(2);
-      const double done = std::min(1.0, bytes / log_bytes);
+      const double done = std::min(1.0, static_cast<double>(r.bytes_read) / static_cast<double>(r.file_bytes));
       const double el = std::chrono::duration<double>(now - t0).count();
       std::fprintf(stderr, "[viewer] %lld SLAM steps, %.0f%% of the log, %.1f steps/s, about %.0f s left\n",
                    static_cast<long long>(st.steps()), 100.0 * done, st.steps() / el, done > 0 ? el * (1.0 - done) / done : 0.0);
     }
-  });
+  }
+  const lcmio::LogReadResult& got = reader.result();
   v.writeFinal();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "[viewer] " << s.log << ": " << events << " events, " << st.steps() << " SLAM steps, " << v.written()

@@ -37,17 +37,18 @@ namespace {
 /// Writes the best particle's map when a save path is configured (atomic; see map_file.h).
 void saveMap(const slamproc::SlamProcessOptions& opt, const SlamDriver& driver, const std::string& tag) {
   if (opt.save_map_path.empty()) return;
-  const slam::FastSlam* f = driver.filter();
+  slamproc::SavedMap m;
+  const slam::FastSlam* f = driver.filterToSave(&m.utime);
   if (f == nullptr) {
     std::cerr << tag << "map not saved: no frame was processed" << std::endl;
     return;
   }
-  slamproc::SavedMap m;
-  m.utime = driver.lastStepUtime();
   m.landmarks = f->bestMap();
   try {
     slamproc::saveMapAtomically(m, opt.save_map_path);
-    std::cerr << tag << "map saved: " << m.landmarks.size() << " landmarks to " << opt.save_map_path << std::endl;
+    std::cerr << tag << "map saved: " << m.landmarks.size() << " landmarks to " << opt.save_map_path
+              << (driver.filter() == nullptr ? " (the map before the last restart: no frame processed since)" : "")
+              << std::endl;
   } catch (const std::exception& e) {
     std::cerr << tag << "error: " << e.what() << std::endl;
     throw;

@@ -115,8 +115,11 @@ void SlamDriver::apply(std::vector<PairEvent>& events, DriverResult& r) {
   for (PairEvent& ev : events) {
     switch (ev.kind) {
       case PairEvent::Kind::kReset:
-        if (filter_) ++stats_.filter_resets;
-        filter_.reset();  // the next frame initialises a new filter (new epoch)
+        if (filter_) {  // the next frame initialises a new filter (new epoch); this one is kept to save
+          ++stats_.filter_resets;
+          ended_filter_ = std::move(filter_);
+          ended_step_utime_ = last_step_utime_;
+        }
         ++epoch_;
         last_step_utime_ = last_frame_utime_ = odom_utime_at_last_frame_ = 0;
         break;
@@ -128,6 +131,15 @@ void SlamDriver::apply(std::vector<PairEvent>& events, DriverResult& r) {
         break;
     }
   }
+}
+
+const slam::FastSlam* SlamDriver::filterToSave(int64_t* utime) const {
+  if (filter_) {
+    if (utime) *utime = last_step_utime_;
+    return filter_.get();
+  }
+  if (utime) *utime = ended_step_utime_;
+  return ended_filter_.get();
 }
 
 void SlamDriver::ensureFilter(const Pose2& odom_O) {

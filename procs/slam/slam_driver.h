@@ -86,6 +86,11 @@ class SlamDriver {
   const slam::FastSlam* filter() const { return filter_.get(); }
   /// utime of the last step (frame or odometry-only), 0 before the first.
   int64_t lastStepUtime() const { return last_step_utime_; }
+  /// The filter whose map is to be saved at exit: the current epoch's, or, when no frame has been
+  /// processed since the last restart, the one that restart ended (a restarted input timeline
+  /// starts a new estimate; it does not undo the map already made). Nothing if no frame was
+  /// processed at all. With its last step's utime in *utime.
+  const slam::FastSlam* filterToSave(int64_t* utime) const;
 
  private:
   void apply(std::vector<PairEvent>& events, DriverResult& r);
@@ -98,6 +103,8 @@ class SlamDriver {
   SlamProcessOptions opt_;
   Pairer pairer_;
   std::unique_ptr<slam::FastSlam> filter_;  ///< created at the first frame of each epoch
+  std::unique_ptr<slam::FastSlam> ended_filter_;  ///< the filter the last restart ended
+  int64_t ended_step_utime_ = 0;                  ///< its last step's utime
   Pose2 odom_prev_O_;
   std::vector<slam::Landmark> prior_map_;
   int64_t last_step_utime_ = 0;     ///< utime of the last filter step (frame or prediction)

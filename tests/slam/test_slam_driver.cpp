@@ -298,6 +298,30 @@ TEST(SlamDriver, RestartReinitialisesTheFilterAndKeepsOutputSequences) {
   EXPECT_EQ(second.front().pose.utime, kT0);
   EXPECT_NEAR(second.front().pose.x_m, 6.0, 0.02) << "a new filter at the start pose";
   EXPECT_EQ(second.front().map->num_landmarks, 0);
+  int64_t utime = 0;
+  EXPECT_EQ(d.filterToSave(&utime), d.filter()) << "the new epoch's map is the one to save";
+  EXPECT_EQ(utime, d.lastStepUtime());
+}
+
+// A restart with no frame after it used to leave nothing to save: "map not saved: no frame was
+// processed" after hundreds had been, and the map was lost at exit.
+TEST(SlamDriver, TheMapEndedByARestartIsSavedWhenNoFrameFollowsIt) {
+  SlamDriver d{SlamProcessOptions{}};
+  int64_t utime = -1;
+  EXPECT_EQ(d.filterToSave(&utime), nullptr);
+  ASSERT_FALSE(run(d, 10).empty());
+  ASSERT_NE(d.filter(), nullptr);
+  const int64_t last_step = d.lastStepUtime();
+  const size_t landmarks = d.filter()->bestMap().size();
+  ASSERT_GT(landmarks, 0u);
+  // The odometry starts again from the beginning (a replayed log): a restart, and no frame after it.
+  for (int64_t k = 0; k < 3; ++k) d.onOdometry(odo(kT0 + k * 20'000, 1000 + k));
+  ASSERT_EQ(d.stats().filter_resets, 1);
+  EXPECT_EQ(d.filter(), nullptr);
+  const slam::FastSlam* saved = d.filterToSave(&utime);
+  ASSERT_NE(saved, nullptr);
+  EXPECT_EQ(utime, last_step);
+  EXPECT_EQ(saved->bestMap().size(), landmarks);
 }
 
 TEST(SlamDriver, FramesWithoutOdometryAreDroppedAndCounted) {

@@ -52,6 +52,9 @@ TEST(LcmioNode, CountsEveryKindOfBadInputAndPassesOnlyGoodOnes) {
   EXPECT_EQ(c.rejected_inputs, 3);
   EXPECT_EQ(c.sequence_gaps, 4);
   EXPECT_NE(c.last_error.find("ODOMETRY"), std::string::npos);
+  // A NaN or negative timeout handles only what is there (the NaN's cast to int was undefined).
+  EXPECT_TRUE(node.handleFor(std::nan("")));
+  EXPECT_TRUE(node.handleFor(-1.0));
 }
 
 // A seq corrupted far ahead (a flipped high bit) passes validation, as any seq >= 0 does. It used to

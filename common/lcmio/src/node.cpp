@@ -77,12 +77,14 @@ void Node::publishStatus() {
   if (counters_.sequence_restarts > 0 || counters_.utime_restarts > 0)
     st.detail += " [inputs restarted: " + std::to_string(counters_.sequence_restarts) + " seq, " +
                  std::to_string(counters_.utime_restarts) + " utime]";
-  lcm_.publish(channels::kProcessStatus, &st);
+  if (lcm_.publish(channels::kProcessStatus, &st) != 0) error("publish on " + std::string(channels::kProcessStatus) + " failed");
   next_status_ = std::chrono::steady_clock::now() + std::chrono::seconds(1);
 }
 
 bool Node::handleFor(double timeout_s) {
-  const int ms = std::max(0, static_cast<int>(timeout_s * 1000.0));
+  // Clamped before the cast: a NaN or huge timeout must not be undefined behaviour.
+  const double clamped_ms = timeout_s > 0.0 ? std::min(timeout_s * 1000.0, 60'000.0) : 0.0;
+  const int ms = static_cast<int>(clamped_ms);
   const int r = lcm_.handleTimeout(ms);
   if (std::chrono::steady_clock::now() >= next_status_) publishStatus();
   if (r < 0 && !stopRequested()) {

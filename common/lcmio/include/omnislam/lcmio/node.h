@@ -10,6 +10,7 @@
 #include <exception>
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -81,7 +82,8 @@ class Node {
   void setDetail(std::string detail) { detail_ = std::move(detail); }
   const Counters& counters() const { return counters_; }
 
-  /// Handles messages for up to timeout_s; publishes status when due. Returns false on an LCM error.
+  /// Handles messages for up to timeout_s (at most 60 s; NaN or <= 0: only what is there);
+  /// publishes status when due. Returns false on an LCM error.
   bool handleFor(double timeout_s);
   /// Loops until a stop is requested or done() is true; calls tick() after every handle.
   void spin(const std::function<bool()>& done = {}, const std::function<void()>& tick = {});
@@ -166,7 +168,8 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
     }
   };
   lcm::Subscription* s = lcm_.subscribeFunction(channel, &Node::dispatch, sub.get());
-  if (s) s->setQueueCapacity(opt.queue_capacity);
+  if (s == nullptr) throw std::runtime_error("cannot subscribe to " + channel);
+  s->setQueueCapacity(opt.queue_capacity);
   subs_.push_back(std::move(sub));
 }
 

@@ -167,6 +167,16 @@ TEST(Validate, ACountThatItsArrayDoesNotHoldIsRefusedNotReadPast) {
 
 TEST(Validate, AssociationsLabelsAndTheLimitsAtTheirBounds) {
   const lcmio::Limits lim;
+  // A utime near INT64_MAX (a corrupted field) overflowed a receiver's utime + window.
+  odometry_t o{};
+  o.utime = lcmio::kMaxUtime;
+  EXPECT_FALSE(lcmio::validate(o).has_value());
+  o.utime = lcmio::kMaxUtime + 1;
+  EXPECT_EQ(lcmio::validate(o).value_or(""), "utime 4611686018427387905 beyond 2^62 us (a corrupted field)");
+  o.utime = 1;
+  o.seq = -1;
+  EXPECT_EQ(lcmio::validate(o).value_or(""), "negative seq -1");
+
   associations_t a{};
   a.num_features = lim.max_features;
   a.landmark_id.assign(static_cast<size_t>(a.num_features), +associations_t::NOT_ASSOCIATED);

@@ -31,6 +31,7 @@ std::optional<std::string> countMismatch(const char* field, int64_t count, size_
 
 std::optional<std::string> checkTime(int64_t utime, int64_t seq) {
   if (utime < 0) return "negative utime " + std::to_string(utime);
+  if (utime > kMaxUtime) return "utime " + std::to_string(utime) + " beyond 2^62 us (a corrupted field)";
   if (seq < 0) return "negative seq " + std::to_string(seq);
   return std::nullopt;
 }

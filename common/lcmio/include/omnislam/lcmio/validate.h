@@ -2,6 +2,7 @@
 // one-line reason when the message must be refused, or nothing when it is acceptable.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -16,6 +17,11 @@
 #include "omnislam/process_status_t.hpp"
 
 namespace omnislam::lcmio {
+
+/// The largest utime accepted (2^62 us, some 146 000 years after 1970). Anything later is a
+/// corrupted field, and the bound leaves every receiver room to add a duration to a utime
+/// without overflowing int64 (a restart window, a buffer length).
+inline constexpr int64_t kMaxUtime = int64_t{1} << 62;
 
 /// Limits on what a process accepts (a message beyond them is refused, not truncated).
 struct Limits {

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -142,6 +143,12 @@ TEST(LogFiles, EventsSwallowedByACorruptLengthAreCountedByTheirNumbers) {
   EXPECT_EQ(r.unreadable(), 0);
   ASSERT_TRUE(r.problem("swallow.lcm"));
   EXPECT_NE(r.problem("swallow.lcm")->find("2 event numbers are missing"), std::string::npos) << *r.problem("swallow.lcm");
+  // Corrupted numbers far apart or negative: counted without overflow, every event still read.
+  writeBytes(d.file("numbers.lcm"), rawEvent(std::numeric_limits<int64_t>::max(), "A", "a") + rawEvent(-5, "A", "b") +
+                                        rawEvent(0, "A", "c") + rawEvent(std::numeric_limits<int64_t>::max(), "A", "d"));
+  const auto n = lcmio::forEachEvent(d.file("numbers.lcm"), [](const lcmio::LogEvent&) {});
+  EXPECT_EQ(n.events, 4);
+  EXPECT_EQ(n.missing_event_numbers, std::numeric_limits<int64_t>::max() - 1);
 }
 
 TEST(LogFiles, AnAtomicWriterShowsNothingAtThePathUntilCommit) {

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "omnislam/lcmio/sequence.h"
+
 namespace omnislam::lcmio {
 
 namespace {
@@ -94,8 +96,10 @@ bool LogReader::next(LogEvent& ev) {
       return stop("the event" + at + " is not followed by another event or the end of the file");
     if (std::fseek(f_, -4, SEEK_CUR) != 0) return stop("cannot seek back" + at);
   }
-  if (result_.events > 0 && number > result_.last_event_number + 1)
-    result_.missing_event_numbers += number - result_.last_event_number - 1;
+  // Both >= 0, so the difference fits; a corrupted (negative) number counts nothing.
+  if (result_.events > 0 && number >= 0 && result_.last_event_number >= 0 && number - result_.last_event_number > 1)
+    result_.missing_event_numbers =
+        saturatingAdd(result_.missing_event_numbers, number - result_.last_event_number - 1);
   result_.last_event_number = number;
   offset_ += kHeaderBytes + channel_bytes + data_bytes;
   ++result_.events;

@@ -133,6 +133,9 @@ TEST(Validate, CovariancesEnumsAndWeightsAsTheContractDefinesThem) {
   EXPECT_FALSE(lcmio::validate(st).has_value());
   st.state = 9;
   EXPECT_NE(lcmio::validate(st).value_or("").find("unknown state 9"), std::string::npos);
+  st.state = process_status_t::STATE_RUNNING;
+  st.utime = -1;
+  EXPECT_EQ(lcmio::validate(st).value_or(""), "negative utime -1");
 
   particles_t ps{};
   ps.num_particles = 2;

@@ -38,6 +38,15 @@ void Node::noteSequence(ChannelState& cs, const std::string& channel, int64_t se
   cs.last_seq = seq;
 }
 
+namespace {
+/// One line: a reason may carry an exception's text, which can hold line breaks.
+std::string oneLine(std::string s) {
+  for (char& c : s)
+    if (c == '\n' || c == '\r') c = ' ';
+  return s;
+}
+}  // namespace
+
 void Node::report(const std::string& line) {
   // One line per problem; after 20 lines only every 100th, so that a flood cannot drown the log.
   ++reports_;
@@ -48,12 +57,12 @@ void Node::report(const std::string& line) {
 
 void Node::reject(const std::string& channel, const std::string& reason) {
   ++counters_.rejected_inputs;
-  counters_.last_error = channel + ": " + reason;
+  counters_.last_error = oneLine(channel + ": " + reason);
   report("rejected " + counters_.last_error);
 }
 
 void Node::error(const std::string& what) {
-  counters_.last_error = what;
+  counters_.last_error = oneLine(what);
   report("error: " + what);
 }
 

@@ -165,7 +165,7 @@ std::optional<std::string> validate(const particles_t& m, const Limits& lim) {
 }
 
 std::optional<std::string> validate(const process_status_t& m, const Limits&) {
-  if (m.seq < 0) return "negative seq";
+  if (auto e = checkTime(m.utime, m.seq)) return e;  // utime: the publisher's wall clock
   if (m.state < process_status_t::STATE_STARTING || m.state > process_status_t::STATE_ERROR)
     return "unknown state " + std::to_string(m.state);
   return std::nullopt;

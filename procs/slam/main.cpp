@@ -192,10 +192,6 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
       ++outputs;
     }
   };
-  auto share = [&] {
-    const auto& r = in.result();
-    return r.file_bytes > 0 ? static_cast<double>(r.bytes_read) / static_cast<double>(r.file_bytes) : 1.0;
-  };
   bool interrupted = false;
   lcmio::LogEvent ev;
   while (in.next(ev)) {
@@ -203,7 +199,7 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
       interrupted = true;
       break;
     }
-    progress.update(share(), driver.stats().frames_processed);
+    progress.update(in.result().shareRead(), driver.stats().frames_processed);
     last_timestamp = ev.log_utime;
     // Outputs of an earlier run in the input are replaced by this run's.
     if (ev.channel == channels::kSlamPose || ev.channel == channels::kSlamMap ||

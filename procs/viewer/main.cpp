@@ -220,10 +220,9 @@ int runLog(const Settings& s) {
     ++events;
     d.dispatch(ev);
     const auto now = std::chrono::steady_clock::now();
-    const lcmio::LogReadResult& r = reader.result();
-    if (now >= next_progress && r.file_bytes > 0) {  // progress every 2 s
+    if (now >= next_progress && reader.result().file_bytes > 0) {  // progress every 2 s
       next_progress = now + std::chrono::seconds(2);
-      const double done = std::min(1.0, static_cast<double>(r.bytes_read) / static_cast<double>(r.file_bytes));
+      const double done = reader.result().shareRead();
       const double el = std::chrono::duration<double>(now - t0).count();
       std::fprintf(stderr, "[viewer] %lld SLAM steps, %.0f%% of the log, %.1f steps/s, about %.0f s left\n",
                    static_cast<long long>(st.steps()), 100.0 * done, st.steps() / el, done > 0 ? el * (1.0 - done) / done : 0.0);

@@ -1,6 +1,7 @@
 // LCM log reading: see log_reader.h.
 #include "omnislam/lcmio/log_reader.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -23,6 +24,10 @@ uint64_t bigEndian(const unsigned char* p, int n) {
 }
 
 }  // namespace
+
+double LogReadResult::shareRead() const {
+  return file_bytes > 0 ? std::min(1.0, static_cast<double>(bytes_read) / static_cast<double>(file_bytes)) : 1.0;
+}
 
 std::optional<std::string> LogReadResult::problem(const std::string& path) const {
   std::string out;
@@ -64,10 +69,10 @@ bool LogReader::next(LogEvent& ev) {
   const size_t got = std::fread(h, 1, sizeof h, f_);
   if (got == 0 && std::feof(f_)) {
     done_ = true;
-    if (!sized_) result_.file_bytes = offset_;
+    if (!sized_) result_.file_bytes = result_.bytes_read;
     return false;
   }
-  const std::string at = " at byte " + std::to_string(offset_);
+  const std::string at = " at byte " + std::to_string(result_.bytes_read);
   if (got != sizeof h) return stop("an event header cut short" + at);
   if (bigEndian(h, 4) != kSyncWord) return stop("no sync word" + at);
   const auto number = static_cast<int64_t>(bigEndian(h + 4, 8));
@@ -79,7 +84,7 @@ bool LogReader::next(LogEvent& ev) {
                 std::to_string(kMaxChannelBytes));
   // Unsized (not a regular file): the reads below find a short file, but a length larger than
   // any log is refused first, so that nothing is allocated for it.
-  const int64_t left = sized_ ? result_.file_bytes - offset_ - kHeaderBytes : int64_t{1} << 30;
+  const int64_t left = sized_ ? result_.file_bytes - result_.bytes_read - kHeaderBytes : int64_t{1} << 30;
   if (data_bytes < 0 || static_cast<int64_t>(channel_bytes) + data_bytes > left)
     return stop("data length " + std::to_string(data_bytes) + at + " runs past the end of the file");
   std::string channel(static_cast<size_t>(channel_bytes), '\0');
@@ -101,9 +106,8 @@ bool LogReader::next(LogEvent& ev) {
     result_.missing_event_numbers =
         saturatingAdd(result_.missing_event_numbers, number - result_.last_event_number - 1);
   result_.last_event_number = number;
-  offset_ += kHeaderBytes + channel_bytes + data_bytes;
+  result_.bytes_read += kHeaderBytes + channel_bytes + data_bytes;
   ++result_.events;
-  result_.bytes_read = offset_;
   ev.event_number = number;
   ev.log_utime = timestamp;
   ev.channel = std::move(channel);
@@ -116,12 +120,6 @@ LogReadResult forEachEvent(const std::string& path, const std::function<void(con
   LogEvent ev;
   while (reader.next(ev)) fn(ev);
   return reader.result();
-}
-
-void LogReadResult::measureFile(const std::string& path) {
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  file_bytes = ec ? bytes_read : static_cast<int64_t>(size);
 }
 
 void requireDistinctFiles(const std::string& in, const std::string& out, const std::string& flag) {

@@ -34,8 +34,8 @@ struct LogReadResult {
   int64_t last_event_number = -1;  ///< the number of the last event read
   std::string stop_reason;      ///< why reading stopped before the end of the file ("" if it did not)
   int64_t unreadable() const { return file_bytes - bytes_read; }
-  /// Sets file_bytes from the file at `path` (bytes_read if it cannot be sized).
-  void measureFile(const std::string& path);
+  /// The share of the file read so far, 0..1 (1 for a file of unknown size): for progress lines.
+  double shareRead() const;
   /// Nothing when every byte was read and no event number is missing; else one line for the user,
   /// naming the log, e.g. "run.lcm: the 4120 bytes after its first 99 events (from byte 600000 of
   /// 604120) cannot be read (truncated or corrupt): only those events were used (data length
@@ -65,7 +65,6 @@ class LogReader {
   bool stop(const std::string& why);
   std::FILE* f_ = nullptr;
   LogReadResult result_;
-  int64_t offset_ = 0;
   bool sized_ = false;  ///< the file's size is known (a regular file)
   bool done_ = false;
 };

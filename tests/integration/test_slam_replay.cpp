@@ -34,6 +34,7 @@
 #include "omnislam/process_status_t.hpp"
 #include "omnislam/sim/trajectory.h"
 #include "bus_util.h"
+#include "log_bytes.h"
 #include "omnislam/lcmio/log_writer.h"
 #include "proc_util.h"
 
@@ -353,10 +354,7 @@ TEST(SlamReplay, ACorruptLengthACorruptSeqAndAFullDiskAreReported) {
   writeLog(dir.file("in.lcm"), ev);
   {
     std::ofstream tail(dir.file("in.lcm"), std::ios::binary | std::ios::app);
-    const unsigned char header[28] = {0xED, 0xA1, 0xDA, 0x01, 0, 0, 0, 0, 0, 0, 0, 99, 0, 0, 0, 0, 0, 0, 0, 1,
-                                      0, 0, 0, 8, 0x7f, 0xff, 0xff, 0xff};
-    tail.write(reinterpret_cast<const char*>(header), sizeof header);
-    tail << "ODOMETRY0123456789";
+    tail << t::rawLogEvent(99, "ODOMETRY", "0123456789", 0x7fffffff);
   }
   const auto r = t::run({t::binPath("omnislam-slam"), "--replay", dir.file("in.lcm"), "--out", dir.file("out.lcm"),
                          "--config", kConfig, "--no-progress"},

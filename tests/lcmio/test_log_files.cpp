@@ -14,8 +14,10 @@
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/log_writer.h"
 #include "omnislam/odometry_t.hpp"
+#include "log_bytes.h"
 
 using namespace omnislam;
+using omnislam::testing::rawLogEvent;
 namespace fs = std::filesystem;
 
 namespace {
@@ -82,20 +84,6 @@ TEST(LogFiles, ATruncatedOrCorruptTailIsNamedNotTakenForTheEnd) {
   EXPECT_TRUE(junk.problem("junk.lcm"));
 }
 
-// One event in lcm-logger's format, with the lengths it declares given separately from the bytes.
-std::string rawEvent(int64_t number, const std::string& channel, const std::string& data, int64_t declared_data = -1,
-                     int64_t declared_channel = -1) {
-  auto be = [](uint64_t v, int n) {
-    std::string b;
-    for (int i = n - 1; i >= 0; --i) b.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
-    return b;
-  };
-  return be(0xEDA1DA01u, 4) + be(static_cast<uint64_t>(number), 8) + be(1'000'000, 8) +
-         be(static_cast<uint64_t>(declared_channel >= 0 ? declared_channel : static_cast<int64_t>(channel.size())), 4) +
-         be(static_cast<uint64_t>(declared_data >= 0 ? declared_data : static_cast<int64_t>(data.size())), 4) +
-         channel + data;
-}
-
 void writeBytes(const std::string& path, const std::string& bytes) {
   std::ofstream(path, std::ios::binary) << bytes;
 }
@@ -105,7 +93,7 @@ void writeBytes(const std::string& path, const std::string& bytes) {
 // 72-byte file). Our reader checks every length against the file first.
 TEST(LogFiles, LengthsThatRunPastTheFileStopReadingWithAReason) {
   Dir d;
-  writeBytes(d.file("huge.lcm"), rawEvent(0, "A", "good") + rawEvent(1, "A", "0123456789", 0x7fffffff));
+  writeBytes(d.file("huge.lcm"), rawLogEvent(0, "A", "good") + rawLogEvent(1, "A", "0123456789", 0x7fffffff));
   lcmio::LogReadResult huge;
   EXPECT_EQ(count(d.file("huge.lcm"), &huge), 1);
   EXPECT_EQ(huge.file_bytes, 72);
@@ -115,14 +103,14 @@ TEST(LogFiles, LengthsThatRunPastTheFileStopReadingWithAReason) {
             std::string::npos)
       << *huge.problem("huge.lcm");
   for (const int64_t bad_channel : {int64_t{0}, int64_t{1000}, int64_t{0xffffffff}}) {
-    writeBytes(d.file("ch.lcm"), rawEvent(0, "A", "good") + rawEvent(1, "A", "x", -1, bad_channel));
+    writeBytes(d.file("ch.lcm"), rawLogEvent(0, "A", "good") + rawLogEvent(1, "A", "x", -1, bad_channel));
     lcmio::LogReadResult ch;
     EXPECT_EQ(count(d.file("ch.lcm"), &ch), 1) << bad_channel;
     ASSERT_TRUE(ch.problem("ch.lcm"));
     EXPECT_NE(ch.problem("ch.lcm")->find("outside 1..999"), std::string::npos) << *ch.problem("ch.lcm");
   }
   // A data length one byte too long: the event is not followed by a sync word, so it is not used.
-  writeBytes(d.file("long.lcm"), rawEvent(0, "A", "good", 5) + rawEvent(1, "A", "next"));
+  writeBytes(d.file("long.lcm"), rawLogEvent(0, "A", "good", 5) + rawLogEvent(1, "A", "next"));
   lcmio::LogReadResult lng;
   EXPECT_EQ(count(d.file("long.lcm"), &lng), 0);
   ASSERT_TRUE(lng.problem("long.lcm"));
@@ -133,9 +121,9 @@ TEST(LogFiles, LengthsThatRunPastTheFileStopReadingWithAReason) {
 // vanished inside it without a word. The event numbers show it.
 TEST(LogFiles, EventsSwallowedByACorruptLengthAreCountedByTheirNumbers) {
   Dir d;
-  const std::string e1 = rawEvent(1, "A", "one"), e2 = rawEvent(2, "A", "two");
-  writeBytes(d.file("swallow.lcm"), rawEvent(0, "A", "zero" + e1 + e2, 4 + static_cast<int64_t>(e1.size() + e2.size())) +
-                                        rawEvent(3, "A", "three"));
+  const std::string e1 = rawLogEvent(1, "A", "one"), e2 = rawLogEvent(2, "A", "two");
+  writeBytes(d.file("swallow.lcm"), rawLogEvent(0, "A", "zero" + e1 + e2, 4 + static_cast<int64_t>(e1.size() + e2.size())) +
+                                        rawLogEvent(3, "A", "three"));
   std::vector<int64_t> numbers;
   const auto r = lcmio::forEachEvent(d.file("swallow.lcm"), [&](const lcmio::LogEvent& e) { numbers.push_back(e.event_number); });
   EXPECT_EQ(numbers, (std::vector<int64_t>{0, 3}));
@@ -144,8 +132,8 @@ TEST(LogFiles, EventsSwallowedByACorruptLengthAreCountedByTheirNumbers) {
   ASSERT_TRUE(r.problem("swallow.lcm"));
   EXPECT_NE(r.problem("swallow.lcm")->find("2 event numbers are missing"), std::string::npos) << *r.problem("swallow.lcm");
   // Corrupted numbers far apart or negative: counted without overflow, every event still read.
-  writeBytes(d.file("numbers.lcm"), rawEvent(std::numeric_limits<int64_t>::max(), "A", "a") + rawEvent(-5, "A", "b") +
-                                        rawEvent(0, "A", "c") + rawEvent(std::numeric_limits<int64_t>::max(), "A", "d"));
+  writeBytes(d.file("numbers.lcm"), rawLogEvent(std::numeric_limits<int64_t>::max(), "A", "a") + rawLogEvent(-5, "A", "b") +
+                                        rawLogEvent(0, "A", "c") + rawLogEvent(std::numeric_limits<int64_t>::max(), "A", "d"));
   const auto n = lcmio::forEachEvent(d.file("numbers.lcm"), [](const lcmio::LogEvent&) {});
   EXPECT_EQ(n.events, 4);
   EXPECT_EQ(n.missing_event_numbers, std::numeric_limits<int64_t>::max() - 1);

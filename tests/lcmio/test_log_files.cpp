@@ -1,10 +1,13 @@
 // Log files: a truncated or corrupt tail is told apart from the end of the log and named; an
-// atomic writer leaves PATH.partial until commit(); an output that is the input is refused.
+// atomic writer leaves PATH.partial until commit(); after a failed write nothing more is written;
+// an output that is the input is refused.
 #include <gtest/gtest.h>
 
 #include <stdlib.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -157,6 +160,56 @@ TEST(LogFiles, AnAtomicWriterShowsNothingAtThePathUntilCommit) {
   }
   EXPECT_FALSE(fs::exists(path + ".partial"));
   EXPECT_EQ(count(path), 10);
+}
+
+// A write that fails (here: past RLIMIT_FSIZE, as a full disk) may leave a torn event where the
+// readers stop. The writer then writes nothing more, so nothing is added that nobody can read, and
+// commit() reports it without giving the log its final name.
+TEST(LogFiles, AfterAFailedWriteNothingMoreIsWrittenAndCommitSaysSo) {
+  Dir d;
+  const std::string path = d.file("out.lcm");
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);  // the write then fails with EFBIG
+  rlimit lim{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &lim), 0);
+  std::vector<uint8_t> payload(10000, 0xab);
+  int failures = 0;
+  std::string first, later;
+  lcmio::LogWriter w(path, lcmio::LogWriter::Mode::kAtomic);
+  rlimit small = lim;
+  small.rlim_cur = 55000;  // room for about five events
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  for (int i = 0; i < 10; ++i) {
+    try {
+      w.write(1000 + i, "IMAGE", payload.data(), static_cast<int32_t>(payload.size()));
+    } catch (const std::exception& e) {
+      (failures++ == 0 ? first : later) = e.what();
+    }
+  }
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &lim), 0);  // space again: nothing may be appended after the tear
+  const int64_t before = w.events();
+  for (int i = 0; i < 20; ++i) EXPECT_THROW(w.write(2000 + i, "ODOMETRY", payload.data(), 100), std::runtime_error);
+  std::string commit_error;
+  try {
+    w.commit();
+  } catch (const std::exception& e) {
+    commit_error = e.what();
+  }
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_GE(failures, 1);
+  EXPECT_NE(first.find("failed"), std::string::npos) << first;
+  EXPECT_NE(later.find("an earlier write failed"), std::string::npos) << later;
+  EXPECT_EQ(w.events(), before);
+  EXPECT_GE(before, 1);
+  EXPECT_LT(before, 10);
+  EXPECT_NE(commit_error.find("ends at the failed write"), std::string::npos) << commit_error;
+  EXPECT_FALSE(fs::exists(path)) << "a log that stops short must not take the final name";
+  int64_t odometry = 0, read = 0;
+  lcmio::forEachEvent(path + ".partial", [&](const lcmio::LogEvent& e) {
+    ++read;
+    odometry += e.channel == "ODOMETRY";
+  });
+  EXPECT_EQ(odometry, 0);
+  EXPECT_LE(read, before);
 }
 
 TEST(LogFiles, AnOutputThatIsTheInputIsRefused) {

@@ -31,6 +31,8 @@ void LogWriter::commit() {
   const bool flushed = f && std::fflush(f) == 0 && (fsync(fileno(f)) == 0 || errno == EINVAL);
   log_.reset();  // closes
   if (!flushed) throw std::runtime_error("writing LCM log '" + fileOf(path_, mode_) + "' failed (flush)");
+  if (failed_)  // kAtomic: not renamed, so a log that stops short never takes the final name
+    throw std::runtime_error("writing LCM log '" + fileOf(path_, mode_) + "' failed: it ends at the failed write");
   if (mode_ == Mode::kAtomic && std::rename(fileOf(path_, mode_).c_str(), path_.c_str()) != 0)
     throw std::runtime_error("cannot rename '" + fileOf(path_, mode_) + "' to '" + path_ + "'");
 }
@@ -43,7 +45,13 @@ void LogWriter::write(int64_t timestamp, const std::string& channel, const void*
   ev.datalen = size;
   ev.data = const_cast<void*>(data);
   if (!log_) throw std::runtime_error("LCM log '" + path_ + "' written after commit()");
-  if (log_->writeEvent(&ev) != 0) throw std::runtime_error("writing LCM log '" + path_ + "' failed");
+  // LCM writes header, channel and data separately: a failure can leave a torn event, and the
+  // log readers stop there. Writing on after it would add events nobody can read.
+  if (failed_) throw std::runtime_error("LCM log '" + path_ + "' not written: an earlier write failed");
+  if (log_->writeEvent(&ev) != 0) {
+    failed_ = true;
+    throw std::runtime_error("writing LCM log '" + path_ + "' failed");
+  }
   ++n_;
 }
 

@@ -31,6 +31,8 @@ class LogWriter {
   LogWriter& operator=(const LogWriter&) = delete;
 
   /// One event with the given log timestamp (microseconds); throws std::runtime_error on failure.
+  /// After a failure every later write throws without writing (the failed one may have left a torn
+  /// event, where readers stop), and commit() throws after closing the file (kAtomic: not renamed).
   void write(int64_t timestamp, const std::string& channel, const void* data, int32_t size);
   template <class Msg>
   void write(int64_t timestamp, const std::string& channel, const Msg& m) {
@@ -38,7 +40,7 @@ class LogWriter {
     m.encode(buf.data(), 0, static_cast<int>(buf.size()));
     write(timestamp, channel, buf.data(), static_cast<int32_t>(buf.size()));
   }
-  int64_t events() const { return n_; }  ///< events written so far
+  int64_t events() const { return n_; }  ///< events written before any failure
   const std::string& path() const { return path_; }
 
  private:
@@ -46,6 +48,7 @@ class LogWriter {
   Mode mode_;
   std::unique_ptr<lcm::LogFile> log_;
   int64_t n_ = 0;
+  bool failed_ = false;
 };
 
 }  // namespace omnislam::lcmio

@@ -98,10 +98,19 @@ int runLive(const Settings& s) {
   lcmio::Node node(s.name, app::lcmUrl(s.url));
   Viewer v(s, "omnislam live" + (s.url.empty() ? std::string() : "  " + s.url));
   auto& st = v.state();
+  int64_t png_failures = 0;
+  std::string first_png_failure;
   lcmio::InputOptions truth_opt;
   truth_opt.queue_capacity = 2000;  // 50 Hz: a slow redraw must not lose truth poses
   node.subscribe<pose_t>(channels::kSlamPose, [&](const pose_t& m) {
-    v.beforePose(m);
+    // A frame that cannot be written (full disk, folder gone) is reported, and the pose still
+    // applied: otherwise every later pose would retry the same file and be refused with it.
+    try {
+      v.beforePose(m);
+    } catch (const std::exception& e) {
+      if (png_failures++ == 0) first_png_failure = e.what();
+      node.error(e.what());
+    }
     st.onSlamPose(m);
   });
   node.subscribe<map_t>(channels::kSlamMap, [&](const map_t& m) { st.onSlamMap(m); });
@@ -154,6 +163,11 @@ int runLive(const Settings& s) {
   const auto& c = node.counters();
   std::cerr << node.tag() << st.steps() << " SLAM steps, " << v.written() << " PNG files written; " << c.messages_in
             << " messages in, " << c.decode_errors << " decode errors, " << c.rejected_inputs << " rejected" << std::endl;
+  if (png_failures > 0) {
+    std::cerr << node.tag() << png_failures << " PNG FILES NOT WRITTEN (the first: " << first_png_failure << ")"
+              << std::endl;
+    return app::kFailure;
+  }
   return app::kOk;
 }
 

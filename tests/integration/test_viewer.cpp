@@ -3,7 +3,8 @@
 // rendered with --headless --log gives frame_<step>.png every N steps and final.png of the expected
 // size with the landmarks, particles and associated features drawn. Live: the viewer on a private
 // URL draws what is published, counts garbage on SLAM_MAP in PROCESS_STATUS and keeps running,
-// and writes final.png on SIGTERM. Bad flags stop it with exit code 2.
+// and writes final.png on SIGTERM; a frame it cannot write is reported and the view goes on. Bad
+// flags stop it with exit code 2.
 #include <gtest/gtest.h>
 
 #include <lcm/lcm-cpp.hpp>
@@ -255,6 +256,40 @@ TEST(Viewer, LiveHeadlessDrawsTheBusCountsGarbageAndWritesTheFinalViewOnSigterm)
   for (const char* f : {"frame_000001.png", "frame_000002.png", "frame_000003.png"}) EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
   expectFullView(out + "/frame_000003.png");
   expectFullView(out + "/final.png");
+}
+
+// A frame that cannot be written is reported, and the view goes on: the poses after it are applied
+// (they used to be refused, each retrying the same file), and the exit code says it.
+TEST(Viewer, AFrameThatCannotBeWrittenIsReportedAndLaterPosesStillApply) {
+  const std::string url = t::privateUdpUrl(16);
+  t::TempDir dir;
+  const std::string out = dir.file("png");
+  fs::create_directories(out + "/frame_000002.png");  // a folder where the frame goes: imwrite fails
+  StatusListener bus(url);
+  ASSERT_TRUE(bus.lcm.good());
+  t::Child viewer({t::binPath("omnislam-viewer"), "--headless", "--url", url, "--out-dir", out, "--every", "1"});
+  ASSERT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status.count("viewer") > 0; }, 10)) << viewer.output();
+  int64_t published = 0;
+  for (int k = 0; k < 6; ++k)
+    for (const auto& [ch, data] : makeStep(k).events) {
+      bus.lcm.publish(ch, data.data(), static_cast<unsigned>(data.size()));
+      ++published;
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+  EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return fs::exists(out + "/frame_000005.png"); }, 10)) << viewer.output();
+  EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status["viewer"].messages_in >= published; }, 20))
+      << bus.status["viewer"].messages_in << " of " << published << " messages handled\n" << viewer.output();
+  EXPECT_EQ(bus.status["viewer"].rejected_inputs, 0) << "a good pose was refused\n" << viewer.output();
+  viewer.signal(SIGTERM);
+  const auto r = viewer.wait(15);
+  ASSERT_FALSE(r.timed_out) << r.output;
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("6 SLAM steps"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 PNG FILES NOT WRITTEN (the first: cannot write '" + out + "/frame_000002.png')"),
+            std::string::npos)
+      << r.output;
+  for (const char* f : {"frame_000001.png", "frame_000003.png", "frame_000004.png", "frame_000005.png", "final.png"})
+    EXPECT_TRUE(fs::is_regular_file(out + "/" + f)) << f;
 }
 
 TEST(Viewer, BadFlagsStopWithExitCodeTwo) {

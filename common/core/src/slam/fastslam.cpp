@@ -174,6 +174,20 @@ void FastSlam::predictOnly(const Pose2& odom_prev, const Pose2& odom_now) {
 
 StepResult FastSlam::step(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z) {
   if (!initialised()) throw std::logic_error("FastSlam::step before initialise()");
+  // The step changes particles in place, one after another: an exception half-way would leave some
+  // moved and some not, and the caller's next step would move those twice. The copy is cheap (the
+  // maps are persistent trees and the candidates shared, both replaced rather than changed).
+  FastSlam before = *this;
+  try {
+    return stepInPlace(odom_prev, odom_now, z);
+  } catch (...) {
+    *this = std::move(before);
+    throw;
+  }
+}
+
+StepResult FastSlam::stepInPlace(const Pose2& odom_prev, const Pose2& odom_now,
+                                 const std::vector<BearingMeasurement>& z) {
   StepResult result;
   const Pose2 u = odometryIncrement(odom_prev, odom_now);
 

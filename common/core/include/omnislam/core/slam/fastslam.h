@@ -143,7 +143,8 @@ class FastSlam {
   bool initialised() const { return !particles_.empty(); }
 
   /// One step of Alg. 1 with the odometry poses of the previous and the current frame and the
-  /// current frame's measurements. Throws std::logic_error before initialise().
+  /// current frame's measurements. Throws std::logic_error before initialise(). Strong exception
+  /// guarantee: if anything in the step throws (std::bad_alloc), the filter is as it was before it.
   StepResult step(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z);
 
   /// Odometry-only step (no image): every particle samples the motion model; weights, maps and
@@ -174,6 +175,7 @@ class FastSlam {
  private:
   struct Meas;                // a validated measurement (filter internal)
   struct ParticleStepInfo;    // what one particle did in a step
+  StepResult stepInPlace(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z);
   ParticleStepInfo processParticle(Particle& p, const Pose2& u, const std::vector<Meas>& Z,
                                    const Eigen::Vector3d& p_CinR_vis_m);
   void updateCandidates(Particle& p, const Pose2& x_t, const std::vector<Meas>& Z, const std::vector<int>& leftover,

@@ -145,9 +145,11 @@ const slam::FastSlam* SlamDriver::filterToSave(int64_t* utime) const {
 void SlamDriver::ensureFilter(const Pose2& odom_O) {
   if (filter_) return;
   // First step of an epoch: the start pose is known (paper 000), all particles at it.
-  filter_ = std::make_unique<slam::FastSlam>(opt_.filter, opt_.seed + static_cast<std::uint64_t>(epoch_));
+  // Built aside and kept only once initialised: a filter that failed to start must not stay.
+  auto filter = std::make_unique<slam::FastSlam>(opt_.filter, opt_.seed + static_cast<std::uint64_t>(epoch_));
   const Pose2 start_W = opt_.start_source == SlamProcessOptions::StartSource::kFixed ? opt_.start_pose_W : odom_O;
-  filter_->initialise(start_W, prior_map_);
+  filter->initialise(start_W, prior_map_);
+  filter_ = std::move(filter);
   odom_prev_O_ = odom_O;
 }
 

@@ -164,6 +164,7 @@ std::string SlamProcessOptions::validate() const {
   const std::string p = pairing.validate();
   if (!p.empty()) return "pairing: " + p;
   if (map_every_n_frames < 1) return "map_every_n_frames must be >= 1";
+  if (max_features_per_frame < 1 || max_features_per_frame > 4096) return "features.max_per_frame must be in [1, 4096]";
   if (odometry_only_after_us < 0) return "output.odometry_only_after_s must be >= 0";
   if (odometry_only_period_us <= 0) return "output.odometry_only_period_s must be > 0";
   if (localisation_only && load_map_path.empty()) return "map.localisation_only needs map.load_path (a map to localise in)";
@@ -185,8 +186,9 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
     }
   }
   if (auto f = root.optChild("features")) {
-    f->rejectUnknownKeys({"use_ceiling_lights", "use_vertical_lines", "min_sigma_deg"});
+    f->rejectUnknownKeys({"use_ceiling_lights", "use_vertical_lines", "min_sigma_deg", "max_per_frame"});
     o.min_sigma_rad = deg2rad(f->getDouble("min_sigma_deg", 0.0, 90.0, 0.0));
+    o.max_features_per_frame = static_cast<int>(f->getInt("max_per_frame", 1, 4096, o.max_features_per_frame));
     o.use_ceiling_lights = f->getBool("use_ceiling_lights", o.use_ceiling_lights);
     o.use_vertical_lines = f->getBool("use_vertical_lines", o.use_vertical_lines);
     if (!o.use_ceiling_lights && !o.use_vertical_lines)

@@ -28,6 +28,10 @@ struct SlamProcessOptions {
   /// Floor on the standard deviation of each measured angle [rad]: the variances of a feature's
   /// covariance are raised to at least min_sigma_rad^2 (0: the covariance as published).
   double min_sigma_rad = 0.0;
+  /// A frame with more usable features than this is refused (counted and reported): the
+  /// association's time grows with about the cube of the count, so one frame of clutter must not
+  /// stall the filter for minutes. 256 is the features process's own default cap.
+  int max_features_per_frame = 256;
   int map_every_n_frames = 1;  ///< SLAM_MAP on every n-th processed frame (SLAM_POSE, SLAM_PARTICLES on every one)
   /// Odometry-only poses: when no frame has arrived for odometry_only_after_us of odometry time (and
   /// none is waiting; the last frame step is older than that too), the filter predicts with the odometry alone and SLAM_POSE and

@@ -97,8 +97,20 @@ DriverResult SlamDriver::onFeatures(const features_t& msg) {
   stats_.features_in += msg.num_features;
   if (!pairer_.odometry().empty())
     odom_utime_at_last_frame_ = std::max(odom_utime_at_last_frame_, pairer_.odometry().newestUtime());
+  int64_t skipped = 0;
+  Frame frame = toFrame(msg, opt_, &skipped);
+  if (static_cast<int>(frame.z.size()) > opt_.max_features_per_frame) {
+    // The association's time grows with about the cube of the count (docs/slam-process.md).
+    ++stats_.frames_too_large;
+    r.refused.push_back({"OMNI_FEATURES", "frame seq " + std::to_string(msg.seq) + " has " +
+                                              std::to_string(frame.z.size()) +
+                                              " usable features, more than features.max_per_frame = " +
+                                              std::to_string(opt_.max_features_per_frame)});
+    return r;
+  }
+  stats_.features_skipped_kind += skipped;
   std::vector<PairEvent> events;
-  note(pairer_.addFrame(toFrame(msg, opt_, &stats_.features_skipped_kind), events), "OMNI_FEATURES", r);
+  note(pairer_.addFrame(std::move(frame), events), "OMNI_FEATURES", r);
   apply(events, r);
   return r;
 }
@@ -270,7 +282,7 @@ std::string SlamDriver::summary() const {
   o << "frames " << p.frames_in << " processed " << s.frames_processed << " dropped: no_odometry "
     << p.dropped_no_odometry << " odometry_gap " << p.dropped_odometry_gap << " too_old " << p.dropped_too_old
     << " restart " << p.dropped_restart << "; odometry " << p.odometry_in << "; refused: duplicates "
-    << p.duplicates << " out_of_order " << p.out_of_order << " stale " << p.stale_after_restart << "; restarts "
+    << p.duplicates << " out_of_order " << p.out_of_order << " stale " << p.stale_after_restart << " too_large " << s.frames_too_large << "; restarts "
     << p.restarts << " filter_resets " << s.filter_resets << "; jumps_ahead: taken " << p.forward_jumps << " stray "
     << p.stray_ahead << "; odometry_jumps " << p.odometry_jumps << "; features " << s.features_in << " skipped " << s.features_skipped_kind
     << " rejected_by_filter " << s.measurements_rejected << "; odometry_only_steps " << s.odometry_only_steps

@@ -57,6 +57,7 @@ struct DriverStats {
   int64_t degenerate_weights = 0;        ///< steps whose weights were all zero (reset to uniform)
   int64_t odometry_only_steps = 0;       ///< predictions published while no frame came
   int64_t dropped_behind_prediction = 0; ///< frames older than the last odometry-only step
+  int64_t frames_too_large = 0;          ///< refused: more usable features than max_features_per_frame
 };
 
 /// Converts one feature to a filter measurement; nothing for a kind that is off in `options` or a

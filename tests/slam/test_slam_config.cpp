@@ -126,6 +126,8 @@ TEST(SlamConfig, MistakesNameTheKey) {
       {"y_m: -3.25", "y_m: south", "start_pose.y_m"},
       {"map_every_n_frames: 1", "map_every_n_frames: 0", "output.map_every_n_frames"},
       {"min_sigma_deg: 0.3", "min_sigma_deg: -0.3", "features.min_sigma_deg"},
+      {"min_sigma_deg: 0.3", "min_sigma_deg: 0.3\n  max_per_frame: 5000",
+       "key 'features.max_per_frame' must be a whole number in [1, 4096], got 5000"},
       {"default_camera_position_m: [0.0, 0.0, 1.8]", "default_camera_position_m: [0.0, 1.8]",
        "default_camera_position_m"},
   };

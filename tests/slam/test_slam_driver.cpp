@@ -230,6 +230,49 @@ TEST(SlamDriver, DegradedInputIsRefusedOrDroppedAndTheFilterCarriesOn) {
   EXPECT_EQ(d.stats().pairing.out_of_order, 1);
 }
 
+// A frame with more usable features than features.max_per_frame is refused whole, with its count
+// and the key named, before it reaches the pairing: the filter does not step on it, and the next
+// frame of ordinary size spans the odometry since the last step.
+TEST(SlamDriver, AFrameWithTooManyFeaturesIsRefusedAndTheNextOneSteps) {
+  SlamProcessOptions o;
+  o.max_features_per_frame = 16;  // hallLights() gives exactly 16
+  SlamDriver d{o};
+  run(d, 10);
+  const int64_t processed = d.stats().frames_processed;
+  features_t big = feats(kT0 + 10'500'000, 10);
+  big.features.push_back(big.features.front());
+  big.num_features = static_cast<int32_t>(big.features.size());
+  EXPECT_TRUE(d.onOdometry(odo(kT0 + 10'520'000, 600)).outputs.empty());
+  EXPECT_TRUE(d.onFeatures(big).outputs.empty());
+  auto r = d.onFeatures(big);  // the same again: refused for its size, not as a duplicate
+  ASSERT_EQ(r.refused.size(), 1u);
+  EXPECT_EQ(r.refused[0].channel, "OMNI_FEATURES");
+  EXPECT_EQ(r.refused[0].reason, "frame seq 10 has 17 usable features, more than features.max_per_frame = 16");
+  EXPECT_EQ(d.stats().frames_too_large, 2);
+  EXPECT_EQ(d.stats().frames_processed, processed);
+  EXPECT_NE(d.summary().find("too_large 2;"), std::string::npos) << d.summary();
+  // Kinds that are off do not count: the same frame as vertical lines, with lines turned off, is
+  // not too large (its features are skipped, not associated).
+  SlamProcessOptions lights_only = o;
+  lights_only.use_vertical_lines = false;
+  SlamDriver e{lights_only};
+  features_t mixed = feats(kT0, 0);
+  feature_t line = mixed.features.front();
+  line.kind = feature_t::KIND_VERTICAL_LINE;
+  line.has_elevation = false;
+  for (int i = 0; i < 40; ++i) mixed.features.push_back(line);
+  mixed.num_features = static_cast<int32_t>(mixed.features.size());
+  e.onOdometry(odo(kT0, 0));
+  EXPECT_TRUE(e.onFeatures(mixed).refused.empty());
+  EXPECT_EQ(e.stats().frames_too_large, 0);
+  // The next ordinary frame steps.
+  d.onOdometry(odo(kT0 + 11'000'000, 601));
+  d.onOdometry(odo(kT0 + 11'020'000, 602));
+  r = d.onFeatures(feats(kT0 + 11'000'000, 11));
+  EXPECT_TRUE(r.refused.empty());
+  EXPECT_EQ(d.stats().frames_processed, processed + 1);
+}
+
 TEST(SlamDriver, OdometryGapDropsFramesButTheNextStepSpansTheGap) {
   SlamDriver d{SlamProcessOptions{}};
   run(d, 5);  // frames 0..4 s processed, odometry to 5 s

@@ -51,6 +51,67 @@ TEST(slam_DataAssociation, MoreMeasurementsThanLandmarks) {
   EXPECT_EQ(associate(cost, cost_new, AssociationMethod::kMaximumLikelihood), (std::vector<int>{0, -1, -1, -1}));
 }
 
+// The Hungarian level against brute force on random matrices with impossible pairs, pairs dearer
+// than "new", and rows and columns with no usable pair (which the solve leaves out): its total cost
+// is the least over every joint assignment.
+TEST(slam_DataAssociation, HungarianTotalCostIsTheBruteForceMinimum) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 10.0);
+  std::uniform_int_distribution<int> size(0, 5);
+  int checked = 0, with_unusable_rows = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int nz = size(rng) + 1, n = size(rng);
+    Eigen::MatrixXd cost(nz, n);
+    std::vector<double> cost_new(nz);
+    for (int l = 0; l < nz; ++l) {
+      cost_new[l] = u(rng);
+      for (int j = 0; j < n; ++j) cost(l, j) = u(rng) < 5.0 ? kInf : u(rng);
+    }
+    double best = kInf;
+    std::vector<int> a(nz, -1);
+    while (true) {  // odometer over {-1, 0..n-1}^nz
+      bool ok = true;
+      double total = 0.0;
+      for (int l = 0; l < nz && ok; ++l) {
+        if (a[l] < 0) {
+          total += cost_new[l];
+          continue;
+        }
+        ok = std::isfinite(cost(l, a[l]));
+        for (int k = 0; k < l && ok; ++k) ok = a[k] != a[l];
+        total += ok ? cost(l, a[l]) : 0.0;
+      }
+      if (ok) best = std::min(best, total);
+      int l = 0;
+      while (l < nz && ++a[l] == n) a[l++] = -1;
+      if (l == nz) break;
+    }
+    const std::vector<int> got = associate(cost, cost_new, AssociationMethod::kHungarian);
+    ASSERT_EQ(got.size(), static_cast<size_t>(nz));
+    double total = 0.0;
+    std::vector<int> uses(n, 0);
+    bool unusable_row = false;
+    for (int l = 0; l < nz; ++l) {
+      bool usable = false;
+      for (int j = 0; j < n; ++j) usable = usable || (std::isfinite(cost(l, j)) && cost(l, j) < cost_new[l]);
+      unusable_row = unusable_row || !usable;
+      if (got[l] < 0) {
+        total += cost_new[l];
+        continue;
+      }
+      ASSERT_LT(got[l], n);
+      ASSERT_TRUE(std::isfinite(cost(l, got[l]))) << "trial " << trial << ": an impossible pair";
+      EXPECT_EQ(++uses[got[l]], 1) << "trial " << trial << ": a landmark taken twice";
+      total += cost(l, got[l]);
+    }
+    EXPECT_NEAR(total, best, 1e-9) << "trial " << trial;
+    ++checked;
+    with_unusable_rows += unusable_row;
+  }
+  EXPECT_EQ(checked, 400);
+  EXPECT_GT(with_unusable_rows, 100) << "the trials must exercise rows left out of the solve";
+}
+
 // Brute force: every joint assignment of a small ratio matrix with its product of ratios.
 std::map<std::vector<int>, double> allAssignments(const Eigen::MatrixXd& log_r) {
   std::map<std::vector<int>, double> out;

@@ -29,12 +29,33 @@ std::vector<int> associate(const Eigen::MatrixXd& cost, const std::vector<double
     }
     return out;
   }
-  Eigen::MatrixXd full(nz, n + nz);
-  full.leftCols(n) = cost;
-  for (int l = 0; l < nz; ++l) full.row(l).tail(nz).setConstant(cost_new[l]);
-  const AssignmentResult r = solveAssignment(full);
+  // Only a pair that costs less than "new" can be in the optimum (a row can always take one of its
+  // own "new" columns instead), so the rows and columns without such a pair are left out before
+  // the O(n^3) solve: a frame of clutter far from every landmark is then no problem to solve at all.
+  std::vector<int> rows, cols;
+  std::vector<char> col_used(n, 0);
   for (int l = 0; l < nz; ++l) {
-    if (r.col_of_row[l] >= 0 && r.col_of_row[l] < n) out[l] = r.col_of_row[l];
+    bool any = false;
+    for (int j = 0; j < n; ++j) {
+      if (std::isfinite(cost(l, j)) && cost(l, j) < cost_new[l]) {
+        any = true;
+        col_used[j] = 1;
+      }
+    }
+    if (any) rows.push_back(l);
+  }
+  for (int j = 0; j < n; ++j)
+    if (col_used[j]) cols.push_back(j);
+  const int nr = static_cast<int>(rows.size()), nc = static_cast<int>(cols.size());
+  if (nr == 0) return out;
+  Eigen::MatrixXd full(nr, nc + nr);
+  for (int a = 0; a < nr; ++a) {
+    for (int b = 0; b < nc; ++b) full(a, b) = cost(rows[a], cols[b]);
+    full.row(a).tail(nr).setConstant(cost_new[rows[a]]);
+  }
+  const AssignmentResult r = solveAssignment(full);
+  for (int a = 0; a < nr; ++a) {
+    if (r.col_of_row[a] >= 0 && r.col_of_row[a] < nc) out[rows[a]] = cols[r.col_of_row[a]];
   }
   return out;
 }

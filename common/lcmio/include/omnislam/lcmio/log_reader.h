@@ -67,6 +67,9 @@ class LogReader {
   LogReadResult result_;
   bool sized_ = false;  ///< the file's size is known (a regular file)
   bool done_ = false;
+  /// The next header's sync word has been read already (each event's is checked after it, and a
+  /// pipe cannot seek back).
+  bool synced_ = false;
 };
 
 /// Calls fn for every event of the log in order (a LogReader). Throws std::runtime_error if it

@@ -1,8 +1,8 @@
-// FastSlam::step's strong exception guarantee, by fault injection: this test executable replaces
-// the global operator new with one that can be armed to throw std::bad_alloc at its n-th
-// allocation. A step that fails at any point leaves the filter exactly as before it (poses,
-// weights, maps, candidates, counters and the random generator), so the same step retried gives
-// the same result, bit for bit, as a filter that never failed.
+// The strong exception guarantee of FastSlam::step and predictOnly, by fault injection: this test
+// executable replaces the global operator new with one that can be armed to throw std::bad_alloc
+// at its n-th allocation. A step that fails at any point leaves the filter exactly as before it
+// (poses, weights, maps, candidates, counters and the random generator), so the same step retried
+// gives the same result, bit for bit, as a filter that never failed.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -126,6 +126,24 @@ TEST(slam_FastSlamExceptions, AStepThatFailsAnywhereLeavesTheFilterAsItWas) {
     expectSame(f, expected);
   }
   EXPECT_EQ(failures, 9);
+
+  // predictOnly (odometry-only steps): the same, at each of its allocations.
+  FastSlam predicted = reference;
+  const long p0 = g_allocations;
+  predicted.predictOnly(prev, now);
+  const long per_prediction = g_allocations - p0;
+  ASSERT_GE(per_prediction, 1);
+  for (long i = 1; i <= per_prediction; ++i) {
+    FastSlam f = reference;
+    g_fail_at = g_allocations + i;
+    EXPECT_THROW(f.predictOnly(prev, now), std::bad_alloc) << "allocation " << i;
+    g_fail_at = -1;
+    expectSame(f, reference);
+    EXPECT_EQ(f.posesBeforeResampling().size(), reference.posesBeforeResampling().size());
+    f.predictOnly(prev, now);
+    expectSame(f, predicted);
+    EXPECT_EQ(f.posesBeforeResampling()[0].x_m, predicted.posesBeforeResampling()[0].x_m);
+  }
 }
 
 }  // namespace

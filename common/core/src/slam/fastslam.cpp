@@ -162,12 +162,17 @@ void FastSlam::initialise(const Pose2& start, const std::vector<Landmark>& prior
 void FastSlam::predictOnly(const Pose2& odom_prev, const Pose2& odom_now) {
   if (!initialised()) throw std::logic_error("FastSlam::predictOnly before initialise()");
   const Pose2 u = odometryIncrement(odom_prev, odom_now);
-  for (auto& p : particles_) {
+  // Both allocations first: if one fails, nothing has changed (as in step()).
+  std::vector<Pose2> poses;
+  poses.reserve(particles_.size());
+  std::vector<double> weights = weights_;
+  for (const auto& p : particles_) {
     const Pose2 x_hat = predictPose(p.pose, u);
-    p.pose = poseFromVec(rng_.gaussian3(x_hat.vec(), motionCovariance(p.pose, u, options_.motion)));
+    poses.push_back(poseFromVec(rng_.gaussian3(x_hat.vec(), motionCovariance(p.pose, u, options_.motion))));
   }
-  poses_before_resampling_ = particlePoses();
-  weights_before_resampling_ = weights_;
+  for (std::size_t k = 0; k < particles_.size(); ++k) particles_[k].pose = poses[k];
+  poses_before_resampling_.swap(poses);
+  weights_before_resampling_.swap(weights);
   ess_ = effectiveSampleSize(weights_);  // this step's weights: the last step's, after its resampling
   ++num_steps_;
 }

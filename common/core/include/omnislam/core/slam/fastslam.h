@@ -148,7 +148,7 @@ class FastSlam {
   StepResult step(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z);
 
   /// Odometry-only step (no image): every particle samples the motion model; weights, maps and
-  /// candidates are unchanged.
+  /// candidates are unchanged. Strong exception guarantee, as step().
   void predictOnly(const Pose2& odom_prev, const Pose2& odom_now);
 
   // --- Results -------------------------------------------------------------------------------

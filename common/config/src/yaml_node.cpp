@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace omnislam::config {
@@ -18,7 +19,15 @@ std::string lineOf(const YAML::Node& n) {
 
 /// Throws ConfigError for a key given twice in one map, anywhere below `n`. yaml-cpp keeps both and
 /// lookups return the first, so an override appended at the end of a file was silently ignored.
-void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const std::string& path) {
+void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const std::string& path,
+                        std::set<int>& containers) {
+  // An alias (*name) of a map or list is the anchored node itself, met again at its own position.
+  // Nine lines of nested aliases expand to a billion nodes (every loader hung on 486 bytes), and no
+  // config needs them: refused. (Aliases of single values are harmless and stay allowed.)
+  if ((n.IsMap() || n.IsSequence()) && n.Mark().pos >= 0 && !containers.insert(n.Mark().pos).second)
+    throw ConfigError(source + ": key '" + (path.empty() ? std::string() : path.substr(0, path.size() - 1)) +
+                      "' repeats the " + (n.IsMap() ? "map" : "list") + " of line " + std::to_string(n.Mark().line + 1) +
+                      " through an alias (*name); aliases of maps and lists are not accepted");
   if (n.IsMap()) {
     std::map<std::string, int> first_line;
     for (auto it = n.begin(); it != n.end(); ++it) {
@@ -28,13 +37,13 @@ void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const st
       if (!fresh)
         throw ConfigError(source + ": key '" + path + key + "' is given twice (lines " + std::to_string(seen->second) +
                           " and " + std::to_string(line) + "); give it once");
-      rejectRepeatedKeys(it->second, source, path + key + ".");
+      rejectRepeatedKeys(it->second, source, path + key + ".", containers);
     }
   } else if (n.IsSequence()) {
     for (std::size_t i = 0; i < n.size(); ++i) {
       std::string p = path;
       if (!p.empty()) p.pop_back();  // "a.b." -> "a.b"
-      rejectRepeatedKeys(n[i], source, p + "[" + std::to_string(i) + "].");
+      rejectRepeatedKeys(n[i], source, p + "[" + std::to_string(i) + "].", containers);
     }
   }
 }
@@ -67,10 +76,13 @@ std::string Node::origin(const std::string& key, const YAML::Node& n) const {
 
 Node Node::loadFile(const std::string& path) {
   if (!std::filesystem::exists(path)) throw ConfigError(path + ": file not found");
+  // A folder (or a device) would fail inside the stream with an exception that names no file.
+  if (!std::filesystem::is_regular_file(path)) throw ConfigError(path + ": not a file");
   try {
     YAML::Node root = YAML::LoadFile(path);
     if (!root.IsMap()) throw ConfigError(path + ": the top level must be a map of keys");
-    rejectRepeatedKeys(root, path, "");
+    std::set<int> containers;
+    rejectRepeatedKeys(root, path, "", containers);
     return Node(root, std::make_shared<const std::string>(path), "");
   } catch (const YAML::Exception& e) {
     throw ConfigError(path + ": not valid YAML: " + e.what());
@@ -93,6 +105,8 @@ Node Node::loadFileWithOverrides(const std::string& path, const std::vector<std:
     } catch (const YAML::Exception& e) {
       throw ConfigError("override '" + ov + "': the value is not valid YAML: " + e.what());
     }
+    std::set<int> containers;  // the same rules as the file: no key given twice, no aliased map or list
+    rejectRepeatedKeys(value, "override '" + ov + "'", key + ".", containers);
     // Walk with fresh handles (YAML::Node assignment would rebind, not copy into, a handle).
     std::vector<std::string> parts;
     for (std::size_t b = 0;;) {
@@ -120,7 +134,8 @@ Node Node::loadString(const std::string& text, const std::string& source) {
   try {
     YAML::Node root = YAML::Load(text);
     if (!root.IsMap()) throw ConfigError(source + ": the top level must be a map of keys");
-    rejectRepeatedKeys(root, source, "");
+    std::set<int> containers;
+    rejectRepeatedKeys(root, source, "", containers);
     return Node(root, std::make_shared<const std::string>(source), "");
   } catch (const YAML::Exception& e) {
     throw ConfigError(source + ": not valid YAML: " + e.what());

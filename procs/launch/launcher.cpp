@@ -28,6 +28,8 @@
 namespace omnislam::launch {
 namespace fs = std::filesystem;
 
+constexpr size_t kMaxVariableBytes = 64 * 1024;  ///< a launch variable after substitution
+
 std::string substitute(const std::string& s, const std::map<std::string, std::string>& vars) {
   std::string out;
   size_t i = 0;
@@ -76,6 +78,11 @@ Plan loadPlan(const std::string& path, const std::map<std::string, std::string>&
       if (val.find("${") == std::string::npos) continue;
       try {
         std::string next = substitute(val, vars);
+        // Each variable may hold another twice: 26 such lines made a 512 MB value, 40 ran out of
+        // memory (a helper's fuzzing). No command line needs more than this.
+        if (next.size() > kMaxVariableBytes)
+          throw config::ConfigError(root.where("variables." + k) + ": its value grows past " +
+                                    std::to_string(kMaxVariableBytes) + " bytes when the variables are substituted");
         changed = changed || next != val;
         val = std::move(next);
       } catch (const std::invalid_argument& e) {

@@ -207,7 +207,8 @@ TEST(Launcher, AStopWhileWaitingForTheRecorderStartsNothing) {
 }
 
 // Variables that name each other at any depth are resolved (one pass in map order passed
-// "${config_dir}/y/x" to the program); a cycle is a bad config naming the variable.
+// "${config_dir}/y/x" to the program); a cycle, or a value that grows without bound, is a bad config
+// naming the variable.
 TEST(Launcher, VariablesResolveAtAnyDepthAndACycleIsRefused) {
   t::TempDir dir;
   const std::string nested = dir.file("nested.yaml");
@@ -225,6 +226,17 @@ TEST(Launcher, VariablesResolveAtAnyDepthAndACycleIsRefused) {
   r = t::run({t::binPath("omnislam-launch"), cycle, "--no-log"}, 20);
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("in a cycle"), std::string::npos) << r.output;
+  // Each variable holding the one before twice: 2^40 bytes. Refused once a value passes 64 KiB.
+  const std::string doubling = dir.file("doubling.yaml");
+  {
+    std::ofstream f(doubling);
+    f << "name: unit\nvariables:\n  v0: \"ab\"\n";
+    for (int i = 1; i <= 40; ++i) f << "  v" << i << ": \"${v" << i - 1 << "}${v" << i - 1 << "}\"\n";
+    f << "processes:\n  - {name: e, cmd: [echo, '${v40}']}\n";
+  }
+  r = t::run({t::binPath("omnislam-launch"), doubling, "--no-log"}, 20);
+  EXPECT_EQ(r.exit_code, 2) << r.output.substr(0, 2000);
+  EXPECT_NE(r.output.find("grows past 65536 bytes"), std::string::npos) << r.output.substr(0, 2000);
 }
 
 }  // namespace

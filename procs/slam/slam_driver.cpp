@@ -282,7 +282,8 @@ std::string SlamDriver::summary() const {
   o << "frames " << p.frames_in << " processed " << s.frames_processed << " dropped: no_odometry "
     << p.dropped_no_odometry << " odometry_gap " << p.dropped_odometry_gap << " too_old " << p.dropped_too_old
     << " restart " << p.dropped_restart << "; odometry " << p.odometry_in << "; refused: duplicates "
-    << p.duplicates << " out_of_order " << p.out_of_order << " stale " << p.stale_after_restart << " too_large " << s.frames_too_large << "; restarts "
+    << p.duplicates << " out_of_order " << p.out_of_order << " stale " << p.stale_after_restart << " too_large "
+    << s.frames_too_large << "; restarts "
     << p.restarts << " filter_resets " << s.filter_resets << "; jumps_ahead: taken " << p.forward_jumps << " stray "
     << p.stray_ahead << "; odometry_jumps " << p.odometry_jumps << "; features " << s.features_in << " skipped " << s.features_skipped_kind
     << " rejected_by_filter " << s.measurements_rejected << "; odometry_only_steps " << s.odometry_only_steps

@@ -127,8 +127,9 @@ TEST(LogFiles, LengthsThatRunPastTheFileStopReadingWithAReason) {
 TEST(LogFiles, EventsSwallowedByACorruptLengthAreCountedByTheirNumbers) {
   Dir d;
   const std::string e1 = rawLogEvent(1, "A", "one"), e2 = rawLogEvent(2, "A", "two");
-  writeBytes(d.file("swallow.lcm"), rawLogEvent(0, "A", "zero" + e1 + e2, 4 + static_cast<int64_t>(e1.size() + e2.size())) +
-                                        rawLogEvent(3, "A", "three"));
+  writeBytes(d.file("swallow.lcm"),
+             rawLogEvent(0, "A", "zero" + e1 + e2, 4 + static_cast<int64_t>(e1.size() + e2.size())) +
+                 rawLogEvent(3, "A", "three"));
   std::vector<int64_t> numbers;
   const auto r = lcmio::forEachEvent(d.file("swallow.lcm"), [&](const lcmio::LogEvent& e) { numbers.push_back(e.event_number); });
   EXPECT_EQ(numbers, (std::vector<int64_t>{0, 3}));
@@ -137,8 +138,9 @@ TEST(LogFiles, EventsSwallowedByACorruptLengthAreCountedByTheirNumbers) {
   ASSERT_TRUE(r.problem("swallow.lcm"));
   EXPECT_NE(r.problem("swallow.lcm")->find("2 event numbers are missing"), std::string::npos) << *r.problem("swallow.lcm");
   // Corrupted numbers far apart or negative: counted without overflow, every event still read.
-  writeBytes(d.file("numbers.lcm"), rawLogEvent(std::numeric_limits<int64_t>::max(), "A", "a") + rawLogEvent(-5, "A", "b") +
-                                        rawLogEvent(0, "A", "c") + rawLogEvent(std::numeric_limits<int64_t>::max(), "A", "d"));
+  const int64_t most = std::numeric_limits<int64_t>::max();
+  writeBytes(d.file("numbers.lcm"), rawLogEvent(most, "A", "a") + rawLogEvent(-5, "A", "b") + rawLogEvent(0, "A", "c") +
+                                        rawLogEvent(most, "A", "d"));
   const auto n = lcmio::forEachEvent(d.file("numbers.lcm"), [](const lcmio::LogEvent&) {});
   EXPECT_EQ(n.events, 4);
   EXPECT_EQ(n.missing_event_numbers, std::numeric_limits<int64_t>::max() - 1);

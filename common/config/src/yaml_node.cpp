@@ -17,16 +17,16 @@ std::string lineOf(const YAML::Node& n) {
   return " (line " + std::to_string(m.line + 1) + ")";
 }
 
-/// Throws ConfigError for a key given twice in one map, anywhere below `n`. yaml-cpp keeps both and
-/// lookups return the first, so an override appended at the end of a file was silently ignored.
-void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const std::string& path,
-                        std::set<int>& containers) {
+/// rejectRepeatedKeys below; `containers` holds the positions of the maps and lists met so far.
+void walkRepeatedKeys(const YAML::Node& n, const std::string& source, const std::string& path,
+                      std::set<int>& containers) {
   // An alias (*name) of a map or list is the anchored node itself, met again at its own position.
   // Nine lines of nested aliases expand to a billion nodes (every loader hung on 486 bytes), and no
   // config needs them: refused. (Aliases of single values are harmless and stay allowed.)
   if ((n.IsMap() || n.IsSequence()) && n.Mark().pos >= 0 && !containers.insert(n.Mark().pos).second)
     throw ConfigError(source + ": key '" + (path.empty() ? std::string() : path.substr(0, path.size() - 1)) +
-                      "' repeats the " + (n.IsMap() ? "map" : "list") + " of line " + std::to_string(n.Mark().line + 1) +
+                      "' repeats the " + (n.IsMap() ? "map" : "list") + " of line " +
+                      std::to_string(n.Mark().line + 1) +
                       " through an alias (*name); aliases of maps and lists are not accepted");
   if (n.IsMap()) {
     std::map<std::string, int> first_line;
@@ -37,15 +37,23 @@ void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const st
       if (!fresh)
         throw ConfigError(source + ": key '" + path + key + "' is given twice (lines " + std::to_string(seen->second) +
                           " and " + std::to_string(line) + "); give it once");
-      rejectRepeatedKeys(it->second, source, path + key + ".", containers);
+      walkRepeatedKeys(it->second, source, path + key + ".", containers);
     }
   } else if (n.IsSequence()) {
     for (std::size_t i = 0; i < n.size(); ++i) {
       std::string p = path;
       if (!p.empty()) p.pop_back();  // "a.b." -> "a.b"
-      rejectRepeatedKeys(n[i], source, p + "[" + std::to_string(i) + "].", containers);
+      walkRepeatedKeys(n[i], source, p + "[" + std::to_string(i) + "].", containers);
     }
   }
+}
+
+/// Throws ConfigError for a key given twice in one map, anywhere below `n` (yaml-cpp keeps both and
+/// lookups return the first, so an override appended at the end of a file was silently ignored),
+/// and for an alias of a map or list.
+void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const std::string& path) {
+  std::set<int> containers;
+  walkRepeatedKeys(n, source, path, containers);
 }
 
 std::string fmt(double v) {
@@ -81,8 +89,7 @@ Node Node::loadFile(const std::string& path) {
   try {
     YAML::Node root = YAML::LoadFile(path);
     if (!root.IsMap()) throw ConfigError(path + ": the top level must be a map of keys");
-    std::set<int> containers;
-    rejectRepeatedKeys(root, path, "", containers);
+    rejectRepeatedKeys(root, path, "");
     return Node(root, std::make_shared<const std::string>(path), "");
   } catch (const YAML::Exception& e) {
     throw ConfigError(path + ": not valid YAML: " + e.what());
@@ -105,8 +112,7 @@ Node Node::loadFileWithOverrides(const std::string& path, const std::vector<std:
     } catch (const YAML::Exception& e) {
       throw ConfigError("override '" + ov + "': the value is not valid YAML: " + e.what());
     }
-    std::set<int> containers;  // the same rules as the file: no key given twice, no aliased map or list
-    rejectRepeatedKeys(value, "override '" + ov + "'", key + ".", containers);
+    rejectRepeatedKeys(value, "override '" + ov + "'", key + ".");  // the file's rules
     // Walk with fresh handles (YAML::Node assignment would rebind, not copy into, a handle).
     std::vector<std::string> parts;
     for (std::size_t b = 0;;) {
@@ -134,8 +140,7 @@ Node Node::loadString(const std::string& text, const std::string& source) {
   try {
     YAML::Node root = YAML::Load(text);
     if (!root.IsMap()) throw ConfigError(source + ": the top level must be a map of keys");
-    std::set<int> containers;
-    rejectRepeatedKeys(root, source, "", containers);
+    rejectRepeatedKeys(root, source, "");
     return Node(root, std::make_shared<const std::string>(source), "");
   } catch (const YAML::Exception& e) {
     throw ConfigError(source + ": not valid YAML: " + e.what());

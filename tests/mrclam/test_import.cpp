@@ -313,6 +313,72 @@ TEST(MrclamImport, MalformedFilesNameFileAndLine) {
   EXPECT_NE(e.find("Robot1_Odometry.dat:6: duplicated time"), std::string::npos) << e;
 }
 
+// Finite values far beyond anything physical used to reach the message check as a logic_error with
+// no file or line (1e308 m/s integrated to an infinite pose), or to give an infinite truth
+// covariance (a sigma of 1e200); a negative sigma was taken. Each is now refused where it is read.
+TEST(MrclamImport, ValuesBeyondPhysicalBoundsNameFileLineAndRange) {
+  t::TempDir d;
+  const std::string p = d.file("Robot1_Odometry.dat");
+  auto odo = [&](const std::string& body) {
+    t::writeMrclamFile(p, body);
+    return errorOf([&] { mrclam::readOdometry(p, mrclam::DuplicateTimes::kError); });
+  };
+  std::string e = odo("1.0 0.1 0.0\n2.0 1e308 0.0\n");
+  EXPECT_NE(e.find(p + ":6: column 'forward velocity [m/s]' is 1e+308, outside -100..100"), std::string::npos) << e;
+  e = odo("1.0 0.1 -101\n");
+  EXPECT_NE(e.find(p + ":5: column 'angular velocity [rad/s]' is -101, outside -100..100"), std::string::npos) << e;
+  EXPECT_EQ(odo("1.0 100 -100\n"), "");  // the bounds themselves are accepted
+
+  const std::string g = d.file("Robot1_Groundtruth.dat");
+  auto truth = [&](const std::string& body) {
+    t::writeMrclamFile(g, body);
+    return errorOf([&] { mrclam::readGroundtruth(g, mrclam::DuplicateTimes::kError); });
+  };
+  e = truth("1.0 2e6 0 0\n");
+  EXPECT_NE(e.find(g + ":5: column 'x [m]' is 2000000, outside -1000000..1000000"), std::string::npos) << e;
+  e = truth("1.0 0 -1e300 0\n");
+  EXPECT_NE(e.find(g + ":5: column 'y [m]'"), std::string::npos) << e;
+  e = truth("1.0 0 0 1e20\n");
+  EXPECT_NE(e.find(g + ":5: column 'orientation [rad]' is 1e+20, outside -100..100"), std::string::npos) << e;
+
+  const std::string m = d.file("Robot1_Measurement.dat");
+  auto meas = [&](const std::string& body) {
+    t::writeMrclamFile(m, body);
+    return errorOf([&] { mrclam::readMeasurements(m); });
+  };
+  e = meas("1.0 63 2.0 0.1\n2.0 63 -0.5 0.1\n");
+  EXPECT_NE(e.find(m + ":6: column 'range [m]' is -0.5, outside 0..1000000"), std::string::npos) << e;
+  e = meas("1.0 63 2.0 1e300\n");
+  EXPECT_NE(e.find(m + ":5: column 'bearing [rad]' is 1e+300, outside -100..100"), std::string::npos) << e;
+  // 4096 measurements at one time make one frame; the 4097th is refused at its own line.
+  std::string rows;
+  for (int k = 0; k < 4096; ++k) rows += "1.0 63 2.0 0.1\n";
+  EXPECT_EQ(meas(rows + "2.0 63 2.0 0.1\n"), "");
+  e = meas("0.5 63 2.0 0.1\n" + rows + "1.0 81 2.0 0.1\n");
+  EXPECT_NE(e.find(m + ":4102: more than 4096 measurements at time 1 s (from line 6)"), std::string::npos) << e;
+
+  const std::string l = d.file("Landmark_Groundtruth.dat");
+  auto lms = [&](const std::string& body) {
+    t::writeMrclamFile(l, body);
+    return errorOf([&] { mrclam::readLandmarks(l); });
+  };
+  e = lms("6 1 2 1e200 0\n");
+  EXPECT_NE(e.find(l + ":5: column 'x std-dev [m]' is 1e+200, outside 0..100"), std::string::npos) << e;
+  e = lms("6 1 2 0 -0.001\n");
+  EXPECT_NE(e.find(l + ":5: column 'y std-dev [m]' is -0.001, outside 0..100"), std::string::npos) << e;
+  e = lms("6 1e7 2 0 0\n");
+  EXPECT_NE(e.find(l + ":5: column 'x [m]'"), std::string::npos) << e;
+  std::string many;
+  for (int k = 0; k <= 100000; ++k) many += std::to_string(k) + " 1 2 0 0\n";
+  e = lms(many);
+  EXPECT_NE(e.find(l + ":100005: more than 100000 landmarks"), std::string::npos) << e;
+
+  // Through the whole import: a ParseError naming the file and line, not a logic_error.
+  writeDataset(d, "100.0 1.0 0.0\n100.5 1e308 0.0\n101.0 0.5 0.5\n");
+  e = errorOf([&] { mrclam::importRobot(d.path(), {}); });
+  EXPECT_NE(e.find("Robot1_Odometry.dat:6: column 'forward velocity [m/s]'"), std::string::npos) << e;
+}
+
 TEST(MrclamImport, DuplicatedTimesKeepLastIsCounted) {
   t::TempDir d;
   const std::string p = d.file("odo.dat");

@@ -65,6 +65,13 @@ void checkTimes(Table& t, DuplicateTimes dup) {
   t.line_of_row = std::move(lines);
 }
 
+/// Throws unless lo <= v <= hi, naming the column and the accepted range.
+void checkValue(const std::string& path, int64_t line, const std::string& name, double v, double lo, double hi) {
+  if (!(v >= lo && v <= hi))
+    throw ParseError(at(path, line) + "column '" + name + "' is " + fmtTime(v) + ", outside " + fmtTime(lo) + ".." +
+                     fmtTime(hi));
+}
+
 void put(FileStats* out, const FileStats& s) {
   if (out) *out = s;
 }
@@ -127,7 +134,12 @@ std::vector<OdometrySample> readOdometry(const std::string& path, DuplicateTimes
   Table t = readTable(path, {"time [s]", "forward velocity [m/s]", "angular velocity [rad/s]"});
   checkTimes(t, dup);
   std::vector<OdometrySample> out;
-  for (const auto& r : t.rows) out.push_back({r[0], r[1], r[2]});
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& r = t.rows[i];
+    checkValue(path, t.line_of_row[i], "forward velocity [m/s]", r[1], -kMaxSpeedMps, kMaxSpeedMps);
+    checkValue(path, t.line_of_row[i], "angular velocity [rad/s]", r[2], -kMaxTurnRateRadps, kMaxTurnRateRadps);
+    out.push_back({r[0], r[1], r[2]});
+  }
   put(stats, t.stats);
   return out;
 }
@@ -136,7 +148,13 @@ std::vector<PoseSample> readGroundtruth(const std::string& path, DuplicateTimes 
   Table t = readTable(path, {"time [s]", "x [m]", "y [m]", "orientation [rad]"});
   checkTimes(t, dup);
   std::vector<PoseSample> out;
-  for (const auto& r : t.rows) out.push_back({r[0], r[1], r[2], r[3]});
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& r = t.rows[i];
+    checkValue(path, t.line_of_row[i], "x [m]", r[1], -kMaxCoordinateM, kMaxCoordinateM);
+    checkValue(path, t.line_of_row[i], "y [m]", r[2], -kMaxCoordinateM, kMaxCoordinateM);
+    checkValue(path, t.line_of_row[i], "orientation [rad]", r[3], -kMaxAngleRad, kMaxAngleRad);
+    out.push_back({r[0], r[1], r[2], r[3]});
+  }
   put(stats, t.stats);
   return out;
 }
@@ -144,6 +162,7 @@ std::vector<PoseSample> readGroundtruth(const std::string& path, DuplicateTimes 
 std::vector<Measurement> readMeasurements(const std::string& path, FileStats* stats) {
   Table t = readTable(path, {"time [s]", "subject (barcode)", "range [m]", "bearing [rad]"});
   std::vector<Measurement> out;
+  size_t first_at_time = 0;  // index in out of the first row with the current time
   for (size_t i = 0; i < t.rows.size(); ++i) {
     const auto& r = t.rows[i];
     const int64_t line = t.line_of_row[i];
@@ -152,6 +171,14 @@ std::vector<Measurement> readMeasurements(const std::string& path, FileStats* st
       throw ParseError(at(path, line) + "time " + fmtTime(r[0]) + " s is before the previous (" +
                        fmtTime(out.back().t_s) + " s at line " + std::to_string(out.back().line) +
                        "): times must not decrease");
+    if (out.empty() || r[0] != out.back().t_s) first_at_time = out.size();
+    if (out.size() - first_at_time == static_cast<size_t>(kMaxMeasurementsPerTime))
+      throw ParseError(at(path, line) + "more than " + std::to_string(kMaxMeasurementsPerTime) +
+                       " measurements at time " + fmtTime(r[0]) + " s (from line " +
+                       std::to_string(out[first_at_time].line) + "): one frame carries at most " +
+                       std::to_string(kMaxMeasurementsPerTime));
+    checkValue(path, line, "range [m]", r[2], 0.0, kMaxRangeM);
+    checkValue(path, line, "bearing [rad]", r[3], -kMaxAngleRad, kMaxAngleRad);
     out.push_back({r[0], integral(path, line, "subject (barcode)", r[1]), r[2], r[3], line});
   }
   put(stats, t.stats);
@@ -164,9 +191,15 @@ std::vector<LandmarkTruth> readLandmarks(const std::string& path, FileStats* sta
   std::set<int> seen;
   for (size_t i = 0; i < t.rows.size(); ++i) {
     const auto& r = t.rows[i];
-    const int s = integral(path, t.line_of_row[i], "subject", r[0]);
-    if (!seen.insert(s).second)
-      throw ParseError(at(path, t.line_of_row[i]) + "duplicated subject " + std::to_string(s));
+    const int64_t line = t.line_of_row[i];
+    const int s = integral(path, line, "subject", r[0]);
+    if (!seen.insert(s).second) throw ParseError(at(path, line) + "duplicated subject " + std::to_string(s));
+    if (i == static_cast<size_t>(kMaxLandmarks))
+      throw ParseError(at(path, line) + "more than " + std::to_string(kMaxLandmarks) + " landmarks");
+    checkValue(path, line, "x [m]", r[1], -kMaxCoordinateM, kMaxCoordinateM);
+    checkValue(path, line, "y [m]", r[2], -kMaxCoordinateM, kMaxCoordinateM);
+    checkValue(path, line, "x std-dev [m]", r[3], 0.0, kMaxLandmarkSigmaM);
+    checkValue(path, line, "y std-dev [m]", r[4], 0.0, kMaxLandmarkSigmaM);
     out.push_back({s, r[1], r[2], r[3], r[4]});
   }
   put(stats, t.stats);

@@ -1,8 +1,9 @@
 // Parsing the text files of the UTIAS MRCLAM datasets (Leung et al., IJRR 2011): RobotN_Odometry,
 // RobotN_Measurement, RobotN_Groundtruth, Landmark_Groundtruth, Barcodes. Comment lines start with
 // '#'; data lines hold whitespace-separated numbers. Every malformed line is an error naming the
-// file and the line (missing or extra columns, non-numeric or non-finite fields, non-integral ids,
-// times going back or repeated, an empty file); nothing is dropped silently: what a policy lets
+// file and the line (missing or extra columns, non-numeric or non-finite fields, values beyond the
+// physical bounds below, non-integral ids, times going back or repeated, an empty file); nothing is
+// dropped silently: what a policy lets
 // through is counted in FileStats. Units as in the files: seconds, metres, radians. No LCM here.
 #pragma once
 
@@ -22,6 +23,21 @@ struct ParseError : std::runtime_error {
 /// Largest time a row may have [s since the Unix epoch]: 4e9 s (the year 2096) is 4e15 us, the
 /// bound of utimes elsewhere; MRCLAM's times are about 1.25e9 s.
 constexpr double kMaxTimeS = 4e9;
+
+/// Physical bounds on the values of a data line (beyond them a line is refused, naming the file, the
+/// line, the column and the range): MRCLAM's robots drive below 0.1 m/s and 0.6 rad/s in a 10 m
+/// arena, so each bound is orders of magnitude away from real data. They keep every integrated
+/// pose, covariance and distance the importer and the evaluation compute finite.
+constexpr double kMaxSpeedMps = 100.0;        ///< |forward velocity|
+constexpr double kMaxTurnRateRadps = 100.0;   ///< |angular velocity|
+constexpr double kMaxCoordinateM = 1e6;       ///< |x|, |y| of a truth pose or a landmark
+constexpr double kMaxAngleRad = 100.0;        ///< |orientation|, |bearing| (wrapped afterwards)
+constexpr double kMaxRangeM = 1e6;            ///< range in 0..kMaxRangeM (read, then dropped)
+constexpr double kMaxLandmarkSigmaM = 100.0;  ///< landmark std-dev in 0..kMaxLandmarkSigmaM
+/// The message contract's sizes (lcmio::Limits, checked at compile time by the importer): more
+/// measurements at one time than a frame may carry, or more landmarks than a map, are refused.
+constexpr int kMaxMeasurementsPerTime = 4096;
+constexpr int kMaxLandmarks = 100000;
 
 /// A file's time [s] as the messages' utime [us], rounded to the nearest microsecond.
 inline int64_t toUtime(double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e6)); }
@@ -81,7 +97,8 @@ struct BarcodeEntry {
 /// Times strictly increasing (a repeated time per `dup`); the first data line's time is the start.
 std::vector<OdometrySample> readOdometry(const std::string& path, DuplicateTimes dup, FileStats* stats = nullptr);
 std::vector<PoseSample> readGroundtruth(const std::string& path, DuplicateTimes dup, FileStats* stats = nullptr);
-/// Times non-decreasing (equal times = one frame); the code column must be integral.
+/// Times non-decreasing (equal times = one frame, at most kMaxMeasurementsPerTime rows); the code
+/// column must be integral.
 std::vector<Measurement> readMeasurements(const std::string& path, FileStats* stats = nullptr);
 /// Subjects integral and unique.
 std::vector<LandmarkTruth> readLandmarks(const std::string& path, FileStats* stats = nullptr);

@@ -243,6 +243,9 @@ vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
   p.rows = static_cast<int>(n.getInt("rows", 0, 20000, p.rows));
   if (p.rows == 1) throw ConfigError(n.where("rows") + " must be 0 (auto) or >= 2");
   p.pad_columns = static_cast<int>(n.getInt("pad_columns", 2, p.columns / 4, p.pad_columns));  // 2: the seam
+  // The panorama's size (rows 0 follows the radii): refused here with the file, not as an
+  // allocation of gigabytes when the detector is built.
+  if (auto why = vision::validate(p)) throw ConfigError(n.where(n.has("rows") ? "rows" : "r_max_px") + ": " + *why);
   o.edge_threshold = static_cast<int>(n.getInt("edge_threshold", 1, 1020, o.edge_threshold));
   o.min_run_rows = static_cast<int>(n.getInt("min_run_rows", 1, 100000, o.min_run_rows));
   o.max_gap_rows = static_cast<int>(n.getInt("max_gap_rows", 0, 100000, o.max_gap_rows));

@@ -285,6 +285,15 @@ TEST(FeaturesProcess, BadConfigStopsWithExitCodeTwoNamingTheKey) {
       {"detector: vertical_lines\ncamera: {model: centre_only, width_px: 640, height_px: 480, mounting: {z_m: 1}}\n"
        "vertical_lines: {centre_u_px: 320, centre_v_px: 240, r_min_px: 50, r_max_px: 20}\n",
        "vertical_lines.r_max_px"},
+      // A panorama of 400 million pixels: refused at start, not an allocation of gigabytes.
+      {"detector: vertical_lines\ncamera: {model: centre_only, width_px: 640, height_px: 480, mounting: {z_m: 1}}\n"
+       "vertical_lines: {centre_u_px: 320, centre_v_px: 240, r_min_px: 50, r_max_px: 200, columns: 20000, rows: 20000}\n",
+       "key 'vertical_lines.rows': rows x (columns + 2 pad_columns) = 20000 x 20048 = 400960000 pixels, more than "
+       "16777216"},
+      // The rows follow the radii when not given: the radius is named.
+      {"detector: vertical_lines\ncamera: {model: centre_only, width_px: 640, height_px: 480, mounting: {z_m: 1}}\n"
+       "vertical_lines: {centre_u_px: 320, centre_v_px: 240, r_min_px: 0, r_max_px: 30000}\n",
+       "key 'vertical_lines.r_max_px': rows 0 (auto: one per pixel of r_max_px - r_min_px) needs"},
       {"detector: ceiling_lights\ncamera: {model: ocamcalib, file: /nonexistent/calib.txt, mounting: {z_m: 1}}\n",
        "camera.file"},
   };

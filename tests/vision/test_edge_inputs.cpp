@@ -1,6 +1,7 @@
 // Edge inputs of the vision library found by an audit: plots of values near the largest double or
 // far from the origin end (their grid loops never did), a vertical-line panorama without the
-// wrapped columns the seam needs is refused, and so is an automatic row count beyond the limit.
+// wrapped columns the seam needs is refused, and so are an automatic row count beyond the limit and
+// a panorama of more pixels than the bound.
 #include <gtest/gtest.h>
 
 #include <limits>
@@ -45,6 +46,26 @@ TEST(VisionEdgeInputs, AnAutomaticRowCountBeyondTheLimitIsRefused) {
   EXPECT_NE(validate(o)->find("r_max_px - r_min_px <= 19999"), std::string::npos) << *validate(o);
   o.r_max_px = 19999;
   EXPECT_FALSE(validate(o).has_value()) << *validate(o);
+}
+
+// 20000 x 20000 passed each side's bound and asked for about 8 GB of remap tables when the detector
+// was built; the product is bounded now, at exactly 2^24 pixels.
+TEST(VisionEdgeInputs, APanoramaOfMoreThanTwoToTheTwentyFourPixelsIsRefused) {
+  PanoramaOptions o;
+  o.centre_u_px = 320, o.centre_v_px = 240, o.r_min_px = 40, o.r_max_px = 200;
+  o.columns = 4048, o.pad_columns = 24, o.rows = 4096;  // 4096 x 4096
+  EXPECT_FALSE(validate(o).has_value()) << *validate(o);
+  o.rows = 4097;
+  ASSERT_TRUE(validate(o).has_value());
+  EXPECT_EQ(*validate(o), "rows x (columns + 2 pad_columns) = 4097 x 4096 = 16781312 pixels, more than 16777216 "
+                          "(4096 x 4096); lower columns or rows");
+  o.rows = 20000, o.columns = 20000;
+  EXPECT_TRUE(validate(o).has_value());
+  // With rows 0 the count follows the radii: 1091 rows x 20047 columns.
+  o.rows = 0, o.columns = 19999, o.pad_columns = 24, o.r_min_px = 110, o.r_max_px = 1200;
+  ASSERT_TRUE(validate(o).has_value());
+  EXPECT_NE(validate(o)->find("1091 x 20047 = 21871277 pixels"), std::string::npos) << *validate(o);
+  EXPECT_NE(validate(o)->find("(rows 0: one per pixel of r_max_px - r_min_px)"), std::string::npos) << *validate(o);
 }
 
 }  // namespace

@@ -26,6 +26,12 @@ std::optional<std::string> validate(const PanoramaOptions& o) {
   if (o.rows == 0 && std::lround(o.r_max_px - o.r_min_px) + 1 > 20000)
     return "rows 0 (auto: one per pixel of r_max_px - r_min_px) needs r_max_px - r_min_px <= 19999";
   if (o.pad_columns < 0 || o.pad_columns > o.columns / 4) return "pad_columns must be in [0, columns / 4]";
+  const int64_t rows = o.rows > 0 ? o.rows : std::lround(o.r_max_px - o.r_min_px) + 1;
+  const int64_t cols = int64_t{o.columns} + 2 * int64_t{o.pad_columns};
+  if (rows * cols > kMaxPanoramaPixels)
+    return "rows x (columns + 2 pad_columns) = " + std::to_string(rows) + " x " + std::to_string(cols) + " = " +
+           std::to_string(rows * cols) + " pixels, more than " + std::to_string(kMaxPanoramaPixels) +
+           " (4096 x 4096); lower columns or rows" + (o.rows == 0 ? " (rows 0: one per pixel of r_max_px - r_min_px)" : "");
   return std::nullopt;
 }
 

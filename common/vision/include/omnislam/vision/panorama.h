@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +31,11 @@ struct PanoramaOptions {
   int rows = 0;                ///< rows; 0 = round(r_max - r_min) + 1 (one row per image pixel)
   int pad_columns = 24;        ///< wrapped extra columns on each side; >= 0
 };
+
+/// The most pixels a panorama may have, rows x (columns + 2 pad_columns): 2^24 (4096 x 4096), some
+/// 30 times the defaults' and about 0.5 GB of remap tables and working images. Each side is also
+/// bounded (20000); their product is what memory follows.
+inline constexpr int64_t kMaxPanoramaPixels = int64_t{1} << 24;
 
 std::optional<std::string> validate(const PanoramaOptions& o);
 

@@ -128,6 +128,29 @@ TEST(WorldConfig, ALightIdUsedTwiceIsRefused) {
   EXPECT_EQ(omnislam::config::parseWorld(Node::loadString(next, "w.yaml")).lights.back().id, 17);
 }
 
+// A grid is the product of its two lists: 3000 values each way were accepted as 9 million lights,
+// 10 000 asked for 3 GB. The lights go into GROUND_TRUTH_MAP, which holds at most 100 000.
+TEST(WorldConfig, MoreLightsThanAMapCarriesAreRefusedBeforeTheGridIsBuilt) {
+  auto values = [](int n) {
+    std::string v = "[";
+    for (int i = 0; i < n; ++i) v += (i ? ", " : "") + std::to_string(i);
+    return v + "]";
+  };
+  auto world = [&](int nx, int ny, const std::string& list) {
+    return "lights:\n  grid:\n    x_m: " + values(nx) + "\n    y_m: " + values(ny) + "\n" + list;
+  };
+  // parseLights is reached through parseWorld; only the lights' own error is looked for.
+  std::string e = errorOf([&] { omnislam::config::parseWorld(Node::loadString(world(10000, 10000, ""), "w.yaml")); });
+  EXPECT_NE(e.find("w.yaml: key 'lights.grid.x_m': a grid of 10000 x 10000 lights, more than 100000"),
+            std::string::npos) << e;
+  e = errorOf([&] { omnislam::config::parseWorld(Node::loadString(world(1000, 100, "  list: [{x_m: 1, y_m: 1}]\n"), "w.yaml")); });
+  EXPECT_NE(e.find("w.yaml: key 'lights.list': 100000 lights in the grid and 1 in the list, more than 100000"),
+            std::string::npos) << e;
+  // 100 000 exactly is not refused by this check (the error, if any, is about another key).
+  e = errorOf([&] { omnislam::config::parseWorld(Node::loadString(world(1000, 100, ""), "w.yaml")); });
+  EXPECT_EQ(e.find("more than 100000"), std::string::npos) << e;
+}
+
 TEST(WorldConfig, TheSportsHallParsesToThePapersExperiment) {
   const auto w = omnislam::config::loadWorld(std::string(OMNISLAM_SOURCE_DIR) + "/config/worlds/sports_hall.yaml");
   EXPECT_EQ(w.lights.size(), 16u);

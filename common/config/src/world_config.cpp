@@ -11,6 +11,11 @@
 namespace omnislam::config {
 namespace {
 
+/// The most lights a world may have: GROUND_TRUTH_MAP carries every light, and a map message holds
+/// at most 100 000 landmarks (lcmio::Limits). A grid is the product of its two lists, so it is
+/// checked before it is built: 3000 values each way asked for 9 million lights, 10 000 for 3 GB.
+constexpr size_t kMaxLights = 100000;
+
 std::vector<sim::Light> parseLights(const Node& n) {
   n.rejectUnknownKeys({"height_m", "radius_m", "intensity", "grid", "list"});
   const double height = n.getDouble("height_m", 0.5, 100.0, 6.5);
@@ -22,6 +27,10 @@ std::vector<sim::Light> parseLights(const Node& n) {
     g.rejectUnknownKeys({"x_m", "y_m"});
     const std::vector<double> xs = g.getDoubles("x_m", g.getStrings("x_m").size(), -1e4, 1e4);
     const std::vector<double> ys = g.getDoubles("y_m", g.getStrings("y_m").size(), -1e4, 1e4);
+    if (static_cast<double>(xs.size()) * static_cast<double>(ys.size()) > static_cast<double>(kMaxLights))
+      throw ConfigError(g.where("x_m") + ": a grid of " + std::to_string(xs.size()) + " x " +
+                        std::to_string(ys.size()) + " lights, more than " + std::to_string(kMaxLights) +
+                        " (the most a GROUND_TRUTH_MAP carries)");
     int64_t id = 1;
     for (double x : xs)
       for (double y : ys) {
@@ -40,7 +49,12 @@ std::vector<sim::Light> parseLights(const Node& n) {
     std::set<int64_t> ids;
     for (const sim::Light& L : out) ids.insert(L.id);
     int64_t id = static_cast<int64_t>(in_grid) + 1;
-    for (const Node& item : n.items("list")) {
+    const std::vector<Node> list = n.items("list");
+    if (in_grid + list.size() > kMaxLights)
+      throw ConfigError(n.where("list") + ": " + std::to_string(in_grid) + " lights in the grid and " +
+                        std::to_string(list.size()) + " in the list, more than " + std::to_string(kMaxLights) +
+                        " (the most a GROUND_TRUTH_MAP carries)");
+    for (const Node& item : list) {
       item.rejectUnknownKeys({"id", "x_m", "y_m", "z_m", "radius_m", "intensity"});
       sim::Light L;
       L.id = item.getInt("id", 0, 1'000'000'000, id);

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "omnislam/config/world_config.h"
 #include "omnislam/config/yaml_node.h"
 
@@ -93,6 +95,52 @@ TEST(YamlNode, AliasesOfListsAndMapsAndFoldersAreRefused) {
   EXPECT_NE(twice.find("override 'filter.motion={model: a, model: b}': key 'filter.motion.model' is given twice"),
             std::string::npos)
       << twice;
+  std::remove(path.c_str());
+}
+
+// A key written with no value counted as absent, so "particles:" or "--set seed=" took the default
+// without a word; and yaml-cpp's Load reads only the first document, so everything after a '---'
+// line was ignored. Both are refused now, naming the key or the line.
+TEST(YamlNode, AKeyWithNoValueAndASecondDocumentAreRefused) {
+  const Node root = Node::loadString("particles:\nmotion:\nlist:\nxs:\nnames:\nok: 3\n", "e.yaml");
+  const std::string with_default = errorOf([&] { root.getInt("particles", 1, 100, 50); });
+  EXPECT_NE(with_default.find("e.yaml: key 'particles' has no value (a single value is required; remove the key to "
+                              "take its default, where it has one) (line 1)"),
+            std::string::npos)
+      << with_default;
+  EXPECT_NE(errorOf([&] { root.getDouble("particles", 0, 1, 0.5); }).find("'particles' has no value"), std::string::npos);
+  EXPECT_NE(errorOf([&] { root.getBool("particles", true); }).find("'particles' has no value"), std::string::npos);
+  EXPECT_NE(errorOf([&] { root.getString("particles", "x"); }).find("'particles' has no value"), std::string::npos);
+  EXPECT_NE(errorOf([&] { root.getEnum("particles", {"a"}, "a"); }).find("'particles' has no value"), std::string::npos);
+  EXPECT_NE(errorOf([&] { root.optChild("motion"); }).find("'motion' has no value (a map of keys is required"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { root.items("list"); }).find("'list' has no value (a list is required"), std::string::npos);
+  EXPECT_NE(errorOf([&] { root.getDoubles("xs", 2, 0, 1); }).find("'xs' has no value"), std::string::npos);
+  EXPECT_NE(errorOf([&] { root.getStrings("names"); }).find("'names' has no value"), std::string::npos);
+  EXPECT_TRUE(root.has("particles"));
+  EXPECT_EQ(root.getInt("ok", 1, 5, 1), 3);
+  EXPECT_EQ(root.getInt("absent", 1, 5, 1), 1);  // a key not written at all still takes its default
+
+  const std::string path = "/tmp/omnislam-yaml-node-empty-" + std::to_string(::getpid()) + ".yaml";
+  std::ofstream(path) << "seed: 4\n";
+  const Node set = Node::loadFileWithOverrides(path, {"seed="});
+  const std::string from_set = errorOf([&] { set.getInt("seed", 0, 100, 1); });
+  EXPECT_NE(from_set.find("key 'seed' has no value"), std::string::npos) << from_set;
+  EXPECT_NE(from_set.find("(from the override 'seed=')"), std::string::npos) << from_set;
+
+  // Documents: a leading '---' and an empty trailing one are one document; a second with content
+  // is refused, in a file, in a string and in an override's value.
+  EXPECT_EQ(Node::loadString("---\na: 1\n---\n", "one.yaml").getInt("a", 0, 9), 1);
+  const std::string two = errorOf([] { Node::loadString("a: 1\n---\nb: 2\n", "two.yaml"); });
+  EXPECT_NE(two.find("two.yaml: a second YAML document starts near line 3 (after a '---' line); a config is one "
+                     "document"),
+            std::string::npos)
+      << two;
+  std::ofstream(path) << "seed: 4\n---\nseed: 5\n";
+  EXPECT_NE(errorOf([&] { Node::loadFile(path); }).find(path + ": a second YAML document"), std::string::npos);
+  std::ofstream(path) << "seed: 4\n";
+  EXPECT_NE(errorOf([&] { Node::loadFileWithOverrides(path, {"seed=1\n---\n2"}); }).find("a second YAML document"),
+            std::string::npos);
   std::remove(path.c_str());
 }
 

@@ -56,6 +56,17 @@ void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const st
   walkRepeatedKeys(n, source, path, containers);
 }
 
+/// The first document of `docs`; a later one that holds anything is refused (yaml-cpp's Load reads
+/// only the first, so everything after a '---' line was ignored without a word).
+YAML::Node onlyDocument(const std::vector<YAML::Node>& docs, const std::string& source) {
+  for (size_t i = 1; i < docs.size(); ++i)
+    if (!docs[i].IsNull())
+      throw ConfigError(source + ": a second YAML document starts" +
+                        (docs[i].Mark().line >= 0 ? " near line " + std::to_string(docs[i].Mark().line + 1) : "") +
+                        " (after a '---' line); a config is one document: join them or remove the '---'");
+  return docs.empty() ? YAML::Node() : docs.front();
+}
+
 std::string fmt(double v) {
   std::ostringstream os;
   os << v;
@@ -87,7 +98,7 @@ Node Node::loadFile(const std::string& path) {
   // A folder (or a device) would fail inside the stream with an exception that names no file.
   if (!std::filesystem::is_regular_file(path)) throw ConfigError(path + ": not a file");
   try {
-    YAML::Node root = YAML::LoadFile(path);
+    YAML::Node root = onlyDocument(YAML::LoadAllFromFile(path), path);
     if (!root.IsMap()) throw ConfigError(path + ": the top level must be a map of keys");
     rejectRepeatedKeys(root, path, "");
     return Node(root, std::make_shared<const std::string>(path), "");
@@ -108,7 +119,7 @@ Node Node::loadFileWithOverrides(const std::string& path, const std::vector<std:
       throw ConfigError("override '" + ov + "': expected dotted.key=value");
     YAML::Node value;
     try {
-      value = YAML::Load(ov.substr(eq + 1));
+      value = onlyDocument(YAML::LoadAll(ov.substr(eq + 1)), "override '" + ov + "'");
     } catch (const YAML::Exception& e) {
       throw ConfigError("override '" + ov + "': the value is not valid YAML: " + e.what());
     }
@@ -138,7 +149,7 @@ Node Node::loadFileWithOverrides(const std::string& path, const std::vector<std:
 
 Node Node::loadString(const std::string& text, const std::string& source) {
   try {
-    YAML::Node root = YAML::Load(text);
+    YAML::Node root = onlyDocument(YAML::LoadAll(text), source);
     if (!root.IsMap()) throw ConfigError(source + ": the top level must be a map of keys");
     rejectRepeatedKeys(root, source, "");
     return Node(root, std::make_shared<const std::string>(source), "");
@@ -161,10 +172,24 @@ void Node::fail(const std::string& key, const std::string& what) const {
   throw ConfigError(where(key) + " " + what + (n ? origin(key, n) : origin(key, node_)));
 }
 
-bool Node::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined() && !node_[key].IsNull(); }
+// A key written with no value ("particles:", "--set seed=") is present: its getter refuses it. It
+// used to count as absent, so a value deleted by mistake silently became the default.
+bool Node::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
+
+void Node::failIfEmpty(const std::string& key, const char* required) const {
+  if (!node_[key].IsNull()) return;
+  // The line is the key's: an empty value's own mark is where the next line starts. (No YAML::Node
+  // is assigned here: assigning to a handle that refers to a node rewrites that node.)
+  const std::string what = " has no value (" + std::string(required) +
+                           "; remove the key to take its default, where it has one)";
+  for (auto it = node_.begin(); it != node_.end(); ++it)
+    if (it->first.IsScalar() && it->first.Scalar() == key) throw ConfigError(where(key) + what + origin(key, it->first));
+  throw ConfigError(where(key) + what + origin(key, node_[key]));
+}
 
 Node Node::child(const std::string& key) const {
   if (!has(key)) fail(key, "is missing (a map of keys is required)");
+  failIfEmpty(key, "a map of keys is required");
   const YAML::Node n = node_[key];
   if (!n.IsMap()) fail(key, "must be a map of keys");
   return Node(n, source_, keyPath(key), overrides_);
@@ -177,6 +202,7 @@ std::optional<Node> Node::optChild(const std::string& key) const {
 
 std::vector<Node> Node::items(const std::string& key) const {
   if (!has(key)) fail(key, "is missing (a list is required)");
+  failIfEmpty(key, "a list is required");
   const YAML::Node n = node_[key];
   if (!n.IsSequence()) fail(key, "must be a list");
   std::vector<Node> out;
@@ -189,6 +215,7 @@ std::vector<Node> Node::items(const std::string& key) const {
 
 YAML::Node Node::scalar(const std::string& key) const {
   if (!has(key)) fail(key, "is missing");
+  failIfEmpty(key, "a single value is required");
   const YAML::Node n = node_[key];
   if (!n.IsScalar()) fail(key, "must be a single value");
   return n;
@@ -265,6 +292,7 @@ std::string Node::getEnum(const std::string& key, const std::vector<std::string>
 
 std::vector<double> Node::getDoubles(const std::string& key, size_t n, double lo, double hi) const {
   if (!has(key)) fail(key, "is missing");
+  failIfEmpty(key, "a list of numbers is required");
   const YAML::Node s = node_[key];
   const std::string what = "a list of " + std::to_string(n) + " numbers in [" + fmt(lo) + ", " + fmt(hi) + "]";
   if (!s.IsSequence() || s.size() != n) fail(key, "must be " + what);
@@ -285,6 +313,7 @@ std::vector<double> Node::getDoubles(const std::string& key, size_t n, double lo
 
 std::vector<std::string> Node::getStrings(const std::string& key) const {
   if (!has(key)) fail(key, "is missing");
+  failIfEmpty(key, "a non-empty list is required");
   const YAML::Node s = node_[key];
   if (!s.IsSequence() || s.size() == 0) fail(key, "must be a non-empty list");
   std::vector<std::string> out;

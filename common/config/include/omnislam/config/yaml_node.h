@@ -41,6 +41,8 @@ class Node {
   /// Directory of the source file (for resolving relative paths), "." for strings.
   std::string sourceDir() const;
 
+  /// The key is in this map, also when written with no value ("particles:"): every getter then
+  /// refuses it, rather than taking the default for a value deleted by mistake.
   bool has(const std::string& key) const;
   /// Required map child; throws if missing or not a map.
   Node child(const std::string& key) const;
@@ -90,6 +92,8 @@ class Node {
   YAML::Node scalar(const std::string& key) const;
   std::string keyPath(const std::string& key) const;
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  /// fail() when the key was written with no value; `required` says what it needs.
+  void failIfEmpty(const std::string& key, const char* required) const;
 
   YAML::Node node_;
   std::shared_ptr<const std::string> source_;

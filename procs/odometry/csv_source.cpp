@@ -1,6 +1,7 @@
 // Wheel-data CSV parsing: see csv_source.h.
 #include "csv_source.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -25,12 +26,14 @@ std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::strin
       header = true;
       continue;
     }
+    // Columns are counted by their commas: a trailing comma ("1000,0.1,0.0,") is a fourth, empty
+    // column, which reading three fields and looking for more let through.
+    const auto columns = std::count(line.begin(), line.end(), ',') + 1;
+    if (columns != 3)
+      fail("expected 3 columns (utime,v_mps,omega_radps), got " + std::to_string(columns) + " in '" + line + "'");
     std::istringstream row(line);
     std::string f[3];
-    for (int i = 0; i < 3; ++i)
-      if (!std::getline(row, f[i], ',')) fail("expected 3 columns (utime,v_mps,omega_radps), got " + std::to_string(i));
-    std::string extra;
-    if (std::getline(row, extra, ',')) fail("expected 3 columns, got more");
+    for (auto& field : f) std::getline(row, field, ',');
     WheelSample s;
     try {
       size_t pos = 0;
@@ -44,6 +47,8 @@ std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::strin
       fail("non-numeric field in '" + line + "'");
     }
     if (!std::isfinite(s.v_mps) || !std::isfinite(s.omega_radps)) fail("non-finite value in '" + line + "'");
+    if (std::abs(s.v_mps) > kMaxCsvSpeedMps || std::abs(s.omega_radps) > kMaxCsvTurnRateRadps)
+      fail("v_mps must be in [-100, 100] and omega_radps in [-100, 100], got '" + line + "'");
     // The contract's utime is >= 0; the bound (year 2096) keeps every difference and sum exact.
     if (s.utime < 0 || s.utime > kMaxCsvUtime)
       fail("utime " + std::to_string(s.utime) + " outside 0.." + std::to_string(kMaxCsvUtime));

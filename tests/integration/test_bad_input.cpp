@@ -296,6 +296,12 @@ TEST(BadConfig, MalformedWheelCsvNamesFileAndLine) {
       {"time,v,w\n1,0,0\n", ":1: expected the header"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,abc,0.0\n", ":3: non-numeric"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1\n", ":3: expected 3 columns"},
+      // A trailing comma is a fourth, empty column (it was accepted).
+      {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1,0.0,\n", ":3: expected 3 columns (utime,v_mps,omega_radps), got 4"},
+      {"utime,v_mps,omega_radps\n1000,0.1,0.0,5\n", ":2: expected 3 columns"},
+      // Finite but beyond any robot: the integrated pose became infinite.
+      {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,1e308,0.0\n", ":3: v_mps must be in [-100, 100]"},
+      {"utime,v_mps,omega_radps\n1000,0.1,-100.5\n", ":2: v_mps must be in [-100, 100] and omega_radps in [-100, 100]"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n1000,0.1,0.0\n", ":3: utime 1000 does not increase"},
       {"utime,v_mps,omega_radps\n1000,nan,0.0\n", ":2: non-finite"},
       {"utime,v_mps,omega_radps\n-5000000,0.1,0.0\n-4000000,0.1,0.0\n", ":2: utime -5000000 outside 0..4000000000000000"},

@@ -12,6 +12,7 @@
 //        position_m: [x, y, z], covariance_m2: [c00, c01, c02, c10, ..., c22]}
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -31,9 +32,12 @@ std::string mapToYaml(const SavedMap& map);
 /// Writes atomically (temporary file, fsync, rename). Throws std::runtime_error naming the path.
 void saveMapAtomically(const SavedMap& map, const std::string& path);
 
-/// Reads a map file; a missing file, a wrong format, version, kind, non-finite number or a
-/// covariance that is not symmetric positive definite throws config::ConfigError naming the file,
-/// the key and the landmark.
+/// The most landmarks a map file may hold: what one SLAM_MAP message carries (lcmio::Limits).
+inline constexpr std::size_t kMaxSavedLandmarks = 100000;
+
+/// Reads a map file; a missing file, a wrong format, version, kind, non-finite number, a
+/// covariance that is not symmetric positive definite, a repeated id or more than
+/// kMaxSavedLandmarks landmarks throws config::ConfigError naming the file, the key and the landmark.
 SavedMap loadMap(const std::string& path);
 
 }  // namespace omnislam::slamproc

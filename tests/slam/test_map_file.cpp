@@ -97,6 +97,20 @@ TEST(MapFile, SaveReplacesAtomicallyAndReportsUnwritablePaths) {
   }
 }
 
+// SLAM_MAP carries at most 100 000 landmarks, so a bigger file is refused when it is loaded, before
+// each landmark is read (empty items suffice to count).
+TEST(MapFile, MoreLandmarksThanAMapMessageCarriesAreRefused) {
+  TmpDir dir;
+  const fs::path p = dir.path / "big.yaml";
+  std::string text = "format: omnislam-map\nversion: 1\nlandmarks:\n";
+  for (int i = 0; i <= 100000; ++i) text += "  - {}\n";
+  writeText(p, text);
+  const std::string e = loadError(p);
+  EXPECT_NE(e.find("key 'landmarks' holds 100001 landmarks, more than 100000 (the most a map message carries)"),
+            std::string::npos)
+      << e;
+}
+
 TEST(MapFile, MalformedFilesNameFileAndKey) {
   TmpDir dir;
   const fs::path p = dir.path / "bad.yaml";

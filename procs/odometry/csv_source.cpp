@@ -20,6 +20,8 @@ std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::strin
   while (std::getline(in, line)) {
     ++lineno;
     if (!line.empty() && line.back() == '\r') line.pop_back();
+    // A UTF-8 byte-order mark, as some spreadsheet programs write, is not part of the header.
+    if (lineno == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
     if (line.empty() || line[0] == '#') continue;
     if (!header) {
       if (line != "utime,v_mps,omega_radps") fail("expected the header 'utime,v_mps,omega_radps', got '" + line + "'");

@@ -307,6 +307,14 @@ TEST(BadConfig, MalformedWheelCsvNamesFileAndLine) {
       {"utime,v_mps,omega_radps\n-5000000,0.1,0.0\n-4000000,0.1,0.0\n", ":2: utime -5000000 outside 0..4000000000000000"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n9223372036854775807,0.1,0.0\n", ":3: utime 9223372036854775807 outside"},
   };
+  // A UTF-8 byte-order mark before the header is not an error (the header check quoted it).
+  {
+    const std::string path = dir.file("bom.csv");
+    writeFile(path, "\xEF\xBB\xBFutime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1,0.0\n");
+    const auto r = t::run({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", path, "--url", "memq://"}, 10.0);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("2 wheel samples"), std::string::npos) << r.output;
+  }
   for (const auto& c : cases) {
     const std::string path = dir.file("wheels.csv");
     writeFile(path, c.text);

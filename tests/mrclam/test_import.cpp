@@ -379,6 +379,15 @@ TEST(MrclamImport, ValuesBeyondPhysicalBoundsNameFileLineAndRange) {
   EXPECT_NE(e.find("Robot1_Odometry.dat:6: column 'forward velocity [m/s]'"), std::string::npos) << e;
 }
 
+TEST(MrclamImport, AByteOrderMarkBeforeTheFirstLineIsNotData) {
+  t::TempDir d;
+  const std::string p = d.file("Robot1_Odometry.dat");
+  std::ofstream(p) << "\xEF\xBB\xBF# a header comment\n1.0 0.1 0.0\n";
+  mrclam::FileStats st;
+  ASSERT_EQ(mrclam::readOdometry(p, mrclam::DuplicateTimes::kError, &st).size(), 1u);
+  EXPECT_EQ(st.comment_lines, 1);
+}
+
 TEST(MrclamImport, DuplicatedTimesKeepLastIsCounted) {
   t::TempDir d;
   const std::string p = d.file("odo.dat");

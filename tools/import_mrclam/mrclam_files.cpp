@@ -88,6 +88,7 @@ Table readTable(const std::string& path, const std::vector<std::string>& names) 
   while (std::getline(f, line)) {
     ++n;
     if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (n == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // a UTF-8 byte-order mark
     const size_t first = line.find_first_not_of(" \t");
     if (first == std::string::npos) {
       ++t.stats.blank_lines;

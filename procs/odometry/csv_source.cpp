@@ -10,7 +10,11 @@ namespace omnislam::odometry {
 
 std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::string& source) {
   std::vector<WheelSample> out;
-  std::istringstream in(text);
+  // Line ends: "\n", "\r\n" or a lone "\r" (old Mac files), which getline alone reads as one line.
+  std::string lines = text;
+  for (size_t i = 0; i < lines.size(); ++i)
+    if (lines[i] == '\r' && (i + 1 == lines.size() || lines[i + 1] != '\n')) lines[i] = '\n';
+  std::istringstream in(lines);
   std::string line;
   int lineno = 0;
   bool header = false;

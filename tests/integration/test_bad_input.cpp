@@ -315,6 +315,14 @@ TEST(BadConfig, MalformedWheelCsvNamesFileAndLine) {
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("2 wheel samples"), std::string::npos) << r.output;
   }
+  // Lone carriage returns end lines (the whole file was read as one header line and refused).
+  {
+    const std::string path = dir.file("cr.csv");
+    writeFile(path, "utime,v_mps,omega_radps\r1000,0.1,0.0\r2000,0.1,0.0\r\n3000,0.1,0.0\r");
+    const auto r = t::run({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", path, "--url", "memq://"}, 10.0);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("3 wheel samples"), std::string::npos) << r.output;
+  }
   for (const auto& c : cases) {
     const std::string path = dir.file("wheels.csv");
     writeFile(path, c.text);

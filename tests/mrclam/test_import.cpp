@@ -388,6 +388,27 @@ TEST(MrclamImport, AByteOrderMarkBeforeTheFirstLineIsNotData) {
   EXPECT_EQ(st.comment_lines, 1);
 }
 
+// Line ends of every kind: "\n", "\r\n" and a lone "\r" (old Mac files, which std::getline read as
+// one line: the header comment hid every data line and the file was "empty").
+TEST(MrclamImport, EveryKindOfLineEndEndsALine) {
+  t::TempDir d;
+  const std::string p = d.file("Robot1_Odometry.dat");
+  for (const std::string& eol : {std::string("\n"), std::string("\r\n"), std::string("\r")}) {
+    std::ofstream(p) << "# header" << eol << "1.0 0.1 0.0" << eol << eol << "2.0 0.2 0.0" << eol << "3.0 0.3 0.0";
+    mrclam::FileStats st;
+    const auto v = mrclam::readOdometry(p, mrclam::DuplicateTimes::kError, &st);
+    ASSERT_EQ(v.size(), 3u) << "line end " << (eol == "\r" ? "CR" : eol == "\n" ? "LF" : "CRLF");
+    EXPECT_DOUBLE_EQ(v[2].v_mps, 0.3);
+    EXPECT_EQ(st.lines, 5);
+    EXPECT_EQ(st.comment_lines, 1);
+    EXPECT_EQ(st.blank_lines, 1);
+  }
+  // A malformed line is named by its number with CR-only line ends too.
+  std::ofstream(p) << "# header\r1.0 0.1 0.0\r2.0 x 0.0\r";
+  const std::string e = errorOf([&] { mrclam::readOdometry(p, mrclam::DuplicateTimes::kError); });
+  EXPECT_NE(e.find(p + ":3: column 2"), std::string::npos) << e;
+}
+
 TEST(MrclamImport, DuplicatedTimesKeepLastIsCounted) {
   t::TempDir d;
   const std::string p = d.file("odo.dat");

@@ -72,6 +72,26 @@ void checkValue(const std::string& path, int64_t line, const std::string& name, 
                      fmtTime(hi));
 }
 
+/// One line, ended by "\n", "\r\n" or a lone "\r" (old Mac files: std::getline read such a file
+/// as one line, its first comment hiding every data line). False at the end of the input.
+bool readLine(std::istream& in, std::string& line) {
+  line.clear();
+  std::streambuf* sb = in.rdbuf();
+  for (;;) {
+    const int c = sb->sbumpc();
+    if (c == std::char_traits<char>::eof()) {
+      if (line.empty()) in.setstate(std::ios::eofbit);
+      return !line.empty();
+    }
+    if (c == '\n') return true;
+    if (c == '\r') {
+      if (sb->sgetc() == '\n') sb->sbumpc();
+      return true;
+    }
+    line.push_back(static_cast<char>(c));
+  }
+}
+
 void put(FileStats* out, const FileStats& s) {
   if (out) *out = s;
 }
@@ -85,9 +105,8 @@ Table readTable(const std::string& path, const std::vector<std::string>& names) 
   t.stats.path = path;
   std::string line;
   int64_t n = 0;
-  while (std::getline(f, line)) {
+  while (readLine(f, line)) {
     ++n;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
     if (n == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // a UTF-8 byte-order mark
     const size_t first = line.find_first_not_of(" \t");
     if (first == std::string::npos) {

@@ -102,6 +102,32 @@ TEST(LcmioNode, AHandlerThatThrowsRefusesThatMessageAndTheNodeGoesOn) {
   EXPECT_EQ(node.counters().last_error, "ODOMETRY: handling it failed: two lines");
 }
 
+// The time order and sequence were advanced before the handler ran, so a message its handler refused
+// (by throwing) could not be sent again: the copy was refused as "a duplicate" of one that never
+// took effect. A refused message now leaves them as they were, as a message refused by validation does.
+TEST(LcmioNode, AMessageItsHandlerRefusedCanBeSentAgain) {
+  lcmio::Node node("unit", "memq://");
+  std::vector<int64_t> seen;
+  bool fail_once = true;
+  node.subscribe<odometry_t>(channels::kOdometry, [&](const odometry_t& m) {
+    if (m.seq == 1 && fail_once) {
+      fail_once = false;
+      throw std::runtime_error("not now");
+    }
+    seen.push_back(m.seq);
+  });
+  auto a = odo(1000, 0), b = odo(2000, 1);
+  for (auto* m : {&a, &b, &b}) {
+    node.lcm().publish(channels::kOdometry, m);
+    EXPECT_TRUE(node.handleFor(0.0));
+  }
+  EXPECT_EQ(seen, (std::vector<int64_t>{0, 1}));
+  EXPECT_EQ(node.counters().rejected_inputs, 1);  // only the handler's refusal
+  EXPECT_EQ(node.counters().last_error, "ODOMETRY: handling it failed: not now");
+  EXPECT_EQ(node.counters().sequence_gaps, 0);
+  EXPECT_EQ(node.counters().sequence_restarts, 0);
+}
+
 // The time order and sequence state was kept per channel name: a second subscription to the same
 // channel saw every message as a duplicate of what the first had just admitted, and got nothing.
 TEST(LcmioNode, TwoSubscriptionsToOneChannelEachGetEveryMessage) {

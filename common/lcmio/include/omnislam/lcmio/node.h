@@ -144,6 +144,10 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
       return;
     }
     ChannelState& cs = self->state;
+    // A message its handler refuses leaves the channel's time order and sequence as they were, like
+    // any other refused message: the next one is judged against the last one handled, and the same
+    // message sent again is not "a duplicate" of one that never took effect.
+    ChannelState before = cs;
     if (opt.require_increasing_utime) {
       const int64_t restarts = cs.time.restarts();
       if (auto why = cs.time.admit(msg.utime, opt.time_order)) {
@@ -162,8 +166,10 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
     try {
       handler(msg);
     } catch (const std::exception& e) {
+      cs = std::move(before);
       reject(channel, std::string("handling it failed: ") + e.what());
     } catch (...) {
+      cs = std::move(before);
       reject(channel, "handling it failed: an unknown exception");
     }
   };

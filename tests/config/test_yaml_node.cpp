@@ -56,6 +56,10 @@ TEST(YamlNode, InvalidYamlAndMissingFilesAreConfigErrors) {
   EXPECT_NE(errorOf([] { Node::loadFile("/nonexistent/x.yaml"); }).find("file not found"), std::string::npos);
   EXPECT_NE(errorOf([] { Node::loadString("- 1\n- 2\n", "seq.yaml"); }).find("top level must be a map"),
             std::string::npos);
+  // yaml-cpp's nesting guard said only "bad file".
+  const std::string deep = errorOf([] { Node::loadString("a: " + std::string(3000, '[') + std::string(3000, ']'), "deep.yaml"); });
+  EXPECT_NE(deep.find("deep.yaml: not valid YAML: nested too deeply (the parser stops at "), std::string::npos) << deep;
+  EXPECT_NE(deep.find(" levels) at line 1"), std::string::npos) << deep;
 }
 
 // A key given twice in one map: yaml-cpp keeps both and lookups return the first, so an override

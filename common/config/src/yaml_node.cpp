@@ -1,6 +1,8 @@
 // Checked YAML access: see yaml_node.h.
 #include "omnislam/config/yaml_node.h"
 
+#include <yaml-cpp/depthguard.h>
+
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -67,6 +69,14 @@ YAML::Node onlyDocument(const std::vector<YAML::Node>& docs, const std::string& 
   return docs.empty() ? YAML::Node() : docs.front();
 }
 
+/// yaml-cpp's message, except for its nesting guard, whose message (0.7) is "bad file".
+std::string yamlError(const YAML::Exception& e) {
+  if (const auto* deep = dynamic_cast<const YAML::DeepRecursion*>(&e))
+    return "nested too deeply (the parser stops at " + std::to_string(deep->depth()) + " levels) at line " +
+           std::to_string(deep->mark.line + 1);
+  return e.what();
+}
+
 std::string fmt(double v) {
   std::ostringstream os;
   os << v;
@@ -103,7 +113,7 @@ Node Node::loadFile(const std::string& path) {
     rejectRepeatedKeys(root, path, "");
     return Node(root, std::make_shared<const std::string>(path), "");
   } catch (const YAML::Exception& e) {
-    throw ConfigError(path + ": not valid YAML: " + e.what());
+    throw ConfigError(path + ": not valid YAML: " + yamlError(e));
   }
 }
 
@@ -121,7 +131,7 @@ Node Node::loadFileWithOverrides(const std::string& path, const std::vector<std:
     try {
       value = onlyDocument(YAML::LoadAll(ov.substr(eq + 1)), "override '" + ov + "'");
     } catch (const YAML::Exception& e) {
-      throw ConfigError("override '" + ov + "': the value is not valid YAML: " + e.what());
+      throw ConfigError("override '" + ov + "': the value is not valid YAML: " + yamlError(e));
     }
     rejectRepeatedKeys(value, "override '" + ov + "'", key + ".");  // the file's rules
     // Walk with fresh handles (YAML::Node assignment would rebind, not copy into, a handle).
@@ -154,7 +164,7 @@ Node Node::loadString(const std::string& text, const std::string& source) {
     rejectRepeatedKeys(root, source, "");
     return Node(root, std::make_shared<const std::string>(source), "");
   } catch (const YAML::Exception& e) {
-    throw ConfigError(source + ": not valid YAML: " + e.what());
+    throw ConfigError(source + ": not valid YAML: " + yamlError(e));
   }
 }
 

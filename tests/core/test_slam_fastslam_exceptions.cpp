@@ -2,7 +2,8 @@
 // executable replaces the global operator new with one that can be armed to throw std::bad_alloc
 // at its n-th allocation. A step that fails at any point leaves the filter exactly as before it
 // (poses, weights, maps, candidates, counters and the random generator), so the same step retried
-// gives the same result, bit for bit, as a filter that never failed.
+// gives the same result, bit for bit, as a filter that never failed. An increment whose motion
+// noise is not finite is refused the same way.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -144,6 +145,36 @@ TEST(slam_FastSlamExceptions, AStepThatFailsAnywhereLeavesTheFilterAsItWas) {
     expectSame(f, predicted);
     EXPECT_EQ(f.posesBeforeResampling()[0].x_m, predicted.posesBeforeResampling()[0].x_m);
   }
+}
+
+// An odometry increment whose motion noise overflows (1e300 m: the rounding junk of a corrupted pose
+// reached the filter as 1e282 m) made every particle NaN for good. It is refused now, by step() and
+// by predictOnly(), and the filter is left as it was: the next good step is bit-identical to one
+// taken by a filter that never saw the bad increment.
+TEST(slam_FastSlamExceptions, AnIncrementWhoseNoiseIsNotFiniteIsRefusedAndChangesNothing) {
+  FastSlamOptions o;
+  o.num_particles = 20;
+  FastSlam reference(o, 5);
+  reference.initialise(Pose2{});
+  Pose2 prev{}, now{};
+  frame(0, &prev);
+  for (int k = 1; k <= 4; ++k) {
+    const auto z = frame(k, &now);
+    reference.step(prev, now, z);
+    prev = now;
+  }
+  const Pose2 wild{1e300, 0.0, 0.0};
+  FastSlam f = reference;
+  const auto z = frame(5, &now);
+  EXPECT_THROW(f.step(prev, wild, z), std::invalid_argument);
+  expectSame(f, reference);
+  EXPECT_THROW(f.predictOnly(prev, wild), std::invalid_argument);
+  expectSame(f, reference);
+  FastSlam g = reference;
+  f.step(prev, now, z);
+  g.step(prev, now, z);
+  expectSame(f, g);
+  for (const Particle& p : f.particles()) ASSERT_TRUE(p.pose.vec().allFinite());
 }
 
 }  // namespace

@@ -16,6 +16,18 @@ namespace omnislam::slam {
 
 namespace {
 
+/// R_t of the step, refused when not finite: an odometry increment of 1e282 m (rounding junk of a
+/// corrupted pose) overflowed it to NaN, and every particle sampled from it stayed NaN for good.
+/// The throw leaves the filter as it was (step() and predictOnly() are all-or-nothing).
+Eigen::Matrix3d checkedMotionCovariance(const Pose2& x_prev, const Pose2& u, const MotionNoiseOptions& motion) {
+  const Eigen::Matrix3d R = motionCovariance(x_prev, u, motion);
+  if (!R.allFinite() || !x_prev.vec().allFinite())
+    throw std::invalid_argument("FastSlam: the motion noise of the odometry increment (" + std::to_string(u.x_m) +
+                                " m, " + std::to_string(u.y_m) + " m, " + std::to_string(u.theta_rad) +
+                                " rad) is not finite");
+  return R;
+}
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 Pose2 poseFromVec(const Eigen::Vector3d& v) { return Pose2::fromVec(v); }
@@ -162,13 +174,20 @@ void FastSlam::initialise(const Pose2& start, const std::vector<Landmark>& prior
 void FastSlam::predictOnly(const Pose2& odom_prev, const Pose2& odom_now) {
   if (!initialised()) throw std::logic_error("FastSlam::predictOnly before initialise()");
   const Pose2 u = odometryIncrement(odom_prev, odom_now);
-  // Both allocations first: if one fails, nothing has changed (as in step()).
+  // Both allocations first: if one fails, nothing has changed (as in step()); a motion noise that is
+  // not finite throws part-way, so the generator is restored then.
   std::vector<Pose2> poses;
   poses.reserve(particles_.size());
   std::vector<double> weights = weights_;
-  for (const auto& p : particles_) {
-    const Pose2 x_hat = predictPose(p.pose, u);
-    poses.push_back(poseFromVec(rng_.gaussian3(x_hat.vec(), motionCovariance(p.pose, u, options_.motion))));
+  const Rng rng_before = rng_;
+  try {
+    for (const auto& p : particles_) {
+      const Pose2 x_hat = predictPose(p.pose, u);
+      poses.push_back(poseFromVec(rng_.gaussian3(x_hat.vec(), checkedMotionCovariance(p.pose, u, options_.motion))));
+    }
+  } catch (...) {
+    rng_ = rng_before;
+    throw;
   }
   for (std::size_t k = 0; k < particles_.size(); ++k) particles_[k].pose = poses[k];
   poses_before_resampling_.swap(poses);
@@ -256,7 +275,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
   // Alg. 1 line 3: xhat_t = g(x_{t-1}, u_t) and R_t.
   const Pose2 x_prev = p.pose;
   const Pose2 x_hat = predictPose(x_prev, u);
-  const Eigen::Matrix3d R = motionCovariance(x_prev, u, o.motion);
+  const Eigen::Matrix3d R = checkedMotionCovariance(x_prev, u, o.motion);
   const Eigen::Matrix3d R_inv = R.llt().solve(Eigen::Matrix3d::Identity());
 
   // Landmarks that can be seen from xhat_t (widened window) enter the association matrix.

@@ -83,8 +83,25 @@ void SlamDriver::note(const InputResult& in, const char* channel, DriverResult& 
   }
 }
 
+namespace {
+std::string num(double v) {
+  std::ostringstream o;
+  o.precision(6);
+  o << v;
+  return o.str();
+}
+}  // namespace
+
 DriverResult SlamDriver::onOdometry(const odometry_t& msg) {
   DriverResult r;
+  if (std::abs(msg.x_m) > kMaxOdometryCoordinateM || std::abs(msg.y_m) > kMaxOdometryCoordinateM ||
+      std::abs(msg.theta_rad) > kMaxOdometryAngleRad) {
+    ++stats_.implausible;
+    r.refused.push_back({"ODOMETRY", "seq " + std::to_string(msg.seq) + " pose (" + num(msg.x_m) + " m, " +
+                                         num(msg.y_m) + " m, " + num(msg.theta_rad) +
+                                         " rad) beyond the plausible 1e6 m and 1e6 rad (a corrupted field?)"});
+    return r;
+  }
   std::vector<PairEvent> events;
   note(pairer_.addOdometry(msg.utime, Pose2{msg.x_m, msg.y_m, msg.theta_rad}, events), "ODOMETRY", r);
   apply(events, r);
@@ -94,6 +111,13 @@ DriverResult SlamDriver::onOdometry(const odometry_t& msg) {
 
 DriverResult SlamDriver::onFeatures(const features_t& msg) {
   DriverResult r;
+  const double cam_m = std::hypot(msg.camera_position_m[0], msg.camera_position_m[1], msg.camera_position_m[2]);
+  if (!(cam_m <= kMaxCameraOffsetM)) {
+    ++stats_.implausible;
+    r.refused.push_back({"OMNI_FEATURES", "frame seq " + std::to_string(msg.seq) + ": camera_position_m " +
+                                              num(cam_m) + " m from the robot's origin, more than the contract's 10 m"});
+    return r;
+  }
   stats_.features_in += msg.num_features;
   if (!pairer_.odometry().empty())
     odom_utime_at_last_frame_ = std::max(odom_utime_at_last_frame_, pairer_.odometry().newestUtime());
@@ -283,7 +307,7 @@ std::string SlamDriver::summary() const {
     << p.dropped_no_odometry << " odometry_gap " << p.dropped_odometry_gap << " too_old " << p.dropped_too_old
     << " restart " << p.dropped_restart << "; odometry " << p.odometry_in << "; refused: duplicates "
     << p.duplicates << " out_of_order " << p.out_of_order << " stale " << p.stale_after_restart << " too_large "
-    << s.frames_too_large << "; restarts "
+    << s.frames_too_large << " implausible " << s.implausible << "; restarts "
     << p.restarts << " filter_resets " << s.filter_resets << "; jumps_ahead: taken " << p.forward_jumps << " stray "
     << p.stray_ahead << "; odometry_jumps " << p.odometry_jumps << "; features " << s.features_in << " skipped " << s.features_skipped_kind
     << " rejected_by_filter " << s.measurements_rejected << "; odometry_only_steps " << s.odometry_only_steps

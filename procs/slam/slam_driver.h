@@ -58,7 +58,17 @@ struct DriverStats {
   int64_t odometry_only_steps = 0;       ///< predictions published while no frame came
   int64_t dropped_behind_prediction = 0; ///< frames older than the last odometry-only step
   int64_t frames_too_large = 0;          ///< refused: more usable features than max_features_per_frame
+  int64_t implausible = 0;               ///< refused: valid but beyond the plausibility bounds below
 };
+
+/// Plausibility bounds on valid inputs (lcmio::validate checks only that they are finite). An
+/// odometry pose beyond them, re-based by the pairing, left rounding junk of 1e282 m that turned every
+/// later pose into NaN (x = 1e300), or quantised each step to nothing (theta = 1e15 rad); a camera
+/// far from the robot moved every point landmark's height through the scale correction. The
+/// contract's producers keep the camera within 10 m (docs/messages.md, "Producer guarantees").
+inline constexpr double kMaxOdometryCoordinateM = 1e6;   ///< |x|, |y| of an ODOMETRY pose
+inline constexpr double kMaxOdometryAngleRad = 1e6;      ///< |theta| of an ODOMETRY pose (wrapped or not)
+inline constexpr double kMaxCameraOffsetM = 10.0;        ///< |camera_position_m| of OMNI_FEATURES
 
 /// Converts one feature to a filter measurement; nothing for a kind that is off in `options` or a
 /// ceiling light without elevation.

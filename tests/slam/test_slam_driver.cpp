@@ -3,6 +3,8 @@
 // never corrupts the filter.
 #include <gtest/gtest.h>
 
+#include <sstream>
+
 #include <algorithm>
 #include <set>
 #include <cmath>
@@ -230,6 +232,59 @@ TEST(SlamDriver, DegradedInputIsRefusedOrDroppedAndTheFilterCarriesOn) {
   EXPECT_EQ(d.stats().pairing.out_of_order, 1);
 }
 
+// Valid but implausible inputs (an auditor's finds): one ODOMETRY at x = 1e300 was re-based by the
+// pairing, leaving 1e282 m of rounding junk that made every later pose NaN; theta = 1e15 rad made
+// every step quantised; a frame whose camera sat 1e10 m above the robot moved every light's height
+// to -1e7 m. Each is refused now with its reason and counted, and the run goes on unharmed.
+TEST(SlamDriver, ImplausibleOdometryAndCameraPositionsAreRefusedAndTheRunGoesOn) {
+  SlamDriver d{SlamProcessOptions{}};
+  run(d, 10);
+  const int64_t processed = d.stats().frames_processed;
+  odometry_t far = odo(kT0 + 10'020'000, 1000);
+  far.x_m = 1e300;
+  auto r = d.onOdometry(far);
+  ASSERT_EQ(r.refused.size(), 1u);
+  EXPECT_EQ(r.refused[0].channel, "ODOMETRY");
+  EXPECT_EQ(r.refused[0].reason,
+            "seq 1000 pose (1e+300 m, " + [&] {
+              std::ostringstream o;
+              o.precision(6);
+              o << far.y_m << " m, " << far.theta_rad;
+              return o.str();
+            }() + " rad) beyond the plausible 1e6 m and 1e6 rad (a corrupted field?)");
+  odometry_t spun = odo(kT0 + 10'040'000, 1001);
+  spun.theta_rad = 1e15;
+  EXPECT_EQ(d.onOdometry(spun).refused.size(), 1u);
+  odometry_t edge = odo(kT0 + 10'060'000, 1002);
+  edge.y_m = -1e6 - 1.0;
+  EXPECT_EQ(d.onOdometry(edge).refused.size(), 1u);
+  features_t high = feats(kT0 + 10'900'000, 1000);
+  high.camera_position_m[2] = 1e10;
+  r = d.onFeatures(high);
+  ASSERT_EQ(r.refused.size(), 1u);
+  EXPECT_EQ(r.refused[0].reason, "frame seq 1000: camera_position_m 1e+10 m from the robot's origin, more than the "
+                                 "contract's 10 m");
+  EXPECT_EQ(d.stats().implausible, 4);
+  EXPECT_NE(d.summary().find("implausible 4;"), std::string::npos) << d.summary();
+  EXPECT_EQ(d.stats().frames_processed, processed);
+  // The run goes on from the last good odometry: the next frames step, and every pose is finite and
+  // on the truth.
+  const auto outs = run(d, 5, kT0 + 11'000'000);
+  ASSERT_GE(outs.size(), 5u);
+  for (const auto& o : outs) {
+    ASSERT_TRUE(std::isfinite(o.pose.x_m) && std::isfinite(o.pose.y_m) && std::isfinite(o.pose.theta_rad));
+    const Pose2 t = truthAt(o.pose.utime);
+    EXPECT_LT(std::hypot(o.pose.x_m - t.x_m, o.pose.y_m - t.y_m), 0.5) << o.pose.utime;
+  }
+  // A camera 10 m away is the contract's bound itself: accepted.
+  SlamDriver e{SlamProcessOptions{}};
+  features_t ten = feats(kT0, 0);
+  ten.camera_position_m[0] = 0.0, ten.camera_position_m[1] = 0.0, ten.camera_position_m[2] = 10.0;
+  e.onOdometry(odo(kT0, 0));
+  EXPECT_TRUE(e.onFeatures(ten).refused.empty());
+  EXPECT_EQ(e.stats().implausible, 0);
+}
+
 // A frame with more usable features than features.max_per_frame is refused whole, with its count
 // and the key named, before it reaches the pairing: the filter does not step on it, and the next
 // frame of ordinary size spans the odometry since the last step.
@@ -250,7 +305,7 @@ TEST(SlamDriver, AFrameWithTooManyFeaturesIsRefusedAndTheNextOneSteps) {
   EXPECT_EQ(r.refused[0].reason, "frame seq 10 has 17 usable features, more than features.max_per_frame = 16");
   EXPECT_EQ(d.stats().frames_too_large, 2);
   EXPECT_EQ(d.stats().frames_processed, processed);
-  EXPECT_NE(d.summary().find("too_large 2;"), std::string::npos) << d.summary();
+  EXPECT_NE(d.summary().find("too_large 2 implausible 0;"), std::string::npos) << d.summary();
   // Kinds that are off do not count: the same frame as vertical lines, with lines turned off, is
   // not too large (its features are skipped, not associated).
   SlamProcessOptions lights_only = o;

@@ -158,4 +158,29 @@ TEST(Eval, ALogWithoutSlamOutputIsAClearError) {
   EXPECT_NE(r.output.find("no SLAM_POSE message"), std::string::npos) << r.output;
 }
 
+// Nothing compared is an error, not ATE 0: truth only after the estimate, or truth too sparse to
+// bridge (samples more than 0.2 s apart) everywhere.
+TEST(Eval, NoComparedPoseIsAnErrorNotAZeroAte) {
+  t::TempDir dir;
+  {
+    lcmio::LogWriter log(dir.file("after.lcm"));
+    for (int k = 0; k < 10; ++k) log.write(k, channels::kSlamPose, t::makePose(1'000'000 + k * 100'000, k, 0, 0));
+    for (int k = 0; k < 10; ++k) log.write(k, channels::kGroundTruthPose, t::makePose(5'000'000 + k * 100'000, k, 0, 0));
+  }
+  {
+    lcmio::LogWriter log(dir.file("sparse.lcm"));
+    for (int k = 0; k < 10; ++k) log.write(k, channels::kSlamPose, t::makePose(1'050'000 + k * 500'000, k, 0, 0));
+    for (int k = 0; k < 10; ++k) log.write(k, channels::kGroundTruthPose, t::makePose(1'000'000 + k * 500'000, k, 0, 0));
+  }
+  for (const char* name : {"after.lcm", "sparse.lcm"})
+    for (const bool align : {false, true}) {
+      std::vector<std::string> argv{t::binPath("omnislam-eval"), dir.file(name), "--json", "--no-tum"};
+      if (align) argv.push_back("--align");
+      const auto r = t::run(argv, 30);
+      EXPECT_EQ(r.exit_code, 2) << name << "\n" << r.output;
+      EXPECT_NE(r.output.find("no SLAM_POSE could be compared"), std::string::npos) << name << "\n" << r.output;
+      EXPECT_EQ(r.output.find("ate_rmse_m"), std::string::npos) << name << "\n" << r.output;
+    }
+}
+
 }  // namespace

@@ -206,6 +206,13 @@ int main(int argc, char** argv) {
     if (c.slam.empty()) throw std::invalid_argument(log + ": no SLAM_POSE message");
     if (c.truth.empty()) throw std::invalid_argument((truth_log.empty() ? log : truth_log) + ": no GROUND_TRUTH_POSE message");
     auto pairs = eval::pairByTime(c.slam, c.truth);
+    // No pair means nothing was compared: a 0 ATE would read as a perfect run.
+    if (pairs.empty())
+      throw std::invalid_argument(
+          "no SLAM_POSE could be compared: none of the " + std::to_string(c.slam.size()) + " poses (utime " +
+          std::to_string(c.slam.front().utime) + ".." + std::to_string(c.slam.back().utime) +
+          ") lies between two GROUND_TRUTH_POSE at most 0.2 s apart (truth utime " + std::to_string(c.truth.front().utime) +
+          ".." + std::to_string(c.truth.back().utime) + ")");
     std::optional<eval::Rigid2D> T;
     if (align) {
       std::vector<Eigen::Vector2d> from, to;

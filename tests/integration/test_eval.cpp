@@ -183,4 +183,57 @@ TEST(Eval, NoComparedPoseIsAnErrorNotAZeroAte) {
     }
 }
 
+// One SLAM pose at x = 1e300: the RMSE is finite and at most the max (its squares would overflow);
+// --align cannot fit such a trajectory and says so instead of printing "-nan".
+TEST(Eval, AHugePoseGivesAnHonestRmseAndAlignRefusesIt) {
+  t::TempDir dir;
+  makeLogs(dir.file("run.lcm"), dir.file("unused.lcm"), true, [](lcmio::LogWriter& log) {
+    const int64_t u = 1'000'000 + 25 * 20'000;
+    log.write(u, channels::kSlamPose, t::makePose(u, 1e300, 0, 0));
+  });
+  const auto raw = t::run({t::binPath("omnislam-eval"), dir.file("run.lcm"), "--json", "--no-tum"}, 30);
+  ASSERT_EQ(raw.exit_code, 0) << raw.output;
+  const double rmse = jsonNumber(raw.output, "ate_rmse_m"), max = jsonNumber(raw.output, "ate_max_m");
+  EXPECT_TRUE(std::isfinite(rmse)) << raw.output;
+  EXPECT_LE(rmse, max) << raw.output;
+  EXPECT_NEAR(rmse / (1e300 / std::sqrt(12.0)), 1.0, 1e-5) << raw.output;  // printed with 6 digits
+  const auto al = t::run({t::binPath("omnislam-eval"), dir.file("run.lcm"), "--json", "--no-tum", "--align"}, 30);
+  EXPECT_EQ(al.exit_code, 2) << al.output;
+  EXPECT_NE(al.output.find("--align: "), std::string::npos) << al.output;
+  EXPECT_EQ(al.output.find("nan"), std::string::npos) << al.output;
+  EXPECT_EQ(al.output.find("inf"), std::string::npos) << al.output;
+}
+
+// An estimate standing still (1 um jitter) against a moving truth has no heading to align: the
+// degeneracy test is relative to the trajectories' spread, not an absolute 1e-12.
+TEST(Eval, AlignRefusesAnEstimateThatDoesNotMove) {
+  t::TempDir dir;
+  {
+    lcmio::LogWriter log(dir.file("still.lcm"));
+    for (int k = 0; k <= 100; ++k) {
+      const int64_t u = 1'000'000 + k * 100'000;
+      log.write(u, channels::kGroundTruthPose, t::makePose(u, 5 * std::cos(0.03 * k), 5 * std::sin(0.03 * k), 0));
+      log.write(u, channels::kSlamPose, t::makePose(u, 2 + 1e-6 * std::sin(7.0 * k), 1e-6 * std::cos(5.0 * k), 0));
+    }
+  }
+  const auto r = t::run({t::binPath("omnislam-eval"), dir.file("still.lcm"), "--json", "--no-tum", "--align"}, 30);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--align: trajectory degenerate"), std::string::npos) << r.output;
+  // Without --align it is scored as it is.
+  const auto raw = t::run({t::binPath("omnislam-eval"), dir.file("still.lcm"), "--json", "--no-tum"}, 30);
+  EXPECT_EQ(raw.exit_code, 0) << raw.output;
+}
+
+// A straight run of 11 poses (SLAM = truth) with `extra` written after them: for the tests of
+// repeated utimes, the map kept and the table's wording.
+void writeLine(const std::string& path, const std::function<void(lcmio::LogWriter&)>& extra) {
+  lcmio::LogWriter log(path);
+  for (int k = 0; k <= 10; ++k) {
+    const int64_t u = 1'000'000 + k * 100'000;
+    log.write(u, channels::kGroundTruthPose, t::makePose(u, k, 0, 0));
+    log.write(u, channels::kSlamPose, t::makePose(u, k, 0, 0));
+  }
+  extra(log);
+}
+
 }  // namespace

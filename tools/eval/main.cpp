@@ -9,10 +9,12 @@
 
 #include <Eigen/Geometry>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -136,6 +138,54 @@ struct DeadReckoning {
   std::vector<eval::TimedPose> poses;  ///< odometry in the truth frame at the SLAM poses' utimes (raw)
 };
 
+/// Root mean square of `v`, accumulated scaled by its largest magnitude: finite and at most that
+/// magnitude whenever every value is finite (a plain sum of squares overflows from 1e154 on).
+double scaledRms(const std::vector<double>& v) {
+  double top = 0.0;
+  for (double x : v) top = std::max(top, std::abs(x));
+  if (v.empty() || top == 0.0 || !std::isfinite(top)) return v.empty() ? 0.0 : top;
+  double s = 0.0;
+  for (double x : v) s += (x / top) * (x / top);
+  return top * std::sqrt(s / static_cast<double>(v.size()));
+}
+
+/// eval::trajectoryErrors with its RMS figures accumulated scaled (scaledRms).
+eval::TrajectoryErrors scaledTrajectoryErrors(const std::vector<eval::PosePair>& pairs) {
+  eval::TrajectoryErrors r = eval::trajectoryErrors(pairs);
+  r.ate_rmse_m = scaledRms(r.position_error_m);
+  r.heading_rmse_rad = scaledRms(r.heading_error_rad);
+  return r;
+}
+
+/// A trajectory whose compared positions spread (RMS distance from their centroid) less than this
+/// fraction of the other's carries no heading: a rotation fitted to it would be fitted to noise.
+constexpr double kMinAlignSpreadRatio = 1e-3;
+
+/// RMS distance of `p` from its centroid (infinite if it overflows).
+double spreadOf(const std::vector<Eigen::Vector2d>& p) {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& q : p) mean += q / static_cast<double>(p.size());
+  std::vector<double> d;
+  for (const auto& q : p) d.push_back((q - mean).norm());
+  return mean.allFinite() ? scaledRms(d) : std::numeric_limits<double>::infinity();
+}
+
+/// "" if the rigid fit of `from` onto `to` is well posed, else why not: fewer than two pairs, a
+/// spread that is not finite, or one spread below kMinAlignSpreadRatio of the other (relative, so
+/// that it holds at any scale; docs/evaluation.md).
+std::string alignmentProblem(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
+  if (from.size() < 2) return "fewer than two poses compared, nothing to align";
+  const double sf = spreadOf(from), st = spreadOf(to);
+  if (!std::isfinite(sf) || !std::isfinite(st)) return "positions too large to align (their spread is not finite)";
+  if (!(sf > kMinAlignSpreadRatio * st) || !(st > kMinAlignSpreadRatio * sf)) {
+    std::ostringstream o;
+    o << "trajectory degenerate: the estimate spreads " << sf << " m and the truth " << st
+      << " m about their centroids; a rotation needs each above 1/1000 of the other";
+    return o.str();
+  }
+  return "";
+}
+
 DeadReckoning deadReckoning(const LogContent& c) {
   DeadReckoning d;
   constexpr int64_t kMaxOdometryGapUs = 2'000'000;  // odometry loggers may pause (MRCLAM: 1 s)
@@ -152,15 +202,16 @@ DeadReckoning deadReckoning(const LogContent& c) {
   if (pairs.empty()) return d;
   d.poses = std::move(dr);
   d.available = true;
-  d.raw = eval::trajectoryErrors(pairs);
+  d.raw = scaledTrajectoryErrors(pairs);
   std::vector<Eigen::Vector2d> from, to;
   for (const auto& p : pairs) {
     from.emplace_back(p.estimate.x_m, p.estimate.y_m);
     to.emplace_back(p.truth.x_m, p.truth.y_m);
   }
-  if (const auto T = eval::fitRigid2D(from, to))
-    for (auto& p : pairs) p.estimate = T->apply(p.estimate);
-  d.aligned = eval::trajectoryErrors(pairs);
+  if (alignmentProblem(from, to).empty())
+    if (const auto T = eval::fitRigid2D(from, to); T && std::isfinite(T->theta_rad) && T->t_m.allFinite())
+      for (auto& p : pairs) p.estimate = T->apply(p.estimate);
+  d.aligned = scaledTrajectoryErrors(pairs);
   return d;
 }
 
@@ -220,13 +271,16 @@ int main(int argc, char** argv) {
         from.emplace_back(p.estimate.x_m, p.estimate.y_m);
         to.emplace_back(p.truth.x_m, p.truth.y_m);
       }
+      if (const std::string why = alignmentProblem(from, to); !why.empty()) throw std::invalid_argument("--align: " + why);
       T = eval::fitRigid2D(from, to);
       if (!T) throw std::invalid_argument("--align: trajectory too short or degenerate to align");
+      if (!std::isfinite(T->theta_rad) || !T->t_m.allFinite())
+        throw std::invalid_argument("--align: the fitted transform is not finite (coordinates too large)");
       for (auto& p : pairs) p.estimate = T->apply(p.estimate);
       for (auto& l : c.slam_map) l = T->apply(l);
       for (auto& p : c.slam) p.pose = T->apply(p.pose);
     }
-    const auto te = eval::trajectoryErrors(pairs);
+    const auto te = scaledTrajectoryErrors(pairs);
     const auto me = eval::mapErrors(c.slam_map, c.truth_map, gate_m, planar);
     const int64_t frames = c.feature_frames > 0 ? c.feature_frames : static_cast<int64_t>(c.slam.size());
     const DeadReckoning dr = deadReckoning(c);
@@ -247,6 +301,19 @@ int main(int argc, char** argv) {
       }
       as = eval::scoreAssociations(a, l, truth_of_estimate);
     }
+    // Every figure printed is a number: a non-finite one is an error with its name, never "inf" or "-nan".
+    std::vector<std::pair<const char*, double>> figures{
+        {"ate_rmse_m", te.ate_rmse_m}, {"ate_max_m", te.ate_max_m}, {"heading_rmse_rad", te.heading_rmse_rad},
+        {"heading_max_rad", te.heading_max_rad}, {"landmark_mean_err_m", me.mean_err_m}, {"landmark_max_err_m", me.max_err_m}};
+    for (double e : te.position_error_m) figures.push_back({"a position error", e});
+    if (dr.available)
+      figures.insert(figures.end(), {{"dr_ate_rmse_m", dr.raw.ate_rmse_m}, {"dr_ate_max_m", dr.raw.ate_max_m},
+                                     {"dr_heading_rmse_rad", dr.raw.heading_rmse_rad},
+                                     {"dr_ate_rmse_aligned_m", dr.aligned.ate_rmse_m},
+                                     {"dr_ate_max_aligned_m", dr.aligned.ate_max_m}});
+    for (const auto& [name, v] : figures)
+      if (!std::isfinite(v))
+        throw std::invalid_argument(std::string(name) + " is not finite: positions too large to compare");
     if (!no_tum) {
       const std::string prefix = tum_prefix.empty() ? log : tum_prefix;
       writeTum(prefix + ".slam.tum", c.slam);

@@ -236,4 +236,30 @@ void writeLine(const std::string& path, const std::function<void(lcmio::LogWrite
   extra(log);
 }
 
+// A second SLAM_POSE at a utime already read replaces the first and is counted; the SLAM_MAP kept is
+// the one with the newest utime, not the last in file order (the older one is counted).
+TEST(Eval, RepeatedUtimesAreCountedAndTheNewestMapIsKept) {
+  t::TempDir dir;
+  writeLine(dir.file("dup.lcm"), [](lcmio::LogWriter& log) {
+    log.write(2'000'000, channels::kSlamPose, t::makePose(1'500'000, 5, 0, 0));  // the same pose again
+    map_t truth = mapOf({{2, 1, 0}, {6, 1, 0}});
+    log.write(2'000'000, channels::kGroundTruthMap, truth);
+    map_t newest = mapOf({{2, 1.1, 0}, {6, 1.1, 0}});
+    newest.utime = 2'000'000;
+    log.write(2'000'000, channels::kSlamMap, newest);
+    map_t older = mapOf({{40, 40, 0}});
+    older.utime = 1'900'000;
+    log.write(2'000'001, channels::kSlamMap, older);
+  });
+  const auto r = t::run({t::binPath("omnislam-eval"), dir.file("dup.lcm"), "--json", "--no-tum"}, 30);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(jsonNumber(r.output, "messages_skipped"), 2) << r.output;
+  EXPECT_EQ(jsonNumber(r.output, "landmarks_matched"), 2) << r.output;
+  EXPECT_EQ(jsonNumber(r.output, "frames_with_pose"), 11) << r.output;
+  EXPECT_NE(r.output.find("skipped 1 message of " + dir.file("dup.lcm") + ": SLAM_POSE: utime already read"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("SLAM_MAP: older than one already read"), std::string::npos) << r.output;
+}
+
 }  // namespace

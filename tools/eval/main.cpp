@@ -44,6 +44,7 @@ struct LogContent {
   std::vector<Eigen::Matrix2d> slam_map_cov_xy;
   int64_t feature_frames = 0;
   bool have_slam_map = false, have_truth_map = false;
+  std::optional<int64_t> slam_map_utime, truth_map_utime;  ///< of the maps kept: the newest
   std::vector<int64_t> slam_map_ids, truth_map_ids;
   std::vector<eval::TimedPose> odometry;                     ///< ODOMETRY (of the first log that has it)
   std::map<int64_t, std::vector<int64_t>> associations;      ///< SLAM_ASSOCIATIONS by frame utime
@@ -67,6 +68,28 @@ std::optional<Msg> decodeValid(const std::string& path, const lcmio::LogEvent& e
   return m;
 }
 
+/// m[utime] = v; a message at a utime already read replaces the earlier one, which is counted in
+/// c.skipped (a second run in the same log, or a publisher that repeats itself: never silent).
+template <class V>
+void keepByUtime(std::map<int64_t, V>& m, int64_t utime, V v, const std::string& path, const std::string& channel,
+                 LogContent& c) {
+  if (!m.insert_or_assign(utime, std::move(v)).second)
+    ++c.skipped[path + ": " + channel + ": utime already read, replaced by this later message"];
+}
+
+/// Whether a map message at `utime` is the newest so far (`newest`: the utime of the map kept, or
+/// nothing); an older one is counted in c.skipped and left out, one at the same utime replaces it.
+bool newestMap(std::optional<int64_t>& newest, int64_t utime, const std::string& path, const std::string& channel,
+               LogContent& c) {
+  if (newest && utime < *newest) {
+    ++c.skipped[path + ": " + channel + ": older than one already read (the newest utime is kept)"];
+    return false;
+  }
+  if (newest && utime == *newest) ++c.skipped[path + ": " + channel + ": utime already read, replaced by this later message"];
+  newest = utime;
+  return true;
+}
+
 /// Poses by utime (a later message with the same utime replaces the earlier one), sorted.
 std::vector<eval::TimedPose> posesOf(const std::map<int64_t, Pose2>& m) {
   std::vector<eval::TimedPose> out;
@@ -78,23 +101,25 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
   std::map<int64_t, Pose2> slam, truth, odom;
   const lcmio::LogReadResult got = lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
     if (ev.channel == channels::kOdometry) {
-      if (auto m = decodeValid<odometry_t>(path, ev, c)) odom[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+      if (auto m = decodeValid<odometry_t>(path, ev, c))
+        keepByUtime(odom, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, path, ev.channel, c);
       return;
     }
     if (want_slam && ev.channel == channels::kSlamAssociations) {
-      if (auto m = decodeValid<associations_t>(path, ev, c)) c.associations[m->utime] = m->landmark_id;
+      if (auto m = decodeValid<associations_t>(path, ev, c)) keepByUtime(c.associations, m->utime, m->landmark_id, path, ev.channel, c);
       return;
     }
     if (want_truth && ev.channel == channels::kGroundTruthFeatureLabels) {
-      if (auto m = decodeValid<feature_labels_t>(path, ev, c)) c.labels[m->utime] = m->landmark_id;
+      if (auto m = decodeValid<feature_labels_t>(path, ev, c)) keepByUtime(c.labels, m->utime, m->landmark_id, path, ev.channel, c);
       return;
     }
     if (want_slam && ev.channel == channels::kSlamPose) {
-      if (auto m = decodeValid<pose_t>(path, ev, c)) slam[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+      if (auto m = decodeValid<pose_t>(path, ev, c)) keepByUtime(slam, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, path, ev.channel, c);
     } else if (want_truth && ev.channel == channels::kGroundTruthPose) {
-      if (auto m = decodeValid<pose_t>(path, ev, c)) truth[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+      if (auto m = decodeValid<pose_t>(path, ev, c)) keepByUtime(truth, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, path, ev.channel, c);
     } else if (want_slam && ev.channel == channels::kSlamMap) {
-      if (auto m = decodeValid<map_t>(path, ev, c)) {
+      auto m = decodeValid<map_t>(path, ev, c);
+      if (m && newestMap(c.slam_map_utime, m->utime, path, ev.channel, c)) {
         c.slam_map.clear();
         c.slam_map_cov_xy.clear();
         c.slam_map_ids.clear();
@@ -108,7 +133,8 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
         c.have_slam_map = true;
       }
     } else if (want_truth && ev.channel == channels::kGroundTruthMap) {
-      if (auto m = decodeValid<map_t>(path, ev, c)) {
+      auto m = decodeValid<map_t>(path, ev, c);
+      if (m && newestMap(c.truth_map_utime, m->utime, path, ev.channel, c)) {
         c.truth_map.clear();
         c.truth_map_ids.clear();
         for (const auto& l : m->landmarks) {
@@ -383,7 +409,7 @@ int main(int argc, char** argv) {
       if (c.unreadable_bytes > 0)
         o << "  the log's last " << c.unreadable_bytes << " bytes cannot be read (truncated or corrupt; stderr)\n";
       if (c.skippedTotal() > 0)
-        o << "  skipped " << c.skippedTotal() << " undecodable or invalid messages (listed on stderr)\n";
+        o << "  skipped " << c.skippedTotal() << " undecodable, invalid or replaced messages (listed on stderr)\n";
       o << "  trajectory: " << te.pairs << " poses compared of " << c.slam.size() << " (" << frames << " frames)\n";
       o << "    ATE RMSE " << te.ate_rmse_m << " m, max " << te.ate_max_m << " m\n";
       o << "    heading RMSE " << te.heading_rmse_rad << " rad, max " << te.heading_max_rad << " rad\n";

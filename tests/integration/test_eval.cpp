@@ -12,6 +12,8 @@
 #include <regex>
 #include <sstream>
 
+#include "omnislam/associations_t.hpp"
+#include "omnislam/feature_labels_t.hpp"
 #include "omnislam/features_t.hpp"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/map_t.hpp"
@@ -260,6 +262,44 @@ TEST(Eval, RepeatedUtimesAreCountedAndTheNewestMapIsKept) {
             std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("SLAM_MAP: older than one already read"), std::string::npos) << r.output;
+}
+
+// The table says what was not compared: precision of no association is "n/a (0/0)", frames left out
+// for differing feature counts are counted, and a log without GROUND_TRUTH_MAP has "no truth map".
+TEST(Eval, TheTableSaysWhatWasNotCompared) {
+  t::TempDir dir;
+  auto assocAndLabels = [](lcmio::LogWriter& log) {
+    for (int k = 0; k <= 10; ++k) {
+      const int64_t u = 1'000'000 + k * 100'000;
+      associations_t a{};
+      a.utime = u;
+      a.landmark_id = {associations_t::NOT_ASSOCIATED};
+      feature_labels_t l{};
+      l.utime = u;
+      l.landmark_id = {0};
+      l.source_code = {0};
+      if (k == 10) l.landmark_id.push_back(1), l.source_code.push_back(0);  // counts differ: left out
+      a.num_features = static_cast<int32_t>(a.landmark_id.size());
+      l.num_features = static_cast<int32_t>(l.landmark_id.size());
+      log.write(u, channels::kSlamAssociations, a);
+      log.write(u, channels::kGroundTruthFeatureLabels, l);
+    }
+    log.write(2'000'000, channels::kSlamMap, mapOf({{2, 1, 0}}));
+  };
+  writeLine(dir.file("assoc.lcm"), [&](lcmio::LogWriter& log) {
+    assocAndLabels(log);
+    log.write(2'000'000, channels::kGroundTruthMap, mapOf({{2, 1, 0}}));
+  });
+  const auto r = t::run({t::binPath("omnislam-eval"), dir.file("assoc.lcm"), "--no-tum"}, 30);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("precision n/a (0/0)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("10 frames, 1 left out"), std::string::npos) << r.output;
+  writeLine(dir.file("notruthmap.lcm"), assocAndLabels);
+  const auto n = t::run({t::binPath("omnislam-eval"), dir.file("notruthmap.lcm"), "--no-tum"}, 30);
+  ASSERT_EQ(n.exit_code, 0) << n.output;
+  EXPECT_NE(n.output.find("no truth map"), std::string::npos) << n.output;
+  EXPECT_EQ(n.output.find("0 true"), std::string::npos) << n.output;
+  EXPECT_EQ(n.output.find("landmark error mean 0 m"), std::string::npos) << n.output;
 }
 
 }  // namespace

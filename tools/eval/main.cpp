@@ -241,6 +241,14 @@ DeadReckoning deadReckoning(const LogContent& c) {
   return d;
 }
 
+/// A ratio for the table: "n/a" when its denominator is 0 (nothing to score), never a 0.
+std::string ratioText(double ratio, int64_t denominator) {
+  if (denominator == 0) return "n/a";
+  std::ostringstream o;
+  o << std::setprecision(6) << ratio;
+  return o.str();
+}
+
 void writeTum(const std::string& path, const std::vector<eval::TimedPose>& poses) {
   std::ofstream f(path);
   if (!f) throw std::runtime_error("cannot write '" + path + "'");
@@ -413,18 +421,26 @@ int main(int argc, char** argv) {
       o << "  trajectory: " << te.pairs << " poses compared of " << c.slam.size() << " (" << frames << " frames)\n";
       o << "    ATE RMSE " << te.ate_rmse_m << " m, max " << te.ate_max_m << " m\n";
       o << "    heading RMSE " << te.heading_rmse_rad << " rad, max " << te.heading_max_rad << " rad\n";
-      o << "  map: " << me.estimated << " estimated, " << me.truth << " true, " << me.matched << " matched within "
-        << gate_m << " m, " << me.spurious << " spurious\n";
-      o << "    landmark error mean " << me.mean_err_m << " m, max " << me.max_err_m << " m\n";
+      if (!c.have_truth_map) {  // nothing to compare with: no "0 true" and no 0 m error
+        o << "  map: " << me.estimated << " estimated; no truth map (no GROUND_TRUTH_MAP)\n";
+      } else {
+        o << "  map: " << me.estimated << " estimated, " << me.truth << " true, " << me.matched << " matched within "
+          << gate_m << " m, " << me.spurious << " spurious\n";
+        if (me.matched > 0)
+          o << "    landmark error mean " << me.mean_err_m << " m, max " << me.max_err_m << " m\n";
+        else
+          o << "    landmark error n/a (no landmark matched)\n";
+      }
       if (T) o << "  alignment: rotation " << T->theta_rad << " rad, translation (" << T->t_m.x() << ", " << T->t_m.y() << ") m\n";
       if (dr.available)
         o << "  dead reckoning (ODOMETRY from the start pose): ATE RMSE " << dr.raw.ate_rmse_m << " m, max "
           << dr.raw.ate_max_m << " m; aligned: RMSE " << dr.aligned.ate_rmse_m << " m, max " << dr.aligned.ate_max_m
           << " m\n";
       if (have_assoc)
-        o << "  association: precision " << as.precision() << " (" << as.correct << "/" << as.associated
-          << "), recall " << as.recall() << " (" << as.correct << "/" << as.true_landmark_features << "); "
-          << as.clutter_associated << " clutter features associated; " << as.frames << " frames\n";
+        o << "  association: precision " << ratioText(as.precision(), as.associated) << " (" << as.correct << "/"
+          << as.associated << "), recall " << ratioText(as.recall(), as.true_landmark_features) << " (" << as.correct
+          << "/" << as.true_landmark_features << "); " << as.clutter_associated << " clutter features associated; "
+          << as.frames << " frames, " << as.frames_mismatched << " left out (feature counts differ)\n";
     }
     std::cout << o.str();
     return 0;

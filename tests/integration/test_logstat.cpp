@@ -130,4 +130,38 @@ TEST(Logstat, ALogWithoutStatusHasNoProcessTable) {
   EXPECT_EQ(r.output.find("process (last status)"), std::string::npos) << r.output;
 }
 
+// The span is newest minus oldest utime (never negative for a log out of order); a 999-character
+// channel name is elided, not the row (its counts and newline stay); a name with a NUL byte is
+// printed escaped, not as a second "SLAM_POSE" row.
+TEST(Logstat, SpansAreNeverNegativeAndOddChannelNamesKeepTheirRows) {
+  t::TempDir dir;
+  const std::string path = dir.file("odd.lcm");
+  {
+    lcmio::LogWriter log(path);
+    int64_t seq = 0;
+    for (const int64_t s : {100, 1, 50}) {
+      odometry_t o{};
+      o.utime = s * 1'000'000, o.seq = seq++;
+      log.write(o.utime, channels::kOdometry, o);
+    }
+    const std::vector<uint8_t> junk{1, 2, 3};
+    log.write(1, std::string(999, 'L'), junk.data(), 3);
+    log.write(1, std::string(999, 'L'), junk.data(), 3);
+    log.write(1, std::string("ODOMETRY\0X", 10), junk.data(), 3);
+  }
+  const auto r = t::run({t::binPath("omnislam-logstat"), path}, 10);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("     99.00"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("-99.00"), std::string::npos) << r.output;
+  const std::string long_row = std::string(40, 'L') + "...(999 bytes) ?";
+  const auto at = r.output.find(long_row);
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const std::string row = r.output.substr(at, r.output.find('\n', at) - at);
+  EXPECT_NE(row.find("       2 "), std::string::npos) << row;  // its message count
+  EXPECT_NE(r.output.find("ODOMETRY\\x00X"), std::string::npos) << r.output;
+  size_t odometry_rows = 0;
+  for (size_t p = r.output.find("\nODOMETRY "); p != std::string::npos; p = r.output.find("\nODOMETRY ", p + 1)) ++odometry_rows;
+  EXPECT_EQ(odometry_rows, 1u) << r.output;
+}
+
 }  // namespace

@@ -1,6 +1,7 @@
 // Log statistics: see logstat.h.
 #include "logstat.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 
@@ -39,8 +40,10 @@ bool account(const lcmio::LogEvent& ev, ChannelStats& s, SeqTrack& t, int64_t ut
   const int64_t utime = utime_override >= 0 ? utime_override : m->utime;
   if (s.first_seq < 0) {
     s.first_seq = m->seq;
-    s.first_utime = utime;
+    s.first_utime = s.min_utime = s.max_utime = utime;
   }
+  s.min_utime = std::min(s.min_utime, utime);
+  s.max_utime = std::max(s.max_utime, utime);
   if (t.have) {
     const lcmio::SequenceStep step = lcmio::sequenceStep(t.last, m->seq);
     s.seq_gaps = lcmio::saturatingAdd(s.seq_gaps, step.missed);
@@ -56,6 +59,23 @@ bool account(const lcmio::LogEvent& ev, ChannelStats& s, SeqTrack& t, int64_t ut
 }
 
 }  // namespace
+
+std::string displayName(const std::string& name) {
+  constexpr size_t kMaxShown = 60, kKept = 40;
+  std::string out;
+  for (const char ch : name) {
+    const auto u = static_cast<unsigned char>(ch);
+    if (u >= 0x20 && u < 0x7f && ch != '\\') {
+      out += ch;
+    } else {  // a NUL, a control or a non-ASCII byte: escaped, so no name reads as another
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", u);
+      out += hex;
+    }
+  }
+  if (out.size() > kMaxShown) out = out.substr(0, kKept) + "...(" + std::to_string(name.size()) + " bytes)";
+  return out;
+}
 
 LogSummary logStats(const std::string& path) {
   LogSummary summary;
@@ -104,11 +124,12 @@ std::string formatStats(const std::map<std::string, ChannelStats>& stats) {
                 "bad", "span_s", "rate_hz", "MB");
   os << line;
   for (const auto& [name, s] : stats) {
-    // In double: two int64 utimes may be further apart than int64 holds.
-    const double span = (static_cast<double>(s.last_utime) - static_cast<double>(s.first_utime)) * 1e-6;
+    // Newest minus oldest (not last minus first: a log out of order would give a negative span). In
+    // double: two int64 utimes may be further apart than int64 holds.
+    const double span = (static_cast<double>(s.max_utime) - static_cast<double>(s.min_utime)) * 1e-6;
     const double rate = span > 0 && s.events > 1 ? (s.events - s.undecodable - 1) / span : 0.0;
     const bool status = name == channels::kProcessStatus;
-    std::snprintf(line, sizeof line, "%-20s %-28s %8lld %6lld %6lld %10.2f %9.2f %10.2f\n", name.c_str(),
+    std::snprintf(line, sizeof line, "%-20s %-28s %8lld %6lld %6lld %10.2f %9.2f %10.2f\n", displayName(name).c_str(),
                   s.type.c_str(), static_cast<long long>(s.events), static_cast<long long>(s.seq_gaps),
                   static_cast<long long>(s.undecodable), status ? 0.0 : span, status ? 0.0 : rate, s.bytes / 1e6);
     os << line;
@@ -116,12 +137,12 @@ std::string formatStats(const std::map<std::string, ChannelStats>& stats) {
   for (const auto& [name, s] : stats) {
     if (name == channels::kProcessStatus) continue;  // several publishers: per process below
     if (s.seq_restarts > 0 || s.utime_not_after > 0)
-      os << "  " << name << ": " << s.seq_restarts << " seq restarts (not after the previous one, or over "
+      os << "  " << displayName(name) << ": " << s.seq_restarts << " seq restarts (not after the previous one, or over "
          << lcmio::kMaxSequenceGap << " ahead of it), " << s.utime_not_after
          << " utime not after the previous one\n";
   }
   for (const auto& [name, s] : stats)
-    if (s.undecodable > 0) os << "  " << name << ": " << s.undecodable << " bad, the first: " << s.first_bad << "\n";
+    if (s.undecodable > 0) os << "  " << displayName(name) << ": " << s.undecodable << " bad, the first: " << s.first_bad << "\n";
   return os.str();
 }
 
@@ -136,13 +157,13 @@ std::string formatProcesses(const std::map<std::string, ProcessSummary>& process
   for (const auto& [name, summary] : processes) {
     const process_status_t& p = summary.last;
     const std::string state = p.state >= 0 && p.state <= 4 ? kStates[p.state] : "state " + std::to_string(p.state);
-    std::snprintf(line, sizeof line, "%-21s %7d %-9s %8lld %10lld %10lld %7lld %8lld %8lld\n", name.c_str(), p.pid,
+    std::snprintf(line, sizeof line, "%-21s %7d %-9s %8lld %10lld %10lld %7lld %8lld %8lld\n", displayName(name).c_str(), p.pid,
                   state.c_str(), static_cast<long long>(summary.statuses), static_cast<long long>(p.messages_in),
                   static_cast<long long>(p.messages_out), static_cast<long long>(p.decode_errors),
                   static_cast<long long>(p.rejected_inputs), static_cast<long long>(p.sequence_gaps));
     os << line;
-    if (!p.detail.empty()) os << "  " << name << " detail: " << p.detail << "\n";
-    if (!p.last_error.empty()) os << "  " << name << " last error: " << p.last_error << "\n";
+    if (!p.detail.empty()) os << "  " << displayName(name) << " detail: " << p.detail << "\n";
+    if (!p.last_error.empty()) os << "  " << displayName(name) << " last error: " << p.last_error << "\n";
   }
   return os.str();
 }

@@ -21,7 +21,8 @@ struct ChannelStats {
   int64_t seq_restarts = 0;  ///< seq not after the previous one (a publisher restarted, or duplicates) or
                              ///< more than lcmio::kMaxSequenceGap ahead of it (a corrupted or re-based seq)
   int64_t utime_not_after = 0;  ///< utime not after the previous message's (duplicate or out of order)
-  int64_t first_utime = 0, last_utime = 0;
+  int64_t first_utime = 0, last_utime = 0;  ///< in log order
+  int64_t min_utime = 0, max_utime = 0;    ///< oldest and newest: the span is their difference
   int64_t bytes = 0;
 };
 
@@ -39,6 +40,11 @@ struct LogSummary {
 
 /// Reads the whole log once. Throws std::runtime_error if it cannot be opened.
 LogSummary logStats(const std::string& path);
+
+/// A channel or process name as printed: bytes other than printable ASCII (a NUL, a control, UTF-8)
+/// and the backslash escaped as \xNN, and a name over 60 characters cut to its first 40 and its
+/// length ("...(999 bytes)"): every row keeps its figures and its newline.
+std::string displayName(const std::string& name);
 
 /// A printable table (one line per channel), then one line per channel with sequence restarts,
 /// utimes not after the previous one, or bad messages (the first one's reason).

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <random>
 
 #include <Eigen/Core>
@@ -262,6 +263,52 @@ TEST(Smooth, CountsAnUndecodableMessageAndRefusesBadFlagsAndLogs) {
   EXPECT_EQ(std::filesystem::file_size(in), size);
   // The output is written whole or not at all: no OUT.partial is left after a run that finished.
   EXPECT_FALSE(std::filesystem::exists(out + ".partial"));
+}
+
+/// Copies the events of `in` into `out` (log time kept), each through `keep` (false: left out).
+void copyLog(const std::string& in, lcmio::LogWriter& out, const std::function<bool(const lcmio::LogEvent&)>& keep) {
+  lcmio::forEachEvent(in, [&](const lcmio::LogEvent& ev) {
+    if (keep(ev)) out.write(ev.log_utime, ev.channel, ev.data.data(), static_cast<int32_t>(ev.data.size()));
+  });
+}
+
+// Two runs in one log (the second starts again at the first one's utimes): lcmio::UtimeOrder accepts
+// the new timeline; the restart and every message it replaces are reported, not merged in silence.
+TEST(Smooth, ARestartedTimelineIsReported) {
+  t::TempDir dir;
+  const std::string run = dir.file("run.lcm"), in = dir.file("in.lcm"), out = dir.file("out.lcm");
+  writeRun(run, false, true, 400);
+  {
+    lcmio::LogWriter w(in);
+    copyLog(run, w, [](const lcmio::LogEvent&) { return true; });
+    copyLog(run, w, [](const lcmio::LogEvent&) { return true; });
+  }
+  const auto r = smooth(in, out, {});
+  EXPECT_NE(r.output.find("warning: SLAM_POSE: 1 new timeline(s) accepted"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("SLAM_POSE: utime already read before its timeline restarted, replaced by this later message"),
+            std::string::npos)
+      << r.output;
+}
+
+// Two ODOMETRY 1000 s apart: the second is refused as a forward jump, and the refusal of the log
+// ("fewer than two") says so.
+TEST(Smooth, ARefusalNamesTheSkippedInput) {
+  t::TempDir dir;
+  const std::string in = dir.file("in.lcm"), out = dir.file("out.lcm");
+  {
+    lcmio::LogWriter w(in);
+    for (int k = 0; k < 2; ++k) {
+      odometry_t o{};
+      o.utime = 1'000'000'000 + k * 1'000'000'000LL, o.seq = k, o.x_m = k;
+      w.write(o.utime, channels::kOdometry, o);
+      w.write(o.utime, channels::kSlamPose, t::makePose(o.utime, k, 0, 0));
+    }
+  }
+  const auto r = smooth(in, out, {});
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("fewer than two ODOMETRY messages (skipped: ODOMETRY: utime duplicated, out of order or jumping"),
+            std::string::npos)
+      << r.output;
 }
 
 }  // namespace

@@ -52,6 +52,7 @@ int main(int argc, char** argv) {
     opt.associations = source == "labels" ? smooth::AssociationSource::kLabels : smooth::AssociationSource::kSlam;
     const auto rep = smooth::smoothLog(in, out, opt);
     for (const auto& p : rep.problems) std::cerr << "omnislam-smooth: skipped " << p << "\n";
+    for (const auto& r : rep.restarts) std::cerr << "omnislam-smooth: warning: " << r << "\n";
     std::cerr << "omnislam-smooth: " << rep.poses << " poses, " << rep.odometry_factors << " odometry and "
               << rep.bearing_factors << " bearing factors (" << rep.bearings_downweighted << " down-weighted below 0.5), "
               << rep.landmarks << " landmarks (" << rep.unanchored_landmarks << " without an initial position, unused), "

@@ -51,6 +51,14 @@ std::optional<Msg> decodeValid(const lcmio::LogEvent& ev, Counter& bad) {
   return m;
 }
 
+/// m[utime] = v. After a new timeline (lcmio::UtimeOrder accepts one) a utime may come again: it
+/// replaces the earlier message, counted with its reason, never silently.
+template <class V>
+void put(std::map<int64_t, V>& m, int64_t utime, V v, const std::string& channel, Counter& bad) {
+  if (!m.insert_or_assign(utime, std::move(v)).second)
+    bad.add(channel + ": utime already read before its timeline restarted, replaced by this later message");
+}
+
 /// One associated azimuth: the frame (problem pose index) it was seen from.
 struct Ray {
   int node;
@@ -116,25 +124,40 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
   const lcmio::LogReadResult got = lcmio::forEachEvent(in_log, [&](const lcmio::LogEvent& ev) {
     const std::string& ch = ev.channel;
     if (ch == channels::kOdometry) {
-      if (const auto m = decodeValid<odometry_t>(ev, bad)) odo[m->utime] = Pose2{m->x_m, m->y_m, m->theta_rad};
+      if (const auto m = decodeValid<odometry_t>(ev, bad)) put(odo, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, ch, bad);
     } else if (ch == channels::kSlamPose) {
-      if (const auto m = decodeValid<pose_t>(ev, bad)) slam_pose[m->utime] = *m;
+      if (const auto m = decodeValid<pose_t>(ev, bad)) put(slam_pose, m->utime, *m, ch, bad);
     } else if (ch == channels::kOmniFeatures) {
-      if (const auto m = decodeValid<features_t>(ev, bad)) frames[m->utime] = *m;
+      if (const auto m = decodeValid<features_t>(ev, bad)) put(frames, m->utime, *m, ch, bad);
     } else if (ch == channels::kSlamMap) {
       if (const auto m = decodeValid<map_t>(ev, bad))
         for (const auto& l : m->landmarks) last_map_position[l.id] = Eigen::Vector2d(l.position_m[0], l.position_m[1]);
     } else if (ch == assoc_channel) {
       if (opt.associations == AssociationSource::kSlam) {
-        if (const auto m = decodeValid<associations_t>(ev, bad)) assoc[m->utime] = m->landmark_id;
+        if (const auto m = decodeValid<associations_t>(ev, bad)) put(assoc, m->utime, m->landmark_id, ch, bad);
       } else if (const auto m = decodeValid<feature_labels_t>(ev, bad)) {
-        assoc[m->utime] = m->landmark_id;
+        put(assoc, m->utime, m->landmark_id, ch, bad);
       }
     }
   });
   if (const auto problem = got.problem(in_log)) rep.problems.push_back(*problem);
-  if (slam_pose.empty()) throw std::invalid_argument(in_log + ": no SLAM_POSE message");
-  if (odo.size() < 2) throw std::invalid_argument(in_log + ": fewer than two ODOMETRY messages");
+  for (const auto& [why, count] : bad.n) {
+    rep.skipped_messages += count;
+    rep.problems.push_back(why + " (" + std::to_string(count) + ")");
+  }
+  bad.n.clear();  // counted; what the problem building below refuses is added at the end
+  for (const auto& [channel, order] : bad.order)
+    if (order.restarts() > 0)
+      rep.restarts.push_back(channel + ": " + std::to_string(order.restarts()) + " new timeline(s) accepted, the last: " +
+                             order.lastRestart() + "; a message at a utime already read replaces the earlier one");
+  // A refusal names what was skipped: the reason a channel is short is often there.
+  auto refuse = [&rep](const std::string& why) {
+    std::string all = why;
+    for (size_t k = 0; k < rep.problems.size(); ++k) all += (k == 0 ? " (skipped: " : "; ") + rep.problems[k];
+    throw std::invalid_argument(all + (rep.problems.empty() ? "" : ")"));
+  };
+  if (slam_pose.empty()) refuse(in_log + ": no SLAM_POSE message");
+  if (odo.size() < 2) refuse(in_log + ": fewer than two ODOMETRY messages");
 
   // Poses: one per SLAM_POSE, the filter's estimate as the initial value.
   slam::SmootherProblem pb;

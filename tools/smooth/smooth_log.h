@@ -55,6 +55,9 @@ struct SmoothLogReport {
   int64_t frames_without_odometry = 0;  ///< frames outside the ODOMETRY time span: no odometry factor
   int64_t solves = 0;                  ///< smoother runs (1 in batch; one per frame when incremental)
   std::vector<std::string> problems;    ///< one line per kind of skipped input, with its count
+  /// One line per channel whose utimes started again (lcmio::UtimeOrder accepted a new timeline):
+  /// two runs in one log, merged by utime.
+  std::vector<std::string> restarts;
   slam::SmootherResult result;
 };
 

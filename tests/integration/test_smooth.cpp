@@ -290,6 +290,28 @@ TEST(Smooth, ARestartedTimelineIsReported) {
       << r.output;
 }
 
+// One SLAM_POSE at x = 1e300 makes the cost infinite: the core smoother accepts no step and calls that
+// converged; the tool refuses the result instead of writing landmarks at 1e298.
+TEST(Smooth, ADivergedSolveIsAnError) {
+  t::TempDir dir;
+  const std::string run = dir.file("run.lcm"), in = dir.file("in.lcm"), out = dir.file("out.lcm");
+  writeRun(run, false, true, 400);
+  {
+    lcmio::LogWriter w(in);
+    const int64_t u = 1'000'000'000 + 5'250'000;  // between two frames, inside the odometry
+    bool written = false;
+    copyLog(run, w, [&](const lcmio::LogEvent& ev) {
+      if (!written && ev.log_utime > u) w.write(u, channels::kSlamPose, t::makePose(u, 1e300, 1e300, 0));
+      written = written || ev.log_utime > u;
+      return true;
+    });
+  }
+  const auto r = smooth(in, out, {});
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("smoother: diverged"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
 // Two ODOMETRY 1000 s apart: the second is refused as a forward jump, and the refusal of the log
 // ("fewer than two") says so.
 TEST(Smooth, ARefusalNamesTheSkippedInput) {

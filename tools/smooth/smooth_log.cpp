@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 
 #include "omnislam/associations_t.hpp"
@@ -97,6 +98,21 @@ std::optional<Eigen::Vector2d> crossRays(const std::vector<Pose2>& poses, const 
 /// The bearing factor of `r` on landmark `landmark` (an index into the problem's landmarks).
 slam::SmootherBearingFactor bearingFactor(const Ray& r, int landmark) {
   return {r.node, landmark, r.azimuth_rad, r.sigma_rad, r.p_CinR_m};
+}
+
+/// Throws with the reason unless the solve succeeded with a finite cost, poses and landmarks: the
+/// core smoother reports "no step accepted" from an infinite cost as converged.
+void requireSolved(const slam::SmootherResult& r) {
+  if (!r.failure.empty()) throw std::invalid_argument("smoother: " + r.failure);
+  bool finite = std::isfinite(r.initial_cost) && std::isfinite(r.final_cost);
+  for (const Pose2& p : r.poses) finite = finite && std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad);
+  for (const Eigen::Vector2d& l : r.landmarks_m) finite = finite && l.allFinite();
+  if (!finite) {
+    std::ostringstream o;
+    o << "smoother: diverged (cost " << r.initial_cost << " -> " << r.final_cost
+      << ", or a pose or landmark not finite): an input pose or landmark is too large to smooth";
+    throw std::invalid_argument(o.str());
+  }
 }
 
 }  // namespace
@@ -227,7 +243,7 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
       for (const Ray& r : rs) pb.bearings.push_back(bearingFactor(r, j));
     }
     rep.result = slam::smoothBearingOnly(pb, opt.smoother);
-    if (!rep.result.failure.empty()) throw std::invalid_argument("smoother: " + rep.result.failure);
+    requireSolved(rep.result);
     rep.solves = 1;
     published = rep.result.poses;
   } else {
@@ -267,7 +283,7 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
         pending.erase(id);
       }
       rep.result = slam::smoothBearingOnly(grown, opt.smoother);
-      if (!rep.result.failure.empty()) throw std::invalid_argument("smoother: " + rep.result.failure);
+      requireSolved(rep.result);
       ++rep.solves;
       grown.poses = rep.result.poses;
       grown.landmarks_m = rep.result.landmarks_m;

@@ -63,8 +63,9 @@ struct SmoothLogReport {
 
 /// Smooths `in_log` into `out_log` (every other event copied as is; SLAM_PARTICLES dropped since
 /// they are the filter's; SLAM_ASSOCIATIONS dropped with kLabels). Throws std::invalid_argument
-/// with the reason when the log has no SLAM_POSE or ODOMETRY, the options are out of range, an
-/// incremental run has a frame without odometry, or the problem cannot be solved.
+/// with the reason (and the skipped input's counts) when the log has no SLAM_POSE or ODOMETRY, the
+/// options are out of range, an incremental run has a frame without odometry, or the problem cannot
+/// be solved (including a cost, pose or landmark that is not finite).
 SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log, const SmoothLogOptions& options);
 
 }  // namespace omnislam::smooth

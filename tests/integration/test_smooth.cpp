@@ -333,4 +333,26 @@ TEST(Smooth, ARefusalNamesTheSkippedInput) {
       << r.output;
 }
 
+// No ODOMETRY between 10 s and 20 s: the 19 frames inside that gap get no odometry factor (the SLAM
+// config's pairing.max_odometry_gap_s, 1.5 s for mrclam.yaml) and are counted; --incremental refuses.
+TEST(Smooth, AnOdometryGapIsNotBridged) {
+  t::TempDir dir;
+  const std::string run = dir.file("run.lcm"), in = dir.file("in.lcm"), out = dir.file("out.lcm");
+  writeRun(run, false);
+  {
+    lcmio::LogWriter w(in);
+    copyLog(run, w, [](const lcmio::LogEvent& ev) {
+      const int64_t u = ev.log_utime - 1'000'000'000;
+      return ev.channel != channels::kOdometry || u <= 10'000'000 || u >= 20'000'000;
+    });
+  }
+  const auto r = smooth(in, out, {});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("121 poses, 100 odometry"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("19 frames without odometry (19 across a gap over 1.5 s)"), std::string::npos) << r.output;
+  const auto inc = smooth(in, out, {"--associations", "labels", "--incremental"});
+  EXPECT_EQ(inc.exit_code, 2) << inc.output;
+  EXPECT_NE(inc.output.find("19 frame(s) without (19 of them across a gap"), std::string::npos) << inc.output;
+}
+
 }  // namespace

@@ -47,7 +47,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 100000));
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-smooth", [&]() -> int {
-    opt.motion = slamproc::loadSlamOptions(config_path, sets).filter.motion;
+    const auto slam_options = slamproc::loadSlamOptions(config_path, sets);
+    opt.motion = slam_options.filter.motion;
+    opt.max_odometry_gap_us = slam_options.pairing.max_odometry_gap_us;
     opt.min_parallax_rad = min_parallax_deg * M_PI / 180.0;
     opt.associations = source == "labels" ? smooth::AssociationSource::kLabels : smooth::AssociationSource::kSlam;
     const auto rep = smooth::smoothLog(in, out, opt);
@@ -56,7 +58,8 @@ int main(int argc, char** argv) {
     std::cerr << "omnislam-smooth: " << rep.poses << " poses, " << rep.odometry_factors << " odometry and "
               << rep.bearing_factors << " bearing factors (" << rep.bearings_downweighted << " down-weighted below 0.5), "
               << rep.landmarks << " landmarks (" << rep.unanchored_landmarks << " without an initial position, unused), "
-              << rep.frames_without_odometry << " frames without odometry; " << rep.solves << " solve(s), the last: cost " << rep.result.initial_cost << " -> "
+              << rep.frames_without_odometry << " frames without odometry (" << rep.frames_across_odometry_gap
+              << " across a gap over " << opt.max_odometry_gap_us / 1e6 << " s); " << rep.solves << " solve(s), the last: cost " << rep.result.initial_cost << " -> "
               << rep.result.final_cost << " in " << rep.result.iterations << " iterations"
               << (rep.result.converged ? "" : " (not converged)") << "\n";
     return app::kOk;

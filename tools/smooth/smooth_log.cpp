@@ -184,13 +184,16 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
     utimes.push_back(u);
     pb.poses.push_back(Pose2{p.x_m, p.y_m, p.theta_rad});
   }
-  // Cumulative odometry at every frame (interpolated; nothing outside the samples' span).
+  // Cumulative odometry at every frame (interpolated; nothing outside the samples' span, nor across
+  // a gap between samples longer than max_odometry_gap_us: the filter's pairing rule).
   std::vector<eval::TimedPose> odo_track;
   for (const auto& [u, p] : odo) odo_track.push_back({u, p});
   std::vector<std::optional<Pose2>> odo_at(utimes.size());
   for (size_t i = 0; i < utimes.size(); ++i) {
-    odo_at[i] = eval::poseAt(odo_track, utimes[i], std::numeric_limits<int64_t>::max());
-    if (!odo_at[i]) ++rep.frames_without_odometry;
+    odo_at[i] = eval::poseAt(odo_track, utimes[i], opt.max_odometry_gap_us);
+    if (odo_at[i]) continue;
+    ++rep.frames_without_odometry;
+    if (eval::poseAt(odo_track, utimes[i], std::numeric_limits<int64_t>::max())) ++rep.frames_across_odometry_gap;
   }
   // Odometry: the filter's step between consecutive frames, with its R_t (motion_model.h).
   for (size_t i = 1; i < utimes.size(); ++i) {
@@ -199,7 +202,7 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
     pb.odometry.push_back({static_cast<int>(i - 1), static_cast<int>(i), u, slam::incrementCovariance(u, opt.motion)});
   }
   if (opt.initial_from_odometry) {
-    if (!odo_at[0]) throw std::invalid_argument(in_log + ": the first SLAM_POSE is outside the ODOMETRY time span");
+    if (!odo_at[0]) refuse(in_log + ": the first SLAM_POSE has no ODOMETRY around it (outside its span or in a gap)");
     for (size_t i = 1; i < utimes.size(); ++i)
       if (odo_at[i]) pb.poses[i] = pb.poses[0].compose(odo_at[0]->between(*odo_at[i]));
   }
@@ -248,9 +251,13 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
     published = rep.result.poses;
   } else {
     // Frame by frame: pb.odometry holds, in order, the step into every frame (checked here).
-    if (rep.frames_without_odometry > 0 || pb.odometry.size() + 1 != utimes.size())
-      throw std::invalid_argument(in_log + ": --incremental needs ODOMETRY over every frame; " +
-                                  std::to_string(rep.frames_without_odometry) + " frame(s) outside its span");
+    if (rep.frames_without_odometry > 0 || pb.odometry.size() + 1 != utimes.size()) {
+      std::ostringstream o;
+      o << in_log << ": --incremental needs ODOMETRY over every frame; " << rep.frames_without_odometry
+        << " frame(s) without (" << rep.frames_across_odometry_gap << " of them across a gap over "
+        << opt.max_odometry_gap_us / 1e6 << " s)";
+      refuse(o.str());
+    }
     slam::SmootherProblem grown;
     std::map<int64_t, int> landmark_of;
     std::map<int64_t, std::vector<Ray>> pending;

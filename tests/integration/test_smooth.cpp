@@ -355,4 +355,20 @@ TEST(Smooth, AnOdometryGapIsNotBridged) {
   EXPECT_NE(inc.output.find("19 frame(s) without (19 of them across a gap"), std::string::npos) << inc.output;
 }
 
+// --incremental re-solves the whole problem at every frame (quadratic): it reports its progress.
+TEST(Smooth, IncrementalReportsItsProgress) {
+  t::TempDir dir;
+  const std::string in = dir.file("in.lcm"), out = dir.file("out.lcm");
+  writeRun(in, false, true, 400);  // 41 frames
+  const auto r = smooth(in, out, {"--associations", "labels", "--incremental"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  size_t lines = 0;
+  for (size_t at = r.output.find("incremental: frame "); at != std::string::npos;
+       at = r.output.find("incremental: frame ", at + 1))
+    ++lines;
+  EXPECT_GE(lines, 9u) << r.output;
+  EXPECT_LE(lines, 10u) << r.output;
+  EXPECT_NE(r.output.find("incremental: frame 5 of 41 (12 %)"), std::string::npos) << r.output;
+}
+
 }  // namespace

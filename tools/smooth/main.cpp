@@ -50,6 +50,7 @@ int main(int argc, char** argv) {
     const auto slam_options = slamproc::loadSlamOptions(config_path, sets);
     opt.motion = slam_options.filter.motion;
     opt.max_odometry_gap_us = slam_options.pairing.max_odometry_gap_us;
+    opt.progress = [](const std::string& line) { std::cerr << "omnislam-smooth: " << line << std::endl; };
     opt.min_parallax_rad = min_parallax_deg * M_PI / 180.0;
     opt.associations = source == "labels" ? smooth::AssociationSource::kLabels : smooth::AssociationSource::kSlam;
     const auto rep = smooth::smoothLog(in, out, opt);

@@ -2,6 +2,7 @@
 #include "smooth_log.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -262,7 +263,22 @@ SmoothLogReport smoothLog(const std::string& in_log, const std::string& out_log,
     std::map<int64_t, int> landmark_of;
     std::map<int64_t, std::vector<Ray>> pending;
     size_t next = 0;
+    const auto start = std::chrono::steady_clock::now();
+    auto last_report = start;
+    size_t next_tenth = 1;
     for (size_t i = 0; i < utimes.size(); ++i) {
+      if (opt.progress && i > 0) {  // quadratic in the frames: say how far it is
+        const auto now = std::chrono::steady_clock::now();
+        if (i * 10 >= next_tenth * utimes.size() || now - last_report >= std::chrono::seconds(30)) {
+          while (i * 10 >= next_tenth * utimes.size()) ++next_tenth;
+          last_report = now;
+          std::ostringstream o;
+          o << "incremental: frame " << i << " of " << utimes.size() << " (" << (100 * i / utimes.size()) << " %), "
+            << std::chrono::duration_cast<std::chrono::seconds>(now - start).count() << " s; the last solve: "
+            << grown.poses.size() << " poses, " << grown.landmarks_m.size() << " landmarks";
+          opt.progress(o.str());
+        }
+      }
       if (i == 0) {
         grown.poses.push_back(pb.poses[0]);
       } else {

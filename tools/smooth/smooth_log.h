@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,9 @@ struct SmoothLogOptions {
   /// A frame gets odometry only from samples around it at most this far apart (the SLAM config's
   /// pairing.max_odometry_gap_s, the filter's own rule); a frame across a longer gap gets none.
   int64_t max_odometry_gap_us = 2'000'000;
+  /// --incremental: called with a one-line progress report every 10 % of the frames and at least
+  /// every 30 s (the run is quadratic in the frames: docs/smoothing.md); may be empty.
+  std::function<void(const std::string&)> progress;
   slam::SmootherOptions smoother;
   /// Empty when the incremental fields are in range (checked with --incremental only), otherwise a
   /// message naming the first bad field and its accepted range. The smoother checks its own options.

@@ -302,4 +302,38 @@ TEST(Eval, TheTableSaysWhatWasNotCompared) {
   EXPECT_EQ(n.output.find("landmark error mean 0 m"), std::string::npos) << n.output;
 }
 
+// Landmark matching is solved per group of landmarks within the gate of each other: 4000 against
+// 4000 on a 10 m grid (a dense 4000 x 4000 Hungarian took 112 s) is matched at once; 6000 against
+// 6000 all within the gate of each other (a 36e6-cell assignment) is refused with the reason.
+TEST(Eval, LandmarkMatchingSolvesGroupsAndRefusesOneTooLarge) {
+  t::TempDir dir;
+  writeLine(dir.file("grid.lcm"), [](lcmio::LogWriter& log) {
+    std::vector<Eigen::Vector3d> est, truth;
+    for (int k = 0; k < 4000; ++k) {
+      truth.emplace_back(10.0 * (k % 64), 10.0 * (k / 64), 0);
+      est.emplace_back(10.0 * (k % 64) + 0.1, 10.0 * (k / 64), 0);
+    }
+    log.write(2'000'000, channels::kGroundTruthMap, mapOf(truth));
+    log.write(2'000'000, channels::kSlamMap, mapOf(est));
+  });
+  const auto r = t::run({t::binPath("omnislam-eval"), dir.file("grid.lcm"), "--json", "--no-tum"}, 30);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(jsonNumber(r.output, "landmarks_matched"), 4000) << r.output;
+  EXPECT_NEAR(jsonNumber(r.output, "landmark_max_err_m"), 0.1, 1e-9) << r.output;
+  writeLine(dir.file("crowd.lcm"), [](lcmio::LogWriter& log) {
+    std::vector<Eigen::Vector3d> est, truth;
+    for (int k = 0; k < 6000; ++k) {
+      truth.emplace_back(1e-4 * k, 0, 0);
+      est.emplace_back(1e-4 * k, 0.1, 0);
+    }
+    log.write(2'000'000, channels::kGroundTruthMap, mapOf(truth));
+    log.write(2'000'000, channels::kSlamMap, mapOf(est));
+  });
+  const auto crowd = t::run({t::binPath("omnislam-eval"), dir.file("crowd.lcm"), "--json", "--no-tum"}, 30);
+  EXPECT_EQ(crowd.exit_code, 2) << crowd.output;
+  EXPECT_NE(crowd.output.find("landmark matching: 6000 estimated and 6000 true landmarks lie within --gate"),
+            std::string::npos)
+      << crowd.output;
+}
+
 }  // namespace

@@ -165,25 +165,6 @@ struct DeadReckoning {
   std::vector<eval::TimedPose> poses;  ///< odometry in the truth frame at the SLAM poses' utimes (raw)
 };
 
-/// Root mean square of `v`, accumulated scaled by its largest magnitude: finite and at most that
-/// magnitude whenever every value is finite (a plain sum of squares overflows from 1e154 on).
-double scaledRms(const std::vector<double>& v) {
-  double top = 0.0;
-  for (double x : v) top = std::max(top, std::abs(x));
-  if (v.empty() || top == 0.0 || !std::isfinite(top)) return v.empty() ? 0.0 : top;
-  double s = 0.0;
-  for (double x : v) s += (x / top) * (x / top);
-  return top * std::sqrt(s / static_cast<double>(v.size()));
-}
-
-/// eval::trajectoryErrors with its RMS figures accumulated scaled (scaledRms).
-eval::TrajectoryErrors scaledTrajectoryErrors(const std::vector<eval::PosePair>& pairs) {
-  eval::TrajectoryErrors r = eval::trajectoryErrors(pairs);
-  r.ate_rmse_m = scaledRms(r.position_error_m);
-  r.heading_rmse_rad = scaledRms(r.heading_error_rad);
-  return r;
-}
-
 /// A trajectory whose compared positions spread (RMS distance from their centroid) less than this
 /// fraction of the other's carries no heading: a rotation fitted to it would be fitted to noise.
 constexpr double kMinAlignSpreadRatio = 1e-3;
@@ -194,7 +175,7 @@ double spreadOf(const std::vector<Eigen::Vector2d>& p) {
   for (const auto& q : p) mean += q / static_cast<double>(p.size());
   std::vector<double> d;
   for (const auto& q : p) d.push_back((q - mean).norm());
-  return mean.allFinite() ? scaledRms(d) : std::numeric_limits<double>::infinity();
+  return mean.allFinite() ? eval::rootMeanSquare(d) : std::numeric_limits<double>::infinity();
 }
 
 /// "" if the rigid fit of `from` onto `to` is well posed, else why not: fewer than two pairs, a
@@ -229,7 +210,7 @@ DeadReckoning deadReckoning(const LogContent& c) {
   if (pairs.empty()) return d;
   d.poses = std::move(dr);
   d.available = true;
-  d.raw = scaledTrajectoryErrors(pairs);
+  d.raw = eval::trajectoryErrors(pairs);
   std::vector<Eigen::Vector2d> from, to;
   for (const auto& p : pairs) {
     from.emplace_back(p.estimate.x_m, p.estimate.y_m);
@@ -238,7 +219,7 @@ DeadReckoning deadReckoning(const LogContent& c) {
   if (alignmentProblem(from, to).empty())
     if (const auto T = eval::fitRigid2D(from, to); T && std::isfinite(T->theta_rad) && T->t_m.allFinite())
       for (auto& p : pairs) p.estimate = T->apply(p.estimate);
-  d.aligned = scaledTrajectoryErrors(pairs);
+  d.aligned = eval::trajectoryErrors(pairs);
   return d;
 }
 
@@ -248,76 +229,6 @@ std::string ratioText(double ratio, int64_t denominator) {
   std::ostringstream o;
   o << std::setprecision(6) << ratio;
   return o.str();
-}
-
-/// Cells of one assignment solved at most: the solver's dense matrix of 8-byte costs (and its copy),
-/// about 200 MB each; a larger group of landmarks within the gate of each other is refused.
-constexpr int64_t kMaxAssignmentCells = 25'000'000;
-
-/// eval::mapErrors, solved per group of landmarks linked by pairs within the gate: estimated and true
-/// landmarks with no pair inside it are left out before the solve (unmatched in every optimum, as
-/// slam::associate leaves out rows and columns), so each dense matrix is the size of its group, not
-/// n x m. Throws std::invalid_argument when a group would be above kMaxAssignmentCells.
-eval::MapErrors gatedMapErrors(const std::vector<Eigen::Vector3d>& est, const std::vector<Eigen::Vector3d>& truth,
-                               double gate_m, bool planar) {
-  auto dist = [planar](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    return planar ? std::hypot(a.x() - b.x(), a.y() - b.y()) : (a - b).norm();
-  };
-  // True landmarks on an x-y grid of gate-sized cells (a 3D distance is at least the x-y one): a pair
-  // within the gate lies in neighbouring cells. Far coordinates are clamped, which only merges cells.
-  auto cellOf = [gate_m](double v) { return static_cast<int64_t>(std::clamp(std::floor(v / gate_m), -1e15, 1e15)); };
-  std::map<std::pair<int64_t, int64_t>, std::vector<size_t>> grid;
-  for (size_t j = 0; j < truth.size(); ++j) grid[{cellOf(truth[j].x()), cellOf(truth[j].y())}].push_back(j);
-  // Groups: union-find over estimates (0..n-1) and true landmarks (n..n+m-1) joined by in-gate pairs.
-  const size_t n = est.size();
-  std::vector<size_t> parent(n + truth.size());
-  for (size_t k = 0; k < parent.size(); ++k) parent[k] = k;
-  auto root = [&parent](size_t k) {
-    while (parent[k] != k) k = parent[k] = parent[parent[k]];
-    return k;
-  };
-  std::vector<bool> paired(parent.size(), false);
-  for (size_t i = 0; i < n; ++i) {
-    const int64_t cx = cellOf(est[i].x()), cy = cellOf(est[i].y());
-    for (int64_t dx = -1; dx <= 1; ++dx)
-      for (int64_t dy = -1; dy <= 1; ++dy) {
-        const auto it = grid.find({cx + dx, cy + dy});
-        if (it == grid.end()) continue;
-        for (const size_t j : it->second)
-          if (dist(est[i], truth[j]) <= gate_m) {
-            paired[i] = paired[n + j] = true;
-            parent[root(i)] = root(n + j);
-          }
-      }
-  }
-  std::map<size_t, std::pair<std::vector<size_t>, std::vector<size_t>>> groups;  // root -> (estimates, truths)
-  for (size_t k = 0; k < parent.size(); ++k)
-    if (paired[k]) (k < n ? groups[root(k)].first : groups[root(k)].second).push_back(k < n ? k : k - n);
-  eval::MapErrors r;
-  r.truth = static_cast<int>(truth.size());
-  r.estimated = static_cast<int>(n);
-  r.truth_of_estimate.assign(n, -1);
-  double sum = 0.0;
-  for (const auto& [key, g] : groups) {
-    const auto& [ei, ti] = g;
-    if (static_cast<double>(ei.size()) * static_cast<double>(ti.size()) > static_cast<double>(kMaxAssignmentCells))
-      throw std::invalid_argument("landmark matching: " + std::to_string(ei.size()) + " estimated and " +
-                                  std::to_string(ti.size()) + " true landmarks lie within --gate of each other: an " +
-                                  "assignment over " + std::to_string(kMaxAssignmentCells) + " cells would not fit; " +
-                                  "a smaller --gate splits them");
-    std::vector<Eigen::Vector3d> e, t;
-    for (const size_t i : ei) e.push_back(est[i]);
-    for (const size_t j : ti) t.push_back(truth[j]);
-    const eval::MapErrors sub = eval::mapErrors(e, t, gate_m, planar);
-    for (size_t k = 0; k < ei.size(); ++k)
-      if (sub.truth_of_estimate[k] >= 0) r.truth_of_estimate[ei[k]] = static_cast<int>(ti[sub.truth_of_estimate[k]]);
-    sum += sub.mean_err_m * sub.matched;  // the group's summed error
-    r.max_err_m = std::max(r.max_err_m, sub.max_err_m);
-    r.matched += sub.matched;
-  }
-  if (r.matched > 0) r.mean_err_m = sum / r.matched;
-  r.spurious = r.estimated - r.matched;
-  return r;
 }
 
 void writeTum(const std::string& path, const std::vector<eval::TimedPose>& poses) {
@@ -385,8 +296,16 @@ int main(int argc, char** argv) {
       for (auto& l : c.slam_map) l = T->apply(l);
       for (auto& p : c.slam) p.pose = T->apply(p.pose);
     }
-    const auto te = scaledTrajectoryErrors(pairs);
-    const auto me = gatedMapErrors(c.slam_map, c.truth_map, gate_m, planar);
+    const auto te = eval::trajectoryErrors(pairs);
+    const auto me = [&] {
+      try {
+        return eval::mapErrors(c.slam_map, c.truth_map, gate_m, planar);
+      } catch (const std::invalid_argument& e) {  // a group too large to solve: name the flag
+        std::ostringstream o;
+        o << e.what() << " (--gate " << gate_m << " m)";
+        throw std::invalid_argument(o.str());
+      }
+    }();
     const int64_t frames = c.feature_frames > 0 ? c.feature_frames : static_cast<int64_t>(c.slam.size());
     const DeadReckoning dr = deadReckoning(c);
     // Association against the labels, with the landmark assignment of the map figures above.

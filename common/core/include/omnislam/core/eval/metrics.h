@@ -45,9 +45,14 @@ struct PosePair {
 std::vector<PosePair> pairByTime(const std::vector<TimedPose>& estimates, const std::vector<TimedPose>& truth,
                                  int64_t max_gap_us = 200'000);
 
+/// Root mean square of `v` (0 when empty), accumulated scaled by its largest magnitude: finite and
+/// at most that magnitude whenever every value is finite (a plain sum of squares overflows from
+/// about 1e154 on: one pose at x = 1e300 gave an RMSE of inf above a max of 1e300).
+double rootMeanSquare(const std::vector<double>& v);
+
 struct TrajectoryErrors {
   int pairs = 0;
-  double ate_rmse_m = 0.0;      ///< RMS of the position error
+  double ate_rmse_m = 0.0;      ///< RMS of the position error (accumulated scaled: finite for finite errors)
   double ate_max_m = 0.0;
   double heading_rmse_rad = 0.0;
   double heading_max_rad = 0.0;
@@ -67,8 +72,14 @@ struct MapErrors {
   std::vector<int> truth_of_estimate;  ///< per estimate: index of its true landmark, -1 if spurious
 };
 
+/// The most cells one group's assignment may have (a dense matrix of 8-byte costs and the solver's
+/// copy: about 200 MB each).
+inline constexpr int64_t kMaxMatchingCells = 25'000'000;
+
 /// One-to-one matching that maximises the number of pairs within gate_m and then minimises the
-/// summed distance (Hungarian). Distances are 3D, or 2D (x, y) when planar is true.
+/// summed distance (Hungarian). Distances are 3D, or 2D (x, y) when planar is true. Solved per
+/// group of landmarks linked by pairs within the gate (the same optimum, each matrix the size of its
+/// group); throws std::invalid_argument when a group has more than kMaxMatchingCells cells.
 MapErrors mapErrors(const std::vector<Eigen::Vector3d>& estimated, const std::vector<Eigen::Vector3d>& truth,
                     double gate_m = 2.0, bool planar = false);
 

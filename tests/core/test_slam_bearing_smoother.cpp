@@ -138,6 +138,17 @@ TEST(slam_BearingSmoother, NoiseFreeDataIsRecoveredExactly) {
   for (double w : r.bearing_weights) EXPECT_NEAR(w, 1.0, 1e-9);
 }
 
+// A pose at 1e300 m made the cost infinite; no step could lower it, and the solve was reported as
+// converged at that "minimum". It is a failure now, with nothing solved.
+TEST(slam_BearingSmoother, AnInfiniteInitialCostIsAFailureNotAMinimum) {
+  Scene s = makeScene(0.0, 0.01, 0.0, 2);
+  s.problem.poses[7].x_m = 1e300;
+  const SmootherResult r = smoothBearingOnly(s.problem);
+  EXPECT_EQ(r.failure, "the initial cost is not finite (a pose, landmark or factor too large to solve)");
+  EXPECT_FALSE(r.converged);
+  EXPECT_FALSE(std::isfinite(r.initial_cost));
+}
+
 TEST(slam_BearingSmoother, BeatsDeadReckoningOnNoisyData) {
   Scene s = makeScene(1.0, 0.01, 0.0, 2);
   SmootherOptions ls;

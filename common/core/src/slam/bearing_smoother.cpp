@@ -232,6 +232,12 @@ SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOption
   State s{pb.poses, pb.landmarks_m};
   double cost = totalCost(pb, s, prior_info, odo_info, c);
   res.initial_cost = cost;
+  // A cost that is not finite (a pose at 1e300 m) accepts no step, which read as "at a minimum": the
+  // problem is refused instead, and nothing is solved.
+  if (!std::isfinite(cost)) {
+    res.failure = "the initial cost is not finite (a pose, landmark or factor too large to solve)";
+    return res;
+  }
   double lambda = opt.initial_lambda;
 
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;

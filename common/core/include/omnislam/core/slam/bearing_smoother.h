@@ -87,7 +87,8 @@ struct SmootherResult {
   double final_cost = 0.0;
   int iterations = 0;                   ///< Levenberg-Marquardt iterations run
   bool converged = false;               ///< stopped by relative_tolerance (not by max_iterations)
-  std::string failure;                  ///< non-empty: the problem or options were invalid; nothing solved
+  std::string failure;                  ///< non-empty: the problem or options were invalid, or its initial cost
+                                        ///< not finite; nothing solved
   /// With SmootherOptions::compute_covariance: the joint covariance of (last pose (x, y, theta),
   /// landmark 0 (x, y), ..., landmark L-1) [m, rad], (3 + 2L) square: the inverse of the Gauss-Newton
   /// information at the solution (bearings with their kernel weights), marginalised onto those.

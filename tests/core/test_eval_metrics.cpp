@@ -190,4 +190,22 @@ TEST(EvalMetrics, RootMeanSquareIsFiniteForAnyFiniteValues) {
   EXPECT_LE(te.ate_rmse_m, te.ate_max_m);
 }
 
+// The degeneracy test is relative to the trajectories' spread: an estimate standing still with 1 um
+// of jitter passed the old absolute test and got a rotation of -1.589 rad.
+TEST(EvalMetrics, ARigidFitToAnEstimateThatDoesNotMoveIsRefused) {
+  std::vector<Eigen::Vector2d> still, moving;
+  for (int i = 0; i < 50; ++i) {
+    still.emplace_back(1.0 + 1e-6 * std::sin(i), 2.0 + 1e-6 * std::cos(3.0 * i));
+    moving.emplace_back(0.2 * i, 0.1 * i);
+  }
+  EXPECT_FALSE(fitRigid2D(still, moving).has_value());
+  EXPECT_EQ(rigidFitProblem(still, moving).rfind("trajectory degenerate: the estimate spreads ", 0), 0u)
+      << rigidFitProblem(still, moving);
+  EXPECT_EQ(rigidFitProblem(moving, moving), "");
+  std::vector<Eigen::Vector2d> huge = moving;
+  huge[3].x() = 1e300;
+  EXPECT_FALSE(fitRigid2D(huge, moving).has_value());
+  EXPECT_EQ(rigidFitProblem(huge, moving), "positions too large to align (their spread is not finite)");
+}
+
 }  // namespace

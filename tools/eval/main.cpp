@@ -9,13 +9,11 @@
 
 #include <Eigen/Geometry>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
-#include <limits>
 #include <map>
 #include <sstream>
 
@@ -165,35 +163,6 @@ struct DeadReckoning {
   std::vector<eval::TimedPose> poses;  ///< odometry in the truth frame at the SLAM poses' utimes (raw)
 };
 
-/// A trajectory whose compared positions spread (RMS distance from their centroid) less than this
-/// fraction of the other's carries no heading: a rotation fitted to it would be fitted to noise.
-constexpr double kMinAlignSpreadRatio = 1e-3;
-
-/// RMS distance of `p` from its centroid (infinite if it overflows).
-double spreadOf(const std::vector<Eigen::Vector2d>& p) {
-  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-  for (const auto& q : p) mean += q / static_cast<double>(p.size());
-  std::vector<double> d;
-  for (const auto& q : p) d.push_back((q - mean).norm());
-  return mean.allFinite() ? eval::rootMeanSquare(d) : std::numeric_limits<double>::infinity();
-}
-
-/// "" if the rigid fit of `from` onto `to` is well posed, else why not: fewer than two pairs, a
-/// spread that is not finite, or one spread below kMinAlignSpreadRatio of the other (relative, so
-/// that it holds at any scale; docs/evaluation.md).
-std::string alignmentProblem(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
-  if (from.size() < 2) return "fewer than two poses compared, nothing to align";
-  const double sf = spreadOf(from), st = spreadOf(to);
-  if (!std::isfinite(sf) || !std::isfinite(st)) return "positions too large to align (their spread is not finite)";
-  if (!(sf > kMinAlignSpreadRatio * st) || !(st > kMinAlignSpreadRatio * sf)) {
-    std::ostringstream o;
-    o << "trajectory degenerate: the estimate spreads " << sf << " m and the truth " << st
-      << " m about their centroids; a rotation needs each above 1/1000 of the other";
-    return o.str();
-  }
-  return "";
-}
-
 DeadReckoning deadReckoning(const LogContent& c) {
   DeadReckoning d;
   constexpr int64_t kMaxOdometryGapUs = 2'000'000;  // odometry loggers may pause (MRCLAM: 1 s)
@@ -216,9 +185,8 @@ DeadReckoning deadReckoning(const LogContent& c) {
     from.emplace_back(p.estimate.x_m, p.estimate.y_m);
     to.emplace_back(p.truth.x_m, p.truth.y_m);
   }
-  if (alignmentProblem(from, to).empty())
-    if (const auto T = eval::fitRigid2D(from, to); T && std::isfinite(T->theta_rad) && T->t_m.allFinite())
-      for (auto& p : pairs) p.estimate = T->apply(p.estimate);
+  if (const auto T = eval::fitRigid2D(from, to))
+    for (auto& p : pairs) p.estimate = T->apply(p.estimate);
   d.aligned = eval::trajectoryErrors(pairs);
   return d;
 }
@@ -287,11 +255,10 @@ int main(int argc, char** argv) {
         from.emplace_back(p.estimate.x_m, p.estimate.y_m);
         to.emplace_back(p.truth.x_m, p.truth.y_m);
       }
-      if (const std::string why = alignmentProblem(from, to); !why.empty()) throw std::invalid_argument("--align: " + why);
+      if (const std::string why = eval::rigidFitProblem(from, to); !why.empty())
+        throw std::invalid_argument("--align: " + why);
       T = eval::fitRigid2D(from, to);
-      if (!T) throw std::invalid_argument("--align: trajectory too short or degenerate to align");
-      if (!std::isfinite(T->theta_rad) || !T->t_m.allFinite())
-        throw std::invalid_argument("--align: the fitted transform is not finite (coordinates too large)");
+      if (!T) throw std::invalid_argument("--align: the fitted transform is degenerate or not finite");
       for (auto& p : pairs) p.estimate = T->apply(p.estimate);
       for (auto& l : c.slam_map) l = T->apply(l);
       for (auto& p : c.slam) p.pose = T->apply(p.pose);

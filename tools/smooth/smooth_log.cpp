@@ -101,8 +101,8 @@ slam::SmootherBearingFactor bearingFactor(const Ray& r, int landmark) {
   return {r.node, landmark, r.azimuth_rad, r.sigma_rad, r.p_CinR_m};
 }
 
-/// Throws with the reason unless the solve succeeded with a finite cost, poses and landmarks: the
-/// core smoother reports "no step accepted" from an infinite cost as converged.
+/// Throws with the reason unless the solve succeeded with a finite cost, poses and landmarks (the
+/// core refuses an infinite initial cost; a solve can still end non-finite).
 void requireSolved(const slam::SmootherResult& r) {
   if (!r.failure.empty()) throw std::invalid_argument("smoother: " + r.failure);
   bool finite = std::isfinite(r.initial_cost) && std::isfinite(r.final_cost);

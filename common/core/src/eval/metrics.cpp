@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -28,8 +30,35 @@ Pose2 Rigid2D::apply(const Pose2& p) const {
   return {q.x(), q.y(), wrapAngle(p.theta_rad + theta_rad)};
 }
 
+namespace {
+
+/// RMS distance of `p` from its centroid (infinite if it overflows).
+double spreadOf(const std::vector<Eigen::Vector2d>& p) {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& q : p) mean += q / static_cast<double>(p.size());
+  std::vector<double> d;
+  for (const auto& q : p) d.push_back((q - mean).norm());
+  return mean.allFinite() ? rootMeanSquare(d) : std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
+
+std::string rigidFitProblem(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
+  if (from.size() != to.size()) return "the two trajectories differ in length";
+  if (from.size() < 2) return "fewer than two poses compared, nothing to align";
+  const double sf = spreadOf(from), st = spreadOf(to);
+  if (!std::isfinite(sf) || !std::isfinite(st)) return "positions too large to align (their spread is not finite)";
+  if (!(sf > kMinAlignSpreadRatio * st) || !(st > kMinAlignSpreadRatio * sf)) {
+    std::ostringstream o;
+    o << "trajectory degenerate: the estimate spreads " << sf << " m and the truth " << st
+      << " m about their centroids; a rotation needs each above 1/1000 of the other";
+    return o.str();
+  }
+  return "";
+}
+
 std::optional<Rigid2D> fitRigid2D(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
-  if (from.size() != to.size() || from.size() < 2) return std::nullopt;
+  if (!rigidFitProblem(from, to).empty()) return std::nullopt;
   Eigen::Vector2d mf = Eigen::Vector2d::Zero(), mt = Eigen::Vector2d::Zero();
   for (size_t i = 0; i < from.size(); ++i) {
     mf += from[i];
@@ -48,6 +77,7 @@ std::optional<Rigid2D> fitRigid2D(const std::vector<Eigen::Vector2d>& from, cons
   Rigid2D T;
   T.theta_rad = std::atan2(sc, sd);
   T.t_m = mt - T.apply(mf);  // apply() adds t_m, which is still zero here
+  if (!std::isfinite(T.theta_rad) || !T.t_m.allFinite()) return std::nullopt;
   return T;
 }
 

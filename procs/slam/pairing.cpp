@@ -169,10 +169,11 @@ InputResult Pairer::add(Input in, std::vector<PairEvent>& out) {
     if (held_ahead_) refuseHeld(pre);  // a jump ahead then one back: the first was a stray
     const std::string why = "utime jumped back from " + us(self.last_utime) + " to " + us(in.utime);
     held_.push_back(std::move(in));
-    if (static_cast<int>(held_.size()) < opt_.restart_confirm_messages) {
+    if (!heldConfirmed()) {
       InputResult r;
       r.verdict = Verdict::kDeferred;
       r.reason = why + ": held until a restart is confirmed";
+      r.held = static_cast<int>(held_.size());
       r.refused_held = std::move(pre.refused_held);
       return r;
     }
@@ -196,17 +197,28 @@ InputResult Pairer::add(Input in, std::vector<PairEvent>& out) {
 InputResult Pairer::holdAhead(Input in, std::vector<PairEvent>& out) {
   InputResult pre;
   // Held messages of a step back, or of a jump ahead that this one does not continue, are refuted.
-  const bool continues = held_ahead_ && !held_.empty() && in.utime > held_.back().utime &&
-                         in.utime - held_.back().utime <= opt_.max_forward_jump_us;
+  // It continues them when it is after the last held message of its own stream (if any) and within
+  // max_forward_jump_us of the newest held one: the two streams interleave, so a message may
+  // come slightly before the other stream's last held one.
+  bool continues = held_ahead_ && !held_.empty();
+  if (continues) {
+    int64_t newest = held_.front().utime;
+    for (const Input& h : held_) {
+      newest = std::max(newest, h.utime);
+      if (h.is_frame == in.is_frame && in.utime <= h.utime) continues = false;
+    }
+    if (in.utime - newest > opt_.max_forward_jump_us || newest - in.utime > opt_.max_forward_jump_us) continues = false;
+  }
   if (!held_.empty() && !continues) refuseHeld(pre);
   const std::string why = "utime " + us(in.utime) + " jumps ahead of the newest input " + us(epoch_newest_utime_) +
                           " by more than " + us(opt_.max_forward_jump_us) + " us";
   held_ahead_ = true;
   held_.push_back(std::move(in));
-  if (static_cast<int>(held_.size()) < opt_.restart_confirm_messages) {
+  if (!heldConfirmed()) {
     InputResult r;
     r.verdict = Verdict::kDeferred;
     r.reason = why + ": held until the next messages confirm it";
+    r.held = static_cast<int>(held_.size());
     r.refused_held = std::move(pre.refused_held);
     return r;
   }
@@ -217,6 +229,26 @@ InputResult Pairer::holdAhead(Input in, std::vector<PairEvent>& out) {
   r.refused_held = std::move(pre.refused_held);
   applyHeld(r, out);
   return r;
+}
+
+bool Pairer::heldConfirmed() const {
+  if (static_cast<int>(held_.size()) < opt_.restart_confirm_messages) return false;
+  bool held_frame = false, held_odom = false;
+  int64_t first = held_.front().utime, last = first;
+  for (const Input& h : held_) {
+    (h.is_frame ? held_frame : held_odom) = true;
+    first = std::min(first, h.utime);
+    last = std::max(last, h.utime);
+  }
+  if (held_frame && held_odom) return true;  // both streams made the same jump
+  // Only one stream jumped. While the other goes on at the old time, the held messages may be
+  // strays (two consecutive frames with a bad stamp must not reset the filter): wait for the other
+  // stream to jump too, or for the held stream to refute them by going on as before. The other
+  // stream cannot confirm when it has said nothing in this epoch, and it may have gone silent: the
+  // wait ends after max_wait_us of the held stream's own time or kMaxHeldMessages messages.
+  const StreamState& other = held_frame ? odom_state_ : frame_state_;
+  if (!other.have_last || other.awaiting_restart) return true;
+  return last - first >= opt_.max_wait_us || static_cast<int>(held_.size()) >= kMaxHeldMessages;
 }
 
 void Pairer::applyHeld(InputResult& r, std::vector<PairEvent>& out) {

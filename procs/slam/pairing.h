@@ -27,7 +27,11 @@ struct PairingOptions {
   int max_pending_frames = 8;
   /// A step back in utime at least this large on either stream is a restart (a replayed log
   /// starting again) once restart_confirm_messages such messages came in a row (a single stray old
-  /// message is refused as out of order); a smaller step back is refused as out of order.
+  /// message is refused as out of order); a smaller step back is refused as out of order. When
+  /// only one stream has stepped back while the other has messages in this epoch, the restart also
+  /// waits until the other stream steps back too, or the held messages span max_wait_us of their
+  /// own utime, or kMaxHeldMessages are held (the other stream has gone silent); if the held
+  /// stream goes on as before first, the held messages were strays. The same holds for jumps ahead.
   int64_t restart_jump_us = 5'000'000;
   int restart_confirm_messages = 2;
   /// A message more than this ahead of the newest utime of either stream is a jump ahead: held
@@ -110,6 +114,9 @@ struct InputResult {
   Verdict verdict = Verdict::kAccepted;
   bool restart = false;  ///< a restart was confirmed: a new epoch started with the held messages
   std::string reason;    ///< one line when not accepted, deferred, or when it restarted
+  /// When deferred: the messages held now, this one included (1 for the first of a jump, so that
+  /// a caller can report a jump once rather than every message held while it waits).
+  int held = 0;
   /// Messages held for a restart that did not come (the stream went on): refused as out of order.
   /// Each: is_frame, one-line reason.
   std::vector<std::pair<bool, std::string>> refused_held;
@@ -137,6 +144,11 @@ struct PairingStats {
 /// is: paired with the interpolated odometry, or dropped.
 class Pairer {
  public:
+  /// Messages held for one stream's jump (back or ahead) beyond which the jump is taken without
+  /// waiting for the other stream (bounds the memory when the other stream has gone silent; 2 s of
+  /// 100 Hz odometry fit below it, so the span rule decides at usual rates).
+  static constexpr int kMaxHeldMessages = 256;
+
   explicit Pairer(const PairingOptions& options);
 
   InputResult addOdometry(int64_t utime, const Pose2& pose_O, std::vector<PairEvent>& out);
@@ -164,6 +176,8 @@ class Pairer {
   InputResult add(Input in, std::vector<PairEvent>& out);
   InputResult apply(Input in, std::vector<PairEvent>& out);
   InputResult holdAhead(Input in, std::vector<PairEvent>& out);
+  /// The held messages (a step back, or a jump ahead) are confirmed: see PairingOptions::restart_jump_us.
+  bool heldConfirmed() const;
   /// Applies the held messages in their order (and empties held_); each refused one is added to
   /// r.refused_held.
   void applyHeld(InputResult& r, std::vector<PairEvent>& out);

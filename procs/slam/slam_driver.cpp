@@ -78,7 +78,9 @@ void SlamDriver::note(const InputResult& in, const char* channel, DriverResult& 
     r.refused.push_back({is_frame ? "OMNI_FEATURES" : "ODOMETRY", why});
   if (!in.accepted() && in.verdict != Verdict::kDeferred) {
     r.refused.push_back({channel, in.reason});
-  } else if (!in.reason.empty()) {  // held for a restart, a restart, an odometry jump re-based
+  } else if (!in.reason.empty() && !(in.verdict == Verdict::kDeferred && in.held > 1)) {
+    // Held for a restart or a jump ahead (the first message of it: the others held while it waits
+    // for the other stream say nothing new), a restart, a jump taken, an odometry jump re-based.
     r.notes.push_back(std::string(channel) + " " + in.reason);
   }
 }

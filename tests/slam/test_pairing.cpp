@@ -192,11 +192,20 @@ TEST(Pairer, ReplayedLogRestartingResetsAndRefusesStaleMessagesOfTheOldEpoch) {
   EXPECT_EQ(count(ev, PairEvent::Kind::kPaired), 21);
   ev.clear();
   p.addFrame(frame(kT0 + 20'500'000, 21), ev);  // waiting when the restart comes
-  // The log starts again: odometry first. One message back is held; the second confirms.
-  const auto held = p.addOdometry(kT0, odoAt(kT0), ev);
-  EXPECT_EQ(held.verdict, Verdict::kDeferred);
+  // The log starts again: odometry first, and the frames stay silent for a while (a replayed
+  // MRCLAM log has no frame until the first sighting). Messages back are held: two in a row are
+  // not enough while the frame stream, which has messages in this epoch, has not stepped back;
+  // once the held ones span max_wait_us of their own time, the frame stream has gone silent and
+  // the restart is confirmed.
+  const PairingOptions defaults;
+  int64_t t = kT0;
+  InputResult r;
+  for (; t - kT0 < defaults.max_wait_us; t += kOdoPeriod) {
+    r = p.addOdometry(t, odoAt(t), ev);
+    ASSERT_EQ(r.verdict, Verdict::kDeferred) << "at " << t - kT0 << " us: " << r.reason;
+  }
   EXPECT_TRUE(ev.empty());
-  const auto r = p.addOdometry(kT0 + kOdoPeriod, odoAt(kT0 + kOdoPeriod), ev);
+  r = p.addOdometry(t, odoAt(t), ev);
   EXPECT_TRUE(r.accepted());
   EXPECT_TRUE(r.restart);
   EXPECT_TRUE(r.refused_held.empty());
@@ -205,7 +214,8 @@ TEST(Pairer, ReplayedLogRestartingResetsAndRefusesStaleMessagesOfTheOldEpoch) {
   EXPECT_EQ(ev[1].kind, PairEvent::Kind::kReset);
   EXPECT_EQ(p.stats().restarts, 1);
   EXPECT_EQ(p.stats().dropped_restart, 1);
-  EXPECT_EQ(p.odometry().size(), 2u) << "both held odometry messages start the new epoch";
+  EXPECT_EQ(static_cast<int64_t>(p.odometry().size()), defaults.max_wait_us / kOdoPeriod + 1)
+      << "every held odometry message starts the new epoch";
   ev.clear();
   // A late frame of the old epoch is stale; the new epoch's frames pair with the new odometry.
   EXPECT_EQ(p.addFrame(frame(kT0 + 21'000'000, 22), ev).verdict, Verdict::kStaleAfterRestart);
@@ -294,6 +304,96 @@ TEST(Pairer, AStrayFarFutureStampIsRefusedAndResetsNothing) {
     EXPECT_EQ(count(ev, PairEvent::Kind::kReset), 0);
     EXPECT_EQ(p.stats().restarts, 0);
     EXPECT_EQ(count(ev, PairEvent::Kind::kPaired), 2) << "both good frames were paired";
+  }
+}
+
+// The case that reset the filter before both streams had to agree (session 39's audit): two
+// consecutive frames with a stamp years ahead (or back) while the odometry goes on at the right
+// time. Confirming them on their own made the frame stream's time the far one, and the next good
+// frames a "restart" that re-initialised the filter.
+TEST(Pairer, TwoConsecutiveStrayFramesAheadOrBackResetNothing) {
+  for (const int64_t stray : {int64_t{9'000'000'000'000'000'000}, kT0 - 100'000'000'000}) {
+    SCOPED_TRACE(stray);
+    Pairer p(PairingOptions{});
+    std::vector<PairEvent> ev;
+    int64_t t = kT0;
+    for (; t <= kT0 + 1'000'000; t += kOdoPeriod) p.addOdometry(t, odoAt(t), ev);
+    p.addFrame(frame(kT0 + 500'000, 0), ev);
+    const auto first = p.addFrame(frame(stray, 1), ev);
+    EXPECT_EQ(first.verdict, Verdict::kDeferred);
+    EXPECT_EQ(first.held, 1);
+    const auto second = p.addFrame(frame(stray + 100'000, 2), ev);
+    EXPECT_EQ(second.verdict, Verdict::kDeferred)
+        << "two frames in a row do not confirm a jump while the odometry has not jumped";
+    EXPECT_EQ(second.held, 2);
+    size_t refused = 0;
+    for (int k = 0; k < 50; ++k, t += kOdoPeriod) {
+      const auto g = p.addOdometry(t, odoAt(t), ev);
+      EXPECT_TRUE(g.accepted()) << g.reason;
+      EXPECT_TRUE(g.refused_held.empty()) << "the odometry going on neither confirms nor refutes them";
+      if (k % 10 == 5) {
+        const auto f = p.addFrame(frame(t, 3 + k), ev);
+        EXPECT_TRUE(f.accepted()) << f.reason;
+        refused += f.refused_held.size();
+      }
+    }
+    EXPECT_EQ(refused, 2u) << "the frame stream going on as before refutes both strays";
+    EXPECT_EQ(count(ev, PairEvent::Kind::kReset), 0);
+    EXPECT_EQ(p.stats().restarts, 0);
+    EXPECT_EQ(p.stats().forward_jumps, 0);
+    EXPECT_EQ(count(ev, PairEvent::Kind::kPaired), 6) << "the first frame and the five good ones after the strays";
+  }
+}
+
+// A jump ahead seen first on the frame stream is taken when the odometry jumps too; a message of
+// the other stream may come slightly before the last held one (the streams interleave).
+TEST(Pairer, AJumpAheadOfBothStreamsIsTakenWhenTheSecondStreamJumps) {
+  PairingOptions o;
+  o.max_forward_jump_us = 60'000'000;
+  Pairer p(o);
+  std::vector<PairEvent> ev;
+  for (int64_t t = kT0; t <= kT0 + 200'000; t += kOdoPeriod) p.addOdometry(t, odoAt(t), ev);
+  p.addFrame(frame(kT0 + 100'000, 0), ev);
+  const int64_t t1 = kT0 + 200'000'000;
+  EXPECT_EQ(p.addFrame(frame(t1 + 30'000, 1), ev).verdict, Verdict::kDeferred);
+  EXPECT_EQ(p.addFrame(frame(t1 + 60'000, 2), ev).verdict, Verdict::kDeferred);
+  const auto r = p.addOdometry(t1, odoAt(t1), ev);  // before the held frames: interleaved
+  EXPECT_TRUE(r.accepted()) << r.reason;
+  EXPECT_TRUE(r.refused_held.empty());
+  EXPECT_EQ(p.stats().forward_jumps, 1);
+  for (int64_t t = t1 + kOdoPeriod; t <= t1 + 100'000; t += kOdoPeriod) p.addOdometry(t, odoAt(t), ev);
+  EXPECT_EQ(count(ev, PairEvent::Kind::kPaired), 3) << "the frame before the jump and both held frames";
+  EXPECT_EQ(count(ev, PairEvent::Kind::kReset), 0);
+}
+
+// When the other stream has gone silent it cannot confirm: the jump is taken once the held
+// messages span max_wait_us of their own time, or kMaxHeldMessages are held, whichever comes first.
+TEST(Pairer, AJumpOfOneStreamIsTakenWhenTheOtherHasGoneSilent) {
+  PairingOptions o;
+  o.max_forward_jump_us = 60'000'000;
+  {
+    Pairer p(o);  // by span: frames at 2 Hz
+    std::vector<PairEvent> ev;
+    for (int64_t t = kT0; t <= kT0 + 200'000; t += kOdoPeriod) p.addOdometry(t, odoAt(t), ev);
+    const int64_t t1 = kT0 + 200'000'000;
+    int held = 0;
+    for (int64_t t = t1; t - t1 < o.max_wait_us; t += 500'000, ++held)
+      ASSERT_EQ(p.addFrame(frame(t, held), ev).verdict, Verdict::kDeferred);
+    EXPECT_TRUE(p.addFrame(frame(t1 + o.max_wait_us, held), ev).accepted());
+    EXPECT_EQ(p.stats().forward_jumps, 1);
+    EXPECT_EQ(p.pendingFrames(), static_cast<size_t>(held) + 1) << "taken, waiting for odometry";
+  }
+  {
+    Pairer p(o);  // by count: odometry at 10 kHz
+    std::vector<PairEvent> ev;
+    p.addFrame(frame(kT0, 0), ev);
+    p.addOdometry(kT0, odoAt(kT0), ev);
+    const int64_t t1 = kT0 + 200'000'000;
+    for (int k = 0; k + 1 < Pairer::kMaxHeldMessages; ++k)
+      ASSERT_EQ(p.addOdometry(t1 + 100 * k, odoAt(t1 + 100 * k), ev).verdict, Verdict::kDeferred) << k;
+    EXPECT_TRUE(p.addOdometry(t1 + 100 * Pairer::kMaxHeldMessages, odoAt(t1), ev).accepted());
+    EXPECT_EQ(p.stats().forward_jumps, 1);
+    EXPECT_EQ(p.odometry().newestUtime(), t1 + 100 * Pairer::kMaxHeldMessages);
   }
 }
 

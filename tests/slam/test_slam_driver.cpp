@@ -285,6 +285,35 @@ TEST(SlamDriver, ImplausibleOdometryAndCameraPositionsAreRefusedAndTheRunGoesOn)
   EXPECT_EQ(e.stats().implausible, 0);
 }
 
+// Session 39's audit: two consecutive frames stamped years ahead, mid-run, while the odometry goes
+// on. They were confirmed as a jump ahead on their own; the next good frames were then a step back,
+// a "restart", and the filter started again at the start pose, metres off. Now the odometry has to
+// jump too: the good frames refute the two strays, and the filter carries on.
+TEST(SlamDriver, TwoStrayFramesStampedYearsAheadDoNotResetTheFilter) {
+  SlamDriver d{SlamProcessOptions{}};
+  ASSERT_FALSE(run(d, 10).empty());
+  const int64_t years_us = int64_t{3} * 365 * 24 * 3600 * 1'000'000;
+  std::vector<std::string> notes;
+  for (int k = 0; k < 2; ++k) {
+    const auto r = d.onFeatures(feats(kT0 + 10'200'000 + k * 100'000 + years_us, 500 + k));
+    EXPECT_TRUE(r.refused.empty() && r.outputs.empty());
+    notes.insert(notes.end(), r.notes.begin(), r.notes.end());
+  }
+  ASSERT_EQ(notes.size(), 1u) << "reported once, when the first is held";
+  EXPECT_NE(notes[0].find("jumps ahead"), std::string::npos) << notes[0];
+  const auto outs = run(d, 10, kT0 + 10'020'000);
+  EXPECT_EQ(d.stats().pairing.restarts, 0);
+  EXPECT_EQ(d.stats().filter_resets, 0);
+  EXPECT_EQ(d.stats().pairing.stray_ahead, 2);
+  EXPECT_EQ(d.stats().pairing.forward_jumps, 0);
+  ASSERT_GE(outs.size(), 9u);
+  for (const auto& o : outs) {
+    const Pose2 t = truthAt(o.pose.utime);
+    EXPECT_LT(std::hypot(o.pose.x_m - t.x_m, o.pose.y_m - t.y_m), 0.5) << o.pose.utime;
+  }
+  EXPECT_GT(outs.back().map->num_landmarks, 0) << "the map was kept";
+}
+
 // A frame with more usable features than features.max_per_frame is refused whole, with its count
 // and the key named, before it reaches the pairing: the filter does not step on it, and the next
 // frame of ordinary size spans the odometry since the last step.
@@ -383,12 +412,19 @@ TEST(SlamDriver, RestartReinitialisesTheFilterAndKeepsOutputSequences) {
     auto r = d.onOdometry(odo(t, oseq++));
     notes.insert(notes.end(), r.notes.begin(), r.notes.end());
     for (auto& o : r.outputs) second.push_back(std::move(o));
-    if (t - 100'000 >= kT0 && (t - 100'000 - kT0) % 1'000'000 == 0)
-      for (auto& o : d.onFeatures(feats(t - 100'000, fseq++)).outputs) second.push_back(std::move(o));
+    if (t - 100'000 >= kT0 && (t - 100'000 - kT0) % 1'000'000 == 0) {
+      auto f = d.onFeatures(feats(t - 100'000, fseq++));
+      notes.insert(notes.end(), f.notes.begin(), f.notes.end());
+      for (auto& o : f.outputs) second.push_back(std::move(o));
+    }
   }
-  ASSERT_EQ(notes.size(), 2u);  // held, then confirmed
-  EXPECT_NE(notes[0].find("held"), std::string::npos);
-  EXPECT_NE(notes[1].find("restart"), std::string::npos);
+  // The odometry steps back first and is held (one note, not one per message held); the frame
+  // stream stepping back too confirms the restart.
+  ASSERT_EQ(notes.size(), 2u);
+  EXPECT_NE(notes[0].find("ODOMETRY"), std::string::npos) << notes[0];
+  EXPECT_NE(notes[0].find("held"), std::string::npos) << notes[0];
+  EXPECT_NE(notes[1].find("OMNI_FEATURES"), std::string::npos) << notes[1];
+  EXPECT_NE(notes[1].find("restart"), std::string::npos) << notes[1];
   EXPECT_EQ(d.stats().pairing.restarts, 1);
   EXPECT_EQ(d.stats().filter_resets, 1);
   ASSERT_GE(second.size(), 2u);
@@ -412,8 +448,10 @@ TEST(SlamDriver, TheMapEndedByARestartIsSavedWhenNoFrameFollowsIt) {
   const int64_t last_step = d.lastStepUtime();
   const size_t landmarks = d.filter()->bestMap().size();
   ASSERT_GT(landmarks, 0u);
-  // The odometry starts again from the beginning (a replayed log): a restart, and no frame after it.
-  for (int64_t k = 0; k < 3; ++k) d.onOdometry(odo(kT0 + k * 20'000, 1000 + k));
+  // The odometry starts again from the beginning (a replayed log) and no frame comes after it: a
+  // restart once the odometry held spans max_wait_s (the frame stream has gone silent).
+  const int64_t wait_us = SlamProcessOptions{}.pairing.max_wait_us;
+  for (int64_t k = 0; k * 20'000 <= wait_us; ++k) d.onOdometry(odo(kT0 + k * 20'000, 1000 + k));
   ASSERT_EQ(d.stats().filter_resets, 1);
   EXPECT_EQ(d.filter(), nullptr);
   const slam::FastSlam* saved = d.filterToSave(&utime);

@@ -16,7 +16,9 @@ int runMain(const std::string& prog, const std::function<int()>& body) {
     std::cerr << prog << ": config error: " << e.what() << std::endl;
     return kBadConfig;
   } catch (const std::invalid_argument& e) {
-    std::cerr << prog << ": invalid setting: " << e.what() << std::endl;
+    // A flag or option out of range, or an input the program cannot work on (a log without the
+    // messages it needs): the message says which; "invalid setting" misnamed the second kind.
+    std::cerr << prog << ": error: " << e.what() << std::endl;
     return kBadConfig;
   } catch (const std::exception& e) {
     std::cerr << prog << ": fatal: " << e.what() << std::endl;

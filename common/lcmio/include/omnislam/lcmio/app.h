@@ -1,6 +1,6 @@
-// The frame of every process's main(): runs the body, turns a config error into exit code 2
-// with a message naming the key, any other failure into exit code 1, and never lets an
-// exception escape.
+// The frame of every process's main(): runs the body, turns a config error, a bad flag or an
+// input the program refuses (std::invalid_argument) into exit code 2 with a message naming the
+// key or the problem, any other failure into exit code 1, and never lets an exception escape.
 #pragma once
 
 #include <functional>
@@ -8,7 +8,7 @@
 
 namespace omnislam::app {
 
-/// Exit codes shared by all processes.
+/// Exit codes shared by all processes: kBadConfig is a bad config, flag or input, refused.
 enum ExitCode : int { kOk = 0, kFailure = 1, kBadConfig = 2 };
 
 /// Runs body(); prints "<prog>: <message>" on failure.

@@ -5,9 +5,12 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <functional>
 #include <random>
+#include <set>
 
 #include "omnislam/core/slam/data_association.h"
+#include "omnislam/core/slam/hungarian.h"
 
 namespace {
 
@@ -110,6 +113,49 @@ TEST(slam_DataAssociation, HungarianTotalCostIsTheBruteForceMinimum) {
   }
   EXPECT_EQ(checked, 400);
   EXPECT_GT(with_unusable_rows, 100) << "the trials must exercise rows left out of the solve";
+}
+
+// Many features spread over the view: the solve split into the components of the pairs dearer
+// than "new" gives the same assignment as one dense solve of the whole N_z x (N + N_z) problem
+// (the method before the split), on frames of up to 120 measurements in many small groups,
+// with a few groups chained into large ones.
+TEST(slam_DataAssociation, HungarianByComponentsEqualsOneDenseSolve) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int components_seen = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int nz = 20 + trial * 100 / 60, n = 3 * nz;
+    Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nz, n, kInf);
+    std::vector<double> cost_new(nz);
+    for (int l = 0; l < nz; ++l) {
+      cost_new[l] = 8.0 + 4.0 * u(rng);
+      // Each measurement sees the landmarks near "its" bearing, and now and then a far one.
+      const int centre = static_cast<int>(u(rng) * n);
+      for (int j = std::max(0, centre - 1); j < std::min(n, centre + 2); ++j) cost(l, j) = 16.0 * u(rng);
+      if (u(rng) < 0.03) cost(l, static_cast<int>(u(rng) * n)) = 16.0 * u(rng);
+    }
+    Eigen::MatrixXd full(nz, n + nz);
+    for (int l = 0; l < nz; ++l) {
+      full.row(l).head(n) = cost.row(l);
+      full.row(l).tail(nz).setConstant(cost_new[l]);
+    }
+    const AssignmentResult dense = solveAssignment(full);
+    std::vector<int> expected(nz, -1);
+    for (int l = 0; l < nz; ++l)
+      if (dense.col_of_row[l] >= 0 && dense.col_of_row[l] < n) expected[l] = dense.col_of_row[l];
+    EXPECT_EQ(associate(cost, cost_new, AssociationMethod::kHungarian), expected) << "trial " << trial;
+    // Count the groups, to be sure the trials split.
+    std::vector<int> parent(nz + n);
+    for (int i = 0; i < nz + n; ++i) parent[i] = i;
+    const std::function<int(int)> root = [&](int i) { return parent[i] == i ? i : parent[i] = root(parent[i]); };
+    for (int l = 0; l < nz; ++l)
+      for (int j = 0; j < n; ++j)
+        if (cost(l, j) < cost_new[l]) parent[root(l)] = root(nz + j);
+    std::set<int> roots;
+    for (int l = 0; l < nz; ++l) roots.insert(root(l));
+    components_seen += roots.size() > 3;
+  }
+  EXPECT_GT(components_seen, 50) << "most trials must have several groups";
 }
 
 // Brute force: every joint assignment of a small ratio matrix with its product of ratios.

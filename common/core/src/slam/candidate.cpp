@@ -225,7 +225,17 @@ CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions
 
 double candidateLogLikelihood(const Candidate& c, const MeasVec& z, const MeasMat& Q, const Pose2& x_t,
                               const Eigen::Vector3d& p_CinR_m, double min_range_m, double max_range_m) {
+  if (c.observations.empty() || z.size() != measurementDim(c.kind)) return -std::numeric_limits<double>::infinity();
+  return candidateLogLikelihood(c, makeObservation(c.kind, x_t, p_CinR_m, z, Q), min_range_m, max_range_m);
+}
+
+double candidateLogLikelihood(const Candidate& c, const CandidateObservation& now, double min_range_m,
+                              double max_range_m) {
   const double ninf = -std::numeric_limits<double>::infinity();
+  const MeasVec& z = now.z;
+  const MeasMat& Q = now.Q;
+  const Pose2& x_t = now.T_WtoR;
+  const Eigen::Vector3d& p_CinR_m = now.p_CinR_m;
   if (c.observations.empty() || z.size() != measurementDim(c.kind)) return ninf;
   if (c.has_estimate) {
     MeasJac Hm;
@@ -235,7 +245,6 @@ double candidateLogLikelihood(const Candidate& c, const MeasVec& z, const MeasMa
     return logGaussian(innovation(z, *zhat), S);
   }
   const CandidateObservation& o = c.observations.back();
-  const CandidateObservation now = makeObservation(c.kind, x_t, p_CinR_m, z, Q);
   const auto x = crossPointOfRays(o.p_CinW_m, o.dir_W, now.p_CinW_m, now.dir_W, 1e-6);
   if (min_range_m > 0.0 || max_range_m < std::numeric_limits<double>::infinity()) {
     // The landmark lies on the candidate's ray within [min_range_m, max_range_m] of its camera:

@@ -586,15 +586,16 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
   const int nc = static_cast<int>(p.candidates.size());
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nl, nc, kInf);
   std::vector<double> cost_new(nl);
+  const double min_range_m = std::max(o.candidates.min_range_m, o.perception.min_range_m);
+  const double max_range_m = std::min(o.candidates.max_range_m, o.perception.max_range_m);
   for (int r = 0; r < nl; ++r) {
     const Meas& m = Z[leftover[r]];
     cost_new[r] = m.neg_log_p_new;
+    const CandidateObservation now = makeObservation(m.kind, x_t, m.p_CinR_m, m.z, m.Q);  // once, not per candidate
     for (int c = 0; c < nc; ++c) {
       const Candidate& cand = *p.candidates[c];
       if (cand.kind != m.kind || !descriptorsCompatible(m.descriptor, cand.descriptor, o.descriptor_gate)) continue;
-      cost(r, c) = -candidateLogLikelihood(cand, m.z, m.Q, x_t, m.p_CinR_m,
-                                           std::max(o.candidates.min_range_m, o.perception.min_range_m),
-                                           std::min(o.candidates.max_range_m, o.perception.max_range_m));
+      cost(r, c) = -candidateLogLikelihood(cand, now, min_range_m, max_range_m);
     }
   }
   // Candidates do not weigh the particle, so a draw here would have no weight to go with it: under

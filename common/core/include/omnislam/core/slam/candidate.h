@@ -122,4 +122,10 @@ double candidateLogLikelihood(const Candidate& candidate, const MeasVec& z, cons
                               const Eigen::Vector3d& p_CinR_m, double min_range_m = 0.0,
                               double max_range_m = std::numeric_limits<double>::infinity());
 
+/// The same for the measurement now = makeObservation(candidate.kind, x_t, p_CinR_m, z, Q), made
+/// once by a caller that scores one measurement against many candidates (the same result, bit for
+/// bit: the ray is what the form above builds for each call).
+double candidateLogLikelihood(const Candidate& candidate, const CandidateObservation& now, double min_range_m = 0.0,
+                              double max_range_m = std::numeric_limits<double>::infinity());
+
 }  // namespace omnislam::slam

@@ -170,9 +170,9 @@ int main(int argc, char** argv) {
   cli.add_option("--world", world_path, "world file (source sim)");
   cli.add_option("--seed", seed, "seed of the image noise and nuisances (source sim)");
   cli.add_option("--dir", dir, "directory of images (source dir)");
-  cli.add_option("--rate-hz", rate_hz, "frame rate (sources dir and device)")->check(CLI::Range(0.01, 1000.0));
+  cli.add_option("--rate-hz", rate_hz, "frame rate (sources dir and device)")->check(omnislam::app::FiniteRange(0.01, 1000.0));
   cli.add_option("--speedup", speedup, "source dir: replay speed-up, 0 = as fast as possible")
-      ->check(CLI::Range(0.0, 1000.0));
+      ->check(omnislam::app::FiniteRange(0.0, 1000.0));
   cli.add_option("--start-utime", start_utime, "source dir: utime of the first image (default: now)")
       ->check(CLI::Range(int64_t{0}, int64_t{4'000'000'000'000'000}));
   cli.add_option("--device", device, "camera index (source device)")->check(CLI::Range(0, 64));

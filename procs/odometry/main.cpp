@@ -118,7 +118,7 @@ int main(int argc, char** argv) {
   cli.add_option("--seed", seed, "seed of the odometry noise (source sim)");
   cli.add_option("--csv", csv, "wheel data CSV: utime,v_mps,omega_radps (source csv)");
   cli.add_option("--speedup", speedup, "source csv: replay speed-up, 0 = as fast as possible")
-      ->check(CLI::Range(0.0, 1000.0));
+      ->check(omnislam::app::FiniteRange(0.0, 1000.0));
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", name, "process name in PROCESS_STATUS");
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);

@@ -74,11 +74,11 @@ int main(int argc, char** argv) {
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", name, "process name in PROCESS_STATUS");
   cli.add_option("--speedup", speedup, "simulated seconds per real second; 0 = as fast as possible")
-      ->check(CLI::Range(0.0, 1000.0));
+      ->check(omnislam::app::FiniteRange(0.0, 1000.0));
   cli.add_option("--duration", duration_s, "stop after this many simulated seconds (0 = whole trajectory)")
-      ->check(CLI::Range(0.0, 1e6));
+      ->check(omnislam::app::FiniteRange(0.0, 1e6));
   cli.add_option("--wait-for", wait_for, "comma-separated process names to wait for (PROCESS_STATUS) before starting");
-  cli.add_option("--wait-timeout", wait_timeout_s, "seconds to wait for them")->check(CLI::Range(0.0, 600.0));
+  cli.add_option("--wait-timeout", wait_timeout_s, "seconds to wait for them")->check(omnislam::app::FiniteRange(0.0, 600.0));
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
 
   return app::runMain("omnislam-sim", [&]() -> int {

@@ -266,7 +266,7 @@ int main(int argc, char** argv) {
   cli.add_option("--every", s.every, "write the view every N SLAM steps (0: only final.png)")->check(CLI::Range(0, 1000000));
   cli.add_option("--log", s.log, "read this LCM log at full speed instead of the bus (needs --headless)")
       ->check(CLI::ExistingFile);
-  cli.add_option("--fps", s.fps, "window redraws per second")->check(CLI::Range(0.5, 60.0));
+  cli.add_option("--fps", s.fps, "window redraws per second")->check(omnislam::app::FiniteRange(0.5, 60.0));
   cli.add_option("--map-width", s.view.map_width_px, "map panel width, pixels")->check(CLI::Range(300, 4000));
   cli.add_option("--image-width", s.view.image_width_px, "image panel width, pixels (0: no image panel)")
       ->check(CLI::Range(0, 4000));

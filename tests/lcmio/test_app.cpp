@@ -1,13 +1,15 @@
-// The main() frame of every process (common/lcmio/include/omnislam/lcmio/app.h): each kind of
-// failure becomes its exit code and one line on stderr that says what kind it is.
+// The main() frame of every process (app.h) and the flag checks (cli.h): each kind of failure
+// becomes its exit code and one line that says what kind it is; NaN is not in any range.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
 
 #include "omnislam/config/yaml_node.h"
 #include "omnislam/lcmio/app.h"
+#include "omnislam/lcmio/cli.h"
 
 using namespace omnislam;
 
@@ -48,6 +50,46 @@ TEST(RunMain, EachKindOfFailureHasItsExitCodeAndOneLine) {
   const Outcome unknown = run([]() -> int { throw 42; });
   EXPECT_EQ(unknown.code, app::kFailure);
   EXPECT_EQ(unknown.err, "prog: fatal: an unknown exception\n");
+}
+
+}  // namespace
+
+namespace {
+
+int parseRate(const std::string& value, double& rate) {
+  CLI::App cli("test");
+  cli.add_option("--rate-hz", rate)->check(app::FiniteRange(0.01, 1000.0));
+  std::vector<std::string> args{"prog", "--rate-hz", value};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  std::ostringstream captured;  // CLI11 prints its error line to cerr
+  std::streambuf* old = std::cerr.rdbuf(captured.rdbuf());
+  const int rc = app::parseFlags(cli, static_cast<int>(argv.size()), argv.data());
+  std::cerr.rdbuf(old);
+  return rc;
+}
+
+// CLI11's Range lets NaN through (NaN < min and NaN > max are both false): --rate-hz nan gave a
+// frame period of LLONG_MIN us and images stamped with negative utimes.
+TEST(FiniteRange, RefusesNanInfinityAndOutOfRangeAcceptsTheBounds) {
+  for (const char* bad : {"nan", "NaN", "-nan", "inf", "-inf", "1e400", "0.001", "1000.5", "fast"}) {
+    double rate = 1.0;
+    EXPECT_EQ(parseRate(bad, rate), app::kBadConfig) << bad;
+  }
+  for (const auto& [good, expected] : {std::pair{"0.01", 0.01}, std::pair{"1000", 1000.0}, std::pair{"2.5", 2.5}}) {
+    double rate = 1.0;
+    EXPECT_EQ(parseRate(good, rate), -1) << good;
+    EXPECT_EQ(rate, expected) << good;
+  }
+  // CLI11's own Range, for the record: it takes NaN.
+  CLI::App cli("test");
+  double rate = 1.0;
+  cli.add_option("--rate-hz", rate)->check(CLI::Range(0.01, 1000.0));
+  std::vector<std::string> args{"prog", "--rate-hz", "nan"};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  EXPECT_NO_THROW(cli.parse(static_cast<int>(argv.size()), argv.data()));
+  EXPECT_TRUE(std::isnan(rate));
 }
 
 }  // namespace

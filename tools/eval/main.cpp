@@ -220,7 +220,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   cli.add_flag("--json", json, "print one JSON object instead of a table");
   cli.add_flag("--align", align, "fit the best rigid 2D transform of the trajectory onto the truth first");
-  cli.add_option("--gate", gate_m, "landmark matching gate, metres")->check(CLI::Range(0.01, 100.0));
+  cli.add_option("--gate", gate_m, "landmark matching gate, metres")->check(omnislam::app::FiniteRange(0.01, 100.0));
   cli.add_flag("--planar", planar, "landmark distances in x, y only (2D landmarks)");
   cli.add_option("--tum-out", tum_prefix,
                  "prefix of the TUM trajectory files PREFIX.slam.tum, .truth.tum and .odometry.tum (dead reckoning "

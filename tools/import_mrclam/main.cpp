@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
   cli.add_flag("--drop-robot-sightings", o.drop_robot_sightings,
                "drop sightings of the other robots (default: keep them as clutter)");
   cli.add_option("--bearing-sigma-deg", sigma_deg, "bearing standard deviation written in each feature [deg]")
-      ->check(CLI::Range(0.001, 45.0));
+      ->check(omnislam::app::FiniteRange(0.001, 45.0));
   cli.add_option("--camera-position-m", cam, "optical centre in the robot frame x y z [m] (default 0 0 0)")
       ->expected(3);
   cli.add_option("--duplicate-times", dup, "a repeated time in odometry / ground truth: error | keep-last")
@@ -85,9 +85,9 @@ int main(int argc, char** argv) {
   cli.add_option("--skip-still-frames", still,
                  "diagnostic: leave out frames after less than M metres and DEG degrees of motion (M DEG)")
       ->expected(2)
-      ->check(CLI::Range(0.0, 1000.0));
+      ->check(omnislam::app::FiniteRange(0.0, 1000.0));
   cli.add_option("--max-duration-s", o.max_duration_s, "import only this many seconds from the first odometry sample")
-      ->check(CLI::Range(0.0, 1e7));
+      ->check(omnislam::app::FiniteRange(0.0, 1e7));
   cli.add_option("--slam-config-template", tmpl, "SLAM config to copy with the start pose set (e.g. config/slam/mrclam.yaml)")
       ->check(CLI::ExistingFile);
   cli.add_option("--slam-config-out", cfg_out, "where to write that config");

@@ -27,8 +27,8 @@ int main(int argc, char** argv) {
   std::string url;
   double period_s = 0.5, duration_s = 10.0;
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
-  cli.add_option("--period", period_s, "seconds between rounds")->check(CLI::Range(0.01, 60.0));
-  cli.add_option("--duration", duration_s, "seconds to run")->check(CLI::Range(0.0, 3600.0));
+  cli.add_option("--period", period_s, "seconds between rounds")->check(omnislam::app::FiniteRange(0.01, 60.0));
+  cli.add_option("--duration", duration_s, "seconds to run")->check(omnislam::app::FiniteRange(0.0, 3600.0));
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-publish-samples", [&]() -> int {
     lcmio::Node node("publish-samples", app::lcmUrl(url));

@@ -40,9 +40,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(2, 100000));
   cli.add_option("--min-parallax-deg", min_parallax_deg,
                  "--incremental: ... seen over at least this spread of directions at their crossing (default 7)")
-      ->check(CLI::Range(0.0, 179.0));
+      ->check(omnislam::app::FiniteRange(0.0, 179.0));
   cli.add_option("--cauchy-scale", opt.smoother.cauchy_scale, "robust kernel scale in bearing sigmas (0: least squares)")
-      ->check(CLI::Range(0.0, 1000.0));
+      ->check(omnislam::app::FiniteRange(0.0, 1000.0));
   cli.add_option("--max-iterations", opt.smoother.max_iterations, "Levenberg-Marquardt iterations")
       ->check(CLI::Range(1, 100000));
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);

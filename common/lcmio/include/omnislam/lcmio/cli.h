@@ -4,10 +4,32 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <sstream>
+#include <string>
 
 #include "omnislam/lcmio/app.h"
 
 namespace omnislam::app {
+
+/// CLI::Range for a real-valued flag that also refuses NaN: CLI11's Range tests only
+/// "v < min || v > max", which NaN passes (e.g. --rate-hz nan gave a frame period of LLONG_MIN us).
+/// The message names the range as CLI11's does.
+inline CLI::Validator FiniteRange(double min, double max) {
+  std::ostringstream name;
+  name << "FLOAT in [" << min << " - " << max << "]";
+  return CLI::Validator(
+      [min, max](std::string& input) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(input, v)) return "Value " + input + " could not be converted";
+        if (!(v >= min && v <= max)) {  // false for NaN
+          std::ostringstream o;
+          o << "Value " << input << " not in range [" << min << " - " << max << "]";
+          return o.str();
+        }
+        return std::string();
+      },
+      name.str());
+}
 
 /// Parses argv; returns -1 to go on, or the exit code to return from main() (CLI11 has printed the
 /// help or the one-line error naming the flag and its accepted range).

@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include <algorithm>
@@ -26,6 +27,7 @@
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
+#include "omnislam/lcmio/validate.h"
 #include "omnislam/sim/image_clock.h"
 #include "omnislam/vision/image_files.h"
 #include "omnislam/vision/render_lights.h"
@@ -40,15 +42,30 @@ struct Publisher {
   std::string camera_name;
   int8_t format;
   int64_t seq = 0;
-  void publish(const cv::Mat& img, int64_t utime) {
+  /// Publishes one image; an image the contract refuses (size, bytes: lcmio::validate, what every
+  /// receiver checks) is not published but reported, and false is returned (its seq is not used).
+  bool publish(const cv::Mat& img, int64_t utime) {
     image_t msg{};
     msg.utime = utime;
-    msg.seq = seq++;
+    msg.seq = seq;
     msg.camera_name = camera_name;
     lcmio::encodeImage(img, format, msg);
-    node.publish(channels::kOmniImage, msg);
+    if (const auto why = lcmio::validate(msg)) {
+      node.error("image " + std::to_string(img.cols) + "x" + std::to_string(img.rows) + " at utime " +
+                 std::to_string(utime) + " not published: every receiver would refuse it (" + *why + ")");
+      return false;
+    }
+    ++seq;
+    return node.publish(channels::kOmniImage, msg);
   }
 };
+
+/// steady-clock time `offset_us / speedup` after `t0` (speedup > 0), capped at 30 years: a tiny
+/// speedup (1e-300, or 0.001 over a long span of utimes) must wait, not overflow into the past.
+std::chrono::steady_clock::time_point paced(std::chrono::steady_clock::time_point t0, double offset_us, double speedup) {
+  const double wait_us = std::min(offset_us / speedup, 1e15);
+  return t0 + std::chrono::microseconds(static_cast<int64_t>(wait_us));
+}
 
 int64_t wallUtime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
@@ -71,9 +88,22 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
   std::mt19937_64 rng(seed);
   sim::ImageClock clock(world.start_utime, world.image_rate_hz, world.truth_rate_hz);
   int64_t frames = 0;
+  bool have_truth = false;
+  int64_t last_truth_utime = 0;
   lcmio::InputOptions truth_opt;
   truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
   node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
+    if (have_truth && p.utime <= last_truth_utime) {
+      // The node took a new timeline (the simulation run again, a truth log replayed again): a new
+      // run. Its image times start again, and so does seq, as a new capture process would; the
+      // clock would otherwise wait for the old run's next image time and publish nothing.
+      clock = sim::ImageClock(world.start_utime, world.image_rate_hz, world.truth_rate_hz);
+      pub.seq = 0;
+      std::cerr << node.tag() << "GROUND_TRUTH_POSE started a new timeline at utime " << p.utime
+                << ": image times and seq start again" << std::endl;
+    }
+    have_truth = true;
+    last_truth_utime = p.utime;
     if (!clock.take(p.utime)) return;  // not an image time (the clock moves on when it is)
     const Pose2 T_RinW{p.x_m, p.y_m, p.theta_rad};
     if (room) {
@@ -97,6 +127,11 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
             << ") at " << world.image_rate_hz << " Hz, " << cam->widthPx() << "x" << cam->heightPx() << ", seed "
             << seed << std::endl;
   node.spin();
+  // Stopped by a signal (the only way out of spin): the last status says so, with the count.
+  node.setState(process_status_t::STATE_STOPPING);
+  node.setDetail("stopped after " + std::to_string(frames) + " images");
+  node.publishStatus();
+  std::cerr << node.tag() << "stopped after " << frames << " images" << std::endl;
   return app::kOk;
 }
 
@@ -114,21 +149,32 @@ int runDir(lcmio::Node& node, Publisher& pub, const std::string& dir, double rat
   node.setState(process_status_t::STATE_RUNNING);
   const auto wall0 = std::chrono::steady_clock::now();
   const int64_t period_us = std::llround(1e6 / rate_hz);
-  for (size_t i = 0; i < files.size() && !lcmio::stopRequested(); ++i) {
+  size_t done = 0, published = 0;
+  for (size_t i = 0; i < files.size() && !lcmio::stopRequested(); ++i, done = i) {
     if (speedup > 0) {
-      const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(i * period_us / speedup));
+      const auto due = paced(wall0, static_cast<double>(i) * static_cast<double>(period_us), speedup);
       while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < due) node.handleFor(0.02);
+      if (lcmio::stopRequested()) break;
     }
-    const cv::Mat img = cv::imread(files[i].string(), cv::IMREAD_UNCHANGED);
+    cv::Mat img = cv::imread(files[i].string(), cv::IMREAD_UNCHANGED);
+    // An alpha channel is dropped: RGBA and grey + alpha PNGs are ordinary colour and grey images.
+    if (!img.empty() && img.depth() == CV_8U && img.channels() == 4) cv::cvtColor(img, img, cv::COLOR_BGRA2BGR);
+    if (!img.empty() && img.depth() == CV_8U && img.channels() == 2) cv::extractChannel(img, img, 0);
     if (img.empty() || img.depth() != CV_8U || (img.channels() != 1 && img.channels() != 3)) {
       node.error("cannot read an 8-bit grey or colour image from " + files[i].string() + "; skipped");
       continue;
     }
-    pub.publish(img, start_utime + static_cast<int64_t>(i) * period_us);
+    published += pub.publish(img, start_utime + static_cast<int64_t>(i) * period_us) ? 1 : 0;
     node.setDetail(files[i].filename().string());
   }
-  node.setState(process_status_t::STATE_FINISHED);
+  // FINISHED only when every file was gone through; stopped by a signal part-way, it says so.
+  const bool finished = done == files.size();
+  node.setState(finished ? process_status_t::STATE_FINISHED : process_status_t::STATE_STOPPING);
+  node.setDetail((finished ? "finished: " : "interrupted: ") + std::to_string(published) + " of " +
+                 std::to_string(files.size()) + " images published");
   node.publishStatus();
+  std::cerr << node.tag() << (finished ? "finished: " : "interrupted: ") << published << " of " << files.size()
+            << " images published" << std::endl;
   return app::kOk;
 }
 
@@ -138,6 +184,7 @@ int runDevice(lcmio::Node& node, Publisher& pub, int device, double rate_hz) {
   node.setState(process_status_t::STATE_RUNNING);
   const auto period = std::chrono::duration<double>(1.0 / rate_hz);
   auto next = std::chrono::steady_clock::now();
+  int64_t frames = 0;
   while (!lcmio::stopRequested()) {
     cv::Mat frame;
     if (!cap.grab()) {
@@ -150,10 +197,13 @@ int runDevice(lcmio::Node& node, Publisher& pub, int device, double rate_hz) {
       node.error("camera retrieve failed");
       continue;
     }
-    pub.publish(frame, utime);
+    frames += pub.publish(frame, utime) ? 1 : 0;
     next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
     while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < next) node.handleFor(0.01);
   }
+  node.setState(process_status_t::STATE_STOPPING);
+  node.setDetail("stopped after " + std::to_string(frames) + " images");
+  node.publishStatus();
   return app::kOk;
 }
 

@@ -5,6 +5,7 @@
 //   csv  a recorded CSV of wheel data (utime,v_mps,omega_radps), integrated and paced by utime.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <iostream>
@@ -39,11 +40,20 @@ odometry_t makeMsg(int64_t utime, int64_t seq, const Pose2& p, double v, double 
 int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed) {
   const sim::World world = config::loadWorld(world_path);
   sim::OdometrySimulator odo(world.odometry_noise, seed);
-  int64_t seq = 0, last_utime = 0;
+  int64_t seq = 0, last_utime = 0, published = 0;
   Pose2 last;
   lcmio::InputOptions truth_opt;
   truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
   node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
+    if (seq > 0 && p.utime <= last_utime) {
+      // The node took a new timeline (the simulation run again, a truth log replayed again): a new
+      // run, as a new odometry process would see it. Integrating the jump back to the start as one
+      // step would "drive" metres in negative time, with a velocity from a negative dt.
+      odo = sim::OdometrySimulator(world.odometry_noise, seed);
+      seq = 0;
+      std::cerr << node.tag() << "GROUND_TRUTH_POSE started a new timeline at utime " << p.utime
+                << ": the odometry starts again (pose, noise draws and seq)" << std::endl;
+    }
     const Pose2 now = odo.step(Pose2{p.x_m, p.y_m, p.theta_rad});
     double v = 0.0, w = 0.0;
     if (seq > 0) {
@@ -52,7 +62,7 @@ int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed) {
       v = d.x_m / dt;
       w = d.theta_rad / dt;
     }
-    node.publish(channels::kOdometry, makeMsg(p.utime, seq++, now, v, w));
+    published += node.publish(channels::kOdometry, makeMsg(p.utime, seq++, now, v, w)) ? 1 : 0;
     last = now;
     last_utime = p.utime;
   }, truth_opt);
@@ -73,6 +83,11 @@ int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed) {
                    " heading_drift_rad_per_m=" + std::to_string(odo.headingDrift_rad_per_m()));
   }
   node.spin();
+  // Stopped by a signal (the only way out of spin): the last status says so, with the count.
+  node.setState(process_status_t::STATE_STOPPING);
+  node.setDetail("stopped after " + std::to_string(published) + " messages");
+  node.publishStatus();
+  std::cerr << node.tag() << "stopped after " << published << " messages" << std::endl;
   return app::kOk;
 }
 
@@ -86,6 +101,7 @@ int runCsv(lcmio::Node& node, const std::string& path, double speedup) {
   node.setState(process_status_t::STATE_RUNNING);
   Pose2 pose;
   const auto wall0 = std::chrono::steady_clock::now();
+  size_t published = 0;
   for (size_t i = 0; i < samples.size() && !lcmio::stopRequested(); ++i) {
     if (i > 0) {
       // Mid-point integration of the previous sample's velocities over the interval.
@@ -94,15 +110,26 @@ int runCsv(lcmio::Node& node, const std::string& path, double speedup) {
       pose = pose.compose(Pose2{ds * std::cos(0.5 * dth), ds * std::sin(0.5 * dth), dth});
     }
     if (speedup > 0) {
-      const auto due = wall0 + std::chrono::microseconds(
-                                   static_cast<int64_t>((samples[i].utime - samples[0].utime) / speedup));
+      // In double and capped at 30 years: a tiny speedup (or 0.001 over a long span of utimes)
+      // must wait, not overflow the microseconds into the past and publish at once.
+      const double wait_us =
+          std::min(static_cast<double>(samples[i].utime - samples[0].utime) / speedup, 1e15);
+      const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(wait_us));
       while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < due) node.handleFor(0.005);
+      if (lcmio::stopRequested()) break;
     }
     node.publish(channels::kOdometry,
                  makeMsg(samples[i].utime, static_cast<int64_t>(i), pose, samples[i].v_mps, samples[i].omega_radps));
+    ++published;
   }
-  node.setState(process_status_t::STATE_FINISHED);
+  // FINISHED only when every row was published; stopped by a signal part-way, it says so.
+  const bool finished = published == samples.size();
+  node.setState(finished ? process_status_t::STATE_FINISHED : process_status_t::STATE_STOPPING);
+  node.setDetail((finished ? "finished: " : "interrupted: ") + std::to_string(published) + " of " +
+                 std::to_string(samples.size()) + " rows published");
   node.publishStatus();
+  std::cerr << node.tag() << (finished ? "finished: " : "interrupted: ") << published << " of " << samples.size()
+            << " rows published" << std::endl;
   return app::kOk;
 }
 

@@ -188,6 +188,24 @@ TEST(OdometryCsv, AStopPartWayIsNotReportedAsFinished) {
   EXPECT_EQ(st->detail, "interrupted: 1 of 3 rows published");
 }
 
+// The test publisher's status said "starting" for its whole run (audit 40, 12c).
+TEST(PublishSamples, ItsLastStatusSaysItFinishedAndHowManyRounds) {
+  const std::string url = t::privateUdpUrl(11);
+  lcm::LCM lcm(url);
+  Collector<process_status_t> status(lcm, channels::kProcessStatus);
+  t::Child p({t::binPath("omnislam-publish-samples"), "--duration", "0.3", "--period", "0.1", "--url", url});
+  const auto r = p.wait(10.0);
+  t::handleFor(lcm, 0.3);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const auto* st = lastStatusOf(status.got, "publish-samples");
+  ASSERT_NE(st, nullptr);
+  EXPECT_EQ(st->state, process_status_t::STATE_FINISHED);
+  EXPECT_EQ(st->detail.rfind("finished: ", 0), 0u) << st->detail;
+  EXPECT_NE(r.output.find("published "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(st->detail.substr(std::string("finished: ").size())), std::string::npos)
+      << "the status and stderr count the same rounds: " << st->detail << " / " << r.output;
+}
+
 // The simulated sources follow GROUND_TRUTH_POSE. When the truth starts a new timeline (the
 // simulator run again on the same bus, a truth log replayed again), each is a new run: capture
 // used to publish no image for the whole second run (its image clock waited for the first run's

@@ -2,6 +2,7 @@
 // repeatedly, so that a viewer such as lcm-spy can be checked against all types.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <iostream>
 #include <thread>
@@ -33,6 +34,7 @@ int main(int argc, char** argv) {
   return app::runMain("omnislam-publish-samples", [&]() -> int {
     lcmio::Node node("publish-samples", app::lcmUrl(url));
     const auto t_end = std::chrono::steady_clock::now() + std::chrono::duration<double>(duration_s);
+    node.setState(process_status_t::STATE_RUNNING);
     int64_t k = 0;
     for (; std::chrono::steady_clock::now() < t_end && !lcmio::stopRequested(); ++k) {
       const int64_t utime = 1'700'000'000'000'000 + k * 1'000'000;
@@ -77,8 +79,14 @@ int main(int argc, char** argv) {
       lb.utime = utime, lb.seq = k, lb.features_seq = k, lb.num_features = 1, lb.landmark_id = {1}, lb.source_code = {1};
       node.publish(channels::kGroundTruthFeatureLabels, lb);
       node.publishStatus();
-      node.handleFor(period_s);
+      // Never past the end: --duration 1 --period 20 ran for 20 s.
+      const double left_s = std::chrono::duration<double>(t_end - std::chrono::steady_clock::now()).count();
+      node.handleFor(std::max(0.0, std::min(period_s, left_s)));
     }
+    const bool interrupted = lcmio::stopRequested();
+    node.setState(interrupted ? process_status_t::STATE_STOPPING : process_status_t::STATE_FINISHED);
+    node.setDetail((interrupted ? "interrupted after " : "finished: ") + std::to_string(k) + " rounds");
+    node.publishStatus();
     std::cerr << "published " << k << " rounds" << std::endl;  // what a recording of the bus must hold
     return 0;
   });

@@ -1,6 +1,7 @@
 // Log files: a truncated or corrupt tail is told apart from the end of the log and named; a log
 // through a pipe is read whole; an atomic writer leaves PATH.partial until commit(); after a failed
-// write nothing more is written; an output that is the input is refused.
+// write nothing more is written, and the events counted written are those in the file; an output
+// that is the input is refused.
 #include <gtest/gtest.h>
 
 #include <stdlib.h>
@@ -255,6 +256,49 @@ TEST(LogFiles, AfterAFailedWriteNothingMoreIsWrittenAndCommitSaysSo) {
   });
   EXPECT_EQ(odometry, 0);
   EXPECT_LE(read, before);
+}
+
+// The writer counted an event once it was in stdio's buffer, so the events that a failing write or
+// flush lost with the buffer were reported as written (a full disk: 714 reported for 687 in the
+// file; /dev/full: 27 for none). Now an event counts once it is complete in the file, and the
+// ones a failure kept out are counted as lost.
+TEST(LogFiles, AfterAFailureTheCountIsWhatTheFileHolds) {
+  Dir d;
+  const std::string path = d.file("out.lcm");
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);  // the write then fails with EFBIG
+  rlimit lim{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &lim), 0);
+  std::vector<uint8_t> payload(200, 0xab);
+  int64_t taken = 0, failures = 0;
+  lcmio::LogWriter w(path);
+  rlimit small = lim;
+  small.rlim_cur = 50000;  // room for 215 events of 232 bytes and a torn one
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  for (int i = 0; i < 1000; ++i) {
+    try {
+      w.write(1000 + i, "POSE", payload.data(), static_cast<int32_t>(payload.size()));
+      ++taken;
+    } catch (const std::exception&) {
+      ++failures;
+    }
+  }
+  EXPECT_THROW(w.commit(), std::runtime_error);
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &lim), 0);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_GE(failures, 1);
+  EXPECT_EQ(w.events(), count(path)) << "events reported written against events in the file";
+  EXPECT_EQ(w.events(), 50000 / (28 + 4 + 200));
+  EXPECT_EQ(w.events() + w.lost(), taken) << "every event taken is in the file or lost";
+}
+
+TEST(LogFiles, OnAFullDeviceNoEventCountsAsWritten) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
+  lcmio::LogWriter w("/dev/full");
+  writeOdometry(w, 27);  // fewer bytes than a buffer: they all wait for commit()
+  EXPECT_EQ(w.events(), 27);
+  EXPECT_THROW(w.commit(), std::runtime_error);
+  EXPECT_EQ(w.events(), 0);
+  EXPECT_EQ(w.lost(), 27);
 }
 
 TEST(LogFiles, AnOutputThatIsTheInputIsRefused) {

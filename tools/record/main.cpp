@@ -19,7 +19,7 @@ namespace {
 
 struct Recorder {
   omnislam::lcmio::LogWriter* log = nullptr;
-  int64_t bytes = 0, failures = 0;
+  int64_t bytes = 0, failures = 0;  // bytes: of the messages taken by the writer
   std::string first_failure;
   // Through LCM's C API: its lcm_subscribe returns NULL for a regex it cannot compile, where the
   // C++ wrapper returns an object whose use then crashes.
@@ -74,8 +74,8 @@ int main(int argc, char** argv) {
         bus_failed = true;  // LCM cannot receive any more: stop rather than record nothing
         break;
       }
-    // Drain what has already arrived, then flush, sync and close the file: stdio writes its last
-    // buffer only now, so a full disk shows here or not at all.
+    // Drain what has already arrived, then flush, sync and close the file: the writer writes its
+    // last buffer only now, so a full disk shows here or not at all.
     while (bus.handleTimeout(0) > 0) {
     }
     try {
@@ -83,8 +83,12 @@ int main(int argc, char** argv) {
     } catch (const std::exception& e) {
       if (rec.failures++ == 0) rec.first_failure = e.what();
     }
-    std::cerr << "[record] " << log.events() << " events, " << rec.bytes / 1e6 << " MB"
-              << (rec.failures ? ", " + std::to_string(rec.failures) + " WRITE FAILURES (the first: " +
+    // After a failure, the events in the file (complete, as readers see them) and the events taken
+    // before it but lost with the write buffer; the messages refused after it are write failures.
+    std::cerr << "[record] " << log.events() << " events" << (rec.failures ? " in the file" : "") << ", "
+              << rec.bytes / 1e6 << " MB"
+              << (rec.failures ? ", " + std::to_string(log.lost()) + " events lost with the write buffer, " +
+                                     std::to_string(rec.failures) + " WRITE FAILURES (the first: " +
                                      rec.first_failure + ")"
                                : "")
               << (bus_failed ? "; stopped: LCM failed to receive" : "") << std::endl;

@@ -2,14 +2,10 @@
 // with the event number counted and every write checked. The counterpart of log_reader.h.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
-#include <memory>
 #include <string>
 #include <vector>
-
-namespace lcm {
-class LogFile;
-}
 
 namespace omnislam::lcmio {
 
@@ -31,8 +27,10 @@ class LogWriter {
   LogWriter& operator=(const LogWriter&) = delete;
 
   /// One event with the given log timestamp (microseconds); throws std::runtime_error on failure.
-  /// After a failure every later write throws without writing (the failed one may have left a torn
-  /// event, where readers stop), and commit() throws after closing the file (kAtomic: not renamed).
+  /// Events wait in a buffer of kBufferBytes and go to the file together, so a write that fails
+  /// (a full disk) may be the one of a later event, or commit()'s. After a failure every later
+  /// write throws without writing (the failed one may have left a torn event, where readers stop),
+  /// and commit() throws after closing the file (kAtomic: not renamed).
   void write(int64_t timestamp, const std::string& channel, const void* data, int32_t size);
   template <class Msg>
   void write(int64_t timestamp, const std::string& channel, const Msg& m) {
@@ -40,14 +38,26 @@ class LogWriter {
     m.encode(buf.data(), 0, static_cast<int>(buf.size()));
     write(timestamp, channel, buf.data(), static_cast<int32_t>(buf.size()));
   }
-  int64_t events() const { return n_; }  ///< events written before any failure
+  /// Events written: every event write() took (the last ones may still wait in the buffer, for a
+  /// later write or commit()); after a failure, only those complete in the file.
+  int64_t events() const { return failed_ ? in_file_ : n_; }
+  /// Events write() took without an error that a later failure kept out of the file (they were
+  /// still in the buffer, or torn by the failed write); 0 without a failure.
+  int64_t lost() const { return failed_ ? n_ - in_file_ : 0; }
   const std::string& path() const { return path_; }
 
+  static constexpr size_t kBufferBytes = 32 * 1024;
+
  private:
+  bool flush();  // writes the buffer; false (failed_, the events counted) on an error
+
   std::string path_;
   Mode mode_;
-  std::unique_ptr<lcm::LogFile> log_;
-  int64_t n_ = 0;
+  int fd_ = -1;
+  std::vector<uint8_t> buf_;   // events not yet in the file
+  std::vector<size_t> ends_;   // where each of them ends in buf_
+  int64_t n_ = 0;              // events taken (the next event number)
+  int64_t in_file_ = 0;        // events known complete in the file
   bool failed_ = false;
 };
 

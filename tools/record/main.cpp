@@ -6,6 +6,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <chrono>
 #include <iostream>
 #include <optional>
 #include <stdexcept>
@@ -75,8 +76,22 @@ int main(int argc, char** argv) {
         break;
       }
     // Drain what has already arrived, then flush, sync and close the file: the writer writes its
-    // last buffer only now, so a full disk shows here or not at all.
+    // last buffer only now, so a full disk shows here or not at all. The drain is bounded: on a bus
+    // that stays busy it never ran dry, so the recorder ignored SIGINT and SIGTERM until the
+    // traffic stopped (17 s in a flood), and the launcher's SIGKILL then lost the buffer and the
+    // report. It ends after kDrainS, or at once on a second SIGINT / SIGTERM.
+    constexpr double kDrainS = 0.5;
+    const auto drain_end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kDrainS);
+    const int signals_at_stop = omnislam::lcmio::stopSignalCount();
+    int64_t drained = 0;
+    bool drain_cut = false;
     while (bus.handleTimeout(0) > 0) {
+      ++drained;
+      if (std::chrono::steady_clock::now() >= drain_end ||
+          (signals_at_stop > 0 && omnislam::lcmio::stopSignalCount() > signals_at_stop)) {
+        drain_cut = true;
+        break;
+      }
     }
     try {
       log.commit();
@@ -91,7 +106,11 @@ int main(int argc, char** argv) {
                                      std::to_string(rec.failures) + " WRITE FAILURES (the first: " +
                                      rec.first_failure + ")"
                                : "")
-              << (bus_failed ? "; stopped: LCM failed to receive" : "") << std::endl;
+              << (bus_failed ? "; stopped: LCM failed to receive" : "")
+              << (drain_cut ? "; the bus was still busy at the stop: the drain ended after " +
+                                  std::to_string(drained) + " messages, the rest is not recorded"
+                            : "")
+              << std::endl;
     return rec.failures || bus_failed ? omnislam::app::kFailure : omnislam::app::kOk;
   });
 }

@@ -8,7 +8,9 @@ namespace omnislam::lcmio {
 namespace {
 std::atomic<int> g_stop_signal{0};
 std::atomic<bool> g_stop{false};
+std::atomic<int> g_stop_signals{0};
 extern "C" void onSignal(int sig) {
+  g_stop_signals.fetch_add(1);
   g_stop_signal.store(sig);
   g_stop.store(true);
 }
@@ -26,5 +28,6 @@ void installStopHandlers() {
 bool stopRequested() { return g_stop.load(); }
 void requestStop() { g_stop.store(true); }
 int stopSignal() { return g_stop_signal.load(); }
+int stopSignalCount() { return g_stop_signals.load(); }
 
 }  // namespace omnislam::lcmio

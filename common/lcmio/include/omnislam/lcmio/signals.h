@@ -10,5 +10,7 @@ bool stopRequested();
 void requestStop();
 /// The signal that requested the stop, 0 if none.
 int stopSignal();
+/// How many SIGINT / SIGTERM were received (a second one can cut short what a stop still does).
+int stopSignalCount();
 
 }  // namespace omnislam::lcmio

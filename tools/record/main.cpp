@@ -41,7 +41,7 @@ struct Recorder {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App cli{"omnislam-record: records an LCM bus into a log file without silent drops"};
+  CLI::App cli{"omnislam-record: records an LCM bus into a log file (a flood can overflow UDP buffers: docs/lcm.md)"};
   std::string url, path, channels = ".*";
   int queue = 20000;
   cli.add_option("-f,--file", path, "output log file (overwritten)")->required();

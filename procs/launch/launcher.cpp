@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <cstring>
@@ -222,6 +223,11 @@ std::string describe(int status) {
   return "status " + std::to_string(status);
 }
 
+constexpr size_t kReadBytes = 16 * 1024;     ///< one read of a child's output
+constexpr int kReadsPerPass = 4;             ///< reads per child per pass of the loop
+constexpr int kReadsAtExit = 8;              ///< reads for a child that has just ended (a full pipe)
+constexpr size_t kMaxLineBytes = 64 * 1024;  ///< a longer line is printed in pieces
+
 class Supervisor {
  public:
   explicit Supervisor(size_t width) : width_(width) {}
@@ -250,28 +256,49 @@ class Supervisor {
     while (std::chrono::steady_clock::now() < until) pump(50);
   }
 
-  void drain(Child& c) {
-    char buf[4096];
-    while (true) {
+  /// Reads what `c` has written, at most `max_reads` reads: a child that writes without pause must
+  /// not keep the launcher from its other children, reaping and a stop request. What is left in
+  /// the pipe is read on the next pass.
+  void drain(Child& c, int max_reads = kReadsPerPass) {
+    char buf[kReadBytes];
+    for (int i = 0; i < max_reads && c.fd >= 0; ++i) {
       const ssize_t n = read(c.fd, buf, sizeof buf);
       if (n > 0) {
-        c.partial.append(buf, static_cast<size_t>(n));
-        size_t nl;
-        while ((nl = c.partial.find('\n')) != std::string::npos) {
-          print(c.name, c.partial.substr(0, nl));
-          ++c.lines;
-          c.partial.erase(0, nl + 1);
-        }
-        continue;
-      }
-      if (n == 0) {  // EOF
-        if (!c.partial.empty()) print(c.name, c.partial);
+        take(c, buf, static_cast<size_t>(n));
+      } else if (n == 0) {  // EOF
+        if (!c.partial.empty()) line(c, c.partial);
         c.partial.clear();
         close(c.fd);
         c.fd = -1;
+      } else if (errno != EINTR) {
+        break;  // EAGAIN: nothing more for now
       }
-      break;
     }
+  }
+
+  /// Splits output into lines. Only the bytes just appended are searched for a newline (searching
+  /// the whole buffer after each read made the work grow with the square of a long line), and a
+  /// line is printed once it reaches kMaxLineBytes, saying so, rather than held without bound.
+  void take(Child& c, const char* data, size_t n) {
+    size_t from = c.partial.size();
+    c.partial.append(data, n);
+    size_t start = 0;
+    size_t nl;
+    while ((nl = c.partial.find('\n', from)) != std::string::npos) {
+      line(c, c.partial.substr(start, nl - start));
+      start = from = nl + 1;
+    }
+    c.partial.erase(0, start);
+    while (c.partial.size() > kMaxLineBytes) {
+      line(c, c.partial.substr(0, kMaxLineBytes) + " [cut: line longer than " + std::to_string(kMaxLineBytes) +
+                  " bytes]");
+      c.partial.erase(0, kMaxLineBytes);
+    }
+  }
+
+  void line(Child& c, const std::string& text) {
+    print(c.name, text);
+    ++c.lines;
   }
 
   void print(const std::string& name, const std::string& line) {
@@ -283,7 +310,9 @@ class Supervisor {
       if (c.exited) continue;
       int st = 0;
       if (waitpid(c.pid, &st, WNOHANG) == c.pid) {
-        if (c.fd >= 0) drain(c);
+        // Its last lines before the report of its end: the pipe holds at most 64 KiB once the
+        // writer is gone (a grandchild still writing is read on the next passes).
+        drain(c, kReadsAtExit);
         c.exited = true;
         c.status = st;
       }

@@ -175,6 +175,47 @@ TEST(Launcher, TheDrainWaitsUntilTheBusIsQuiet) {
   }
 }
 
+// A child that writes without pause (`yes`) kept the launcher reading its pipe for ever: the
+// process that ends the run was never reaped and SIGINT was not seen. Each pass over the children
+// now reads a bounded amount from each.
+TEST(Launcher, AChildThatFloodsItsOutputDoesNotWedgeTheLauncher) {
+  t::TempDir dir;
+  const auto file = launchFile(dir,
+                               "  - {name: flooder, cmd: ['yes']}\n"
+                               "  - {name: scenario, cmd: [sleep, '1'], ends_run: true}\n");
+  // Tens of MB of `flooder | y`: into a file, not the test's memory.
+  const std::string out = dir.file("out.txt");
+  t::RunResult r;
+  const double s = secondsOf([&] {
+    r = t::run({"sh", "-c", "exec \"$0\" \"$@\" > " + out + " 2>&1", t::binPath("omnislam-launch"), file,
+                "--no-log", "--url", "memq://"},
+               15);
+  });
+  EXPECT_FALSE(r.timed_out) << "the launcher did not end";
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const std::string text = t::readFile(out);
+  const std::string tail = text.substr(text.size() > 4000 ? text.size() - 4000 : 0);
+  EXPECT_NE(text.find("stopping: scenario finished the scenario"), std::string::npos) << tail;
+  EXPECT_NE(tail.find("launch   | done"), std::string::npos) << tail;
+  EXPECT_LT(s, 10.0) << tail;
+}
+
+// Output without a newline was kept whole until one came: 300 MB of it grew the launcher by as
+// much. A line is printed once it reaches 64 KiB, saying that it was cut.
+TEST(Launcher, ALineWithoutNewlineIsCutAt64KiB) {
+  t::TempDir dir;
+  const auto file = launchFile(dir,
+                               "  - {name: w, cmd: [sh, -c, 'head -c 150000 /dev/zero | tr \"\\\\000\" x; echo; echo next'],"
+                               " ends_run: true}\n");
+  const auto r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 15);
+  EXPECT_EQ(r.exit_code, 0) << r.output.substr(0, 2000);
+  // 150000 bytes: two pieces of 65536 with the note, then the rest as the line.
+  const std::string piece = "w      | " + std::string(65536, 'x') + " [cut: line longer than 65536 bytes]\n";
+  const std::string rest = "w      | " + std::string(150000 - 2 * 65536, 'x') + "\n";
+  EXPECT_NE(r.output.find(piece + piece + rest + "w      | next\n"), std::string::npos)
+      << r.output.substr(0, 2000);
+}
+
 TEST(Launcher, BadLaunchFilesNameTheKey) {
   t::TempDir dir;
   const auto dup = launchFile(dir, "  - {name: a, cmd: [sleep, '1']}\n  - {name: a, cmd: [sleep, '1']}\n");

@@ -346,38 +346,61 @@ class Supervisor {
   size_t width_;
 };
 
+constexpr int kMessagesPerBatch = 1000;  ///< bus messages handled between two passes over the children
+
+/// What the drain counts: messages but PROCESS_STATUS (published once a second by every process,
+/// busy or idle), and when the last one came.
+struct Activity {
+  std::chrono::steady_clock::time_point last;
+  int64_t messages = 0;
+  void on(const lcm::ReceiveBuffer*, const std::string& channel) {
+    if (channel == channels::kProcessStatus) return;
+    last = std::chrono::steady_clock::now();
+    ++messages;
+  }
+};
+
+void ignore(const lcm::ReceiveBuffer*, const std::string&, void*) {}
+
+/// The drain's bus listener, set up when the launcher starts, before anything publishes. LCM tests
+/// the URL on its first subscription (it sends itself a message and waits for it): at the end of
+/// the run, on a bus that stayed busy, that test lasted as long as the flood (holding the drain
+/// past drain_s with no child looked after) or failed, and LCM then gave no subscription, which the
+/// launcher used unchecked and crashed on. The channel subscribed to here is never published: LCM
+/// queues nothing for the launcher until the drain subscribes to every channel.
+std::unique_ptr<lcm::LCM> listenForTheDrain(Supervisor& sup, const Plan& plan) {
+  if (plan.drain_s <= 0 || plan.drain_quiet_s <= 0) return nullptr;
+  auto bus = std::make_unique<lcm::LCM>(plan.lcm_url);
+  if (bus->good() && bus->subscribeFunction("OMNISLAM_LAUNCH_NOTHING", &ignore, static_cast<void*>(nullptr)))
+    return bus;
+  sup.print("launch", "cannot listen on " + plan.lcm_url + " for the drain: it will wait the whole drain_s");
+  return nullptr;
+}
+
 /// The end of a run: the processes work through what they have queued (a loaded machine, a slow
 /// filter) before they are stopped, since a process stopped by SIGINT leaves its queue unprocessed.
-/// The bus is quiet once no message but PROCESS_STATUS (published once a second by every process,
-/// busy or idle) has been seen for drain_quiet_s; drain_s bounds the wait.
-void drainUntilQuiet(Supervisor& sup, const Plan& plan) {
+/// The bus is quiet once no message but PROCESS_STATUS has been seen for drain_quiet_s; drain_s
+/// bounds the wait.
+void drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus) {
   using Clock = std::chrono::steady_clock;
+  Activity activity;
+  if (bus)
+    if (lcm::Subscription* sub = bus->subscribe(".*", &Activity::on, &activity)) sub->setQueueCapacity(100000);
   const auto start = Clock::now();
   const auto until = start + std::chrono::duration<double>(plan.drain_s);
-  std::unique_ptr<lcm::LCM> bus;
-  if (plan.drain_quiet_s > 0) {
-    bus = std::make_unique<lcm::LCM>(plan.lcm_url);
-    if (!bus->good()) {
-      sup.print("launch", "cannot listen on " + plan.lcm_url + " for the drain: waiting the whole drain_s");
-      bus.reset();
-    }
-  }
-  struct Activity {
-    Clock::time_point last;
-    int64_t messages = 0;
-    void on(const lcm::ReceiveBuffer*, const std::string& channel) {
-      if (channel == channels::kProcessStatus) return;
-      last = Clock::now();
-      ++messages;
-    }
-  } activity{start};
-  if (bus) bus->subscribe(".*", &Activity::on, &activity)->setQueueCapacity(100000);
+  activity.last = start;
   const auto quiet = std::chrono::duration<double>(plan.drain_quiet_s);
+  bool busy = false;  // the last batch found the bus still busy: do not wait on the children
   while (Clock::now() < until && !lcmio::stopRequested()) {
-    sup.pump(bus ? 20 : 50);
+    sup.pump(busy ? 0 : bus ? 20 : 50);
     if (!bus) continue;
-    while (bus->handleTimeout(0) > 0) {
-    }
+    // What waits on the bus, in batches: a bus that never empties must not keep the launcher from
+    // drain_s, a stop request and the children (it did, until the flood ended by itself).
+    int handled = 0;
+    while (handled < kMessagesPerBatch && Clock::now() < until && !lcmio::stopRequested() &&
+           bus->handleTimeout(0) > 0)
+      ++handled;
+    busy = handled == kMessagesPerBatch;
     if (Clock::now() - activity.last >= quiet) {
       const double s = std::chrono::duration<double>(Clock::now() - start).count();
       std::ostringstream o;
@@ -387,7 +410,7 @@ void drainUntilQuiet(Supervisor& sup, const Plan& plan) {
       return;
     }
   }
-  if (bus) {
+  if (bus && !lcmio::stopRequested()) {
     std::ostringstream o;
     o << "drain_s (" << plan.drain_s << " s) reached before the bus was quiet for " << plan.drain_quiet_s << " s ("
       << activity.messages << " messages since the scenario ended): stopping anyway";
@@ -403,6 +426,7 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
   for (const auto& p : plan.processes) width = std::max(width, p.name.size());
   Supervisor sup(width);
   sup.print("launch", "run '" + plan.name + "' on " + plan.lcm_url);
+  const std::unique_ptr<lcm::LCM> drain_bus = listenForTheDrain(sup, plan);
 
   if (plan.log_enabled) {
     const fs::path dir = fs::path(plan.log_file).parent_path();
@@ -475,7 +499,7 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
     if (reason.empty() && !any_running) reason = "every process has ended";
   }
   sup.print("launch", "stopping: " + reason);
-  if (!lcmio::stopRequested() && plan.drain_s > 0) drainUntilQuiet(sup, plan);
+  if (!lcmio::stopRequested() && plan.drain_s > 0) drainUntilQuiet(sup, plan, drain_bus.get());
   sup.stop(false, plan.stop_grace_s);
   // The logger goes last, after a moment for the final messages (status, last frame) to land.
   sup.pumpFor(std::chrono::milliseconds(300));

@@ -3,6 +3,7 @@
 // lcm-logger or omnislam-record.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -10,9 +11,12 @@
 #include <string>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include <sys/stat.h>
 #include <unistd.h>
+
+#include <lcm/lcm-cpp.hpp>
 
 #include "omnislam/lcmio/channels.h"
 #include "proc_util.h"
@@ -214,6 +218,57 @@ TEST(Launcher, ALineWithoutNewlineIsCutAt64KiB) {
   const std::string rest = "w      | " + std::string(150000 - 2 * 65536, 'x') + "\n";
   EXPECT_NE(r.output.find(piece + piece + rest + "w      | next\n"), std::string::npos)
       << r.output.substr(0, 2000);
+}
+
+// After the scenario the launcher listens until the bus is quiet, at most drain_s. On a bus that
+// stayed busy it was held past drain_s (and past a SIGINT, with no child's output read) until the
+// flood ended: LCM's test of the URL, on the drain's first subscription, lasted as long as the
+// flood or failed (the launcher then crashed on the missing subscription, or reported "0 messages"
+// once drain_s was spent), and its loop handled messages for as long as one was waiting.
+TEST(Launcher, ABusyBusDoesNotHoldTheDrainPastDrainS) {
+  t::TempDir dir;
+  const std::string url = t::privateUdpUrl(31);
+  const std::string path = dir.file("launch.yaml");
+  std::ofstream(path) << "name: unit\nlogger: {enabled: false}\nstop_grace_s: 1\ndrain_s: 1\ndrain_quiet_s: 0.5\n"
+                      << "processes:\n  - {name: scenario, cmd: [sleep, '1.5'], ends_run: true}\n"
+                      << "  - {name: idle, cmd: [sleep, '60']}\n";
+  // The launcher runs at a lower priority so that it cannot keep up with the flood.
+  t::Child launcher({"nice", "-n", "10", t::binPath("omnislam-launch"), path, "--url", url});
+  const auto t0 = std::chrono::steady_clock::now();
+  while (launcher.output().find("started idle") == std::string::npos && launcher.alive() &&
+         std::chrono::steady_clock::now() < t0 + std::chrono::seconds(10))
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  // The flood, once the run has started (the end of a run on a busy bus): small messages as fast as
+  // three threads send them, until the launcher has ended or for 14 s.
+  std::atomic<bool> end{false};
+  std::atomic<bool> flood_ended_by_itself{false};
+  std::vector<std::thread> flood;
+  for (int i = 0; i < 3; ++i)
+    flood.emplace_back([&] {
+      lcm::LCM bus(url);
+      const std::vector<uint8_t> data(200, 0);
+      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(14);
+      while (!end) {
+        for (int k = 0; k < 256; ++k) bus.publish("FLOOD", data.data(), static_cast<unsigned>(data.size()));
+        if (std::chrono::steady_clock::now() >= until) {
+          flood_ended_by_itself = true;
+          break;
+        }
+      }
+    });
+  const t::RunResult r = launcher.wait(30);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  end = true;
+  for (auto& th : flood) th.join();
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(flood_ended_by_itself) << "the launcher ended only after the flood, " << s << " s\n" << r.output;
+  // "drain_s (1 s) reached before the bus was quiet for 0.5 s (N messages since the scenario
+  // ended)", or, when the flood starved the launcher so much that it saw nothing for 0.5 s, "bus
+  // quiet after X s (N messages ...)": either way it saw the flood.
+  const auto at = r.output.find(" messages since the scenario ended)");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  EXPECT_GT(std::stol(r.output.substr(r.output.rfind('(', at) + 1)), 0) << "the flood was not seen\n" << r.output;
+  EXPECT_LT(s, 12.0) << r.output;
 }
 
 TEST(Launcher, BadLaunchFilesNameTheKey) {

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -153,6 +154,7 @@ struct Child {
   bool is_logger = false;
   bool exited = false;
   int status = 0;
+  bool group_killed = false;  ///< processes it started outlived it and had to be killed
 };
 
 std::string resolveProgram(const std::string& prog, const std::string& bin_dir) {
@@ -186,7 +188,9 @@ Child spawn(const std::string& name, const std::vector<std::string>& argv, const
   }
   if (pid == 0) {
     // Child: own process group (so a terminal's Ctrl-C reaches only the launcher, which stops
-    // the children in order), die with the launcher, output into the pipe.
+    // the children in order, and a stop reaches what the child starts), SIGTERM when the launcher
+    // dies (SIGTERM rather than SIGKILL: the recorder still closes its log; docs/launch-file.md),
+    // output into the pipe.
     std::signal(SIGINT, SIG_DFL);
     std::signal(SIGTERM, SIG_DFL);
     setpgid(0, 0);
@@ -207,6 +211,9 @@ Child spawn(const std::string& name, const std::vector<std::string>& argv, const
     std::fprintf(stderr, "cannot start '%s': %s\n", cargs[0], std::strerror(errno));
     _exit(127);
   }
+  // The group is set on both sides of the fork (the usual way): a stop sent to the group before the
+  // child has run setpgid would otherwise find no group.
+  setpgid(pid, pid);
   pthread_sigmask(SIG_SETMASK, &old_mask, nullptr);
   close(fds[1]);
   fcntl(fds[0], F_SETFL, O_NONBLOCK);
@@ -321,28 +328,64 @@ class Supervisor {
 
   bool alive(const Child& c) const { return !c.exited; }
 
-  /// SIGINT to the given children, SIGKILL after grace_s. Reports what had to be killed.
+  /// SIGINT to the given children and to what they started (their process groups, which outlive
+  /// a child that has ended), SIGKILL to what is left after grace_s. Reports what had to be killed.
   void stop(bool loggers, double grace_s) {
+    const auto mine = [&](const Child& c) { return c.is_logger == loggers; };
     for (auto& c : children)
-      if (!c.exited && c.is_logger == loggers) kill(c.pid, SIGINT);
+      if (mine(c) && (!c.exited || groupAlive(c))) signalGroup(c, SIGINT);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(grace_s);
     while (std::chrono::steady_clock::now() < deadline) {
       bool any = false;
-      for (auto& c : children) any = any || (!c.exited && c.is_logger == loggers);
+      for (auto& c : children) any = any || (mine(c) && (!c.exited || groupAlive(c)));
       if (!any) return;
       pump(50);
     }
-    for (auto& c : children)
-      if (!c.exited && c.is_logger == loggers) {
-        std::ostringstream o;
+    for (auto& c : children) {
+      if (!mine(c)) continue;
+      std::ostringstream o;
+      if (!c.exited) {
         o << c.name << " did not stop within " << grace_s << " s: killing it";
-        print("launch", o.str());
-        kill(c.pid, SIGKILL);
+      } else if (groupAlive(c)) {
+        o << "processes " << c.name << " started did not stop within " << grace_s << " s: killing them";
+        c.group_killed = true;
+      } else {
+        continue;
       }
+      print("launch", o.str());
+      signalGroup(c, SIGKILL);
+    }
     for (int i = 0; i < 40; ++i) pump(50);
   }
 
  private:
+  /// `sig` to the child's process group; to the child alone if the group is gone (it has not yet
+  /// been reaped, or it left the group).
+  static void signalGroup(const Child& c, int sig) {
+    if (kill(-c.pid, sig) != 0 && !c.exited) kill(c.pid, sig);
+  }
+
+  /// Whether a process other than a zombie is left in the child's group (an orphaned zombie waits
+  /// for init, which may be slow to reap it, or never in a container).
+  static bool groupAlive(const Child& c) {
+    if (kill(-c.pid, 0) != 0) return false;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator("/proc", ec)) {
+      const std::string pid = e.path().filename().string();
+      if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos) continue;
+      std::ifstream f(e.path() / "stat");
+      std::string stat;
+      std::getline(f, stat);  // pid (comm) state ppid pgrp ...
+      const auto paren = stat.rfind(')');
+      if (paren == std::string::npos) continue;
+      std::istringstream rest(stat.substr(paren + 1));
+      char state = 0;
+      long ppid = 0, pgrp = 0;
+      if (rest >> state >> ppid >> pgrp && pgrp == c.pid && state != 'Z' && state != 'X') return true;
+    }
+    return false;
+  }
+
   size_t width_;
 };
 
@@ -513,6 +556,7 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
       sup.print("launch", "process " + c.name + " ended badly while stopping: " + describe(c.status));
       rc = 1;
     }
+    if (c.group_killed) rc = 1;
   }
   if (plan.log_enabled) sup.print("launch", "log: " + plan.log_file);
   if (lcmio::stopRequested()) {

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <utility>
@@ -218,6 +219,59 @@ TEST(Launcher, ALineWithoutNewlineIsCutAt64KiB) {
   const std::string rest = "w      | " + std::string(150000 - 2 * 65536, 'x') + "\n";
   EXPECT_NE(r.output.find(piece + piece + rest + "w      | next\n"), std::string::npos)
       << r.output.substr(0, 2000);
+}
+
+// The live (not zombie) processes of a process group, from /proc.
+std::vector<pid_t> liveProcessesOfGroup(pid_t pgid) {
+  std::vector<pid_t> out;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator("/proc", ec)) {
+    const std::string pid = e.path().filename().string();
+    if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    const std::string stat = t::readFile(e.path().string() + "/stat");  // pid (comm) state ppid pgrp ...
+    const auto paren = stat.rfind(')');
+    if (paren == std::string::npos) continue;
+    std::istringstream rest(stat.substr(paren + 1));
+    char state = 0;
+    long ppid = 0, pgrp = 0;
+    if (rest >> state >> ppid >> pgrp && pgrp == pgid && state != 'Z' && state != 'X') out.push_back(std::stoi(pid));
+  }
+  return out;
+}
+
+// Each child runs in its own process group, but the stop went to the child alone: the `sleep` of
+// `bash -c 'sleep 30; ...'` outlived the launcher (bash was killed after the grace), and so did a
+// background job, which a non-interactive shell starts with SIGINT ignored. SIGINT and SIGKILL now
+// go to the whole group; what is left of a group after the grace is killed, and said so.
+TEST(Launcher, StoppingAProcessStopsTheProcessesItStarted) {
+  t::TempDir dir;
+  const auto file = launchFile(dir,
+                               "  - {name: fg, cmd: [bash, -c, 'echo group $$; sleep 30; echo after']}\n"
+                               "  - {name: bg, cmd: [sh, -c, 'echo group $$; sleep 30 & wait']}\n"
+                               "  - {name: scenario, cmd: [sleep, '1'], ends_run: true}\n");
+  const auto r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 30);
+  const auto groupOf = [&](const std::string& name) {
+    const std::vector<std::string> w = t::wordsOfLine(r.output, name);  // name | group PID
+    return w.size() == 4 && w[2] == "group" ? static_cast<pid_t>(std::stol(w[3])) : pid_t{-1};
+  };
+  for (const std::string name : {"fg", "bg"}) {
+    const pid_t group = groupOf(name);
+    ASSERT_GT(group, 1) << r.output;
+    // An orphan is reaped by init: a moment for that.
+    std::vector<pid_t> left = liveProcessesOfGroup(group);
+    for (int i = 0; i < 20 && !left.empty(); ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      left = liveProcessesOfGroup(group);
+    }
+    EXPECT_TRUE(left.empty()) << name << ": " << left.size() << " processes of its group outlived the launcher\n"
+                              << r.output;
+    if (!left.empty()) kill(-group, SIGKILL);
+  }
+  EXPECT_EQ(r.output.find("fg       | after"), std::string::npos) << r.output;
+  // The background sleep ignores SIGINT: killed after the grace, which makes the run fail.
+  EXPECT_NE(r.output.find("processes bg started did not stop within 2 s: killing them"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.exit_code, 1) << r.output;
 }
 
 // After the scenario the launcher listens until the bus is quiet, at most drain_s. On a bus that

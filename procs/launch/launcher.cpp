@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
@@ -148,10 +149,11 @@ struct Child {
   pid_t pid = -1;
   int fd = -1;  ///< read end of its stdout+stderr
   std::string partial;
-  int64_t lines = 0;  ///< lines of output printed so far
   bool ends_run = false;
   bool required = true;
   bool is_logger = false;
+  std::string ready_line;  ///< the start of the line that says it works (the recorder's)
+  bool ready = false;      ///< it has printed that line
   bool exited = false;
   int status = 0;
   bool group_killed = false;  ///< processes it started outlived it and had to be killed
@@ -305,7 +307,7 @@ class Supervisor {
 
   void line(Child& c, const std::string& text) {
     print(c.name, text);
-    ++c.lines;
+    if (!c.ready && !c.ready_line.empty() && text.rfind(c.ready_line, 0) == 0) c.ready = true;
   }
 
   void print(const std::string& name, const std::string& line) {
@@ -480,19 +482,29 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
             : std::vector<std::string>{"omnislam-record", "--url", plan.lcm_url, "-f", plan.log_file};
     Child lg = spawn("logger", argv, plan.lcm_url, bin_dir);
     lg.is_logger = true;
+    // The logger must be subscribed before anyone publishes. omnislam-record prints this line once
+    // it has opened the file and subscribed; lcm-logger prints it just before it opens the file and
+    // subscribes (and ends at once if it cannot open it). Any other line (an error, LCM's warning)
+    // is not the start. Wait for it (a loaded machine starts processes slowly, up to 20 s), then a
+    // short margin.
+    lg.ready_line = plan.log_tool == "lcm-logger" ? "Opening log file" : "[record] recording";
     sup.children.push_back(lg);
     sup.print("launch", "recording every channel into " + plan.log_file + " (" + plan.log_tool + ")");
-    // The logger must be subscribed before anyone publishes. omnislam-record prints its first line
-    // once it has subscribed; lcm-logger prints 'Opening log file' just before it subscribes. Wait
-    // for that line (a loaded machine starts processes slowly, up to 20 s), then a short margin.
     const Child& logger = sup.children.back();
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-    while (logger.lines == 0 && !logger.exited && !lcmio::stopRequested() &&
-           std::chrono::steady_clock::now() < deadline)
+    while (!logger.ready && !logger.exited && !lcmio::stopRequested() && std::chrono::steady_clock::now() < deadline)
       sup.pump(20);
-    if (logger.lines == 0 && !logger.exited && !lcmio::stopRequested())
+    if (!logger.ready && !logger.exited && !lcmio::stopRequested())
       sup.print("launch", plan.log_tool + " has not said it is recording after 20 s");
     if (!lcmio::stopRequested()) sup.pumpFor(std::chrono::milliseconds(300));
+    // A recorder that has ended records nothing (it could not write the file): the run stops
+    // before it starts. Its error line used to pass for the start, and the run went on unrecorded.
+    if (logger.exited && !lcmio::stopRequested()) {
+      sup.print("launch", plan.log_tool + " ended before it started recording (" + describe(logger.status) +
+                              "): starting nothing");
+      sup.print("launch", "done with errors");
+      return 1;
+    }
   }
   // A stop while waiting for the logger: start nothing (the loop below stops what runs).
   for (const auto& p : plan.processes) {
@@ -558,7 +570,10 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
     }
     if (c.group_killed) rc = 1;
   }
-  if (plan.log_enabled) sup.print("launch", "log: " + plan.log_file);
+  // Only a log the recorder said it writes (one stopped while the recorder started has nothing).
+  const bool recorded = std::any_of(sup.children.begin(), sup.children.end(),
+                                    [](const Child& c) { return c.is_logger && c.ready; });
+  if (recorded && fs::exists(plan.log_file)) sup.print("launch", "log: " + plan.log_file);
   if (lcmio::stopRequested()) {
     // Everything was stopped in order and the recording closed, but the run did not end by
     // itself: 128 + signal (the shell's convention) lets a script tell it from a finished run.

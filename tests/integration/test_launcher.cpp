@@ -341,6 +341,27 @@ TEST(Launcher, BadLaunchFilesNameTheKey) {
   EXPECT_NE(r.output.find("processes[0].cmdd' is not a known key"), std::string::npos) << r.output;
 }
 
+// The recorder that cannot write its file (here a path in /proc) printed its error and exited; the
+// launcher took that first line for "recording", started the run, and named a log that does not
+// exist. It now stops before anything starts. lcm-logger says 'Opening log file' before it opens it.
+TEST(Launcher, ARecorderThatFailsToStartStopsTheRunBeforeAnythingStarts) {
+  for (const std::string tool : {"omnislam-record", "lcm-logger"}) {
+    t::TempDir dir;
+    const std::string path = dir.file("launch.yaml");
+    std::ofstream(path) << "name: unit\nlogger: {tool: " << tool << "}\nprocesses:\n"
+                        << "  - {name: w, cmd: [sh, -c, 'echo working; sleep 1'], ends_run: true}\n";
+    const auto r = t::run({t::binPath("omnislam-launch"), path, "--log-file", "/proc/nope.lcm", "--url",
+                           t::privateUdpUrl(41)},
+                          30);
+    EXPECT_EQ(r.exit_code, 1) << tool << "\n" << r.output;
+    EXPECT_NE(r.output.find("ended before it started recording"), std::string::npos) << tool << "\n" << r.output;
+    EXPECT_EQ(r.output.find("started w"), std::string::npos) << tool << "\n" << r.output;
+    EXPECT_EQ(r.output.find("working"), std::string::npos) << tool << "\n" << r.output;
+    EXPECT_EQ(r.output.find("log: "), std::string::npos) << tool << "\n" << r.output;
+    EXPECT_NE(r.output.find("done with errors"), std::string::npos) << tool << "\n" << r.output;
+  }
+}
+
 // SIGTERM while the launcher waits (up to 20 s) for the recorder to say it records: it used to
 // wait the 20 s out and then start every process anyway.
 TEST(Launcher, AStopWhileWaitingForTheRecorderStartsNothing) {

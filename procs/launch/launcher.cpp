@@ -134,6 +134,11 @@ Plan loadPlan(const std::string& path, const std::map<std::string, std::string>&
         throw config::ConfigError(p.where("cmd") + ": " + e.what());
       }
     }
+    // The launcher's own lines and the recorder's carry these names: a process of either name
+    // could print lines that pass for theirs.
+    if (spec.name == "launch" || spec.name == "logger")
+      throw config::ConfigError(p.where("name") + " '" + spec.name + "' is reserved (the launcher's own lines and the "
+                                "recorder's are prefixed with 'launch' and 'logger')");
     for (const auto& other : plan.processes)
       if (other.name == spec.name) throw config::ConfigError(p.where("name") + " '" + spec.name + "' is used twice");
     plan.processes.push_back(std::move(spec));

@@ -221,6 +221,18 @@ TEST(Launcher, ALineWithoutNewlineIsCutAt64KiB) {
       << r.output.substr(0, 2000);
 }
 
+// The launcher prefixes its own lines with 'launch' and the recorder's with 'logger': a process of
+// that name could print lines that pass for theirs ('logger | ...' looked like the recorder dying).
+TEST(Launcher, AProcessMayNotTakeTheLaunchersOrTheRecordersName) {
+  t::TempDir dir;
+  for (const std::string name : {"logger", "launch"}) {
+    const auto file = launchFile(dir, "  - {name: a, cmd: [sleep, '1']}\n  - {name: " + name + ", cmd: [sleep, '1']}\n");
+    const auto r = t::run({t::binPath("omnislam-launch"), file, "--no-log"}, 10);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("processes[1].name' '" + name + "' is reserved"), std::string::npos) << r.output;
+  }
+}
+
 // The live (not zombie) processes of a process group, from /proc.
 std::vector<pid_t> liveProcessesOfGroup(pid_t pgid) {
   std::vector<pid_t> out;

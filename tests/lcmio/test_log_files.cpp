@@ -86,7 +86,9 @@ TEST(LogFiles, LcmsOwnReaderReadsWhatLogWriterWrites) {
     EXPECT_EQ(ev->timestamp, 1'000'000 + static_cast<int64_t>(k));
     EXPECT_EQ(ev->channel, written[k].first);
     ASSERT_EQ(ev->datalen, static_cast<int32_t>(written[k].second.size())) << k;
-    EXPECT_EQ(0, std::memcmp(ev->data, written[k].second.data(), written[k].second.size())) << k;
+    if (ev->datalen > 0) {  // (memcmp with an empty event's null pointers is undefined)
+      EXPECT_EQ(0, std::memcmp(ev->data, written[k].second.data(), written[k].second.size())) << k;
+    }
   }
   EXPECT_EQ(k, written.size());
 }

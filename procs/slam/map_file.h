@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "omnislam/core/limits.h"
 #include "omnislam/core/slam/types.h"
 
 namespace omnislam::slamproc {
@@ -32,8 +33,8 @@ std::string mapToYaml(const SavedMap& map);
 /// Writes atomically (temporary file, fsync, rename). Throws std::runtime_error naming the path.
 void saveMapAtomically(const SavedMap& map, const std::string& path);
 
-/// The most landmarks a map file may hold: what one SLAM_MAP message carries (lcmio::Limits).
-inline constexpr std::size_t kMaxSavedLandmarks = 100000;
+/// The most landmarks a map file may hold: what one SLAM_MAP message carries.
+inline constexpr std::size_t kMaxSavedLandmarks = kMaxMapLandmarks;
 
 /// Reads a map file; a missing file, a wrong format, version, kind, non-finite number, a
 /// covariance that is not symmetric positive definite, a repeated id or more than

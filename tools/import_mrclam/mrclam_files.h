@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "omnislam/core/limits.h"
+
 namespace omnislam::mrclam {
 
 /// A malformed or unreadable input file; what() is "FILE:LINE: reason" (or "FILE: reason").
@@ -34,10 +36,11 @@ constexpr double kMaxCoordinateM = 1e6;       ///< |x|, |y| of a truth pose or a
 constexpr double kMaxAngleRad = 100.0;        ///< |orientation|, |bearing| (wrapped afterwards)
 constexpr double kMaxRangeM = 1e6;            ///< range in 0..kMaxRangeM (read, then dropped)
 constexpr double kMaxLandmarkSigmaM = 100.0;  ///< landmark std-dev in 0..kMaxLandmarkSigmaM
-/// The message contract's sizes (lcmio::Limits, checked at compile time by the importer): more
-/// measurements at one time than a frame may carry, or more landmarks than a map, are refused.
+/// The message contract's sizes (lcmio::Limits; the first checked at compile time by the
+/// importer): more measurements at one time than a frame may carry, or more landmarks than a map,
+/// are refused.
 constexpr int kMaxMeasurementsPerTime = 4096;
-constexpr int kMaxLandmarks = 100000;
+constexpr int kMaxLandmarks = kMaxMapLandmarks;
 
 /// A file's time [s] as the messages' utime [us], rounded to the nearest microsecond.
 inline int64_t toUtime(double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e6)); }

@@ -21,7 +21,6 @@ namespace omnislam::mrclam {
 namespace {
 
 static_assert(lcmio::Limits{}.max_features == kMaxMeasurementsPerTime, "a frame's size: mrclam_files.h");
-static_assert(lcmio::Limits{}.max_landmarks == kMaxLandmarks, "a map's size: mrclam_files.h");
 
 constexpr int kFirstLandmarkSubject = 6;  // Barcodes.dat: subjects 1-5 are robots, 6-20 landmarks
 constexpr int kRankMap = 0, kRankTruth = 1, kRankOdometry = 2, kRankFeatures = 3, kRankLabels = 4;

@@ -7,14 +7,15 @@
 #include <set>
 
 #include "omnislam/core/angles.h"
+#include "omnislam/core/limits.h"
 
 namespace omnislam::config {
 namespace {
 
 /// The most lights a world may have: GROUND_TRUTH_MAP carries every light, and a map message holds
-/// at most 100 000 landmarks (lcmio::Limits). A grid is the product of its two lists, so it is
+/// at most kMaxMapLandmarks (100 000). A grid is the product of its two lists, so it is
 /// checked before it is built: 3000 values each way asked for 9 million lights, 10 000 for 3 GB.
-constexpr size_t kMaxLights = 100000;
+constexpr size_t kMaxLights = kMaxMapLandmarks;
 
 std::vector<sim::Light> parseLights(const Node& n) {
   n.rejectUnknownKeys({"height_m", "radius_m", "intensity", "grid", "list"});

@@ -2,6 +2,7 @@
 // one-line reason when the message must be refused, or nothing when it is acceptable.
 #pragma once
 
+#include "omnislam/core/limits.h"
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -28,7 +29,7 @@ struct Limits {
   int max_image_side_px = 8192;
   int max_image_bytes = 64 * 1024 * 1024;
   int max_features = 4096;
-  int max_landmarks = 100000;
+  int max_landmarks = kMaxMapLandmarks;  ///< omnislam/core/limits.h
   int max_particles = 100000;
 };
 

@@ -26,6 +26,7 @@
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/node.h"
+#include "omnislam/lcmio/pacing.h"
 #include "omnislam/lcmio/signals.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/sim/image_clock.h"
@@ -60,12 +61,6 @@ struct Publisher {
   }
 };
 
-/// steady-clock time `offset_us / speedup` after `t0` (speedup > 0), capped at 30 years: a tiny
-/// speedup (1e-300, or 0.001 over a long span of utimes) must wait, not overflow into the past.
-std::chrono::steady_clock::time_point paced(std::chrono::steady_clock::time_point t0, double offset_us, double speedup) {
-  const double wait_us = std::min(offset_us / speedup, 1e15);
-  return t0 + std::chrono::microseconds(static_cast<int64_t>(wait_us));
-}
 
 int64_t wallUtime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
@@ -152,7 +147,7 @@ int runDir(lcmio::Node& node, Publisher& pub, const std::string& dir, double rat
   size_t done = 0, published = 0;
   for (size_t i = 0; i < files.size() && !lcmio::stopRequested(); ++i, done = i) {
     if (speedup > 0) {
-      const auto due = paced(wall0, static_cast<double>(i) * static_cast<double>(period_us), speedup);
+      const auto due = lcmio::pacedTime(wall0, static_cast<double>(i) * static_cast<double>(period_us) * 1e-6, speedup);
       while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < due) node.handleFor(0.02);
       if (lcmio::stopRequested()) break;
     }

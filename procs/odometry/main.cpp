@@ -5,7 +5,6 @@
 //   csv  a recorded CSV of wheel data (utime,v_mps,omega_radps), integrated and paced by utime.
 #include <CLI/CLI.hpp>
 
-#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <iostream>
@@ -17,6 +16,7 @@
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
+#include "omnislam/lcmio/pacing.h"
 #include "omnislam/lcmio/signals.h"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/sim/odometry_sim.h"
@@ -110,11 +110,8 @@ int runCsv(lcmio::Node& node, const std::string& path, double speedup) {
       pose = pose.compose(Pose2{ds * std::cos(0.5 * dth), ds * std::sin(0.5 * dth), dth});
     }
     if (speedup > 0) {
-      // In double and capped at 30 years: a tiny speedup (or 0.001 over a long span of utimes)
-      // must wait, not overflow the microseconds into the past and publish at once.
-      const double wait_us =
-          std::min(static_cast<double>(samples[i].utime - samples[0].utime) / speedup, 1e15);
-      const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(wait_us));
+      const auto due =
+          lcmio::pacedTime(wall0, static_cast<double>(samples[i].utime - samples[0].utime) * 1e-6, speedup);
       while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < due) node.handleFor(0.005);
       if (lcmio::stopRequested()) break;
     }

@@ -15,6 +15,7 @@
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
+#include "omnislam/lcmio/pacing.h"
 #include "omnislam/lcmio/signals.h"
 #include "omnislam/feature_t.hpp"
 #include "omnislam/map_t.hpp"
@@ -127,8 +128,7 @@ int main(int argc, char** argv) {
     for (int64_t k = 0; k <= n_steps && !lcmio::stopRequested(); ++k) {
       const double t = k * dt;
       if (speedup > 0) {
-        const auto due = wall0 + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                     std::chrono::duration<double>(t / speedup));
+        const auto due = lcmio::pacedTime(wall0, t, speedup);
         while (!lcmio::stopRequested()) {
           const double left = std::chrono::duration<double>(due - std::chrono::steady_clock::now()).count();
           if (left <= 0) break;

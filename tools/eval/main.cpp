@@ -2,9 +2,10 @@
 // (from the same log or --truth) and prints a table, or one JSON object with --json. Landmarks are
 // matched one-to-one by optimal assignment within --gate; unmatched estimates are spurious. No
 // alignment unless --align (best rigid 2D transform of the trajectory onto the truth, applied to
-// trajectory and map). Writes both trajectories in TUM format for evo. Also: dead reckoning
-// (ODOMETRY mapped into the truth frame by the start pose) raw and aligned, and, when the log has
-// SLAM_ASSOCIATIONS and GROUND_TRUTH_FEATURE_LABELS, association precision / recall.
+// trajectory and map). Writes the SLAM, truth and (with ODOMETRY) dead-reckoning trajectories in TUM
+// format for evo. Also: dead reckoning (ODOMETRY mapped into the truth frame by the start pose) raw
+// and aligned, and, when the log has SLAM_ASSOCIATIONS and GROUND_TRUTH_FEATURE_LABELS, association
+// precision / recall.
 #include <CLI/CLI.hpp>
 
 #include <Eigen/Geometry>

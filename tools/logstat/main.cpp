@@ -1,5 +1,5 @@
 // omnislam-logstat: prints what an LCM log holds, channel by channel (counts, sequence gaps,
-// undecodable events, span and rate in the messages' own time), then each process's last
+// undecodable or invalid events, span and rate in the messages' own time), then each process's last
 // PROCESS_STATUS (received, published, undecodable, refused, missed; its detail and last error).
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>

@@ -4,7 +4,7 @@
 // method and ML on the same frames. The world is a grid of ceiling lights 4.5 m apart at 6.5 m;
 // the robot drives a 2 m circle in the middle; the perceptual range is 9.5 m. Also one association
 // level of many features (split into components against one dense solve) and the candidate
-// costs (the measurement's ray built once against once per pair).
+// costs (a candidate's prediction made once per frame against once per pair).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -18,6 +18,7 @@
 #include "omnislam/core/slam/data_association.h"
 #include "omnislam/core/slam/fastslam.h"
 #include "omnislam/core/slam/hungarian.h"
+#include "candidate_per_pair.h"  // tests/support: the baseline of BM_CandidateCosts
 
 namespace {
 
@@ -234,37 +235,49 @@ BENCHMARK_CAPTURE(BM_Associate, dense, false)->Arg(32)->Arg(128)->Arg(256)->ArgN
 BENCHMARK_CAPTURE(BM_Associate, components, true)->Arg(32)->Arg(128)->Arg(256)->ArgName("features")->Unit(benchmark::kMicrosecond);
 
 // ---- Candidate costs: one measurement against many candidates ------------------------------
-// The candidate level scores every leftover measurement against every candidate. The baseline
-// builds the measurement's ray for each pair (candidateLogLikelihood with z, Q, x_t, as before);
-// the other builds it once per measurement (the overload taking the observation, as updateCandidates
-// does now). 256 ceiling-light candidates of one or two rays each, 32 measurements.
-void BM_CandidateCosts(benchmark::State& state, bool ray_once) {
+// The candidate level scores every leftover measurement against every candidate. The baseline is
+// the code before a candidate's prediction was made once per frame (tests/support/
+// candidate_per_pair.h: the measurement's ray built once, the cross-point and predictions per pair);
+// the other is updateCandidates's form now (one CandidatePrediction per candidate, the cross-point
+// depths without an atan2). 256 candidates of one ray each, 32 measurements, range 0.5-9.5 m:
+// ceiling lights (azimuth + elevation) and vertical lines (azimuth only).
+void BM_CandidateCosts(benchmark::State& state, bool prediction_once, LandmarkKind kind) {
   std::mt19937_64 rng(23);
   std::uniform_real_distribution<double> az(-kPi, kPi), el(0.3, 1.3);
-  Eigen::Matrix2d Q = Eigen::Matrix2d::Identity() * kSigma_rad * kSigma_rad;
+  const int dim = measurementDim(kind);
+  const MeasMat Q = MeasMat::Identity(dim, dim) * kSigma_rad * kSigma_rad;
+  const auto bearing = [&]() {
+    MeasVec z(dim);
+    z(0) = az(rng);
+    if (dim == 2) z(1) = el(rng);
+    return z;
+  };
   const Pose2 x0{0.0, 0.0, 0.0}, x1{0.3, 0.1, 0.05};
   std::vector<Candidate> cands(256);
-  for (size_t k = 0; k < cands.size(); ++k) {
-    cands[k].kind = LandmarkKind::kPoint3D;
-    cands[k].observations.push_back(makeObservation(LandmarkKind::kPoint3D, x0, kCamInR, Eigen::Vector2d(az(rng), el(rng)), Q));
+  for (auto& c : cands) {
+    c.kind = kind;
+    c.observations.push_back(makeObservation(kind, x0, kCamInR, bearing(), Q));
   }
-  std::vector<Eigen::Vector2d> zs(32);
-  for (auto& z : zs) z = Eigen::Vector2d(az(rng), el(rng));
+  std::vector<MeasVec> zs(32);
+  for (auto& z : zs) z = bearing();
+  std::vector<CandidatePrediction> predictions(cands.size());
   for (auto _ : state) {
     double sum = 0.0;
+    std::fill(predictions.begin(), predictions.end(), CandidatePrediction{});  // a new frame
     for (const auto& z : zs) {
-      if (ray_once) {
-        const CandidateObservation now = makeObservation(LandmarkKind::kPoint3D, x1, kCamInR, z, Q);
-        for (const auto& c : cands) sum += candidateLogLikelihood(c, now, 0.5, kRange_m);
-      } else {
-        for (const auto& c : cands) sum += candidateLogLikelihood(c, z, Q, x1, kCamInR, 0.5, kRange_m);
+      const CandidateObservation now = makeObservation(kind, x1, kCamInR, z, Q);
+      for (size_t k = 0; k < cands.size(); ++k) {
+        sum += prediction_once ? candidateLogLikelihood(cands[k], now, 0.5, kRange_m, predictions[k])
+                               : omnislam::testing::candidateLogLikelihoodPerPair(cands[k], now, 0.5, kRange_m);
       }
     }
     benchmark::DoNotOptimize(sum);
   }
 }
-BENCHMARK_CAPTURE(BM_CandidateCosts, ray_per_pair, false)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_CandidateCosts, ray_once, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_CandidateCosts, lights_per_pair, false, LandmarkKind::kPoint3D)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_CandidateCosts, lights_prediction_once, true, LandmarkKind::kPoint3D)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_CandidateCosts, lines_per_pair, false, LandmarkKind::kVerticalLine)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_CandidateCosts, lines_prediction_once, true, LandmarkKind::kVerticalLine)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

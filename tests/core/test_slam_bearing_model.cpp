@@ -2,7 +2,9 @@
 // (ordinary, near the zenith, at the edge of the field of view, close to the camera), helpers.
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <cstring>
 #include <random>
 
 #include "omnislam/core/slam/bearing_model.h"
@@ -205,6 +207,73 @@ TEST(slam_BearingModel, LogGaussian) {
   MeasMat bad(2, 2);
   bad << 1.0, 2.0, 2.0, 1.0;
   EXPECT_EQ(logGaussian(r, bad), -std::numeric_limits<double>::infinity());
+}
+
+bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// The general form of logGaussian (Eigen's LLT and triangular solve), as it was before the
+// one-dimensional case was written out.
+double logGaussianByLlt(const MeasVec& r, const MeasMat& S, double* m2_out) {
+  const Eigen::LLT<MeasMat> llt(S);
+  if (llt.info() != Eigen::Success) {
+    *m2_out = std::numeric_limits<double>::infinity();
+    return -std::numeric_limits<double>::infinity();
+  }
+  const MeasVec y = llt.matrixL().solve(r);
+  const double m2 = y.squaredNorm();
+  double log_det = 0.0;
+  for (Eigen::Index i = 0; i < S.rows(); ++i) log_det += 2.0 * std::log(llt.matrixL()(i, i));
+  *m2_out = m2;
+  return -0.5 * (static_cast<double>(r.size()) * std::log(2.0 * kPi) + log_det + m2);
+}
+
+TEST(slam_BearingModel, OneDimensionalLogGaussianIsTheLltFormBitForBit) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<std::pair<double, double>> cases = {
+      {0.0, 1e-4}, {-0.0, 1e-4}, {0.3, 0.0}, {0.3, -1e-6}, {0.0, std::nan("")}, {0.1, std::nan("")},
+      {std::nan(""), 1e-4}, {1e-300, 1e-300}, {2.0, 1e300}, {0.0, std::numeric_limits<double>::infinity()},
+      {0.5, std::numeric_limits<double>::denorm_min()}};
+  for (int i = 0; i < 20000; ++i) cases.emplace_back(u(rng) * std::pow(10.0, 3.0 * u(rng)), std::pow(10.0, 6.0 * u(rng)));
+  for (const auto& [r0, s00] : cases) {
+    MeasVec r(1);
+    r << r0;
+    MeasMat S(1, 1);
+    S << s00;
+    double m2 = -1.0, m2_ref = -1.0;
+    const double lg = logGaussian(r, S, &m2);
+    const double ref = logGaussianByLlt(r, S, &m2_ref);
+    EXPECT_TRUE(sameBits(lg, ref) || (std::isnan(lg) && std::isnan(ref))) << "r " << r0 << " S " << s00 << ": " << lg << " vs " << ref;
+    EXPECT_TRUE(sameBits(m2, m2_ref) || (std::isnan(m2) && std::isnan(m2_ref))) << "r " << r0 << " S " << s00;
+  }
+}
+
+TEST(slam_BearingModel, PredictionWithCosAndSinGivenIsTheSameBitForBit) {
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < 5000; ++i) {
+    const Eigen::Vector3d p(8.0 * u(rng), 8.0 * u(rng), 6.0 * u(rng));
+    const Pose2 T{3.0 * u(rng), 3.0 * u(rng), 4.0 * u(rng)};
+    const Eigen::Vector3d cam(0.2 * u(rng), 0.2 * u(rng), 1.0 + u(rng));
+    for (const auto kind : {LandmarkKind::kPoint3D, LandmarkKind::kVerticalLine}) {
+      MeasJac Jp1, Jl1, Jp2, Jl2;
+      const auto a = predictMeasurement(kind, p, T, cam, &Jp1, &Jl1);
+      const auto b = predictMeasurement(kind, p, T, std::cos(T.theta_rad), std::sin(T.theta_rad), cam, &Jp2, &Jl2);
+      const auto c = predictMeasurement(kind, p, T, cam);
+      ASSERT_EQ(a.has_value(), b.has_value());
+      ASSERT_EQ(a.has_value(), c.has_value());
+      if (!a) continue;
+      const auto full = predictBearing(p, T, cam);
+      ASSERT_EQ(a->size(), measurementDim(kind));
+      for (Eigen::Index k = 0; k < a->size(); ++k) {
+        EXPECT_TRUE(sameBits((*a)(k), (*b)(k)));
+        EXPECT_TRUE(sameBits((*a)(k), (*c)(k)));
+        EXPECT_TRUE(sameBits((*a)(k), (*full)(k)));  // a line's azimuth is the point model's
+      }
+      for (Eigen::Index k = 0; k < Jp1.size(); ++k) EXPECT_TRUE(sameBits(Jp1(k), Jp2(k)));
+      for (Eigen::Index k = 0; k < Jl1.size(); ++k) EXPECT_TRUE(sameBits(Jl1(k), Jl2(k)));
+    }
+  }
 }
 
 }  // namespace

@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cstring>
 #include <random>
 
 #include "omnislam/core/slam/candidate.h"
 #include "omnislam/core/slam/triangulation.h"
+#include "candidate_per_pair.h"
 
 namespace {
 
@@ -65,6 +67,51 @@ TEST(slam_CrossPoint, DegenerateParallax) {
   const Eigen::Vector3d b2(std::cos(1e-4), std::sin(1e-4), 0.0);
   EXPECT_TRUE(crossPointOfRays({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, b2, 0.5e-4));
   EXPECT_FALSE(crossPointOfRays({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, b2, 2e-4));  // below the threshold
+}
+
+bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+TEST(slam_CrossPoint, DepthsAloneAreCrossPointsDepthsBitForBit) {
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double nan = std::nan("");
+  const std::vector<double> thresholds = {1e-9, 1e-6, 1e-3, 0.1, 0.49, 0.5, 0.6, 1.2, 0.0, -1.0, nan};
+  int crossings = 0, refused = 0;
+  for (int i = 0; i < 40000; ++i) {
+    const double t = thresholds[i % thresholds.size()];
+    const Eigen::Vector3d c1(5 * u(rng), 5 * u(rng), u(rng)), c2(5 * u(rng), 5 * u(rng), u(rng));
+    Eigen::Vector3d b1(u(rng), u(rng), u(rng)), b2;
+    switch (i % 5) {
+      case 0:  // random directions
+        b2 = Eigen::Vector3d(u(rng), u(rng), u(rng));
+        break;
+      case 1: case 2: {  // a parallax near the threshold (both sides, within a few per cent)
+        const Eigen::Vector3d axis = b1.unitOrthogonal();
+        const double angle = (std::isfinite(t) && t > 0.0 ? t : 1e-6) * (1.0 + 0.05 * u(rng));
+        b2 = Eigen::AngleAxisd(angle, axis) * b1 * (0.5 + std::abs(u(rng)));
+        break;
+      }
+      case 3:  // near the factors of 2 of the quick test
+        b2 = Eigen::AngleAxisd((std::isfinite(t) && t > 0.0 ? t : 1e-6) * (u(rng) > 0 ? 2.0 : 0.5) * (1.0 + 1e-9 * u(rng)),
+                               b1.unitOrthogonal()) * b1;
+        break;
+      default:  // parallel, anti-parallel, zero, non-finite
+        b2 = (i / 5) % 4 == 0 ? b1 : (i / 5) % 4 == 1 ? Eigen::Vector3d(-b1) : (i / 5) % 4 == 2 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(nan, 0, 1);
+    }
+    if (i % 7 == 0) b1 = -b1;
+    const auto full = crossPointOfRays(c1, b1, c2, b2, t);
+    const auto depths = crossDepthsOfRays(c1, b1, c2, b2, t);
+    ASSERT_EQ(full.has_value(), depths.has_value()) << "case " << i << " threshold " << t;
+    if (!full) {
+      ++refused;
+      continue;
+    }
+    ++crossings;
+    EXPECT_TRUE(sameBits(full->depth1_m, depths->depth1_m)) << i;
+    EXPECT_TRUE(sameBits(full->depth2_m, depths->depth2_m)) << i;
+  }
+  EXPECT_GT(crossings, 10000);  // both outcomes are exercised
+  EXPECT_GT(refused, 10000);
 }
 
 // --- Candidates ------------------------------------------------------------------------------
@@ -237,6 +284,66 @@ TEST(slam_Candidate, LevelTwoLikelihood) {
   MeasVec z1(1);
   z1 << 0.3;
   EXPECT_EQ(candidateLogLikelihood(est, z1, q(0.005, 1), now, kCam), -std::numeric_limits<double>::infinity());
+}
+
+TEST(slam_Candidate, LikelihoodWithOnePredictionPerCandidateIsThePerPairFormBitForBit) {
+  std::mt19937_64 rng(22);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<std::pair<double, double>> ranges = {{0.0, inf}, {0.3, 8.5}, {0.5, inf}, {0.0, 6.0}};
+  int finite = 0, compared = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const LandmarkKind kind = trial % 2 ? LandmarkKind::kVerticalLine : LandmarkKind::kPoint3D;
+    const int dim = measurementDim(kind);
+    const Eigen::Vector3d cam(0.1 * u(rng), 0.1 * u(rng), 0.5 + 0.5 * u(rng));
+    // A few candidates: rays from random poses to random points, some with an estimate.
+    std::vector<Candidate> cands;
+    for (int k = 0; k < 8; ++k) {
+      Candidate c;
+      c.kind = kind;
+      const Eigen::Vector3d X(6 * u(rng), 6 * u(rng), 4.0 + 2 * u(rng));
+      const int n = 1 + k % 3;
+      for (int j = 0; j < n; ++j) {
+        const Pose2 T{3 * u(rng), 3 * u(rng), 3 * u(rng)};
+        const auto z = predictMeasurement(kind, X, T, cam);
+        if (!z) continue;
+        c.observations.push_back(makeObservation(kind, T, cam, *z, q(deg2rad(0.3 + 2.0 * std::abs(u(rng))), dim)));
+      }
+      c.has_estimate = k % 4 == 3 && !c.observations.empty();
+      c.estimate_W_m = X + 0.2 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+      const Eigen::Matrix3d A = Eigen::Matrix3d::Random() * 0.1;
+      c.estimate_cov_m2 = A * A.transpose() + Eigen::Matrix3d::Identity() * 1e-4;
+      cands.push_back(c);
+    }
+    const Pose2 now_pose{3 * u(rng), 3 * u(rng), 3 * u(rng)};
+    const auto [min_r, max_r] = ranges[trial % ranges.size()];
+    std::vector<CandidatePrediction> predictions(cands.size());
+    for (int m = 0; m < 12; ++m) {  // many measurements against the same predictions
+      MeasVec z(dim);
+      for (int d = 0; d < dim; ++d) z(d) = (d == 0 ? 3.1 : 1.5) * u(rng);
+      if (m % 5 == 0) z(0) = kPi;  // the wrap
+      const auto now = makeObservation(kind, now_pose, cam, z, q(deg2rad(0.5 + std::abs(u(rng))), dim));
+      for (size_t k = 0; k < cands.size(); ++k) {
+        const double ref = omnislam::testing::candidateLogLikelihoodPerPair(cands[k], now, min_r, max_r);
+        const double with = candidateLogLikelihood(cands[k], now, min_r, max_r, predictions[k]);
+        const double fresh = candidateLogLikelihood(cands[k], now, min_r, max_r);
+        ++compared;
+        if (std::isfinite(ref)) ++finite;
+        EXPECT_TRUE(sameBits(ref, with)) << "trial " << trial << " candidate " << k << ": " << ref << " vs " << with;
+        EXPECT_TRUE(sameBits(ref, fresh)) << "trial " << trial << " candidate " << k;
+      }
+    }
+    // A prediction made for another pose, camera or range is remade, not reused.
+    const auto moved = makeObservation(kind, Pose2{now_pose.x_m + 0.5, now_pose.y_m, now_pose.theta_rad + 0.2}, cam,
+                                       MeasVec::Constant(dim, 0.2), q(0.01, dim));
+    for (size_t k = 0; k < cands.size(); ++k) {
+      EXPECT_TRUE(sameBits(omnislam::testing::candidateLogLikelihoodPerPair(cands[k], moved, min_r, max_r),
+                           candidateLogLikelihood(cands[k], moved, min_r, max_r, predictions[k])));
+      EXPECT_TRUE(sameBits(omnislam::testing::candidateLogLikelihoodPerPair(cands[k], moved, 0.0, 3.0),
+                           candidateLogLikelihood(cands[k], moved, 0.0, 3.0, predictions[k])));
+    }
+  }
+  EXPECT_GT(finite, compared / 2);
 }
 
 TEST(slam_Candidate, VerticalLineInitialisesInXY) {

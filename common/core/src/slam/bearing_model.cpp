@@ -17,10 +17,14 @@ Eigen::Vector3d bearingDirectionInWorld(double azimuth_rad, double elevation_rad
   return unitOf(Bearing{azimuth_rad + theta_rad, elevation_rad});
 }
 
-std::optional<Eigen::Vector2d> predictBearing(const Eigen::Vector3d& p_LinW_m, const Pose2& T_WtoR,
-                                              const Eigen::Vector3d& p_CinR_m, Eigen::Matrix<double, 2, 3>* J_z_pose,
-                                              Eigen::Matrix<double, 2, 3>* J_z_landmark) {
-  const double c = std::cos(T_WtoR.theta_rad), s = std::sin(T_WtoR.theta_rad);
+namespace {
+
+// The point model with the heading's cosine and sine given. with_elevation false leaves z(1) at 0
+// and does not compute it (a vertical line has no elevation; one atan2 less per prediction).
+std::optional<Eigen::Vector2d> predictBearingCS(const Eigen::Vector3d& p_LinW_m, const Pose2& T_WtoR, double c,
+                                                double s, const Eigen::Vector3d& p_CinR_m, bool with_elevation,
+                                                Eigen::Matrix<double, 2, 3>* J_z_pose,
+                                                Eigen::Matrix<double, 2, 3>* J_z_landmark) {
   // d' = Rz^T (p_LinW - t): landmark in R; d = d' - p_CinR: direction from the optical centre.
   const double ex = p_LinW_m.x() - T_WtoR.x_m, ey = p_LinW_m.y() - T_WtoR.y_m;
   const double dpx = c * ex + s * ey, dpy = -s * ex + c * ey;
@@ -28,7 +32,7 @@ std::optional<Eigen::Vector2d> predictBearing(const Eigen::Vector3d& p_LinW_m, c
   const double rho2 = d.x() * d.x() + d.y() * d.y();
   const double rho = std::sqrt(rho2);
   if (!(rho >= kMinHorizontalRange_m)) return std::nullopt;
-  const Eigen::Vector2d z(std::atan2(d.y(), d.x()), std::atan2(d.z(), rho));
+  const Eigen::Vector2d z(std::atan2(d.y(), d.x()), with_elevation ? std::atan2(d.z(), rho) : 0.0);
   if (J_z_pose == nullptr && J_z_landmark == nullptr) return z;
 
   const double r2 = rho2 + d.z() * d.z();
@@ -48,18 +52,35 @@ std::optional<Eigen::Vector2d> predictBearing(const Eigen::Vector3d& p_LinW_m, c
   return z;
 }
 
+}  // namespace
+
+std::optional<Eigen::Vector2d> predictBearing(const Eigen::Vector3d& p_LinW_m, const Pose2& T_WtoR,
+                                              const Eigen::Vector3d& p_CinR_m, Eigen::Matrix<double, 2, 3>* J_z_pose,
+                                              Eigen::Matrix<double, 2, 3>* J_z_landmark) {
+  return predictBearingCS(p_LinW_m, T_WtoR, std::cos(T_WtoR.theta_rad), std::sin(T_WtoR.theta_rad), p_CinR_m, true,
+                          J_z_pose, J_z_landmark);
+}
+
 int measurementDim(LandmarkKind kind) { return kind == LandmarkKind::kVerticalLine ? 1 : 2; }
 
 std::optional<MeasVec> predictMeasurement(LandmarkKind kind, const Eigen::Vector3d& p_LinW_m, const Pose2& T_WtoR,
-                                          const Eigen::Vector3d& p_CinR_m, MeasJac* J_z_pose, MeasJac* J_z_landmark) {
+                                          double cos_theta, double sin_theta, const Eigen::Vector3d& p_CinR_m,
+                                          MeasJac* J_z_pose, MeasJac* J_z_landmark) {
   Eigen::Matrix<double, 2, 3> Jp, Jl;
-  const auto z = predictBearing(p_LinW_m, T_WtoR, p_CinR_m, J_z_pose ? &Jp : nullptr, J_z_landmark ? &Jl : nullptr);
-  if (!z) return std::nullopt;
   const int dim = measurementDim(kind);
+  const auto z = predictBearingCS(p_LinW_m, T_WtoR, cos_theta, sin_theta, p_CinR_m, dim == 2,
+                                  J_z_pose ? &Jp : nullptr, J_z_landmark ? &Jl : nullptr);
+  if (!z) return std::nullopt;
   MeasVec out = z->head(dim);
   if (J_z_pose) *J_z_pose = Jp.topRows(dim);
   if (J_z_landmark) *J_z_landmark = Jl.topRows(dim);  // azimuth row: zero column for z already
   return out;
+}
+
+std::optional<MeasVec> predictMeasurement(LandmarkKind kind, const Eigen::Vector3d& p_LinW_m, const Pose2& T_WtoR,
+                                          const Eigen::Vector3d& p_CinR_m, MeasJac* J_z_pose, MeasJac* J_z_landmark) {
+  return predictMeasurement(kind, p_LinW_m, T_WtoR, std::cos(T_WtoR.theta_rad), std::sin(T_WtoR.theta_rad), p_CinR_m,
+                            J_z_pose, J_z_landmark);
 }
 
 MeasVec measurementVector(const BearingMeasurement& m) {
@@ -94,6 +115,22 @@ MeasVec innovation(const MeasVec& z, const MeasVec& zhat) {
 }
 
 double logGaussian(const MeasVec& r, const MeasMat& S, double* mahalanobis_sq) {
+  if (S.rows() == 1 && S.cols() == 1 && r.size() == 1) {
+    // The general path below for one dimension, written out: the same operations in the same order
+    // as Eigen's LLT and triangular solve (so the same bits, tested), without their set-up, which
+    // dominates at this size (azimuth-only measurements are scored once per candidate and particle).
+    const double s00 = S(0, 0);
+    if (s00 <= 0.0) {  // LLT's test: a NaN passes it, as there
+      if (mahalanobis_sq) *mahalanobis_sq = std::numeric_limits<double>::infinity();
+      return -std::numeric_limits<double>::infinity();
+    }
+    const double l00 = std::sqrt(s00);
+    const double y = r(0) != 0.0 ? r(0) / l00 : r(0);  // the solve skips a zero right-hand side
+    const double m2 = y * y;
+    const double log_det = 0.0 + 2.0 * std::log(l00);
+    if (mahalanobis_sq) *mahalanobis_sq = m2;
+    return -0.5 * (1.0 * std::log(2.0 * kPi) + log_det + m2);
+  }
   const Eigen::LLT<MeasMat> llt(S);
   if (llt.info() != Eigen::Success) {
     if (mahalanobis_sq) *mahalanobis_sq = std::numeric_limits<double>::infinity();

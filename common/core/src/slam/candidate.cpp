@@ -41,6 +41,8 @@ CandidateObservation makeObservation(LandmarkKind kind, const Pose2& T_WtoR, con
   o.z = z;
   o.Q = Q;
   o.p_CinW_m = cameraCentreInWorld(T_WtoR, p_CinR_m);
+  o.cos_theta = std::cos(T_WtoR.theta_rad);
+  o.sin_theta = std::sin(T_WtoR.theta_rad);
   if (kind == LandmarkKind::kVerticalLine) {
     o.p_CinW_m.z() = 0.0;
     const double a = z(0) + T_WtoR.theta_rad;
@@ -229,54 +231,114 @@ double candidateLogLikelihood(const Candidate& c, const MeasVec& z, const MeasMa
   return candidateLogLikelihood(c, makeObservation(c.kind, x_t, p_CinR_m, z, Q), min_range_m, max_range_m);
 }
 
+namespace {
+
+bool hasRangeLimit(double min_range_m, double max_range_m) {
+  return min_range_m > 0.0 || max_range_m < std::numeric_limits<double>::infinity();
+}
+
+// The point of the candidate's ray o at depth, seen from now (what the score needs of it).
+CandidatePrediction::Point rayPoint(const Candidate& c, const CandidateObservation& o, const CandidateObservation& now,
+                                    double depth) {
+  CandidatePrediction::Point pt;
+  const Eigen::Vector3d P = o.p_CinW_m + depth * o.dir_W;
+  const auto zhat = predictMeasurement(c.kind, P, now.T_WtoR, now.cos_theta, now.sin_theta, now.p_CinR_m);
+  const double range_now = (P - now.p_CinW_m).norm();
+  if (!zhat || !(range_now > 0.0)) return pt;
+  pt.valid = true;
+  pt.zhat = *zhat;
+  pt.scale = depth / range_now;
+  return pt;
+}
+
+double scorePoint(const CandidatePrediction::Point& pt, const CandidateObservation& now, const CandidateObservation& o) {
+  if (!pt.valid) return -std::numeric_limits<double>::infinity();
+  return logGaussian(innovation(now.z, pt.zhat), MeasMat(now.Q + pt.scale * pt.scale * o.Q));
+}
+
+bool madeFor(const CandidatePrediction& p, const CandidateObservation& now, double min_range_m, double max_range_m) {
+  return p.made && p.T_WtoR.x_m == now.T_WtoR.x_m && p.T_WtoR.y_m == now.T_WtoR.y_m &&
+         p.T_WtoR.theta_rad == now.T_WtoR.theta_rad && p.p_CinR_m == now.p_CinR_m && p.p_CinW_m == now.p_CinW_m &&
+         p.min_range_m == min_range_m && p.max_range_m == max_range_m;
+}
+
+}  // namespace
+
+CandidatePrediction predictCandidate(const Candidate& c, const CandidateObservation& now, double min_range_m,
+                                     double max_range_m) {
+  CandidatePrediction p;
+  p.made = true;
+  p.T_WtoR = now.T_WtoR;
+  p.p_CinR_m = now.p_CinR_m;
+  p.p_CinW_m = now.p_CinW_m;
+  p.min_range_m = min_range_m;
+  p.max_range_m = max_range_m;
+  if (c.observations.empty()) return p;
+  p.has_estimate = c.has_estimate;
+  if (c.has_estimate) {
+    MeasJac Hm;
+    const auto zhat = predictMeasurement(c.kind, c.estimate_W_m, now.T_WtoR, now.cos_theta, now.sin_theta,
+                                         now.p_CinR_m, nullptr, &Hm);
+    if (!zhat) return p;
+    p.valid_estimate = true;
+    p.zhat_estimate = *zhat;
+    p.H_estimate = Hm;
+    return p;
+  }
+  const CandidateObservation& o = c.observations.back();
+  if (hasRangeLimit(min_range_m, max_range_m)) {
+    const double lo = std::max(min_range_m, 1e-3);
+    p.lo = rayPoint(c, o, now, lo);
+    p.hi = rayPoint(c, o, now, max_range_m == std::numeric_limits<double>::infinity() ? 1e6 : max_range_m);
+    return p;
+  }
+  // Point at infinity along the candidate's ray: its direction seen in the current robot axes.
+  const int dim = measurementDim(c.kind);
+  p.zhat_infinity = MeasVec(dim);
+  p.zhat_infinity(0) = wrapAngle(std::atan2(o.dir_W.y(), o.dir_W.x()) - now.T_WtoR.theta_rad);
+  if (dim == 2) p.zhat_infinity(1) = std::asin(std::clamp(o.dir_W.z(), -1.0, 1.0));
+  return p;
+}
+
 double candidateLogLikelihood(const Candidate& c, const CandidateObservation& now, double min_range_m,
                               double max_range_m) {
+  CandidatePrediction p;
+  return candidateLogLikelihood(c, now, min_range_m, max_range_m, p);
+}
+
+double candidateLogLikelihood(const Candidate& c, const CandidateObservation& now, double min_range_m,
+                              double max_range_m, CandidatePrediction& p) {
   const double ninf = -std::numeric_limits<double>::infinity();
   const MeasVec& z = now.z;
   const MeasMat& Q = now.Q;
-  const Pose2& x_t = now.T_WtoR;
-  const Eigen::Vector3d& p_CinR_m = now.p_CinR_m;
   if (c.observations.empty() || z.size() != measurementDim(c.kind)) return ninf;
+  if (!madeFor(p, now, min_range_m, max_range_m) || p.has_estimate != c.has_estimate) {
+    p = predictCandidate(c, now, min_range_m, max_range_m);
+  }
   if (c.has_estimate) {
-    MeasJac Hm;
-    const auto zhat = predictMeasurement(c.kind, c.estimate_W_m, x_t, p_CinR_m, nullptr, &Hm);
-    if (!zhat) return ninf;
-    const MeasMat S = Q + Hm * c.estimate_cov_m2 * Hm.transpose();  // dim x 3 * 3x3 * 3 x dim
-    return logGaussian(innovation(z, *zhat), S);
+    if (!p.valid_estimate) return ninf;
+    // The product in the sum, as before: evaluated apart, it can differ in the last bit.
+    const MeasMat S = Q + p.H_estimate * c.estimate_cov_m2 * p.H_estimate.transpose();
+    return logGaussian(innovation(z, p.zhat_estimate), S);
   }
   const CandidateObservation& o = c.observations.back();
-  const auto x = crossPointOfRays(o.p_CinW_m, o.dir_W, now.p_CinW_m, now.dir_W, 1e-6);
-  if (min_range_m > 0.0 || max_range_m < std::numeric_limits<double>::infinity()) {
+  const auto x = crossDepthsOfRays(o.p_CinW_m, o.dir_W, now.p_CinW_m, now.dir_W, 1e-6);
+  const bool crosses_in_front = x && x->depth1_m > 0.0 && x->depth2_m > 0.0;
+  if (hasRangeLimit(min_range_m, max_range_m)) {
     // The landmark lies on the candidate's ray within [min_range_m, max_range_m] of its camera:
     // predict from the point of that segment nearest (in bearing) to the measured ray, i.e. the
     // crossing clamped to the segment, or the better end when the rays do not cross in front.
-    auto at = [&](double depth) {
-      const Eigen::Vector3d P = o.p_CinW_m + depth * o.dir_W;
-      const auto zhat = predictMeasurement(c.kind, P, x_t, p_CinR_m);
-      const double range_now = (P - now.p_CinW_m).norm();
-      if (!zhat || !(range_now > 0.0)) return ninf;
-      const double scale = depth / range_now;
-      return logGaussian(innovation(z, *zhat), MeasMat(Q + scale * scale * o.Q));
-    };
     const double lo = std::max(min_range_m, 1e-3);
-    if (x && x->depth1_m > 0.0 && x->depth2_m > 0.0) return at(std::clamp(x->depth1_m, lo, std::max(lo, max_range_m)));
-    if (max_range_m == std::numeric_limits<double>::infinity()) return std::max(at(lo), at(1e6));
-    return std::max(at(lo), at(max_range_m));
-  }
-  if (x && x->depth1_m > 0.0 && x->depth2_m > 0.0) {
-    const Eigen::Vector3d P = o.p_CinW_m + x->depth1_m * o.dir_W;  // on the candidate's ray
-    const auto zhat = predictMeasurement(c.kind, P, x_t, p_CinR_m);
-    const double range_now = (P - now.p_CinW_m).norm();
-    if (zhat && range_now > 0.0) {
-      const double scale = x->depth1_m / range_now;
-      return logGaussian(innovation(z, *zhat), MeasMat(Q + scale * scale * o.Q));
+    if (crosses_in_front) {
+      return scorePoint(rayPoint(c, o, now, std::clamp(x->depth1_m, lo, std::max(lo, max_range_m))), now, o);
     }
+    return std::max(scorePoint(p.lo, now, o), scorePoint(p.hi, now, o));
   }
-  // Point at infinity along the candidate's ray: its direction seen in the current robot axes.
-  MeasVec zhat(z.size());
-  zhat(0) = wrapAngle(std::atan2(o.dir_W.y(), o.dir_W.x()) - x_t.theta_rad);
-  if (zhat.size() == 2) zhat(1) = std::asin(std::clamp(o.dir_W.z(), -1.0, 1.0));
-  return logGaussian(innovation(z, zhat), MeasMat(Q + o.Q));
+  if (crosses_in_front) {
+    const CandidatePrediction::Point pt = rayPoint(c, o, now, x->depth1_m);  // on the candidate's ray
+    if (pt.valid) return scorePoint(pt, now, o);
+  }
+  return logGaussian(innovation(z, p.zhat_infinity), MeasMat(Q + o.Q));
 }
 
 }  // namespace omnislam::slam

@@ -584,10 +584,16 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
   const FastSlamOptions& o = options_;
   const int nl = static_cast<int>(leftover.size());
   const int nc = static_cast<int>(p.candidates.size());
-  Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nl, nc, kInf);
+  // The cost matrix of a frame of many features (256 x 1000 doubles: 2 MB) is written once per
+  // particle: one buffer kept across particles and steps, not an allocation (and page faults) each.
+  candidate_cost_buffer_.assign(static_cast<size_t>(nl) * static_cast<size_t>(nc), kInf);
+  Eigen::Map<Eigen::MatrixXd> cost(candidate_cost_buffer_.data(), nl, nc);
   std::vector<double> cost_new(nl);
   const double min_range_m = std::max(o.candidates.min_range_m, o.perception.min_range_m);
   const double max_range_m = std::min(o.candidates.max_range_m, o.perception.max_range_m);
+  // What a candidate predicts at x_t does not depend on the measurement: made once per candidate
+  // (on its first pair), not once per pair.
+  std::vector<CandidatePrediction> predictions(nl > 0 ? nc : 0);
   for (int r = 0; r < nl; ++r) {
     const Meas& m = Z[leftover[r]];
     cost_new[r] = m.neg_log_p_new;
@@ -595,7 +601,7 @@ void FastSlam::updateCandidates(Particle& p, const Pose2& x_t, const std::vector
     for (int c = 0; c < nc; ++c) {
       const Candidate& cand = *p.candidates[c];
       if (cand.kind != m.kind || !descriptorsCompatible(m.descriptor, cand.descriptor, o.descriptor_gate)) continue;
-      cost(r, c) = -candidateLogLikelihood(cand, now, min_range_m, max_range_m);
+      cost(r, c) = -candidateLogLikelihood(cand, now, min_range_m, max_range_m, predictions[c]);
     }
   }
   // Candidates do not weigh the particle, so a draw here would have no weight to go with it: under

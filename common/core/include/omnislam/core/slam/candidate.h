@@ -69,6 +69,8 @@ struct CandidateObservation {
   MeasMat Q;  ///< its covariance Q_t
   Eigen::Vector3d p_CinW_m = Eigen::Vector3d::Zero();  ///< optical centre in W (z = 0 for lines)
   Eigen::Vector3d dir_W = Eigen::Vector3d::UnitX();    ///< unit ray direction in W (horizontal for lines)
+  double cos_theta = 1.0;  ///< std::cos(T_WtoR.theta_rad), once per ray (predictions from this pose)
+  double sin_theta = 0.0;  ///< std::sin(T_WtoR.theta_rad)
 };
 
 CandidateObservation makeObservation(LandmarkKind kind, const Pose2& T_WtoR, const Eigen::Vector3d& p_CinR_m,
@@ -127,5 +129,37 @@ double candidateLogLikelihood(const Candidate& candidate, const MeasVec& z, cons
 /// bit: the ray is what the form above builds for each call).
 double candidateLogLikelihood(const Candidate& candidate, const CandidateObservation& now, double min_range_m = 0.0,
                               double max_range_m = std::numeric_limits<double>::infinity());
+
+/// The part of candidateLogLikelihood that depends on the candidate and the current pose and camera
+/// (now.T_WtoR, now.p_CinR_m, now.p_CinW_m) but not on the measured bearing: the prediction from
+/// the estimate, or from the ends of the ray's range segment and its point at infinity. A caller
+/// that scores many measurements against one candidate at one pose makes it once.
+struct CandidatePrediction {
+  bool made = false;  ///< false: nothing computed yet (the form below then computes it)
+  Pose2 T_WtoR;       ///< the pose, camera and range limits it was made for
+  Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d p_CinW_m = Eigen::Vector3d::Zero();
+  double min_range_m = 0.0, max_range_m = 0.0;
+  struct Point {
+    bool valid = false;  ///< h is defined and the point is not at the camera
+    MeasVec zhat;        ///< h(point, x_t)
+    double scale = 0.0;  ///< its depth on the candidate's ray / its range from the camera now
+  };
+  bool has_estimate = false;
+  MeasVec zhat_estimate;  ///< h(X, x_t) (valid_estimate)
+  MeasJac H_estimate;     ///< H_m = d h / d X at the estimate (Sigma_X is taken from the candidate)
+  bool valid_estimate = false;
+  Point lo, hi;           ///< the ends of the range segment (with a range limit)
+  MeasVec zhat_infinity;  ///< the ray's direction in the robot's axes (without a range limit)
+};
+
+/// The prediction for the pose and camera of now, for candidateLogLikelihood below.
+CandidatePrediction predictCandidate(const Candidate& candidate, const CandidateObservation& now, double min_range_m,
+                                     double max_range_m);
+
+/// candidateLogLikelihood(candidate, now, min_range_m, max_range_m), bit for bit, using (and when
+/// not made, or made for another pose, camera or range, first remaking) prediction.
+double candidateLogLikelihood(const Candidate& candidate, const CandidateObservation& now, double min_range_m,
+                              double max_range_m, CandidatePrediction& prediction);
 
 }  // namespace omnislam::slam

@@ -188,6 +188,7 @@ class FastSlam {
   std::vector<double> weights_;
   std::vector<Pose2> poses_before_resampling_;
   std::vector<double> weights_before_resampling_;
+  std::vector<double> candidate_cost_buffer_;  ///< updateCandidates's cost matrix (scratch, reused)
   double ess_ = 0.0;
   int best_index_ = 0;
   std::uint64_t next_landmark_id_ = 0;

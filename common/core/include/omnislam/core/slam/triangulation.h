@@ -24,4 +24,18 @@ std::optional<RayCrossPoint> crossPointOfRays(const Eigen::Vector3d& c1_W_m, con
                                               const Eigen::Vector3d& c2_W_m, const Eigen::Vector3d& b2_W,
                                               double min_parallax_rad = 1e-9);
 
+/// Depths along the two rays of their closest approach.
+struct RayCrossDepths {
+  double depth1_m = 0.0;  ///< RayCrossPoint::depth1_m
+  double depth2_m = 0.0;  ///< RayCrossPoint::depth2_m
+};
+
+/// crossPointOfRays's depth1_m and depth2_m, bit for bit, and std::nullopt exactly when it returns
+/// std::nullopt, without the point, gap and parallax: for a caller that scores many ray pairs
+/// (candidate association). The parallax test needs no atan2 unless tan(parallax) is within a
+/// factor of 2 of min_parallax_rad (min_parallax_rad < 0.5 rad; otherwise it is always computed).
+std::optional<RayCrossDepths> crossDepthsOfRays(const Eigen::Vector3d& c1_W_m, const Eigen::Vector3d& b1_W,
+                                                const Eigen::Vector3d& c2_W_m, const Eigen::Vector3d& b2_W,
+                                                double min_parallax_rad = 1e-9);
+
 }  // namespace omnislam::slam

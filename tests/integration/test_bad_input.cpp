@@ -283,7 +283,7 @@ TEST(BadInput, RecorderOnAFullDiskSaysSoAndFails) {
   EXPECT_NE(r.output.find("WRITE FAILURES (the first: writing LCM log '/dev/full' failed (flush))"), std::string::npos)
       << r.output;
   // The 5 events never reached the device: they were reported written while lost with the buffer.
-  EXPECT_NE(r.output.find("[record] 0 events in the file"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("[record] 0 events in the file, 0 MB"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("5 events lost with the write buffer"), std::string::npos) << r.output;
 }
 

@@ -328,6 +328,23 @@ TEST(LogFiles, AfterAFailureTheCountIsWhatTheFileHolds) {
   EXPECT_EQ(w.events(), count(path)) << "events reported written against events in the file";
   EXPECT_EQ(w.events(), 50000 / (28 + 4 + 200));
   EXPECT_EQ(w.events() + w.lost(), taken) << "every event taken is in the file or lost";
+  // The bytes are those of the complete events, not of the torn one after them (the recorder's
+  // MB figure counted every message taken, lost ones too).
+  EXPECT_EQ(w.bytes(), w.events() * (28 + 4 + 200));
+  EXPECT_LT(w.bytes(), static_cast<int64_t>(fs::file_size(path)));
+}
+
+TEST(LogFiles, TheBytesReportedAreTheFilesSize) {
+  Dir d;
+  const std::string path = d.file("out.lcm");
+  lcmio::LogWriter w(path);
+  std::vector<uint8_t> payload(1000, 0x5a);
+  for (int i = 0; i < 100; ++i) {  // 100 kB: three buffers written, the rest waiting for commit()
+    w.write(1000 + i, "IMAGE", payload.data(), static_cast<int32_t>(payload.size()));
+    EXPECT_EQ(w.bytes(), (i + 1) * (28 + 5 + 1000));
+  }
+  w.commit();
+  EXPECT_EQ(w.bytes(), static_cast<int64_t>(fs::file_size(path)));
 }
 
 TEST(LogFiles, OnAFullDeviceNoEventCountsAsWritten) {
@@ -338,6 +355,7 @@ TEST(LogFiles, OnAFullDeviceNoEventCountsAsWritten) {
   EXPECT_THROW(w.commit(), std::runtime_error);
   EXPECT_EQ(w.events(), 0);
   EXPECT_EQ(w.lost(), 27);
+  EXPECT_EQ(w.bytes(), 0);
 }
 
 TEST(LogFiles, AnOutputThatIsTheInputIsRefused) {

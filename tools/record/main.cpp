@@ -20,7 +20,7 @@ namespace {
 
 struct Recorder {
   omnislam::lcmio::LogWriter* log = nullptr;
-  int64_t bytes = 0, failures = 0;  // bytes: of the messages taken by the writer
+  int64_t failures = 0;
   std::string first_failure;
   // Through LCM's C API: its lcm_subscribe returns NULL for a regex it cannot compile, where the
   // C++ wrapper returns an object whose use then crashes.
@@ -31,7 +31,6 @@ struct Recorder {
     try {  // nothing may unwind through LCM's C dispatch
       // The log's own receive time, as lcm-logger writes it.
       log->write(rbuf->recv_utime, channel, rbuf->data, static_cast<int32_t>(rbuf->data_size));
-      bytes += rbuf->data_size;
     } catch (const std::exception& e) {
       if (failures++ == 0) first_failure = e.what();
     }
@@ -101,7 +100,7 @@ int main(int argc, char** argv) {
     // After a failure, the events in the file (complete, as readers see them) and the events taken
     // before it but lost with the write buffer; the messages refused after it are write failures.
     std::cerr << "[record] " << log.events() << " events" << (rec.failures ? " in the file" : "") << ", "
-              << rec.bytes / 1e6 << " MB"
+              << log.bytes() / 1e6 << " MB"
               << (rec.failures ? ", " + std::to_string(log.lost()) + " events lost with the write buffer, " +
                                      std::to_string(rec.failures) + " WRITE FAILURES (the first: " +
                                      rec.first_failure + ")"

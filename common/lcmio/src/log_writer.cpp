@@ -55,7 +55,9 @@ bool LogWriter::flush() {
     done += static_cast<size_t>(w);
   }
   // The events that ended within what was written are complete in the file; a torn one is not.
-  in_file_ += std::upper_bound(ends_.begin(), ends_.end(), done) - ends_.begin();
+  const auto complete = std::upper_bound(ends_.begin(), ends_.end(), done) - ends_.begin();
+  in_file_ += complete;
+  bytes_in_file_ += complete > 0 ? static_cast<int64_t>(ends_[static_cast<size_t>(complete) - 1]) : 0;
   const bool ok = done == buf_.size();
   if (!ok) failed_ = true;
   buf_.clear();

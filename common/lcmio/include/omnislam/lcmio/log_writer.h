@@ -44,6 +44,9 @@ class LogWriter {
   /// Events write() took without an error that a later failure kept out of the file (they were
   /// still in the buffer, or torn by the failed write); 0 without a failure.
   int64_t lost() const { return failed_ ? n_ - in_file_ : 0; }
+  /// Bytes of the events() events in the log format (headers included): what the file holds, or
+  /// will once the buffer is written; after a failure, only the complete events' bytes.
+  int64_t bytes() const { return failed_ ? bytes_in_file_ : bytes_in_file_ + static_cast<int64_t>(buf_.size()); }
   const std::string& path() const { return path_; }
 
   static constexpr size_t kBufferBytes = 32 * 1024;
@@ -58,6 +61,7 @@ class LogWriter {
   std::vector<size_t> ends_;   // where each of them ends in buf_
   int64_t n_ = 0;              // events taken (the next event number)
   int64_t in_file_ = 0;        // events known complete in the file
+  int64_t bytes_in_file_ = 0;  // their bytes
   bool failed_ = false;
 };
 

@@ -180,6 +180,43 @@ TEST(Launcher, TheDrainWaitsUntilTheBusIsQuiet) {
   }
 }
 
+// A stop while the launcher waits for the bus to go quiet (drain_s far away, the bus still busy)
+// ends the wait: every process is stopped in order, the recording is closed with all that was
+// published, and the launcher exits 128 + SIGINT (note 40 had checked it only by hand).
+TEST(Launcher, SigintDuringTheDrainStopsTheRunAndKeepsTheRecording) {
+  t::TempDir dir;
+  const std::string path = dir.file("launch.yaml");
+  // The scenario lasts 2 s so that the publisher has installed its signal handlers (see above).
+  std::ofstream(path) << "name: unit\nstop_grace_s: 5\ndrain_s: 300\ndrain_quiet_s: 0.5\nprocesses:\n"
+                      << "  - {name: scenario, cmd: [sleep, '2'], ends_run: true}\n"
+                      << "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '600', --period, '0.05']}\n";
+  const std::string log = dir.file("rec.lcm");
+  t::Child launcher({t::binPath("omnislam-launch"), path, "--log-file", log, "--url", t::privateUdpUrl(35)});
+  const auto t0 = std::chrono::steady_clock::now();
+  while (launcher.output().find("stopping: scenario finished") == std::string::npos && launcher.alive() &&
+         std::chrono::steady_clock::now() < t0 + std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_NE(launcher.output().find("stopping: scenario finished"), std::string::npos) << launcher.output();
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // in the drain: the publisher goes on
+  launcher.signal(SIGINT);
+  const t::RunResult r = launcher.wait(60);
+  ASSERT_FALSE(r.timed_out) << "still draining 60 s after SIGINT\n" << r.output;
+  EXPECT_EQ(r.exit_code, 128 + SIGINT) << r.output;
+  EXPECT_NE(r.output.find("done (interrupted)"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("bus quiet"), std::string::npos) << "the bus was never quiet\n" << r.output;
+  EXPECT_EQ(r.output.find("drain_s ("), std::string::npos) << "ended by the stop, not by drain_s\n" << r.output;
+  // The publisher was stopped by the launcher (long before its 600 s), and the recorder, stopped
+  // after it, has every round it published.
+  const auto at = r.output.find("published ");
+  ASSERT_NE(at, std::string::npos) << "no final report from the publisher\n" << r.output;
+  EXPECT_GT(at, r.output.find("stopping: scenario finished")) << r.output;
+  const long rounds = std::stol(r.output.substr(at + 10));
+  EXPECT_GT(rounds, 1) << r.output;
+  const std::vector<std::string> row = t::wordsOfLine(t::run({t::binPath("omnislam-logstat"), log}, 10).output, "SLAM_POSE");
+  ASSERT_GE(row.size(), 3u) << "no SLAM_POSE in the recording";
+  EXPECT_EQ(row[2], std::to_string(rounds)) << "SLAM_POSE messages recorded against rounds published";
+}
+
 // A child that writes without pause (`yes`) kept the launcher reading its pipe for ever: the
 // process that ends the run was never reaped and SIGINT was not seen. Each pass over the children
 // now reads a bounded amount from each.

@@ -158,7 +158,9 @@ CandidatePrediction predictCandidate(const Candidate& candidate, const Candidate
                                      double max_range_m);
 
 /// candidateLogLikelihood(candidate, now, min_range_m, max_range_m), bit for bit, using (and when
-/// not made, or made for another pose, camera or range, first remaking) prediction.
+/// not made, or made for another pose, camera or range, first remaking) prediction. One prediction
+/// belongs to one candidate, unchanged since it was made (a caller keeps one per candidate and
+/// frame; it is not checked).
 double candidateLogLikelihood(const Candidate& candidate, const CandidateObservation& now, double min_range_m,
                               double max_range_m, CandidatePrediction& prediction);
 

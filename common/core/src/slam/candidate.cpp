@@ -258,7 +258,7 @@ double scorePoint(const CandidatePrediction::Point& pt, const CandidateObservati
 
 bool madeFor(const CandidatePrediction& p, const CandidateObservation& now, double min_range_m, double max_range_m) {
   return p.made && p.T_WtoR.x_m == now.T_WtoR.x_m && p.T_WtoR.y_m == now.T_WtoR.y_m &&
-         p.T_WtoR.theta_rad == now.T_WtoR.theta_rad && p.p_CinR_m == now.p_CinR_m && p.p_CinW_m == now.p_CinW_m &&
+         p.T_WtoR.theta_rad == now.T_WtoR.theta_rad && p.p_CinR_m == now.p_CinR_m &&
          p.min_range_m == min_range_m && p.max_range_m == max_range_m;
 }
 
@@ -270,11 +270,9 @@ CandidatePrediction predictCandidate(const Candidate& c, const CandidateObservat
   p.made = true;
   p.T_WtoR = now.T_WtoR;
   p.p_CinR_m = now.p_CinR_m;
-  p.p_CinW_m = now.p_CinW_m;
   p.min_range_m = min_range_m;
   p.max_range_m = max_range_m;
   if (c.observations.empty()) return p;
-  p.has_estimate = c.has_estimate;
   if (c.has_estimate) {
     MeasJac Hm;
     const auto zhat = predictMeasurement(c.kind, c.estimate_W_m, now.T_WtoR, now.cos_theta, now.sin_theta,
@@ -312,9 +310,7 @@ double candidateLogLikelihood(const Candidate& c, const CandidateObservation& no
   const MeasVec& z = now.z;
   const MeasMat& Q = now.Q;
   if (c.observations.empty() || z.size() != measurementDim(c.kind)) return ninf;
-  if (!madeFor(p, now, min_range_m, max_range_m) || p.has_estimate != c.has_estimate) {
-    p = predictCandidate(c, now, min_range_m, max_range_m);
-  }
+  if (!madeFor(p, now, min_range_m, max_range_m)) p = predictCandidate(c, now, min_range_m, max_range_m);
   if (c.has_estimate) {
     if (!p.valid_estimate) return ninf;
     // The product in the sum, as before: evaluated apart, it can differ in the last bit.

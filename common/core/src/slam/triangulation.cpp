@@ -64,7 +64,7 @@ std::optional<RayCrossDepths> crossDepthsOfRays(const Eigen::Vector3d& c1_W_m, c
   // b <= 0 means a parallax of at least pi / 2. The factor 2 dwarfs every rounding error.
   const double t = min_parallax_rad, b = p->b;
   bool passes = false;
-  if (t > 0.0 && t < 0.5 && b > 0.0 && std::isfinite(b)) {
+  if (t > 0.0 && t < 0.5 && b > 0.0) {  // b is a cosine: at most 1, or NaN (which fails here)
     const double x = p->sin_par / b;
     if (x >= 2.0 * t) {
       passes = true;

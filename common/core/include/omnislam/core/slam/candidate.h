@@ -131,21 +131,19 @@ double candidateLogLikelihood(const Candidate& candidate, const CandidateObserva
                               double max_range_m = std::numeric_limits<double>::infinity());
 
 /// The part of candidateLogLikelihood that depends on the candidate and the current pose and camera
-/// (now.T_WtoR, now.p_CinR_m, now.p_CinW_m) but not on the measured bearing: the prediction from
+/// (now.T_WtoR, now.p_CinR_m) but not on the measured bearing: the prediction from
 /// the estimate, or from the ends of the ray's range segment and its point at infinity. A caller
 /// that scores many measurements against one candidate at one pose makes it once.
 struct CandidatePrediction {
   bool made = false;  ///< false: nothing computed yet (the form below then computes it)
   Pose2 T_WtoR;       ///< the pose, camera and range limits it was made for
   Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();
-  Eigen::Vector3d p_CinW_m = Eigen::Vector3d::Zero();
   double min_range_m = 0.0, max_range_m = 0.0;
   struct Point {
     bool valid = false;  ///< h is defined and the point is not at the camera
     MeasVec zhat;        ///< h(point, x_t)
     double scale = 0.0;  ///< its depth on the candidate's ray / its range from the camera now
   };
-  bool has_estimate = false;
   MeasVec zhat_estimate;  ///< h(X, x_t) (valid_estimate)
   MeasJac H_estimate;     ///< H_m = d h / d X at the estimate (Sigma_X is taken from the candidate)
   bool valid_estimate = false;

@@ -270,8 +270,7 @@ TEST(BadInput, RecorderOnAFullDiskSaysSoAndFails) {
   lcm::LCM bus(url);
   ASSERT_TRUE(bus.good());
   // The recorder announces itself once subscribed; then a few small messages (less than a buffer).
-  for (int i = 0; i < 100 && rec.output().find("recording") == std::string::npos; ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  rec.waitForOutput("recording", 5);
   for (int k = 0; k < 5; ++k) {
     auto p = pose(1'000'000 + k * 20'000, k);
     bus.publish(channels::kGroundTruthPose, &p);

@@ -78,11 +78,7 @@ TEST(Launcher, SigintStopsEveryProcessCleanly) {
                                "  - {name: b, cmd: [sleep, '60']}\n");
   t::Child launcher({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"});
   // Its stop handlers are installed before it starts anything (a fixed pause here was a timing).
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (launcher.output().find("started b") == std::string::npos && launcher.alive() &&
-         std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  ASSERT_NE(launcher.output().find("started b"), std::string::npos) << launcher.output();
+  ASSERT_TRUE(launcher.waitForOutput("started b", 20)) << launcher.output();
   ASSERT_TRUE(launcher.alive()) << launcher.output();
   launcher.signal(SIGINT);
   const auto r = launcher.wait(10);
@@ -192,11 +188,7 @@ TEST(Launcher, SigintDuringTheDrainStopsTheRunAndKeepsTheRecording) {
                       << "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '600', --period, '0.05']}\n";
   const std::string log = dir.file("rec.lcm");
   t::Child launcher({t::binPath("omnislam-launch"), path, "--log-file", log, "--url", t::privateUdpUrl(35)});
-  const auto t0 = std::chrono::steady_clock::now();
-  while (launcher.output().find("stopping: scenario finished") == std::string::npos && launcher.alive() &&
-         std::chrono::steady_clock::now() < t0 + std::chrono::seconds(60))
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  ASSERT_NE(launcher.output().find("stopping: scenario finished"), std::string::npos) << launcher.output();
+  ASSERT_TRUE(launcher.waitForOutput("stopping: scenario finished", 60)) << launcher.output();
   std::this_thread::sleep_for(std::chrono::milliseconds(500));  // in the drain: the publisher goes on
   launcher.signal(SIGINT);
   const t::RunResult r = launcher.wait(60);
@@ -338,9 +330,7 @@ TEST(Launcher, ABusyBusDoesNotHoldTheDrainPastDrainS) {
   // The launcher runs at a lower priority so that it cannot keep up with the flood.
   t::Child launcher({"nice", "-n", "10", t::binPath("omnislam-launch"), path, "--url", url});
   const auto t0 = std::chrono::steady_clock::now();
-  while (launcher.output().find("started idle") == std::string::npos && launcher.alive() &&
-         std::chrono::steady_clock::now() < t0 + std::chrono::seconds(10))
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  launcher.waitForOutput("started idle", 10);
   // The flood, once the run has started (the end of a run on a busy bus): small messages as fast as
   // three threads send them, until the launcher has ended or for 14 s.
   std::atomic<bool> end{false};

@@ -47,9 +47,7 @@ TEST(Record, StopsSoonAfterSigintWhileTheBusStaysBusy) {
   t::TempDir dir;
   const std::string url = t::privateUdpUrl(57), path = dir.file("flood.lcm");
   t::Child rec({t::binPath("omnislam-record"), "-f", path, "--url", url});
-  for (int i = 0; i < 100 && rec.output().find("recording") == std::string::npos; ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  ASSERT_NE(rec.output().find("recording"), std::string::npos) << rec.output();
+  ASSERT_TRUE(rec.waitForOutput("recording", 5)) << rec.output();
   t::RunResult r;
   double stop_s = 0;
   {

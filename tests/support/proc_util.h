@@ -150,6 +150,14 @@ class Child {
     poll(0);
     return out_;
   }
+  /// Waits up to timeout_s for text in the output: true once it is there, false when the child
+  /// ended or the time ran out first.
+  bool waitForOutput(const std::string& text, double timeout_s) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (output().find(text) == std::string::npos && !done_ && std::chrono::steady_clock::now() < deadline)
+      poll(20);
+    return output().find(text) != std::string::npos;
+  }
 
  private:
   void poll(int timeout_ms) {

@@ -358,6 +358,41 @@ TEST(LogFiles, OnAFullDeviceNoEventCountsAsWritten) {
   EXPECT_EQ(w.bytes(), 0);
 }
 
+// A recorder flushes now and then so that a SIGKILL loses at most what came since: the flushed
+// events are complete in the file before commit(), readable by LCM's own reader, and a failing
+// flush is reported once and counts its events as lost.
+TEST(LogFiles, FlushedEventsAreInTheFileBeforeCommit) {
+  Dir d;
+  const std::string path = d.file("out.lcm");
+  lcmio::LogWriter w(path);
+  writeOdometry(w, 10);  // far less than a buffer
+  EXPECT_EQ(fs::file_size(path), 0u);
+  w.flushBuffered();
+  EXPECT_EQ(static_cast<int64_t>(fs::file_size(path)), w.bytes());
+  EXPECT_EQ(count(path), 10);
+  lcm::LogFile lcm_reader(path, "r");
+  ASSERT_TRUE(lcm_reader.good());
+  int64_t read_by_lcm = 0;
+  while (lcm_reader.readNextEvent() != nullptr) ++read_by_lcm;
+  EXPECT_EQ(read_by_lcm, 10);
+  w.flushBuffered();  // nothing buffered: nothing written
+  EXPECT_EQ(count(path), 10);
+  writeOdometry(w, 5);
+  w.commit();
+  EXPECT_EQ(count(path), 15);
+  EXPECT_EQ(static_cast<int64_t>(fs::file_size(path)), w.bytes());
+  EXPECT_THROW(w.flushBuffered(), std::runtime_error);  // after commit()
+
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
+  lcmio::LogWriter full("/dev/full");
+  writeOdometry(full, 3);
+  EXPECT_THROW(full.flushBuffered(), std::runtime_error);
+  EXPECT_EQ(full.events(), 0);
+  EXPECT_EQ(full.lost(), 3);
+  EXPECT_NO_THROW(full.flushBuffered());  // the failure was reported once
+  EXPECT_THROW(full.commit(), std::runtime_error);
+}
+
 TEST(LogFiles, AnOutputThatIsTheInputIsRefused) {
   Dir d;
   { lcmio::LogWriter w(d.file("in.lcm")); }

@@ -1,7 +1,9 @@
 // omnislam-record: records every LCM message of a bus into a standard LCM log file (the format of
 // lcm-logger, replayable with lcm-logplayer). Unlike lcm-logger 1.3.1, whose subscription keeps
 // LCM's default queue of 30 messages and silently drops when it is starved of CPU, it queues up
-// to --queue messages, so a busy machine delays the recording instead of losing it.
+// to --queue messages, so a busy machine delays the recording instead of losing it. It hands
+// what it has recorded to the operating system every --flush-interval-s, so a SIGKILL or a crash
+// of the recorder loses at most that much (a SIGINT or SIGTERM loses nothing).
 #include <CLI/CLI.hpp>
 
 #include <lcm/lcm-cpp.hpp>
@@ -43,10 +45,16 @@ int main(int argc, char** argv) {
   CLI::App cli{"omnislam-record: records an LCM bus into a log file (a flood can overflow UDP buffers: docs/lcm.md)"};
   std::string url, path, channels = ".*";
   int queue = 20000;
+  double flush_interval_s = 0.5;
   cli.add_option("-f,--file", path, "output log file (overwritten)")->required();
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("-c,--channels", channels, "channel regex (anchored, as in LCM)");
   cli.add_option("--queue", queue, "messages queued before LCM drops")->check(CLI::Range(30, 10'000'000));
+  cli.add_option("--flush-interval-s", flush_interval_s,
+                 "wall seconds between writes of the recorded messages to the file, bounding what a "
+                 "SIGKILL or crash loses (0: only when the 32 KiB buffer is full)")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return omnislam::app::runMain("omnislam-record", [&]() -> int {
     // Everything that can be refused is checked before the file is opened (and so emptied).
@@ -69,11 +77,23 @@ int main(int argc, char** argv) {
     rec.log = &log;
     std::cerr << "[record] recording '" << channels << "' into " << path << std::endl;
     bool bus_failed = false;
-    while (!omnislam::lcmio::stopRequested())
+    // Wall time, not the messages' utime: this bounds what a crash of this process loses.
+    const auto flush_every = std::chrono::duration<double>(flush_interval_s);
+    auto last_flush = std::chrono::steady_clock::now();
+    while (!omnislam::lcmio::stopRequested()) {
       if (bus.handleTimeout(100) < 0 && !omnislam::lcmio::stopRequested()) {
         bus_failed = true;  // LCM cannot receive any more: stop rather than record nothing
         break;
       }
+      if (flush_interval_s > 0 && std::chrono::steady_clock::now() - last_flush >= flush_every) {
+        last_flush = std::chrono::steady_clock::now();
+        try {
+          log.flushBuffered();
+        } catch (const std::exception& e) {
+          if (rec.failures++ == 0) rec.first_failure = e.what();
+        }
+      }
+    }
     // Drain what has already arrived, then flush, sync and close the file: the writer writes its
     // last buffer only now, so a full disk shows here or not at all. The drain is bounded: on a bus
     // that stays busy it never ran dry, so the recorder ignored SIGINT and SIGTERM until the

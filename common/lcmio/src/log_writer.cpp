@@ -65,6 +65,12 @@ bool LogWriter::flush() {
   return ok;
 }
 
+void LogWriter::flushBuffered() {
+  if (fd_ < 0) throw std::runtime_error("LCM log '" + path_ + "' flushed after commit()");
+  if (failed_ || buf_.empty()) return;
+  if (!flush()) throw std::runtime_error("writing LCM log '" + path_ + "' failed");
+}
+
 void LogWriter::commit() {
   if (fd_ < 0) throw std::runtime_error("LCM log '" + path_ + "' committed twice");
   const bool was_failed = failed_;

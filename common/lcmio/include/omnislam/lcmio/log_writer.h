@@ -48,6 +48,12 @@ class LogWriter {
   /// will once the buffer is written; after a failure, only the complete events' bytes.
   int64_t bytes() const { return failed_ ? bytes_in_file_ : bytes_in_file_ + static_cast<int64_t>(buf_.size()); }
   const std::string& path() const { return path_; }
+  /// Writes the buffered events to the file now (to the operating system, not synced to the
+  /// disk), so that a crash or SIGKILL of this process cannot lose them: a recorder calls it now
+  /// and then. Throws std::runtime_error as write() does when the write fails (the events it did
+  /// not complete are then lost(), as on write()'s failure); does nothing after an earlier failure
+  /// (already reported by the write that failed) or when nothing is buffered. Not after commit().
+  void flushBuffered();
 
   static constexpr size_t kBufferBytes = 32 * 1024;
 

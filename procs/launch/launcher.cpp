@@ -430,8 +430,11 @@ std::unique_ptr<lcm::LCM> listenForTheDrain(Supervisor& sup, const Plan& plan) {
 /// The end of a run: the processes work through what they have queued (a loaded machine, a slow
 /// filter) before they are stopped, since a process stopped by SIGINT leaves its queue unprocessed.
 /// The bus is quiet once no message but PROCESS_STATUS has been seen for drain_quiet_s; drain_s
-/// bounds the wait.
-void drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus) {
+/// bounds the wait. The logger or a required process dying meanwhile ends it at once, reported
+/// (the wait is for them; a busy bus held the failure unseen until drain_s): `reported` marks
+/// them, so that the end of the run does not report them again.
+/// Returns false when the drain ended that way.
+bool drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus, std::vector<bool>& reported) {
   using Clock = std::chrono::steady_clock;
   Activity activity;
   if (bus)
@@ -443,6 +446,17 @@ void drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus) {
   bool busy = false;  // the last batch found the bus still busy: do not wait on the children
   while (Clock::now() < until && !lcmio::stopRequested()) {
     sup.pump(busy ? 0 : bus ? 20 : 50);
+    for (size_t i = 0; i < sup.children.size(); ++i) {
+      const Child& c = sup.children[i];
+      if (!c.exited || reported[i]) continue;
+      const bool ok = WIFEXITED(c.status) && WEXITSTATUS(c.status) == 0;
+      if (!c.is_logger && (ok || !c.required)) continue;  // reported at the end, as before
+      reported[i] = true;
+      sup.print("launch", (c.is_logger ? plan.log_tool + " died" : "process " + c.name + " died") + " during the drain (" +
+                              describe(c.status) + "): stopping now" +
+                              (c.is_logger ? ", the rest of the run is not recorded" : ""));
+      return false;
+    }
     if (!bus) continue;
     // What waits on the bus, in batches: a bus that never empties must not keep the launcher from
     // drain_s, a stop request and the children (it did, until the flood ended by itself).
@@ -457,7 +471,7 @@ void drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus) {
       o << std::fixed << std::setprecision(1) << "bus quiet after " << s << " s (" << activity.messages
         << " messages since the scenario ended)";
       sup.print("launch", o.str());
-      return;
+      return true;
     }
   }
   if (bus && !lcmio::stopRequested()) {
@@ -466,6 +480,7 @@ void drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus) {
       << activity.messages << " messages since the scenario ended): stopping anyway";
     sup.print("launch", o.str());
   }
+  return true;
 }
 
 }  // namespace
@@ -559,7 +574,7 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
     if (reason.empty() && !any_running) reason = "every process has ended";
   }
   sup.print("launch", "stopping: " + reason);
-  if (!lcmio::stopRequested() && plan.drain_s > 0) drainUntilQuiet(sup, plan, drain_bus.get());
+  if (!lcmio::stopRequested() && plan.drain_s > 0 && !drainUntilQuiet(sup, plan, drain_bus.get(), reported)) rc = 1;
   sup.stop(false, plan.stop_grace_s);
   // The logger goes last, after a moment for the final messages (status, last frame) to land.
   sup.pumpFor(std::chrono::milliseconds(300));

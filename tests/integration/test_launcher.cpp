@@ -209,6 +209,35 @@ TEST(Launcher, SigintDuringTheDrainStopsTheRunAndKeepsTheRecording) {
   EXPECT_EQ(row[2], std::to_string(rounds)) << "SLAM_POSE messages recorded against rounds published";
 }
 
+// A required process that died during the drain was seen only when the drain ended: on a bus kept
+// busy (here by the sample publisher) that was drain_s later, with the failure unreported and the
+// rest of the system still running. The drain now ends at once and says why.
+TEST(Launcher, ARequiredProcessDyingDuringTheDrainEndsItAtOnce) {
+  t::TempDir dir;
+  const std::string path = dir.file("launch.yaml");
+  std::ofstream(path) << "name: unit\nstop_grace_s: 5\ndrain_s: 300\ndrain_quiet_s: 0.5\nprocesses:\n"
+                      << "  - {name: scenario, cmd: [sleep, '2'], ends_run: true}\n"
+                      << "  - {name: worker, cmd: [sh, -c, 'sleep 4; exit 3'], required: true}\n"
+                      << "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '600', --period, '0.05']}\n";
+  const std::string log = dir.file("rec.lcm");
+  t::Child launcher({t::binPath("omnislam-launch"), path, "--log-file", log, "--url", t::privateUdpUrl(36)});
+  const t::RunResult r = launcher.wait(60);
+  ASSERT_FALSE(r.timed_out) << "still draining 60 s after the start\n" << r.output;
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const auto stopping = r.output.find("stopping: scenario finished");
+  const auto died = r.output.find("process worker died during the drain (exit code 3): stopping now");
+  ASSERT_NE(stopping, std::string::npos) << r.output;
+  ASSERT_NE(died, std::string::npos) << r.output;
+  EXPECT_GT(died, stopping) << r.output;
+  EXPECT_EQ(r.output.find("bus quiet"), std::string::npos) << "the bus was never quiet\n" << r.output;
+  EXPECT_EQ(r.output.find("drain_s ("), std::string::npos) << "ended by the death, not by drain_s\n" << r.output;
+  EXPECT_EQ(r.output.find("ended badly while stopping"), std::string::npos) << "reported twice\n" << r.output;
+  EXPECT_NE(r.output.find("done with errors"), std::string::npos) << r.output;
+  // The others were stopped in order and the recording closed.
+  const std::vector<std::string> row = t::wordsOfLine(t::run({t::binPath("omnislam-logstat"), log}, 10).output, "SLAM_POSE");
+  EXPECT_GE(row.size(), 3u) << "no SLAM_POSE in the recording";
+}
+
 // A child that writes without pause (`yes`) kept the launcher reading its pipe for ever: the
 // process that ends the run was never reaped and SIGINT was not seen. Each pass over the children
 // now reads a bounded amount from each.

@@ -396,6 +396,7 @@ class Supervisor {
   size_t width_;
 };
 
+constexpr double kLoggerGraceS = 5.0;  ///< the logger's least SIGINT-to-SIGKILL grace (runPlan)
 constexpr int kMessagesPerBatch = 1000;  ///< bus messages handled between two passes over the children
 
 /// What the drain counts: messages but PROCESS_STATUS (published once a second by every process,
@@ -578,7 +579,11 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
   sup.stop(false, plan.stop_grace_s);
   // The logger goes last, after a moment for the final messages (status, last frame) to land.
   sup.pumpFor(std::chrono::milliseconds(300));
-  sup.stop(true, plan.stop_grace_s);
+  // Its grace is at least kLoggerGraceS: a recorder stopping on a busy bus records what has
+  // arrived for up to 0.5 s, then writes and syncs the file, and a stop_grace_s below that (0.1 s is
+  // accepted) killed it in the middle, losing the report and what it held. The wait ends as soon as
+  // it has stopped, so the floor costs nothing when it stops at once.
+  sup.stop(true, std::max(plan.stop_grace_s, kLoggerGraceS));
 
   for (size_t i = 0; i < sup.children.size(); ++i) {
     const Child& c = sup.children[i];

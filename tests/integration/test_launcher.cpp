@@ -3,7 +3,6 @@
 // lcm-logger or omnislam-record.
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +19,8 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "omnislam/lcmio/channels.h"
+#include "omnislam/lcmio/log_reader.h"
+#include "bus_util.h"
 #include "proc_util.h"
 
 namespace t = omnislam::testing;
@@ -362,28 +363,12 @@ TEST(Launcher, ABusyBusDoesNotHoldTheDrainPastDrainS) {
   launcher.waitForOutput("started idle", 10);
   // The flood, once the run has started (the end of a run on a busy bus): small messages as fast as
   // three threads send them, until the launcher has ended or for 14 s.
-  std::atomic<bool> end{false};
-  std::atomic<bool> flood_ended_by_itself{false};
-  std::vector<std::thread> flood;
-  for (int i = 0; i < 3; ++i)
-    flood.emplace_back([&] {
-      lcm::LCM bus(url);
-      const std::vector<uint8_t> data(200, 0);
-      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(14);
-      while (!end) {
-        for (int k = 0; k < 256; ++k) bus.publish("FLOOD", data.data(), static_cast<unsigned>(data.size()));
-        if (std::chrono::steady_clock::now() >= until) {
-          flood_ended_by_itself = true;
-          break;
-        }
-      }
-    });
+  t::BusFlood flood(url, 3, 14.0);
   const t::RunResult r = launcher.wait(30);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  end = true;
-  for (auto& th : flood) th.join();
+  flood.stop();
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_FALSE(flood_ended_by_itself) << "the launcher ended only after the flood, " << s << " s\n" << r.output;
+  EXPECT_FALSE(flood.endedByItself()) << "the launcher ended only after the flood, " << s << " s\n" << r.output;
   // "drain_s (1 s) reached before the bus was quiet for 0.5 s (N messages since the scenario
   // ended)", or, when the flood starved the launcher so much that it saw nothing for 0.5 s, "bus
   // quiet after X s (N messages ...)": either way it saw the flood.
@@ -391,6 +376,34 @@ TEST(Launcher, ABusyBusDoesNotHoldTheDrainPastDrainS) {
   ASSERT_NE(at, std::string::npos) << r.output;
   EXPECT_GT(std::stol(r.output.substr(r.output.rfind('(', at) + 1)), 0) << "the flood was not seen\n" << r.output;
   EXPECT_LT(s, 12.0) << r.output;
+}
+
+// stop_grace_s accepts 0.1 s, but a recorder stopping on a busy bus drains for up to 0.5 s and
+// then writes and syncs the file: the launcher killed it in the middle ("logger did not stop
+// within 0.1 s"), losing its report and what it held, and the run failed. The logger now gets at
+// least 5 s, and the run ends cleanly with the recording closed.
+TEST(Launcher, TheLoggerGetsTimeToCloseTheRecordingWhateverStopGraceSays) {
+  t::TempDir dir;
+  const std::string url = t::privateUdpUrl(37);
+  const std::string path = dir.file("launch.yaml"), log = dir.file("rec.lcm");
+  std::ofstream(path) << "name: unit\nstop_grace_s: 0.1\ndrain_s: 0\n"
+                      << "processes:\n  - {name: scenario, cmd: [sleep, '1.5'], ends_run: true}\n";
+  t::Child launcher({t::binPath("omnislam-launch"), path, "--log-file", log, "--url", url});
+  ASSERT_TRUE(launcher.waitForOutput("started scenario", 30)) << launcher.output();
+  // A flood from two threads until the launcher has ended (at most 20 s): the recorder's stop
+  // comes while the bus is busy.
+  t::BusFlood flood(url, 2, 20.0);
+  const t::RunResult r = launcher.wait(40);
+  flood.stop();
+  EXPECT_FALSE(r.timed_out) << r.output;
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("did not stop within"), std::string::npos) << r.output;
+  // The recorder's own report, naming the events that are in the file.
+  int64_t in_file = 0;
+  omnislam::lcmio::forEachEvent(log, [&](const omnislam::lcmio::LogEvent&) { ++in_file; });
+  EXPECT_GT(in_file, 0);
+  EXPECT_NE(r.output.find("[record] " + std::to_string(in_file) + " events"), std::string::npos)
+      << in_file << " events in the file\n" << r.output;
 }
 
 TEST(Launcher, BadLaunchFilesNameTheKey) {

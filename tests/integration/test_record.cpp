@@ -6,7 +6,6 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include <atomic>
 #include <chrono>
 #include <csignal>
 #include <optional>
@@ -14,36 +13,11 @@
 #include <vector>
 
 #include "omnislam/lcmio/log_reader.h"
+#include "bus_util.h"
 #include "proc_util.h"
 
 using namespace omnislam;
 namespace t = omnislam::testing;
-
-namespace {
-
-// Publishes 200-byte messages as fast as it can on `url` until `stop`, from two threads, so that
-// the recorder never sees the bus run dry.
-class Flood {
- public:
-  explicit Flood(const std::string& url) {
-    for (int k = 0; k < 2; ++k)
-      threads_.emplace_back([this, url] {
-        lcm::LCM bus(url);
-        std::vector<uint8_t> data(200, 0x5a);
-        while (bus.good() && !stop_.load()) bus.publish("FLOOD", data.data(), static_cast<unsigned>(data.size()));
-      });
-  }
-  ~Flood() {
-    stop_.store(true);
-    for (auto& th : threads_) th.join();
-  }
-
- private:
-  std::atomic<bool> stop_{false};
-  std::vector<std::thread> threads_;
-};
-
-}  // namespace
 
 TEST(Record, StopsSoonAfterSigintWhileTheBusStaysBusy) {
   t::TempDir dir;
@@ -53,7 +27,7 @@ TEST(Record, StopsSoonAfterSigintWhileTheBusStaysBusy) {
   t::RunResult r;
   double stop_s = 0;
   {
-    Flood flood(url);
+    t::BusFlood flood(url, 2, 60.0);
     std::this_thread::sleep_for(std::chrono::milliseconds(1500));
     const auto t0 = std::chrono::steady_clock::now();
     rec.signal(SIGINT);

@@ -1,8 +1,10 @@
-// The three MRCLAM diagnostic scripts whose figures docs/mrclam.md quotes (scripts/
-// mrclam_odometry_heading.py, mrclam_bearing_correlation.py, mrclam_visual_rotation.py), each on a
-// small MRCLAM-format dataset the test writes with a known answer: a turn-scale error the fit must
-// recover, residuals whose correlation is -1 and +1 by construction, and a spin in place whose
-// rotation the landmarks' bearings give exactly. Plus what each does with input it cannot use.
+// The four MRCLAM diagnostic scripts whose figures docs/mrclam.md and mrclam-diagnosis.md quote
+// (scripts/mrclam_odometry_heading.py, mrclam_bearing_correlation.py, mrclam_visual_rotation.py,
+// mrclam_group_observability.py), each on a small MRCLAM-format dataset the test writes with a known
+// answer: a turn-scale error the fit must recover, residuals whose correlation is -1 and +1 by
+// construction, a spin in place whose rotation the landmarks' bearings give exactly, and a group
+// seen with a fixed pattern of misses and passing robots. Plus what each does with input it cannot
+// use.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -206,6 +208,88 @@ TEST(MrclamDiagnosticScripts, VisualRotationOfASpinInPlaceIsExact) {
   EXPECT_TRUE(has(r.output, "5 s windows: heading error RMS commanded 0.075, fused 0.001 rad")) << r.output;
 
   expectRefusals("mrclam_visual_rotation.py", d, {"--max-gap-s", "0"});
+}
+
+TEST(MrclamDiagnosticScripts, GroupObservabilityOfExactBearingsFromADrive) {
+  t::TempDir d;
+  // One landmark ahead and to the left; the robot drives an arc towards it at 0.05 m/s, commanded 0.01 rad/s,
+  // truly 0.009 rad/s; a frame every 0.5 s with the exact bearing whenever it is within +-0.6 rad.
+  const std::vector<std::pair<double, double>> lm = {{4.0, 1.0}};
+  writeLandmarks(d, lm);
+  std::string meas;
+  writeRobot(d, 120.0, 0.05, [](int) { return 0.01; }, 0.9, &meas, 0.5, lm);
+  t::writeMrclamFile(d.file("Robot1_Measurement.dat"), meas);
+  const auto r = script("mrclam_group_observability.py", {d.path()});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "1 landmarks in 1 groups (link 0.5 m): 1: 6 at (4.00, 1.00)")) << r.output;
+  // The heading error grows by 0.001 rad/s: 0.57, 1.72 and 3.44 deg over 10, 30 and 60 s, in every
+  // window, so the median is the 90th percentile.
+  EXPECT_TRUE(has(r.output, "dead reckoning heading error: 10 s median 0.6 / p90 0.6 deg, 30 s median 1.7 / "
+                            "p90 1.7 deg, 60 s median 3.4 / p90 3.4 deg"))
+      << r.output;
+  // Exact bearings from the true poses cross at the landmark, the group's centre, in every window
+  // with enough parallax (there are some).
+  EXPECT_TRUE(matches(r.output, R"(triangulated from the true poses: 20 s windows [1-9][0-9]*, median error 0\.00 m; )"
+                                R"(40 s windows [1-9][0-9]*, median error 0\.00 m)"))
+      << r.output;
+  // Every frame with the group in view has its sighting; every sighting is in its own group's gate.
+  EXPECT_TRUE(matches(r.output, R"(detection in view: P_D 1\.00 over [1-9][0-9]* group-frames; miss runs 0, p90 nan, )"
+                                R"(p99 nan, longest 0 frames)"))
+      << r.output;
+  EXPECT_TRUE(has(r.output, "landmark sightings to their own group 100.0 %, to none 0.0 %")) << r.output;
+  EXPECT_TRUE(has(r.output, "visits (gap 10 s): 1, per group 1;")) << r.output;
+
+  expectRefusals("mrclam_group_observability.py", d, {"--gate-sigma", "0"});
+}
+
+TEST(MrclamDiagnosticScripts, GroupObservabilityCountsMissesVisitsAndPassingRobots) {
+  t::TempDir d;
+  // Landmarks 6 and 7 0.2 m apart form one group centred 3 m ahead; landmark 8 stands alone behind.
+  writeLandmarks(d, {{3.0, 0.1}, {3.0, -0.1}, {-4.0, 0.0}});
+  writeRobot(d, 30.0, 0.0, [](int) { return 0.0; }, 1.0);  // standing at the origin facing +x
+  // 60 frames 0.5 s apart. Landmark 6 is reported in frames k with k % 3 != 2, except k = 20..44:
+  // 24 detections of 60 frames in view, misses in runs of 1 (k = 2, 5, ..., 17 and 47, ..., 56;
+  // k = 59 is not closed by a detection) and one of 25 (20..44), which splits the sightings into two
+  // visits (1010.0 s, then 1023.0 s). Robot 2 (barcode 14) is in every frame, on the group's bearing
+  // in the first 15 and 0.5 rad off after; one unknown barcode.
+  std::string meas = "1000.500 99 2.0 0.3\n";
+  char line[120];
+  for (int k = 0; k < 60; ++k) {
+    const double time = 1000.5 + 0.5 * k;
+    if (k % 3 != 2 && (k < 20 || k > 44)) {
+      std::snprintf(line, sizeof line, "%.3f 60 3.0 %.9f\n", time, std::atan2(0.1, 3.0));
+      meas += line;
+    }
+    std::snprintf(line, sizeof line, "%.3f 14 2.0 %.9f\n", time, k < 15 ? 0.0 : 0.5);
+    meas += line;
+  }
+  t::writeMrclamFile(d.file("Robot1_Measurement.dat"), meas);
+  const auto r = script("mrclam_group_observability.py", {d.path()});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r.output, "3 landmarks in 2 groups (link 0.5 m): 1: 6,7 at (3.00, 0.00); 2: 8 at (-4.00, 0.00)"))
+      << r.output;
+  EXPECT_TRUE(has(r.output, "robot 1: 85 sightings: landmarks 24 (28 %), other robots 60 (71 %), unknown barcodes 1"))
+      << r.output;
+  EXPECT_TRUE(has(r.output, "visits (gap 10 s): 2, per group 2 0; parallax per visit median 0.0 deg")) << r.output;
+  // Runs [1 x 10, 25]: the 90th percentile is 1, the 99th 1 + 0.9 * 24 = 22.6.
+  EXPECT_TRUE(has(r.output,
+                  "detection in view: P_D 0.40 over 60 group-frames; miss runs 11, p90 1, p99 23, longest 25 frames"))
+      << r.output;
+  // Landmark 6 is 0.033 rad off the group's centre: 0.9 of the widened sigma, sqrt(1 deg^2 +
+  // (0.1 m / 3 m)^2). Robot 2 is in the gate in 15 of its 60 sightings.
+  EXPECT_TRUE(has(r.output, "landmark sightings to their own group 100.0 %, to none 0.0 %; other robots' sightings "
+                            "inside a gate 25.0 %"))
+      << r.output;
+  // Standing still: no heading error, and no window with parallax to triangulate from.
+  EXPECT_TRUE(has(r.output, "10 s median 0.0 / p90 0.0 deg")) << r.output;
+  EXPECT_TRUE(has(r.output, "20 s windows 0, median error nan m")) << r.output;
+
+  // The same without the truth file: the script names it.
+  std::remove(d.file("Robot1_Groundtruth.dat").c_str());
+  const auto missing = script("mrclam_group_observability.py", {d.path()});
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_TRUE(has(missing.output, "Robot1_Groundtruth.dat")) << missing.output;
+  EXPECT_FALSE(has(missing.output, "Traceback")) << missing.output;
 }
 
 }  // namespace

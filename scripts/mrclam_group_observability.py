@@ -55,6 +55,11 @@ def percentile(values, p):
     return v[i] if i + 1 >= len(v) else v[i] + (pos - i) * (v[i + 1] - v[i])
 
 
+def share(k, total):
+    """k of total in percent; nan when total is 0."""
+    return 100.0 * k / total if total else float('nan')
+
+
 def median(values):
     return percentile(values, 50.0)
 
@@ -139,9 +144,8 @@ def robot(dataset, r, groups, group_of_barcode, robot_barcodes, args):
     n_landmark = sum(1 for _, b, _ in sightings if b in group_of_barcode)
     n_robot = sum(1 for _, b, _ in sightings if b in robot_barcodes)
     n = len(sightings)
-    pct = (lambda k: 100.0 * k / n) if n else (lambda k: float('nan'))
-    print(f'robot {r}: {n} sightings: landmarks {n_landmark} ({pct(n_landmark):.0f} %), other robots {n_robot} '
-          f'({pct(n_robot):.0f} %), unknown barcodes {n - n_landmark - n_robot}')
+    print(f'robot {r}: {n} sightings: landmarks {n_landmark} ({share(n_landmark, n):.0f} %), other robots {n_robot} '
+          f'({share(n_robot, n):.0f} %), unknown barcodes {n - n_landmark - n_robot}')
 
     # Dead reckoning's relative heading error.
     odo_t, acc = [odo[0][0]], [0.0]
@@ -251,8 +255,8 @@ def robot(dataset, r, groups, group_of_barcode, robot_barcodes, args):
         else:
             robots_in_gate += best is not None
     print(f'  {args.gate_sigma:g}-sigma gate from the true poses: landmark sightings to their own group '
-          f'{pct(own) * n / max(n_landmark, 1):.1f} %, to none {pct(none) * n / max(n_landmark, 1):.1f} %; '
-          f'other robots\' sightings inside a gate {pct(robots_in_gate) * n / max(n_robot, 1):.1f} %')
+          f'{share(own, n_landmark):.1f} %, to none {share(none, n_landmark):.1f} %; '
+          f'other robots\' sightings inside a gate {share(robots_in_gate, n_robot):.1f} %')
 
 
 def main():

@@ -39,6 +39,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from mrclam_odometry_heading import add_dataset_argument, load, truth_heading, wrap  # noqa: E402  (same folder)
+from mrclam_visual_rotation import Integral  # noqa: E402  (same folder)
 
 HEADING_WINDOWS_S = (10, 30, 60)
 TRIANGULATION_WINDOWS_S = (20.0, 40.0)
@@ -89,15 +90,15 @@ def groups_of(landmarks, link_m):
 
 
 class Track:
-    """Linear interpolation of a timed table's columns (clamped at the ends)."""
+    """Linear interpolation of a timed table's x and y columns (clamped at the ends)."""
 
-    def __init__(self, times, *columns):
-        self.t, self.columns = times, columns
+    def __init__(self, rows):
+        self.t, self.x, self.y = [r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows]
 
     def __call__(self, t):
         i = max(1, min(bisect.bisect_left(self.t, t), len(self.t) - 1))
         s = min(max((t - self.t[i - 1]) / (self.t[i] - self.t[i - 1]), 0.0), 1.0)
-        return tuple(c[i - 1] + s * (c[i] - c[i - 1]) for c in self.columns)
+        return self.x[i - 1] + s * (self.x[i] - self.x[i - 1]), self.y[i - 1] + s * (self.y[i] - self.y[i - 1])
 
 
 def crossing(rays):
@@ -133,14 +134,14 @@ def robot(dataset, r, groups, group_of_barcode, robot_barcodes, args):
     gt = load(os.path.join(dataset, f'Robot{r}_Groundtruth.dat'), columns=4)
     rows = load(os.path.join(dataset, f'Robot{r}_Measurement.dat'), columns=4, merge_equal_times=False)
     heading = truth_heading(gt)
-    position = Track([g[0] for g in gt], [g[1] for g in gt], [g[2] for g in gt])
+    position = Track(gt)
 
-    def pose(t):
-        x, y = position(t)
-        return x, y, heading(t)
-
-    # Sightings.
+    # Sightings, and the true pose at each frame (distinct sighting time), interpolated once.
     sightings = [(row[0], int(row[1]), row[3]) for row in rows]
+    pose = {}
+    for t, _, _ in sightings:
+        if t not in pose:
+            pose[t] = position(t) + (heading(t),)
     n_landmark = sum(1 for _, b, _ in sightings if b in group_of_barcode)
     n_robot = sum(1 for _, b, _ in sightings if b in robot_barcodes)
     n = len(sightings)
@@ -148,36 +149,32 @@ def robot(dataset, r, groups, group_of_barcode, robot_barcodes, args):
           f'({share(n_robot, n):.0f} %), unknown barcodes {n - n_landmark - n_robot}')
 
     # Dead reckoning's relative heading error.
-    odo_t, acc = [odo[0][0]], [0.0]
-    for i in range(1, len(odo)):
-        odo_t.append(odo[i][0])
-        acc.append(acc[-1] + odo[i - 1][2] * (odo[i][0] - odo[i - 1][0]))
-    commanded = Track(odo_t, acc)
+    commanded = Integral(odo, lambda row: row[2])
     start, end = max(odo[0][0], gt[0][0]) + 1.0, min(odo[-1][0], gt[-1][0]) - 1.0
     grid = [start + k for k in range(int(math.ceil(end - start)))]
     parts = []
     for w in HEADING_WINDOWS_S:
         errors = []
         for i in range(0, len(grid) - w, 5):
-            turned = commanded(grid[i + w])[0] - commanded(grid[i])[0]
+            turned = commanded(grid[i + w]) - commanded(grid[i])
             errors.append(abs(wrap(turned - (heading(grid[i + w]) - heading(grid[i])))))
         parts.append(f'{w} s median {math.degrees(median(errors)):.1f} / '
                      f'p90 {math.degrees(percentile(errors, 90)):.1f} deg')
     print('  dead reckoning heading error: ' + ', '.join(parts))
 
     # Visits and their parallax.
-    per_group = [[(t, b) for t, b, _ in sightings if group_of_barcode.get(b) == g] for g in range(len(groups))]
+    per_group = [[t for t, b, _ in sightings if group_of_barcode.get(b) == g] for g in range(len(groups))]
     visit_counts, parallaxes = [], []
     for g, seen in enumerate(per_group):
         visits = []
-        for t, _ in seen:
+        for t in seen:
             if not visits or t - visits[-1][-1] > args.visit_gap_s:
                 visits.append([])
             visits[-1].append(t)
         visit_counts.append(len(visits))
         cx, cy = groups[g][1]
         for times in visits:
-            parallaxes.append(spread([math.atan2(cy - position(t)[1], cx - position(t)[0]) for t in times]))
+            parallaxes.append(spread([math.atan2(cy - pose[t][1], cx - pose[t][0]) for t in times]))
     print(f'  visits (gap {args.visit_gap_s:g} s): {sum(visit_counts)}, per group '
           + ' '.join(str(c) for c in visit_counts)
           + f'; parallax per visit median {math.degrees(median(parallaxes)):.1f} deg')
@@ -193,7 +190,7 @@ def robot(dataset, r, groups, group_of_barcode, robot_barcodes, args):
                 rays = []
                 for t, b, z in landmark_sightings:
                     if ws <= t < ws + w and group_of_barcode[b] == g:
-                        x, y, th = pose(t)
+                        x, y, th = pose[t]
                         rays.append((x, y, th + z))
                 if len(rays) < 4:
                     continue
@@ -218,7 +215,7 @@ def robot(dataset, r, groups, group_of_barcode, robot_barcodes, args):
     for g, (_, (cx, cy)) in enumerate(groups):
         run = 0
         for t in sorted(frames):
-            x, y, th = pose(t)
+            x, y, th = pose[t]
             rng = math.hypot(cx - x, cy - y)
             visible = abs(wrap(math.atan2(cy - y, cx - x) - th)) < VIEW_HALF_RAD and VIEW_MIN_M < rng < VIEW_MAX_M
             seen = g in frames[t]
@@ -242,7 +239,7 @@ def robot(dataset, r, groups, group_of_barcode, robot_barcodes, args):
     for t, b, z in sightings:
         if b not in group_of_barcode and b not in robot_barcodes:
             continue
-        x, y, th = pose(t)
+        x, y, th = pose[t]
         best, best_e = None, None
         for g, (_, (cx, cy)) in enumerate(groups):
             rng = max(math.hypot(cx - x, cy - y), 1e-6)

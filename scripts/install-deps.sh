@@ -10,6 +10,7 @@ PKGS=(
   default-jre                                         # lcm-spy is a Swing window: AWT's X11 library
   libeigen3-dev                                       # core maths
   libopencv-dev                                       # image processing, rendering, image I/O
+  libopencv-contrib-dev                               # cv::omnidir (ccalib): calibration tool, model checks
   libyaml-cpp-dev                                     # world / config files
   libcli11-dev                                        # command-line flags
   libgtest-dev libgmock-dev googletest                # unit and integration tests

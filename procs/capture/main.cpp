@@ -213,7 +213,7 @@ int main(int argc, char** argv) {
   int device = 0;
   cli.add_option("--source", source, "sim | dir | device")->required()->check(CLI::IsMember({"sim", "dir", "device"}));
   cli.add_option("--world", world_path, "world file (source sim)");
-  cli.add_option("--seed", seed, "seed of the image noise and nuisances (source sim)");
+  cli.add_option("--seed", seed, "seed of the image noise and nuisances (source sim)")->check(app::SeedRange());
   cli.add_option("--dir", dir, "directory of images (source dir)");
   cli.add_option("--rate-hz", rate_hz, "frame rate (sources dir and device)")->check(omnislam::app::FiniteRange(0.01, 1000.0));
   cli.add_option("--speedup", speedup, "source dir: replay speed-up, 0 = as fast as possible")

@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <chrono>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <filesystem>
@@ -19,6 +20,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -169,6 +171,17 @@ std::string resolveProgram(const std::string& prog, const std::string& bin_dir) 
   const fs::path local = fs::path(bin_dir) / prog;
   if (fs::exists(local)) return local.string();
   return prog;  // execvp searches PATH
+}
+
+bool isExecutableFile(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_regular_file(p, ec) && access(p.c_str(), X_OK) == 0;
+}
+
+std::vector<std::string> recorderArgv(const Plan& plan) {
+  return plan.log_tool == "lcm-logger"
+             ? std::vector<std::string>{"lcm-logger", "--lcm-url=" + plan.lcm_url, "-f", plan.log_file}
+             : std::vector<std::string>{"omnislam-record", "--url", plan.lcm_url, "-f", plan.log_file};
 }
 
 Child spawn(const std::string& name, const std::vector<std::string>& argv, const std::string& url,
@@ -486,7 +499,34 @@ bool drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus, std::vect
 
 }  // namespace
 
+std::optional<std::string> findProgram(const std::string& prog, const std::string& bin_dir) {
+  if (prog.empty()) return std::nullopt;
+  if (prog.find('/') != std::string::npos) return isExecutableFile(prog) ? std::optional<std::string>(prog) : std::nullopt;
+  if (isExecutableFile(fs::path(bin_dir) / prog)) return (fs::path(bin_dir) / prog).string();
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "";
+  size_t start = 0;
+  while (start <= dirs.size()) {
+    const size_t end = std::min(dirs.find(':', start), dirs.size());
+    const fs::path dir = dirs.substr(start, end - start);
+    if (!dir.empty() && isExecutableFile(dir / prog)) return (dir / prog).string();
+    start = end + 1;
+  }
+  return std::nullopt;
+}
+
+void checkPrograms(const Plan& plan, const std::string& bin_dir) {
+  auto check = [&](const std::string& who, const std::string& prog) {
+    if (!findProgram(prog, bin_dir))
+      throw std::invalid_argument(who + ": program '" + prog + "' not found or not executable (looked in " +
+                                  bin_dir + " and PATH); nothing was started");
+  };
+  if (plan.log_enabled) check("logger (" + plan.log_tool + ")", recorderArgv(plan).front());
+  for (const auto& p : plan.processes) check("process '" + p.name + "'", p.argv.empty() ? "" : p.argv.front());
+}
+
 int runPlan(const Plan& plan, const std::string& bin_dir) {
+  checkPrograms(plan, bin_dir);
   lcmio::installStopHandlers();
   size_t width = 6;
   for (const auto& p : plan.processes) width = std::max(width, p.name.size());
@@ -497,11 +537,7 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
   if (plan.log_enabled) {
     const fs::path dir = fs::path(plan.log_file).parent_path();
     if (!dir.empty()) fs::create_directories(dir);
-    const std::vector<std::string> argv =
-        plan.log_tool == "lcm-logger"
-            ? std::vector<std::string>{"lcm-logger", "--lcm-url=" + plan.lcm_url, "-f", plan.log_file}
-            : std::vector<std::string>{"omnislam-record", "--url", plan.lcm_url, "-f", plan.log_file};
-    Child lg = spawn("logger", argv, plan.lcm_url, bin_dir);
+    Child lg = spawn("logger", recorderArgv(plan), plan.lcm_url, bin_dir);
     lg.is_logger = true;
     // The logger must be subscribed before anyone publishes. omnislam-record prints this line once
     // it has opened the file and subscribed; lcm-logger prints it just before it opens the file and

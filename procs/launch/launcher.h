@@ -4,6 +4,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,14 @@ Plan loadPlan(const std::string& path, const std::map<std::string, std::string>&
 
 /// Replaces ${name} by vars[name]; throws std::invalid_argument naming an unknown variable.
 std::string substitute(const std::string& s, const std::map<std::string, std::string>& vars);
+
+/// The program a process (or the recorder) would run: `prog` itself when it has a '/', else
+/// bin_dir/prog when that exists, else the first executable `prog` on PATH; nullopt when none is.
+std::optional<std::string> findProgram(const std::string& prog, const std::string& bin_dir);
+
+/// Throws std::invalid_argument naming the first process (or the recorder) whose program cannot
+/// be found or is not executable, so that a bad launch file starts nothing.
+void checkPrograms(const Plan& plan, const std::string& bin_dir);
 
 /// Runs the plan; returns the launcher's exit code (0 when every process ended normally).
 int runPlan(const Plan& plan, const std::string& bin_dir);

@@ -139,7 +139,7 @@ int main(int argc, char** argv) {
   double speedup = 1.0;
   cli.add_option("--source", source, "sim | csv")->required()->check(CLI::IsMember({"sim", "csv"}));
   cli.add_option("--world", world_path, "world file (source sim)");
-  cli.add_option("--seed", seed, "seed of the odometry noise (source sim)");
+  cli.add_option("--seed", seed, "seed of the odometry noise (source sim)")->check(app::SeedRange());
   cli.add_option("--csv", csv, "wheel data CSV: utime,v_mps,omega_radps (source csv)");
   cli.add_option("--speedup", speedup, "source csv: replay speed-up, 0 = as fast as possible")
       ->check(omnislam::app::FiniteRange(0.0, 1000.0));

@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <stdexcept>
@@ -174,7 +175,12 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
               const std::string& out_path, bool show_progress) {
   lcmio::requireDistinctFiles(in_path, out_path, "--out");
   lcmio::LogReader in(in_path);  // every length checked: a corrupt log is named, never a crash
-  lcmio::LogWriter out(out_path);
+  // OUT.lcm.partial until the end (interrupted too: outputs so far are kept), so a full disk or a
+  // crash never leaves a short OUT.lcm that reads as complete. A device or pipe (/dev/null,
+  // /dev/full) is written in place: it cannot be replaced by a rename.
+  std::error_code ec;
+  const bool special = std::filesystem::exists(out_path, ec) && !std::filesystem::is_regular_file(out_path, ec);
+  lcmio::LogWriter out(out_path, special ? lcmio::LogWriter::Mode::kDirect : lcmio::LogWriter::Mode::kAtomic);
   SlamDriver driver(opt, std::move(prior));
   Progress progress(show_progress);
   lcmio::installStopHandlers();  // SIGINT / SIGTERM: stop reading, write what was computed
@@ -238,7 +244,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> sets;
   bool localise = false, progress = false, no_progress = false;
   cli.add_option("--config", config_path, "SLAM config (YAML, e.g. config/slam/sports_hall.yaml); default: built-in");
-  auto* seed_opt = cli.add_option("--seed", seed, "filter seed (overrides the config's seed)");
+  auto* seed_opt = cli.add_option("--seed", seed, "filter seed (overrides the config's seed)")->check(app::SeedRange());
   cli.add_option("--replay", replay, "offline: read this LCM log instead of the bus");
   cli.add_option("--out", out, "offline: write the input events and the outputs to this LCM log");
   cli.add_option("--set", sets, "override a config key: --set filter.resample_ess_fraction=1.0 (repeatable; needs --config)");
@@ -265,6 +271,9 @@ int main(int argc, char** argv) {
       opt.filter.association = slamproc::associationFromName(association);
     if (particles > 0) opt.filter.num_particles = particles;
     if (const std::string err = opt.validate(); !err.empty()) throw std::invalid_argument(err);
+    // Outputs are checked before any work whose result would be lost at the end.
+    if (!opt.save_map_path.empty()) lcmio::requireWritableFile(opt.save_map_path, "--save-map (map.save_path)");
+    if (!out.empty()) lcmio::requireWritableFile(out, "--out");
     std::vector<slam::Landmark> prior;
     if (!opt.load_map_path.empty()) {
       prior = slamproc::loadMap(opt.load_map_path).landmarks;

@@ -422,6 +422,27 @@ TEST(Launcher, BadLaunchFilesNameTheKey) {
   EXPECT_NE(r.output.find("processes[0].cmdd' is not a known key"), std::string::npos) << r.output;
 }
 
+// A launch file naming a program that does not exist used to start every process before it and
+// fail only when it reached that one. Every program is now found before anything starts.
+TEST(Launcher, AMissingProgramStopsTheRunBeforeAnythingStarts) {
+  t::TempDir dir;
+  const std::string marker = dir.file("started");
+  const auto file = launchFile(dir, "  - {name: first, cmd: [sh, -c, 'touch " + marker + "; sleep 5']}\n"
+                                    "  - {name: typo, cmd: [omnislam-featurez, --config, x.yaml]}\n");
+  const auto r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 20);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("process 'typo': program 'omnislam-featurez' not found"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("started first"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(marker)) << r.output;
+  // A path that is not executable is refused the same way.
+  const std::string plain = dir.file("not-a-program.sh");
+  std::ofstream(plain) << "echo hi\n";
+  const auto file2 = launchFile(dir, "  - {name: plain, cmd: [" + plain + "]}\n");
+  const auto r2 = t::run({t::binPath("omnislam-launch"), file2, "--no-log", "--url", "memq://"}, 20);
+  EXPECT_EQ(r2.exit_code, 2) << r2.output;
+  EXPECT_NE(r2.output.find("not found or not executable"), std::string::npos) << r2.output;
+}
+
 // The recorder that cannot write its file (here a path in /proc) printed its error and exited; the
 // launcher took that first line for "recording", started the run, and named a log that does not
 // exist. It now stops before anything starts. lcm-logger says 'Opening log file' before it opens it.

@@ -364,6 +364,7 @@ TEST(SlamReplay, ACorruptLengthACorruptSeqAndAFullDiskAreReported) {
   EXPECT_NE(r.output.find("sequence_gaps 0 sequence_restarts 2"), std::string::npos) << r.output;
   // Frames 0..4 (frame 5 is logged after 5 s): every one answered, the corrupt seq notwithstanding.
   EXPECT_EQ(lcmio::readChannel<pose_t>(dir.file("out.lcm"), channels::kSlamPose).size(), 5u) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out.lcm.partial"))) << "written as .partial, renamed at the end";
 
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
   const auto full = t::run({t::binPath("omnislam-slam"), "--replay", dir.file("in.lcm"), "--out", "/dev/full",
@@ -392,6 +393,22 @@ TEST(SlamReplay, BadConfigAndFlagsStopWithAMessageNamingTheKey) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("is the input log"), std::string::npos) << r.output;
   EXPECT_EQ(std::filesystem::file_size(dir.file("in.lcm")), 9u);
+  // An output that cannot be written is refused at start, not after the work (the map was lost at
+  // exit): nothing is read, nothing is written.
+  for (const std::string& bad : std::vector<std::string>{"/proc/omnislam-no-such-folder/map.yaml", "/proc/map.yaml", dir.path()}) {
+    r = t::run({t::binPath("omnislam-slam"), "--config", kConfig, "--replay", dir.file("in.lcm"), "--out",
+                dir.file("never.lcm"), "--save-map", bad},
+               10.0);
+    EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.output;
+    EXPECT_NE(r.output.find("--save-map (map.save_path): cannot write '" + bad + "'"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("never.lcm"))) << bad;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("never.lcm.partial"))) << bad;
+  }
+  r = t::run({t::binPath("omnislam-slam"), "--config", kConfig, "--replay", dir.file("in.lcm"), "--out",
+              "/proc/omnislam-no-such-folder/out.lcm"},
+             10.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--out: cannot write"), std::string::npos) << r.output;
   // A bad flag value is a bad config too: exit 2, naming the flag and its accepted range.
   r = t::run({t::binPath("omnislam-slam"), "--particles", "0"}, 10.0);
   EXPECT_EQ(r.exit_code, 2) << r.output;

@@ -93,3 +93,36 @@ TEST(FiniteRange, RefusesNanInfinityAndOutOfRangeAcceptsTheBounds) {
 }
 
 }  // namespace
+
+namespace {
+
+int parseSeed(const std::string& value, std::uint64_t& seed) {
+  CLI::App cli("test");
+  cli.add_option("--seed", seed)->check(app::SeedRange());
+  std::vector<std::string> args{"prog", "--seed", value};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  std::ostringstream captured;
+  std::streambuf* old = std::cerr.rdbuf(captured.rdbuf());
+  const int rc = app::parseFlags(cli, static_cast<int>(argv.size()), argv.data());
+  std::cerr.rdbuf(old);
+  return rc;
+}
+
+// CLI11 reads "-1" into a uint64_t as 2^64 - 1 without a word: a user asking for seed -1 got
+// seed 18446744073709551615. Seeds take what the config files' `seed` keys take.
+TEST(SeedRange, RefusesNegativeFractionalAndTooLargeAcceptsTheBounds) {
+  for (const char* bad : {"-1", "-0", "1.5", "1e3", "", " 1", "0x10", "9223372036854775808", "99999999999999999999", "seven"}) {
+    std::uint64_t seed = 5;
+    EXPECT_EQ(parseSeed(bad, seed), app::kBadConfig) << "'" << bad << "'";
+    EXPECT_EQ(seed, 5u) << bad;
+  }
+  for (const auto& [good, expected] :
+       {std::pair{"0", 0ull}, std::pair{"1", 1ull}, std::pair{"9223372036854775807", 9223372036854775807ull}}) {
+    std::uint64_t seed = 5;
+    EXPECT_EQ(parseSeed(good, seed), -1) << good;
+    EXPECT_EQ(seed, expected) << good;
+  }
+}
+
+}  // namespace

@@ -19,6 +19,9 @@
 #include <cerrno>
 #include <cstdio>
 #include <stdexcept>
+#include <string>
+#include <filesystem>
+#include <cstring>
 
 namespace omnislam::lcmio {
 
@@ -105,6 +108,23 @@ void LogWriter::write(int64_t timestamp, const std::string& channel, const void*
     --n_;  // this event is the last in the buffer, so not complete in the file: it is not taken
     throw std::runtime_error("writing LCM log '" + path_ + "' failed");
   }
+}
+
+void requireWritableFile(const std::string& path, const std::string& flag) {
+  namespace fs = std::filesystem;
+  auto refuse = [&](const std::string& why) {
+    throw std::invalid_argument(flag + ": cannot write '" + path + "': " + why);
+  };
+  if (path.empty()) refuse("no path given");
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) refuse("it is a folder");
+  const fs::path dir = fs::path(path).has_parent_path() ? fs::path(path).parent_path() : fs::path(".");
+  if (!fs::is_directory(dir, ec)) refuse("its folder '" + dir.string() + "' does not exist");
+  const fs::path probe = dir / (".omnislam-write-probe-" + std::to_string(::getpid()));
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) refuse(std::string("cannot create a file in '") + dir.string() + "': " + std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
 }
 
 }  // namespace omnislam::lcmio

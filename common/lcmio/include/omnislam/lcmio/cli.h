@@ -31,6 +31,20 @@ inline CLI::Validator FiniteRange(double min, double max) {
       name.str());
 }
 
+/// A seed flag: a whole number in [0, 2^63 - 1], the range the config files' `seed` keys accept.
+/// CLI11 reads "-1" into a uint64_t as 2^64 - 1 without a word; this refuses it, naming the range.
+inline CLI::Validator SeedRange() {
+  return CLI::Validator(
+      [](std::string& input) -> std::string {
+        const bool digits = !input.empty() && input.size() <= 19 &&
+                            input.find_first_not_of("0123456789") == std::string::npos;
+        if (!digits || (input.size() == 19 && input > "9223372036854775807"))
+          return "Value " + input + " not in range [0 - 9223372036854775807] (a whole number)";
+        return std::string();
+      },
+      "UINT in [0 - 9223372036854775807]");
+}
+
 /// Parses argv; returns -1 to go on, or the exit code to return from main() (CLI11 has printed the
 /// help or the one-line error naming the flag and its accepted range).
 inline int parseFlags(CLI::App& cli, int argc, char** argv) {

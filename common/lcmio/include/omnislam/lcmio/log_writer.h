@@ -71,4 +71,10 @@ class LogWriter {
   bool failed_ = false;
 };
 
+/// Checked at start, before any work whose result would go there: throws std::invalid_argument
+/// ("FLAG: cannot write 'PATH': REASON") when `path` is a folder, or a file cannot be created in
+/// its folder (missing folder, no permission, read-only file system: probed by creating and
+/// removing a file beside it, since root's access() says yes to read-only mounts and /proc).
+void requireWritableFile(const std::string& path, const std::string& flag);
+
 }  // namespace omnislam::lcmio

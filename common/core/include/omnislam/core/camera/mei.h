@@ -78,6 +78,7 @@ class MeiCamera final : public CameraModel {
   Params p_;
   double max_zenith_rad_ = 0.0;
   double max_radius_ = 0.0;  // undistorted normalised radius r at max_zenith_rad_
+  double max_rim_rd_ = 0.0;  // largest |m_d| on the rim r = max_radius_
 };
 
 }  // namespace omnislam::camera

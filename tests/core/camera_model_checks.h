@@ -112,4 +112,26 @@ inline void expectJacobiansAtDirection(const camera::CameraModel& cam, double ze
   expectJacobiansAt(cam, *px, rel_tol);
 }
 
+/// d(image radius)/d(zeta) at zeta along the azimuth 0 (u axis), relative to its value at the centre,
+/// from the model's own project() (central differences, h = 1e-5 rad). The camera must see zeta +- h.
+inline double radialSlopeRatio(const camera::CameraModel& cam, double zeta_rad) {
+  const auto u = [&](double z) { return cam.project(directionAt(z, 0.0)).value().x(); };
+  const double h = 1e-5;
+  return (u(zeta_rad + h) - u(zeta_rad - h)) / (u(h) - u(-h));
+}
+
+/// The field of view [0, max_zenith_rad] ends at bound_rad or where the radial slope falls to 1 % of
+/// the centre's (kMinRadialSlopeRatio, sampled every bound / 4096): the slope just inside is about 1 %
+/// when the view is cut short. Checked on a camera whose image does not clip the view.
+inline void expectViewEndsAtBoundOrFlattening(const camera::CameraModel& unclipped, double max_zenith_rad,
+                                              double bound_rad) {
+  const double step = bound_rad / 4096.0;
+  EXPECT_LE(max_zenith_rad, bound_rad);
+  if (max_zenith_rad >= bound_rad - 3.0 * step) return;  // ends at the bound
+  // Cut short: only because the radius has flattened to about 1 % of the centre's slope.
+  const double slope_inside = radialSlopeRatio(unclipped, max_zenith_rad - 2.0 * step);
+  EXPECT_GT(slope_inside, 0.0095);
+  EXPECT_LT(slope_inside, 0.02);
+}
+
 }  // namespace omnislam::testing

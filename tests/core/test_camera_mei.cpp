@@ -99,14 +99,22 @@ TEST(camera_Mei, XiAboveOneIsLimitedToTheInjectiveRange) {
   p.k1 = p.k2 = p.p1 = p.p2 = 0.0;
   p.fx_px = p.fy_px = 100.0;  // the image covers the whole model
   const MeiCamera cam(p);
-  // zs > -1/xi: beyond it the radius sin / (cos + xi) decreases again (the model folds).
+  // zs > -1/xi: beyond it the radius sin / (cos + xi) decreases again (the model folds); the view
+  // ends a little before, where the slope (1 + xi cos) / (cos + xi)^2 falls to 1 % of the centre's.
   const double limit = std::acos(-1.0 / 1.5);
-  EXPECT_LT(cam.maxZenithRad(), limit);
-  EXPECT_GT(cam.maxZenithRad(), limit * (1.0 - 2.0 / 4096.0));
+  const auto slope = [](double z) { return (1.0 + 1.5 * std::cos(z)) / std::pow(std::cos(z) + 1.5, 2); };
+  double lo = 0.0, hi = limit;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (slope(mid) > 0.01 * slope(0.0) ? lo : hi) = mid;
+  }
+  const double step = std::acos(-1.0 / 1.5) / 4096.0;
+  EXPECT_LE(cam.maxZenithRad(), lo + step);
+  EXPECT_GT(cam.maxZenithRad(), lo - 2.0 * step);
   EXPECT_FALSE(cam.project(directionAt(limit + 0.01, 0.3)).has_value());
-  // The valid image is the disc of radius f / sqrt(xi^2 - 1) (r at zs = -1/xi) around the centre.
+  // The valid image is the disc of radius f r(maxZenith) around the centre (r -> 1 / sqrt(xi^2 - 1)).
   const auto px_stats = omnislam::testing::pixelRoundTrip(cam);
-  const double radius_px = 100.0 / std::sqrt(1.5 * 1.5 - 1.0);
+  const double radius_px = 100.0 * std::sin(cam.maxZenithRad()) / (std::cos(cam.maxZenithRad()) + 1.5);
   EXPECT_NEAR(px_stats.valid, kPi * radius_px * radius_px, 0.01 * kPi * radius_px * radius_px);
   EXPECT_LT(px_stats.worst_px, 1e-6);
   const auto d_stats = omnislam::testing::directionRoundTrip(cam, cam.maxZenithRad());
@@ -115,27 +123,34 @@ TEST(camera_Mei, XiAboveOneIsLimitedToTheInjectiveRange) {
 
 TEST(camera_Mei, FoldingDistortionLimitsTheFieldOfView) {
   MeiParams p = catadioptric();
-  p.k1 = -0.6;  // radial only: r (1 + k1 r^2) stops increasing at r^2 = 1 / (3 |k1|)
+  p.k1 = -0.6;  // radial only: r_d = r (1 + k1 r^2) stops increasing at r^2 = 1 / (3 |k1|)
   p.k2 = p.p1 = p.p2 = 0.0;
   p.skew_px = 0.0;
   const MeiCamera cam(p);
-  const double r_fold = std::sqrt(1.0 / 1.8);
-  // Zenith of r_fold: sin / (cos + xi) = r  ->  solve on the increasing branch by bisection.
-  double lo = 0.0, hi = 2.0;
+  // The view ends where d(r_d)/d(zeta) falls to 1 % of its value at the centre, 1 / (1 + xi): a
+  // little before the fold. Find that zenith by bisection on the closed-form slope.
+  const auto slope = [&](double zeta) {
+    const double c = std::cos(zeta), r = std::sin(zeta) / (c + p.xi);
+    const double dr = (1.0 + p.xi * c) / ((c + p.xi) * (c + p.xi));
+    return (1.0 + 3.0 * p.k1 * r * r) * dr;
+  };
+  double lo = 0.0, hi = 1.5;  // the fold (r = 0.745) is at 69 deg
   for (int i = 0; i < 200; ++i) {
     const double mid = 0.5 * (lo + hi);
-    (std::sin(mid) / (std::cos(mid) + p.xi) < r_fold ? lo : hi) = mid;
+    (slope(mid) > 0.01 / (1.0 + p.xi) ? lo : hi) = mid;
   }
   const double step = std::acos(-p.xi) / 4096.0;
-  EXPECT_LE(cam.maxZenithRad(), lo);
+  EXPECT_LE(cam.maxZenithRad(), lo + step);
   EXPECT_GT(cam.maxZenithRad(), lo - 2.0 * step);
   // Inside: exact round trips; beyond the fold: nullopt both ways.
   const auto px_stats = omnislam::testing::pixelRoundTrip(cam);
   EXPECT_GT(px_stats.valid, 10000);
   EXPECT_LT(px_stats.valid, 1280L * 960L);
   EXPECT_LT(px_stats.worst_px, 1e-6);
+  const auto d_stats = omnislam::testing::directionRoundTrip(cam, cam.maxZenithRad());
+  EXPECT_LT(d_stats.worst_rad, 1e-10);
   EXPECT_FALSE(cam.project(directionAt(lo + 0.05, 0.2)).has_value());
-  const double r_d_fold = r_fold * (1.0 - 0.6 * r_fold * r_fold);
+  const double r_fold = std::sqrt(1.0 / 1.8), r_d_fold = r_fold * (1.0 - 0.6 * r_fold * r_fold);
   EXPECT_FALSE(cam.unproject({p.cx_px + p.fx_px * r_d_fold * 1.02, p.cy_px}).has_value());
 }
 

@@ -64,4 +64,27 @@ struct Intrinsics {
   }
 };
 
+/// Fields of view end where the image radius stops increasing by at least this fraction of its
+/// increase at the centre (per equal zenith step): beyond, one pixel spans over 100 times the centre's
+/// angle, the inverse is ill-conditioned, and a closed-form inverse loses digits.
+constexpr double kMinRadialSlopeRatio = 1e-2;
+/// Zenith steps of the field-of-view scans.
+constexpr int kZenithScanSteps = 4096;
+
+/// End of the first stretch of [0, zeta_bound_rad] on which radius(zeta) increases by at least
+/// kMinRadialSlopeRatio times its first step at every step (kZenithScanSteps equal steps; the bound
+/// itself is not evaluated, for open bounds). Returns zeta_bound_rad when it increases throughout.
+template <typename RadiusFn>
+double increasingStretchEnd(RadiusFn radius, double zeta_bound_rad) {
+  const double h = zeta_bound_rad / kZenithScanSteps;
+  const double min_step = kMinRadialSlopeRatio * (radius(h) - radius(0.0));
+  double prev = radius(0.0);
+  for (int i = 1; i < kZenithScanSteps; ++i) {
+    const double r = radius(zeta_bound_rad * i / kZenithScanSteps);
+    if (!(r - prev >= min_step)) return zeta_bound_rad * (i - 1) / kZenithScanSteps;
+    prev = r;
+  }
+  return zeta_bound_rad;
+}
+
 }  // namespace omnislam::camera::detail

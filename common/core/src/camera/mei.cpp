@@ -43,12 +43,14 @@ std::optional<std::string> MeiCamera::validate(const Params& p) {
 
 MeiCamera::MeiCamera(const Params& params) : p_(params) {
   if (const auto err = validate(p_)) throw std::invalid_argument("MeiParams: " + *err);
-  // Scan zenith x azimuth outwards; stop before the distortion folds (det J <= 0 or |m_d| not increasing
-  // along a ray), at the model's limit, or once the whole ring lies beyond the image's farthest corner.
-  constexpr int kZenithSteps = 4096, kAzimuths = 64;
+  // Scan zenith x azimuth outwards; stop before the distortion folds (det J <= 0, or |m_d| increasing
+  // along a ray by less than kMinRadialSlopeRatio of the first step), at the model's limit, or once the
+  // whole ring lies beyond the image's farthest corner.
+  constexpr int kZenithSteps = detail::kZenithScanSteps, kAzimuths = 64;
   const double zeta_geo = geometricMaxZenith(p_.xi);
   const double r_img = intrinsicsOf(p_).farthestCornerRadius(p_.width_px, p_.height_px);
   std::vector<double> prev_rd(kAzimuths, 0.0);
+  double min_step = std::numeric_limits<double>::infinity();  // kMinRadialSlopeRatio x the first step
   double zeta_max = zeta_geo * (kZenithSteps - 1) / kZenithSteps;
   for (int i = 1; i < kZenithSteps; ++i) {
     const double zeta = zeta_geo * i / kZenithSteps;
@@ -59,7 +61,8 @@ MeiCamera::MeiCamera(const Params& params) : p_(params) {
       const double phi = 2.0 * kPi * j / kAzimuths;
       Eigen::Matrix2d J;
       const double rd = distort(r * Eigen::Vector2d(std::cos(phi), std::sin(phi)), &J).norm();
-      folds = !(J.determinant() > 0.0) || !(rd > prev_rd[j]);
+      if (i == 1) min_step = std::min(min_step, detail::kMinRadialSlopeRatio * rd);
+      folds = !(J.determinant() > 0.0) || !(rd - prev_rd[j] >= min_step);
       prev_rd[j] = rd;
       min_rd = std::min(min_rd, rd);
     }

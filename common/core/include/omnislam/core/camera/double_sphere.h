@@ -6,13 +6,19 @@
 //   d1 = |X|,   k = xi d1 + z,   d2 = sqrt(x^2 + y^2 + k^2),   den = alpha d2 + (1 - alpha) k
 //   u = fx x / den + cx,   v = fy y / den + cy
 // Valid projections (paper eq. 43-45): z > -w2 d1,  w2 = (w1 + xi) / sqrt(2 w1 xi + xi^2 + 1),
-//   w1 = alpha / (1 - alpha) if alpha <= 0.5, else (1 - alpha) / alpha.
+//   w1 = alpha / (1 - alpha) if alpha <= 0.5, else (1 - alpha) / alpha;
+//   and zeta = atan2(hypot(x, y), z) <= maxZenithRad(): the paper's condition alone lets the image
+//   radius turn back for xi < 0 with alpha near 0 or 1 (alpha = 0, xi = -0.5 is a pinhole shifted by
+//   0.5, valid up to 60 deg, while acos(-w2) = 63.4 deg), so the field of view also ends where the
+//   radius grows by less than 1 % of its growth at the centre per zenith step (4096 steps; one pixel
+//   then spans over 100 times the centre's angle and the closed-form inverse loses digits).
 // Unprojection (paper eq. 47-50): mx = (u - cx) / fx, my = (v - cy) / fy, r2 = mx^2 + my^2,
 //   mz = (1 - alpha^2 r2) / (alpha sqrt(1 - (2 alpha - 1) r2) + 1 - alpha),
 //   d  = (mz xi + sqrt(mz^2 + (1 - xi^2) r2)) / (mz^2 + r2) (mx, my, mz) - (0, 0, xi), normalised;
-//   valid for r2 < 1 / (2 alpha - 1) when alpha > 0.5 (any r2 otherwise), and the direction must
-//   satisfy the projection condition (so that the two are inverse of each other).
-// Half field of view: maxZenithRad() = acos(-w2). The pixel must lie in the image.
+//   valid for r2 < 1 / (2 alpha - 1) when alpha > 0.5 (any r2 otherwise), and the direction must be
+//   a valid projection (so that the two are inverse of each other).
+// Half field of view: maxZenithRad() = min(acos(-w2), end of the increasing radius). The pixel must
+// lie in the image.
 // For a camera looking into a convex mirror wrap it in ReflectedCamera (reflected_camera.h).
 #pragma once
 
@@ -30,7 +36,7 @@ struct DoubleSphereParams {
   double fy_px = 0.0;   ///< focal length along v [px]; finite, > 0
   double cx_px = 0.0;   ///< principal point, column [px]; finite
   double cy_px = 0.0;   ///< principal point, row [px]; finite
-  double xi = 0.0;      ///< distance between the two sphere centres [-]; in [-1, 1]
+  double xi = 0.0;      ///< distance between the two sphere centres [-]; in (-1, 1] (-1: degenerate axis)
   double alpha = 0.5;   ///< image-plane shift [-]; in [0, 1]
   int width_px = 0;     ///< image width [px]; > 0
   int height_px = 0;    ///< image height [px]; > 0
@@ -44,8 +50,6 @@ class DoubleSphereCamera final : public CameraModel {
   explicit DoubleSphereCamera(const Params& params);
 
   /// nullopt when usable; otherwise a message naming the offending field and its accepted range.
-  /// The image radius is also checked to increase strictly with the zenith angle on 4096 angles of
-  /// the valid field of view (so project / unproject are one-to-one there).
   static std::optional<std::string> validate(const Params& p);
 
   std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& d_C,
@@ -58,7 +62,7 @@ class DoubleSphereCamera final : public CameraModel {
 
   const Params& params() const { return p_; }
 
-  /// Half field of view of the valid projections, acos(-w2) [rad] (open bound).
+  /// Half field of view [rad]: min(acos(-w2) (open bound), end of the increasing radius).
   double maxZenithRad() const { return max_zenith_rad_; }
 
  private:

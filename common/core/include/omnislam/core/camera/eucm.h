@@ -12,9 +12,11 @@
 //   d = (mx, my, mz) / |(mx, my, mz)|;
 //   valid for r2 < 1 / (beta (2 alpha - 1)) when alpha > 0.5, and the direction must satisfy the
 //   projection condition (so that the two are inverse of each other).
-// Half field of view: maxZenithRad() = pi/2 + atan2(w sqrt(beta), sqrt(1 - w^2)), where z = -w rho on
-// the unit sphere (pi/2 for alpha = 0 or 1, pi for alpha = 0.5).
-// The pixel must lie in the image.
+// Half field of view: maxZenithRad() = the bound of z > -w rho on the unit sphere,
+//   pi/2 + atan2(w sqrt(beta), sqrt(1 - w^2))  (pi/2 for alpha = 0 or 1, pi for alpha = 0.5),
+// or a little less where the image radius flattens: the view ends where the radius grows by less than
+// 1 % of its growth at the centre per zenith step (4096 steps; one pixel then spans over 100 times
+// the centre's angle and the inverse is ill-conditioned). The pixel must lie in the image.
 // For a camera looking into a convex mirror wrap it in ReflectedCamera (reflected_camera.h).
 #pragma once
 
@@ -46,8 +48,6 @@ class EucmCamera final : public CameraModel {
   explicit EucmCamera(const Params& params);
 
   /// nullopt when usable; otherwise a message naming the offending field and its accepted range.
-  /// The image radius is also checked to increase strictly with the zenith angle on 4096 angles of
-  /// the valid field of view (so project / unproject are one-to-one there).
   static std::optional<std::string> validate(const Params& p);
 
   std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& d_C,
@@ -60,7 +60,7 @@ class EucmCamera final : public CameraModel {
 
   const Params& params() const { return p_; }
 
-  /// Half field of view of the valid projections [rad] (open bound).
+  /// Half field of view [rad] (see the header comment).
   double maxZenithRad() const { return max_zenith_rad_; }
 
  private:

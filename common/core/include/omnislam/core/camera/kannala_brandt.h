@@ -11,8 +11,9 @@
 // atan2 the model also covers fields of view beyond 180 degrees.
 // Inverse: theta from theta_d by Newton's method inside a shrinking bracket (bisection when a step
 // leaves it), as PajdlaBaksteinCamera::zenithOfRadius.
-// Valid field of view: theta <= maxZenithRad() = min(max_zenith_rad, the end of the first increasing
-// stretch of theta_d(theta), checked on a grid of 4096 angles), and the pixel in the image.
+// Valid field of view: theta <= maxZenithRad() = min(max_zenith_rad, the end of the first stretch on
+// which d(theta_d)/d(theta) >= 0.01, 1 % of its value at the centre, checked on 4096 angles), and the
+// pixel in the image.
 // For a camera looking into a convex mirror wrap it in ReflectedCamera (reflected_camera.h).
 #pragma once
 
@@ -39,7 +40,7 @@ struct KannalaBrandtParams {
   int width_px = 0;      ///< image width [px]; > 0
   int height_px = 0;     ///< image height [px]; > 0
   /// Upper bound of the half field of view [rad]; in (0, pi]. The valid field of view also ends where
-  /// theta_d stops increasing. Default pi: the polynomial alone decides.
+  /// theta_d flattens (slope below 1 % of the centre's). Default pi: the polynomial alone decides.
   double max_zenith_rad = kPi;
 };
 

@@ -14,9 +14,10 @@
 //   lambda = (xi + sqrt(1 + (1 - xi^2) r2)) / (1 + r2),   d = (lambda x, lambda y, lambda - xi).
 // Valid field of view: zenith angle zeta = atan2(hypot(X.x, X.y), X.z) <= maxZenithRad(), the
 // smallest of (a) the model's own limit acos(-min(xi, 1/xi)) (open), (b) the first zenith angle where
-// the distortion stops being one-to-one (det of its 2x2 Jacobian <= 0, or |(x_d, y_d)| not
-// increasing along a ray; 4096 x 64 grid of zenith x azimuth), (c) the zenith angle beyond which the
-// whole image circle lies outside the image. The pixel must also lie in the image.
+// the mapping stops being safely one-to-one: det of the 2x2 distortion Jacobian <= 0, or |(x_d, y_d)|
+// growing along a ray by less than 1 % of its growth at the centre per step (4096 x 64 grid of zenith
+// x azimuth; flatter, one pixel spans over 100 times the centre's angle), (c) the zenith angle beyond
+// which the whole ring lies outside the image. The pixel must also lie in the image.
 // For a camera looking into a convex mirror wrap it in ReflectedCamera (reflected_camera.h).
 #pragma once
 

@@ -1,7 +1,7 @@
 // The camera section of the features config with calibration files (procs/features/detectors.cpp):
 // `model: auto` and the explicit formats, `optics`, the image size when the file has none, Kalibr's
 // camera choice, roll / pitch in the mounting and the vertical-line detector's refusal of a tilted
-// camera; also roll / pitch in a world file. Every refusal names the key.
+// camera; also roll / pitch in a world file and the lights renderer. Every refusal names the key.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -16,7 +16,6 @@
 #include "omnislam/config/world_config.h"
 #include "omnislam/config/yaml_node.h"
 #include "omnislam/vision/render_lights.h"
-#include "omnislam/vision/render_room.h"
 
 using namespace omnislam;
 namespace t = omnislam::testing;
@@ -166,27 +165,6 @@ TEST(FeaturesCameraConfig, WorldMountingRollPitch) {
       Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix() * camera::rotationCameraToRobot(w.camera.mounting);
   EXPECT_LT((R - expect).norm(), 1e-15);
   EXPECT_NEAR(std::acos((R * Eigen::Vector3d::UnitZ()).z()), deg2rad(std::hypot(5.0, 2.0)), deg2rad(0.05));
-  // The room renderer needs a level camera: refused at load, naming the keys.
-  const std::string room = t::readFile(t::sourcePath("config/worlds/room.yaml"));
-  ASSERT_FALSE(room.empty());
-  std::string tilted = room;
-  const size_t at = tilted.find("z_m:", tilted.find("mounting"));
-  ASSERT_NE(at, std::string::npos);
-  tilted.insert(at, "pitch_deg: 1.0, ");
-  try {
-    config::parseWorld(config::Node::loadString(tilted, "room.yaml"));
-    ADD_FAILURE() << "a tilted camera in a room world was accepted";
-  } catch (const config::ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("key 'camera.mounting.pitch_deg' and 'roll_deg' must be 0 in a room world"),
-              std::string::npos)
-        << e.what();
-  }
-  // And the room renderer itself refuses a tilted mounting.
-  const sim::World level = config::parseWorld(config::Node::loadString(room, "room.yaml"));
-  camera::CameraMounting m = level.camera.mounting;
-  m.roll_rad = 0.01;
-  EXPECT_THROW(vision::RoomRenderer(*sim::makeCamera(level.camera), m, *level.room, level.nuisance),
-               std::invalid_argument);
 }
 
 }  // namespace

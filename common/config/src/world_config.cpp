@@ -353,10 +353,6 @@ sim::World parseWorld(const Node& root) {
     throw ConfigError(key + " must be inside the room, in (0, " + std::to_string(w.room->height_m) +
                       ") m (room.height_m), got " + std::to_string(w.camera.mounting.z_m));
   }
-  if (w.room && !camera::isLevel(w.camera.mounting))
-    // The room renderer casts its rays in azimuth / elevation about a vertical optical axis.
-    throw ConfigError(root.child("camera").child("mounting").where("pitch_deg") +
-                      " and 'roll_deg' must be 0 in a room world (its renderer needs a level camera)");
   return w;
 }
 

@@ -45,9 +45,7 @@ CameraPoseInWorld cameraInWorld(const Pose2& T_RinW, const camera::CameraMountin
   CameraPoseInWorld out;
   const Eigen::Vector2d xy = T_RinW.transformFrom(Eigen::Vector2d(m.x_m, m.y_m));
   out.p_CinW_m = Eigen::Vector3d(xy.x(), xy.y(), m.z_m);
-  // Level: the yaw-only product, exactly as before roll and pitch existed (bit-identical images).
-  out.R_WfromC = camera::isLevel(m) ? rotZ(T_RinW.theta_rad + m.yaw_rad)
-                                    : Eigen::Matrix3d(rotZ(T_RinW.theta_rad) * camera::rotationCameraToRobot(m));
+  out.R_WfromC = rotZ(T_RinW.theta_rad + m.yaw_rad);
   return out;
 }
 

@@ -100,8 +100,6 @@ RoomRenderer::RoomRenderer(const camera::CameraModel& camera, const camera::Came
       room_(room),
       nz_(nuisance) {
   if (auto err = room_.validate()) throw std::invalid_argument("RoomRenderer: " + *err);
-  if (!camera::isLevel(mounting_))  // render() casts rays about a vertical optical axis
-    throw std::invalid_argument("RoomRenderer: the camera mounting must be level (roll = pitch = 0)");
   facets_ = room_.facets();
   valid_ = cv::Mat::zeros(height_, width_, CV_8U);
   rays_.reserve(static_cast<size_t>(width_) * height_ * ss_ * ss_ / 2);

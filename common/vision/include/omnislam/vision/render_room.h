@@ -30,8 +30,7 @@ namespace omnislam::vision {
 class RoomRenderer {
  public:
   /// Precomputes the per-ray bearings (the slow part: one unproject per sub-pixel ray). The
-  /// camera is used only here. Throws std::invalid_argument when the room is invalid or the mounting
-  /// is not level (roll or pitch != 0: the rays are cast about a vertical optical axis).
+  /// camera is used only here. Throws std::invalid_argument when the room is invalid.
   RoomRenderer(const camera::CameraModel& camera, const camera::CameraMounting& mounting, const sim::Room& room,
                const sim::ImageNuisance& nuisance);
 

@@ -45,7 +45,10 @@ CameraPoseInWorld cameraInWorld(const Pose2& T_RinW, const camera::CameraMountin
   CameraPoseInWorld out;
   const Eigen::Vector2d xy = T_RinW.transformFrom(Eigen::Vector2d(m.x_m, m.y_m));
   out.p_CinW_m = Eigen::Vector3d(xy.x(), xy.y(), m.z_m);
-  out.R_WfromC = rotZ(T_RinW.theta_rad + m.yaw_rad);
+  // Level mounting: the yaw-only arithmetic, so simulated runs replay bit for bit. Otherwise
+  // R_WfromC = Rz(theta) R_CtoR with R_CtoR = Rz(yaw) Ry(pitch) Rx(roll).
+  out.R_WfromC = camera::isLevel(m) ? rotZ(T_RinW.theta_rad + m.yaw_rad)
+                                    : Eigen::Matrix3d(rotZ(T_RinW.theta_rad) * camera::rotationCameraToRobot(m));
   return out;
 }
 

@@ -101,6 +101,12 @@ RoomRenderer::RoomRenderer(const camera::CameraModel& camera, const camera::Came
       nz_(nuisance) {
   if (auto err = room_.validate()) throw std::invalid_argument("RoomRenderer: " + *err);
   facets_ = room_.facets();
+  // Rays are stored in robot-parallel axes before the yaw (render() applies theta + yaw about z):
+  // d = Ry(pitch) Rx(roll) d_C. A level mounting keeps d_C itself (bit-identical images).
+  const bool level = camera::isLevel(mounting_);
+  camera::CameraMounting tilt_only = mounting_;
+  tilt_only.yaw_rad = 0.0;
+  const Eigen::Matrix3d R_tilt = camera::rotationCameraToRobot(tilt_only);
   valid_ = cv::Mat::zeros(height_, width_, CV_8U);
   rays_.reserve(static_cast<size_t>(width_) * height_ * ss_ * ss_ / 2);
   for (int v = 0; v < height_; ++v)
@@ -108,15 +114,16 @@ RoomRenderer::RoomRenderer(const camera::CameraModel& camera, const camera::Came
       for (int sy = 0; sy < ss_; ++sy)
         for (int sx = 0; sx < ss_; ++sx) {
           const Eigen::Vector2d px(u - 0.5 + (sx + 0.5) / ss_, v - 0.5 + (sy + 0.5) / ss_);
-          const auto d = camera.unproject(px);
-          if (!d) continue;
-          const double h = std::hypot(d->x(), d->y());
+          const auto d_C = camera.unproject(px);
+          if (!d_C) continue;
+          const Eigen::Vector3d d = level ? *d_C : Eigen::Vector3d(R_tilt * *d_C);
+          const double h = std::hypot(d.x(), d.y());
           if (!(h > 1e-9)) continue;  // straight up / down: no azimuth (not in a catadioptric view)
           Ray r;
-          r.cos_az = static_cast<float>(d->x() / h);
-          r.sin_az = static_cast<float>(d->y() / h);
-          r.tan_el = static_cast<float>(d->z() / h);
-          r.az = static_cast<float>(wrap2Pi(std::atan2(d->y(), d->x())));
+          r.cos_az = static_cast<float>(d.x() / h);
+          r.sin_az = static_cast<float>(d.y() / h);
+          r.tan_el = static_cast<float>(d.z() / h);
+          r.az = static_cast<float>(wrap2Pi(std::atan2(d.y(), d.x())));
           r.pixel = v * width_ + u;
           rays_.push_back(r);
           valid_.at<uint8_t>(v, u) = 255;

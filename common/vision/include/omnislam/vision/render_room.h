@@ -1,6 +1,7 @@
 // Renders the colour image of a room (sim::Room, paper 002's scenario) seen by an omnidirectional
 // camera from a robot pose, by ray casting through the camera model: per pixel n x n sub-pixel
-// rays (image.supersample), each unprojected once at construction (a bearing LUT in camera axes);
+// rays (image.supersample), each unprojected once at construction and turned by the mounting's pitch
+// and roll (a bearing LUT in yaw-free robot axes; a level mounting keeps camera axes exactly);
 // per frame each ray is turned by the camera's yaw in the world and cast against the floor, the
 // ceiling and the room's facets (wall panels, box sides and tops), which are binned by azimuth as
 // seen from the camera so that a ray tests only the few facets in its direction, nearest first.

@@ -53,7 +53,7 @@ struct ScaramuzzaParams {
   OcamOptics optics = OcamOptics::kCatadioptric;  ///< axis mapping, see the header comment
   double min_radius_px = 0.0;  ///< smallest usable sensor radius rho [px] (e.g. the mirror's dead centre)
   double max_radius_px = std::numeric_limits<double>::infinity();  ///< largest usable rho [px]; clipped to the image
-  /// Usable elevation range in C (equal to the robot frame's: the mounting only yaws). Paper 002's
+  /// Usable elevation range in C (equal to the robot frame's for a level mounting). Paper 002's
   /// camera: -5 deg .. 65 deg. Default: no restriction.
   double min_elevation_rad = -kPi / 2.0;
   double max_elevation_rad = kPi / 2.0;

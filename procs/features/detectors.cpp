@@ -5,14 +5,15 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <sstream>
+#include <utility>
 
 #include "omnislam/config/world_config.h"
 #include "omnislam/core/angles.h"
 #include "omnislam/core/camera/pajdla_bakstein.h"
 #include "omnislam/core/camera/scaramuzza.h"
 #include "omnislam/vision/annotate.h"
+#include "omnislam/vision/calibration_files.h"
 #include "omnislam/vision/ceiling_lights.h"
 #include "omnislam/vision/vertical_lines.h"
 
@@ -30,51 +31,123 @@ struct CameraSetup {
   std::string description;
 };
 
+/// The largest tilt of the optical axis from the robot's vertical (roll and pitch of the mounting)
+/// that the vertical-line detector accepts [deg]: it looks for vertical lines as radial lines about
+/// the image centre. A tilt tau slants a line spanning elevations e1..e2 by about
+/// tau (tan e2 - tan e1) of image angle: 0.5 deg x 2.23 (-5..65 deg, the room's band) = 1.1 deg,
+/// inside the default max_drift_columns (6 of 1440 columns = 1.5 deg). docs/detectors.md.
+constexpr double kMaxLinesTiltDeg = 0.5;
+
 camera::CameraMounting parseMounting(const Node& m) {
-  m.rejectUnknownKeys({"x_m", "y_m", "z_m", "yaw_deg"});
+  m.rejectUnknownKeys({"x_m", "y_m", "z_m", "yaw_deg", "pitch_deg", "roll_deg"});
   camera::CameraMounting out;
   out.x_m = m.getDouble("x_m", -10.0, 10.0, 0.0);
   out.y_m = m.getDouble("y_m", -10.0, 10.0, 0.0);
   out.z_m = m.getDouble("z_m", -10.0, 10.0);
   out.yaw_rad = deg2rad(m.getDouble("yaw_deg", -180.0, 180.0, 0.0));
+  out.pitch_rad = deg2rad(m.getDouble("pitch_deg", -90.0, 90.0, 0.0));
+  out.roll_rad = deg2rad(m.getDouble("roll_deg", -180.0, 180.0, 0.0));
   return out;
 }
 
+/// Keys that only some camera models read are refused for the others, not ignored.
+void refuseKeys(const Node& c, std::initializer_list<const char*> keys, const std::string& model, const char* why) {
+  for (const char* k : keys)
+    if (c.has(k)) throw ConfigError(c.where(k) + " is not read for model '" + model + "' (" + why + ")");
+}
+
+/// The OCamCalib camera of a calibration, with the config's optics and valid region (as before the
+/// other formats existed, so that these configs give the same output).
+void ocamSetup(const Node& c, camera::ScaramuzzaParams p, const std::string& path, CameraSetup* s) {
+  p.optics = c.getEnum("optics", {"catadioptric", "dioptric"}, "catadioptric") == "catadioptric"
+                 ? camera::OcamOptics::kCatadioptric
+                 : camera::OcamOptics::kDioptric;
+  p.min_elevation_rad = deg2rad(c.getDouble("min_elevation_deg", -90.0, 90.0, -90.0));
+  p.max_elevation_rad = deg2rad(c.getDouble("max_elevation_deg", -90.0, 90.0, 90.0));
+  p.min_radius_px = c.getDouble("min_radius_px", 0.0, 1e5, 0.0);
+  if (c.has("max_radius_px")) p.max_radius_px = c.getDouble("max_radius_px", 1.0, 1e5);
+  if (auto why = camera::ScaramuzzaCamera::validate(p)) throw ConfigError(c.where("file") + " " + *why);
+  s->model = std::make_unique<camera::ScaramuzzaCamera>(p);
+  s->centre_px = Eigen::Vector2d(p.yc_col_px, p.xc_row_px);
+  s->description = "OCamCalib camera from " + path;
+}
+
+/// Image size of a calibration: the file's, else camera.width_px / height_px; both must agree.
+std::pair<int, int> calibrationSize(const Node& c, const vision::CameraCalibration& cal, const std::string& path) {
+  if (cal.width_px == 0) {
+    if (!c.has("width_px") || !c.has("height_px"))
+      throw ConfigError(c.where("file") + " '" + path + "' states no image size: set camera.width_px and camera.height_px");
+    return {static_cast<int>(c.getInt("width_px", 1, 16384)), static_cast<int>(c.getInt("height_px", 1, 16384))};
+  }
+  for (const auto& [key, v] : {std::pair<const char*, int>{"width_px", cal.width_px}, {"height_px", cal.height_px}})
+    if (c.has(key) && c.getInt(key, 1, 16384) != v)
+      throw ConfigError(c.where(key) + " is " + std::to_string(c.getInt(key, 1, 16384)) + " but '" + path +
+                        "' says " + std::to_string(v));
+  return {cal.width_px, cal.height_px};
+}
+
+/// A camera from a calibration file: model auto (detect by content) or one named format.
+void fileSetup(const Node& c, const std::string& model, CameraSetup* s) {
+  const std::string path = c.getPath("file");
+  vision::CalibrationReadOptions opt;
+  const std::vector<std::pair<std::string, vision::CalibrationFormat>> formats = {
+      {"opencv_omnidir", vision::CalibrationFormat::kOpencvOmnidir},
+      {"opencv_fisheye", vision::CalibrationFormat::kOpencvFisheye},
+      {"kalibr", vision::CalibrationFormat::kKalibr},
+      {"ocamcalib", vision::CalibrationFormat::kOcamcalib}};
+  for (const auto& [key, f] : formats)
+    if (model == key) opt.format = f;
+  opt.kalibr_camera = c.getString("kalibr_camera", "");
+  vision::CameraCalibration cal;
+  try {
+    cal = vision::readCalibrationFile(path, opt);
+  } catch (const ConfigError& e) {
+    throw ConfigError(c.where("file") + " " + e.what());
+  }
+  if (cal.format != vision::CalibrationFormat::kKalibr && c.has("kalibr_camera"))
+    throw ConfigError(c.where("kalibr_camera") + " is for Kalibr files; '" + path + "' is " +
+                      vision::formatDescription(cal.format));
+  if (cal.format == vision::CalibrationFormat::kOcamcalib) {
+    ocamSetup(c, std::get<camera::ScaramuzzaParams>(cal.intrinsics), path, s);
+    calibrationSize(c, cal, path);  // width_px / height_px, when given, must agree
+    return;
+  }
+  refuseKeys(c, {"min_elevation_deg", "max_elevation_deg", "min_radius_px", "max_radius_px"}, model,
+             "the valid region of OCamCalib models only");
+  if (!c.has("optics"))
+    throw ConfigError(c.where("optics") + " is required for " + vision::formatDescription(cal.format) +
+                      ": catadioptric (camera looking into a mirror) or dioptric (lens)");
+  const auto optics = c.getEnum("optics", {"catadioptric", "dioptric"}) == "catadioptric"
+                          ? camera::OcamOptics::kCatadioptric
+                          : camera::OcamOptics::kDioptric;
+  const auto [w, h] = calibrationSize(c, cal, path);
+  try {
+    s->model = vision::makeCalibratedCamera(cal, optics, w, h);
+  } catch (const ConfigError& e) {
+    throw ConfigError(c.where("file") + " " + e.what());
+  }
+  s->centre_px = vision::principalPointPx(cal);
+  s->description = cal.description + (optics == camera::OcamOptics::kCatadioptric ? ", catadioptric" : ", dioptric");
+}
+
 CameraSetup parseCamera(const Node& c) {
-  c.rejectUnknownKeys({"model", "world", "file", "optics", "min_elevation_deg", "max_elevation_deg", "min_radius_px",
-                       "max_radius_px", "width_px", "height_px", "mounting"});
+  c.rejectUnknownKeys({"model", "world", "file", "kalibr_camera", "optics", "min_elevation_deg", "max_elevation_deg",
+                       "min_radius_px", "max_radius_px", "width_px", "height_px", "mounting"});
   CameraSetup s;
-  const std::string model = c.getEnum("model", {"world", "ocamcalib", "centre_only"});
+  const std::string model = c.getEnum(
+      "model", {"world", "auto", "opencv_omnidir", "opencv_fisheye", "kalibr", "ocamcalib", "centre_only"});
   if (model == "world") {
     const sim::World w = config::loadWorld(c.getPath("world"));
     s.model = sim::makeCamera(w.camera);  // the world's model: Pajdla-Bakstein or Scaramuzza
     s.mounting = c.has("mounting") ? parseMounting(c.child("mounting")) : w.camera.mounting;
     s.centre_px = sim::cameraCentrePx(w.camera);
     s.description = s.model->name() + " camera of world '" + w.name + "'";
-  } else if (model == "ocamcalib") {
-    const std::string path = c.getPath("file");
-    std::ifstream f(path);
-    if (!f) throw ConfigError(c.where("file") + " cannot read '" + path + "'");
-    std::stringstream ss;
-    ss << f.rdbuf();
-    auto parsed = camera::parseOcamCalib(ss.str());
-    if (!parsed.params) throw ConfigError(c.where("file") + " '" + path + "': " + parsed.error);
-    camera::ScaramuzzaParams p = *parsed.params;
-    p.optics = c.getEnum("optics", {"catadioptric", "dioptric"}, "catadioptric") == "catadioptric"
-                   ? camera::OcamOptics::kCatadioptric
-                   : camera::OcamOptics::kDioptric;
-    p.min_elevation_rad = deg2rad(c.getDouble("min_elevation_deg", -90.0, 90.0, -90.0));
-    p.max_elevation_rad = deg2rad(c.getDouble("max_elevation_deg", -90.0, 90.0, 90.0));
-    p.min_radius_px = c.getDouble("min_radius_px", 0.0, 1e5, 0.0);
-    if (c.has("max_radius_px")) p.max_radius_px = c.getDouble("max_radius_px", 1.0, 1e5);
-    if (auto why = camera::ScaramuzzaCamera::validate(p)) throw ConfigError(c.where("file") + " " + *why);
-    s.model = std::make_unique<camera::ScaramuzzaCamera>(p);
-    s.mounting = parseMounting(c.child("mounting"));
-    s.centre_px = Eigen::Vector2d(p.yc_col_px, p.xc_row_px);
-    s.description = "OCamCalib camera from " + path;
-  } else {
+  } else if (model == "centre_only") {
     s.mounting = parseMounting(c.child("mounting"));
     s.description = "centre-only geometry (azimuth = image angle about the panorama centre)";
+  } else {
+    fileSetup(c, model, &s);
+    s.mounting = parseMounting(c.child("mounting"));
   }
   if (s.model) {
     s.width_px = s.model->widthPx();
@@ -84,6 +157,19 @@ CameraSetup parseCamera(const Node& c) {
     s.height_px = static_cast<int>(c.getInt("height_px", 1, 16384));
   }
   return s;
+}
+
+/// The vertical-line detector needs the optical axis along the robot's vertical (see
+/// kMaxLinesTiltDeg): a tilted mounting is refused, naming its keys.
+void checkLevelForLines(const Node& c, const CameraSetup& s) {
+  const double tilt_deg = rad2deg(std::acos(std::clamp(camera::rotationCameraToRobot(s.mounting)(2, 2), -1.0, 1.0)));
+  if (tilt_deg > kMaxLinesTiltDeg) {
+    std::ostringstream m;
+    m << (c.has("mounting") ? c.child("mounting").where("pitch_deg") : c.where("world")) << " and 'roll_deg' tilt the "
+      << "optical axis " << tilt_deg << " deg from the robot's vertical; vertical_lines needs at most "
+      << kMaxLinesTiltDeg << " deg (it finds vertical lines as radial lines about the image centre)";
+    throw ConfigError(m.str());
+  }
 }
 
 std::string checkSizeAndFormat(const cv::Mat& img, int w, int h, bool colour_ok) {
@@ -269,17 +355,20 @@ std::unique_ptr<Detector> makeDetector(const Node& root) {
   CameraSetup cam = parseCamera(root.child("camera"));
   if (kind == "ceiling_lights") {
     if (!cam.model)
-      throw ConfigError(root.child("camera").where("model") + " ceiling_lights needs a camera model (world or ocamcalib)");
+      throw ConfigError(root.child("camera").where("model") + " ceiling_lights needs a camera model (not centre_only)");
     const auto opt = root.has("ceiling_lights") ? parseLights(root.child("ceiling_lights")) : vision::CeilingLightOptions{};
     return std::make_unique<LightsDetector>(std::move(cam), opt, max_features);
   }
+  checkLevelForLines(root.child("camera"), cam);
   const Node n = root.child("vertical_lines");
   const auto opt = parseLines(n, cam);
   return std::make_unique<LinesDetector>(std::move(cam), opt, max_features);
 }
 
 vision::VerticalLineOptions verticalLineOptions(const Node& root) {
-  return parseLines(root.child("vertical_lines"), parseCamera(root.child("camera")));
+  const CameraSetup cam = parseCamera(root.child("camera"));
+  checkLevelForLines(root.child("camera"), cam);
+  return parseLines(root.child("vertical_lines"), cam);
 }
 
 }  // namespace omnislam::features

@@ -79,11 +79,13 @@ std::vector<sim::Light> parseLights(const Node& n) {
 camera::CameraMounting parseMounting(const Node& n) {
   camera::CameraMounting m;
   if (auto mo = n.optChild("mounting")) {
-    mo->rejectUnknownKeys({"x_m", "y_m", "z_m", "yaw_deg"});
+    mo->rejectUnknownKeys({"x_m", "y_m", "z_m", "yaw_deg", "pitch_deg", "roll_deg"});
     m.x_m = mo->getDouble("x_m", -10.0, 10.0, 0.0);
     m.y_m = mo->getDouble("y_m", -10.0, 10.0, 0.0);
     m.z_m = mo->getDouble("z_m", 0.0, 10.0, 1.8);
     m.yaw_rad = deg2rad(mo->getDouble("yaw_deg", -180.0, 180.0, 0.0));
+    m.pitch_rad = deg2rad(mo->getDouble("pitch_deg", -90.0, 90.0, 0.0));
+    m.roll_rad = deg2rad(mo->getDouble("roll_deg", -180.0, 180.0, 0.0));
   }
   return m;
 }

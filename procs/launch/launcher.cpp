@@ -578,6 +578,7 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
   int rc = 0;
   std::string reason;
   std::vector<bool> reported(sup.children.size(), false);
+  bool logger_died = false;  // the documented policy: the run stops at once (docs/launch-file.md)
   while (reason.empty()) {
     sup.pump(100);
     if (lcmio::stopRequested()) {
@@ -590,9 +591,11 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
       reported[i] = true;
       const bool ok = WIFEXITED(c.status) && WEXITSTATUS(c.status) == 0;
       if (c.is_logger) {
-        sup.print("launch", plan.log_tool + " died (" + describe(c.status) + "): the run is not being recorded");
+        sup.print("launch", plan.log_tool + " died (" + describe(c.status) +
+                                "): the run is not being recorded; stopping it now, without the drain");
         rc = 1;
         reason = "logger died";
+        logger_died = true;
       } else if (ok && c.ends_run) {
         reason = c.name + " finished the scenario";
       } else if (ok) {
@@ -611,7 +614,11 @@ int runPlan(const Plan& plan, const std::string& bin_dir) {
     if (reason.empty() && !any_running) reason = "every process has ended";
   }
   sup.print("launch", "stopping: " + reason);
-  if (!lcmio::stopRequested() && plan.drain_s > 0 && !drainUntilQuiet(sup, plan, drain_bus.get(), reported)) rc = 1;
+  // The drain lets the processes finish what they queued, for the recording: without a recorder it
+  // would only let the run go on unrecorded (up to drain_s).
+  if (!lcmio::stopRequested() && !logger_died && plan.drain_s > 0 &&
+      !drainUntilQuiet(sup, plan, drain_bus.get(), reported))
+    rc = 1;
   sup.stop(false, plan.stop_grace_s);
   // The logger goes last, after a moment for the final messages (status, last frame) to land.
   sup.pumpFor(std::chrono::milliseconds(300));

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -420,6 +421,28 @@ TEST(Launcher, BadLaunchFilesNameTheKey) {
   r = t::run({t::binPath("omnislam-launch"), typo, "--no-log"}, 10);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("processes[0].cmdd' is not a known key"), std::string::npos) << r.output;
+}
+
+// A recorder that dies (kill -9, or a full disk: it ends on its first failed write) used to leave
+// the run going: the launcher printed "stopping", then drained for up to drain_s while everything
+// ran on unrecorded. The documented policy: the run stops at once, exit 1.
+TEST(Launcher, ADeadRecorderStopsTheRunAtOnceWithoutTheDrain) {
+  t::TempDir dir;
+  const std::string path = dir.file("launch.yaml");
+  std::ofstream(path) << "name: unit\nstop_grace_s: 2\ndrain_s: 60\ndrain_quiet_s: 0\nprocesses:\n"
+                      << "  - {name: s, cmd: [sleep, '60']}\n";
+  const std::string log = dir.file("run.lcm");
+  t::Child launch({t::binPath("omnislam-launch"), path, "--log-file", log, "--url", t::privateUdpUrl(43)});
+  ASSERT_TRUE(launch.waitForOutput("started s", 30)) << launch.output();
+  const auto killed_at = std::chrono::steady_clock::now();
+  // '[o]' keeps the pattern from matching the shell that runs pkill (its command line holds it).
+  ASSERT_EQ(std::system(("pkill -KILL -f '[o]mnislam-record.*" + log + "'").c_str()), 0) << launch.output();
+  const auto r = launch.wait(60);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - killed_at).count();
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("omnislam-record died (killed by signal 9"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("stopping it now, without the drain"), std::string::npos) << r.output;
+  EXPECT_LT(s, 30.0) << "the drain (60 s, never quiet with drain_quiet_s 0) must not run\n" << r.output;
 }
 
 // A launch file naming a program that does not exist used to start every process before it and

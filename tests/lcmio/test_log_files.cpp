@@ -282,6 +282,9 @@ TEST(LogFiles, AfterAFailedWriteNothingMoreIsWrittenAndCommitSaysSo) {
   std::signal(SIGXFSZ, old_handler);
   EXPECT_GE(failures, 1);
   EXPECT_NE(first.find("failed"), std::string::npos) << first;
+  // The system's reason is in the message (RLIMIT_FSIZE: EFBIG), not only "failed".
+  EXPECT_EQ(w.failure(), std::strerror(EFBIG));
+  EXPECT_NE(first.find(std::strerror(EFBIG)), std::string::npos) << first;
   EXPECT_NE(later.find("an earlier write failed"), std::string::npos) << later;
   EXPECT_EQ(w.events(), before);
   EXPECT_GE(before, 1);

@@ -8,7 +8,10 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <sys/statvfs.h>
+
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <optional>
 #include <stdexcept>
@@ -37,6 +40,44 @@ struct Recorder {
       if (failures++ == 0) first_failure = e.what();
     }
   }
+};
+
+// Free space on the recording's file system: said at start, and warned about while recording when
+// it falls below kLowBytes (again at each halving), with the time left at the current rate.
+class FreeSpaceWatch {
+ public:
+  static constexpr double kLowBytes = 512e6;
+  explicit FreeSpaceWatch(const std::string& path) {
+    const std::filesystem::path p(path);
+    dir_ = p.has_parent_path() ? p.parent_path().string() : ".";
+    start_ = std::chrono::steady_clock::now();
+  }
+  void check(int64_t bytes_written, bool at_start) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!at_start && now - last_ < std::chrono::seconds(2)) return;
+    last_ = now;
+    struct statvfs st {};
+    if (::statvfs(dir_.c_str(), &st) != 0) return;  // a device or pipe: nothing to measure
+    const double free_bytes = static_cast<double>(st.f_bavail) * static_cast<double>(st.f_frsize);
+    if (at_start) {
+      std::cerr << "[record] " << free_bytes / 1e6 << " MB free on the file system of '" << dir_ << "'"
+                << (free_bytes < kLowBytes ? ": LOW, the recording may stop when it is full" : "") << std::endl;
+      warn_below_ = free_bytes < kLowBytes ? free_bytes / 2 : kLowBytes;
+      return;
+    }
+    if (free_bytes >= warn_below_) return;
+    const double elapsed_s = std::chrono::duration<double>(now - start_).count();
+    const double rate = elapsed_s > 0 ? bytes_written / elapsed_s : 0.0;
+    std::cerr << "[record] warning: " << free_bytes / 1e6 << " MB free on '" << dir_ << "'";
+    if (rate > 0) std::cerr << ", about " << static_cast<int64_t>(free_bytes / rate) << " s of recording left";
+    std::cerr << std::endl;
+    warn_below_ = free_bytes / 2;
+  }
+
+ private:
+  std::string dir_;
+  std::chrono::steady_clock::time_point start_, last_{};
+  double warn_below_ = kLowBytes;
 };
 
 }  // namespace
@@ -80,6 +121,8 @@ int main(int argc, char** argv) {
     // Wall time, not the messages' utime: this bounds what a crash of this process loses.
     const auto flush_every = std::chrono::duration<double>(flush_interval_s);
     auto last_flush = std::chrono::steady_clock::now();
+    FreeSpaceWatch space(path);
+    space.check(log.bytes(), true);
     while (!omnislam::lcmio::stopRequested()) {
       if (bus.handleTimeout(100) < 0 && !omnislam::lcmio::stopRequested()) {
         bus_failed = true;  // LCM cannot receive any more: stop rather than record nothing
@@ -92,6 +135,15 @@ int main(int argc, char** argv) {
         } catch (const std::exception& e) {
           if (rec.failures++ == 0) rec.first_failure = e.what();
         }
+      }
+      space.check(log.bytes(), false);
+      // A failed write leaves the file torn there: nothing after it could be read. Say so at once
+      // (a full disk used to show only at the stop) and end, so that a launcher sees the recorder
+      // die and applies its policy instead of running on unrecorded.
+      if (rec.failures > 0) {
+        std::cerr << "[record] WRITE FAILED, recording stopped: " << rec.first_failure << "; " << log.events()
+                  << " events (" << log.bytes() / 1e6 << " MB) are in the file" << std::endl;
+        break;
       }
     }
     // Drain what has already arrived, then flush, sync and close the file: the writer writes its

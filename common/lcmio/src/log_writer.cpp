@@ -39,7 +39,7 @@ void putBigEndian(std::vector<uint8_t>& buf, uint64_t v, int bytes) {
 
 LogWriter::LogWriter(const std::string& path, Mode mode) : path_(path), mode_(mode) {
   fd_ = ::open(fileOf(path, mode).c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd_ < 0) throw std::runtime_error("cannot write LCM log '" + fileOf(path, mode) + "'");
+  if (fd_ < 0) throw std::runtime_error("cannot write LCM log '" + fileOf(path, mode) + "': " + std::strerror(errno));
   buf_.reserve(kBufferBytes);
 }
 
@@ -54,6 +54,8 @@ bool LogWriter::flush() {
   while (done < buf_.size()) {
     const ssize_t w = ::write(fd_, buf_.data() + done, buf_.size() - done);
     if (w < 0 && errno == EINTR) continue;
+    if (w < 0) failure_ = std::strerror(errno);
+    if (w == 0) failure_ = "the system wrote nothing";
     if (w <= 0) break;
     done += static_cast<size_t>(w);
   }
@@ -71,7 +73,7 @@ bool LogWriter::flush() {
 void LogWriter::flushBuffered() {
   if (fd_ < 0) throw std::runtime_error("LCM log '" + path_ + "' flushed after commit()");
   if (failed_ || buf_.empty()) return;
-  if (!flush()) throw std::runtime_error("writing LCM log '" + path_ + "' failed");
+  if (!flush()) throw std::runtime_error("writing LCM log '" + path_ + "' failed: " + failure_);
 }
 
 void LogWriter::commit() {
@@ -79,11 +81,15 @@ void LogWriter::commit() {
   const bool was_failed = failed_;
   // fsync fails with EINVAL on a pipe or a device (--out /dev/stdout): nothing to sync there.
   const bool flushed = (failed_ || flush()) && (fsync(fd_) == 0 || errno == EINVAL);
+  if (!flushed && !was_failed && failure_.empty()) failure_ = std::string("fsync: ") + std::strerror(errno);
   const bool closed = ::close(fd_) == 0;
+  if (!closed && failure_.empty()) failure_ = std::string("close: ") + std::strerror(errno);
   fd_ = -1;
   if (was_failed)  // kAtomic: not renamed, so a log that stops short never takes the final name
-    throw std::runtime_error("writing LCM log '" + fileOf(path_, mode_) + "' failed: it ends at the failed write");
-  if (!flushed || !closed) throw std::runtime_error("writing LCM log '" + fileOf(path_, mode_) + "' failed (flush)");
+    throw std::runtime_error("writing LCM log '" + fileOf(path_, mode_) + "' failed (" + failure_ +
+                             "): it ends at the failed write");
+  if (!flushed || !closed)
+    throw std::runtime_error("writing LCM log '" + fileOf(path_, mode_) + "' failed (flush): " + failure_);
   if (mode_ == Mode::kAtomic && std::rename(fileOf(path_, mode_).c_str(), path_.c_str()) != 0)
     throw std::runtime_error("cannot rename '" + fileOf(path_, mode_) + "' to '" + path_ + "'");
 }
@@ -106,7 +112,7 @@ void LogWriter::write(int64_t timestamp, const std::string& channel, const void*
   ++n_;
   if (buf_.size() >= kBufferBytes && !flush()) {
     --n_;  // this event is the last in the buffer, so not complete in the file: it is not taken
-    throw std::runtime_error("writing LCM log '" + path_ + "' failed");
+    throw std::runtime_error("writing LCM log '" + path_ + "' failed: " + failure_);
   }
 }
 

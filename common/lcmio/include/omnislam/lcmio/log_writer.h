@@ -48,6 +48,8 @@ class LogWriter {
   /// will once the buffer is written; after a failure, only the complete events' bytes.
   int64_t bytes() const { return failed_ ? bytes_in_file_ : bytes_in_file_ + static_cast<int64_t>(buf_.size()); }
   const std::string& path() const { return path_; }
+  /// The system's reason for the first failed write (e.g. "No space left on device"); empty before.
+  const std::string& failure() const { return failure_; }
   /// Writes the buffered events to the file now (to the operating system, not synced to the
   /// disk), so that a crash or SIGKILL of this process cannot lose them: a recorder calls it now
   /// and then. Throws std::runtime_error as write() does when the write fails (the events it did
@@ -69,6 +71,7 @@ class LogWriter {
   int64_t in_file_ = 0;        // events known complete in the file
   int64_t bytes_in_file_ = 0;  // their bytes
   bool failed_ = false;
+  std::string failure_;  // the system's reason for the first failure (strerror), for the messages
 };
 
 /// Checked at start, before any work whose result would go there: throws std::invalid_argument

@@ -11,8 +11,17 @@ namespace omnislam::vision {
 
 std::optional<std::string> validate(const CeilingLightOptions& o) {
   const auto& b = o.blobs;
+  if (b.background_window_px < 3 || b.background_window_px > 255 || b.background_window_px % 2 == 0)
+    return "background_window_px must be odd, in [3, 255]";
+  if (!(b.noise_margin_sigma > 0.0 && b.noise_margin_sigma <= 100.0)) return "noise_margin_sigma must be in (0, 100]";
+  if (!(b.min_noise_sigma_grey > 0.0 && b.min_noise_sigma_grey <= 100.0))
+    return "min_noise_sigma_grey must be in (0, 100]";
+  if (!(b.min_source_ratio >= 1.0 && b.min_source_ratio <= 1000.0)) return "min_source_ratio must be in [1, 1000]";
+  if (b.saturation_grey < 1 || b.saturation_grey > 255) return "saturation_grey must be in [1, 255]";
+  if (!(b.min_peak_ratio >= 0.0 && b.min_peak_ratio <= 1000.0)) return "min_peak_ratio must be in [0, 1000]";
+  if (!(b.min_surround_contrast >= 0.0 && b.min_surround_contrast <= 1.0))
+    return "min_surround_contrast must be in [0, 1]";
   if (b.threshold_grey < 0 || b.threshold_grey > 254) return "threshold_grey must be in [0, 254]";
-  if (!(b.background_grey >= 0 && b.background_grey < 255)) return "background_grey must be in [0, 255)";
   if (b.min_area_px < 1) return "min_area_px must be >= 1";
   if (b.max_area_px < b.min_area_px) return "max_area_px must be >= min_area_px";
   if (b.connectivity != 4 && b.connectivity != 8) return "connectivity must be 4 or 8";
@@ -27,16 +36,27 @@ CeilingLightDetector::CeilingLightDetector(const camera::CameraModel& camera, co
                                            const CeilingLightOptions& options)
     : camera_(camera), mounting_(mounting), opt_(options) {
   if (auto why = validate(opt_)) throw std::invalid_argument("ceiling lights: " + *why);
+  field_of_view_ = cv::Mat(camera.heightPx(), camera.widthPx(), CV_8U);
+  for (int v = 0; v < field_of_view_.rows; ++v)
+    for (int u = 0; u < field_of_view_.cols; ++u)
+      field_of_view_.at<uint8_t>(v, u) = camera.unproject(Eigen::Vector2d(u, v)).has_value() ? 255 : 0;
 }
 
-std::vector<CeilingLight> CeilingLightDetector::detect(const cv::Mat& grey) const {
+std::vector<CeilingLight> CeilingLightDetector::detect(const cv::Mat& grey, const cv::Mat& mask) const {
   if (grey.type() != CV_8UC1) throw std::invalid_argument("ceiling lights: needs an 8-bit grey image");
   if (grey.cols != camera_.widthPx() || grey.rows != camera_.heightPx())
     throw std::invalid_argument("ceiling lights: image " + std::to_string(grey.cols) + "x" + std::to_string(grey.rows) +
                                 " does not match the camera's " + std::to_string(camera_.widthPx()) + "x" +
                                 std::to_string(camera_.heightPx()));
+  cv::Mat usable = field_of_view_;
+  if (!mask.empty()) {
+    if (mask.type() != CV_8UC1 || mask.size() != grey.size())
+      throw std::invalid_argument("ceiling lights: the mask must be CV_8UC1 of the image's size");
+    usable = field_of_view_ & (mask != 0);
+  }
   std::vector<CeilingLight> out;
-  for (const BrightBlob& b : detectBrightBlobs(grey, opt_.blobs)) {
+  for (const BrightBlob& b : detectLampBlobs(grey, usable, opt_.blobs, &last_stats_)) {
+    if (b.truncated && opt_.truncated_blobs == TruncatedBlobs::kDrop) continue;
     const double eq_diam = 2.0 * std::sqrt(b.area_px / kPi);
     const double elong = eq_diam > 0 ? std::max(1.0, b.major_axis_px / eq_diam) : 1.0;
     if (elong > opt_.max_elongation) continue;

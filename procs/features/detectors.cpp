@@ -207,8 +207,9 @@ class LinesDetector final : public Detector {
 
 vision::LampBlobOptions parseLampBlobs(const Node& n) {
   vision::LampBlobOptions o;
-  o.background_window_px = static_cast<int>(n.getInt("background_window_px", 3, 255, o.background_window_px));
-  if (o.background_window_px % 2 == 0) throw ConfigError(n.where("background_window_px") + " must be odd, in [3, 255]");
+  o.background_window_px = static_cast<int>(n.getInt("background_window_px", 0, 255, o.background_window_px));
+  if (o.background_window_px != 0 && (o.background_window_px < 3 || o.background_window_px % 2 == 0))
+    throw ConfigError(n.where("background_window_px") + " must be 0 (from background_window_rad) or odd, in [3, 255]");
   o.noise_margin_sigma = n.getDouble("noise_margin_sigma", 0.1, 100.0, o.noise_margin_sigma);
   o.min_noise_sigma_grey = n.getDouble("min_noise_sigma_grey", 0.01, 100.0, o.min_noise_sigma_grey);
   o.min_source_ratio = n.getDouble("min_source_ratio", 1.0, 1000.0, o.min_source_ratio);
@@ -225,14 +226,24 @@ vision::LampBlobOptions parseLampBlobs(const Node& n) {
 }
 
 vision::CeilingLightOptions parseLights(const Node& n) {
-  n.rejectUnknownKeys({"background_window_px", "noise_margin_sigma", "min_noise_sigma_grey", "min_source_ratio",
-                       "saturation_grey", "min_peak_ratio", "min_surround_contrast", "threshold_grey", "min_area_px",
-                       "max_area_px", "connectivity", "max_elongation", "noise_sigma_grey", "pixel_sigma_floor_px",
-                       "truncated_blobs"});
+  if (n.has("background_grey"))
+    throw ConfigError(n.where("background_grey") +
+                      " was removed: the background is now measured around each blob (a median over"
+                      " background_window_px / background_window_rad); delete the key");
+  n.rejectUnknownKeys({"background_window_px", "background_window_rad", "noise_margin_sigma", "min_noise_sigma_grey",
+                       "min_source_ratio", "saturation_grey", "min_peak_ratio", "min_surround_contrast",
+                       "threshold_grey", "min_area_px", "max_area_px", "connectivity", "max_elongation",
+                       "max_clipped_elongation", "noise_sigma_grey", "pixel_sigma_floor_px", "truncated_blobs"});
   vision::CeilingLightOptions o;
   o.blobs = parseLampBlobs(n);
+  o.background_window_rad = n.getDouble("background_window_rad", 1e-3, 1.0, o.background_window_rad);
   o.max_elongation = n.getDouble("max_elongation", 1.0, 100.0, o.max_elongation);
-  o.noise_sigma_grey = n.getDouble("noise_sigma_grey", 0.0, 100.0, o.noise_sigma_grey);
+  o.max_clipped_elongation = n.getDouble("max_clipped_elongation", 1.0, 100.0, std::max(o.max_elongation, o.max_clipped_elongation));
+  if (o.max_clipped_elongation < o.max_elongation)
+    throw ConfigError(n.where("max_clipped_elongation") + " must be >= max_elongation");
+  // "auto" (or absent): the frame's own noise estimate.
+  if (n.has("noise_sigma_grey") && n.getString("noise_sigma_grey") != "auto")
+    o.noise_sigma_grey = n.getDouble("noise_sigma_grey", 0.0, 100.0);
   o.pixel_sigma_floor_px = n.getDouble("pixel_sigma_floor_px", 1e-3, 100.0, o.pixel_sigma_floor_px);
   o.truncated_blobs = n.getEnum("truncated_blobs", {"drop", "keep"}, "drop") == "drop" ? vision::TruncatedBlobs::kDrop
                                                                                       : vision::TruncatedBlobs::kKeep;

@@ -68,11 +68,14 @@ FrameStatistics frameStatistics(const cv::Mat& grey, const cv::Mat& valid, const
     }
   }
   FrameStatistics s;
-  s.black_grey = quantile(hist, n, 0.005);
   s.median_grey = quantile(hist, n, 0.5);
   // The median |difference| of neighbours is 0.6745 sqrt(2) sigma for Gaussian noise; edges are
   // few, so they do not move the median.
   s.noise_sigma_grey = std::max(o.min_noise_sigma_grey, 1.4826 * quantile(diff, nd, 0.5) / std::sqrt(2.0));
+  // The 0.5th percentile of a noisy dark floor lies 2.576 sigma below it: the dark level is that
+  // percentile plus 2.576 sigma (at most the median), so that median - black measures the room's
+  // light, not the noise (a dark IR image has median - black ~ 0, not ~ 2.6 sigma).
+  s.black_grey = std::min(s.median_grey, quantile(hist, n, 0.005) + 2.576 * s.noise_sigma_grey);
   return s;
 }
 
@@ -172,6 +175,8 @@ std::vector<BrightBlob> detectLampBlobs(const cv::Mat& grey, const cv::Mat& vali
   if (grey.type() != CV_8UC1) throw std::invalid_argument("detectLampBlobs: needs an 8-bit single-channel image");
   if (!valid_in.empty() && (valid_in.type() != CV_8UC1 || valid_in.size() != grey.size()))
     throw std::invalid_argument("detectLampBlobs: the mask must be CV_8UC1 of the image's size");
+  if (o.background_window_px < 3 || o.background_window_px > 255 || o.background_window_px % 2 == 0)
+    throw std::invalid_argument("detectLampBlobs: background_window_px must be odd, in [3, 255]");
   const cv::Mat valid = valid_in.empty() ? cv::Mat(grey.size(), CV_8U, cv::Scalar(255)) : valid_in;
   const FrameStatistics s = frameStatistics(grey, valid, o);
   if (stats_out) *stats_out = s;

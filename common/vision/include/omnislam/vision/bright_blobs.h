@@ -6,7 +6,8 @@
 //    for auto-exposed real images (docs/detectors.md, "Ceiling lights"):
 //      B      = median of the image over a background_window_px square (the lamp-scale background:
 //               a lamp narrower than about window / 2.8 covers less than half of any window on it)
-//      stats  = black (0.5th percentile), median, noise sigma (1.4826 MAD of neighbour differences / sqrt 2)
+//      stats  = noise sigma (1.4826 MAD of neighbour differences / sqrt 2), median, black (the dark
+//               level: 0.5th percentile + 2.576 sigma, at most the median)
 //      core   = I - B >= noise_margin_sigma sigma  and  I > threshold_grey  and
 //               (I >= saturation_grey  or  I - black >= min_source_ratio (B - black))
 //      blobs  = connected core pixels; kept when min_area <= area <= max_area, the peak is saturated
@@ -55,12 +56,18 @@ struct BrightBlob {
 std::vector<BrightBlob> detectBrightBlobs(const cv::Mat& grey, const BrightBlobOptions& options = {});
 
 struct LampBlobOptions {
-  int background_window_px = 31;       ///< odd, 3..255: side of the median window of the background [px]
+  /// Side of the median window of the background [px]: odd, 3..255. 0 = not set here:
+  /// CeilingLightDetector derives it from the camera (background_window_rad); detectLampBlobs
+  /// refuses 0.
+  int background_window_px = 0;
   double noise_margin_sigma = 5.0;     ///< core: I - B >= this x the frame's noise sigma; > 0
   double min_noise_sigma_grey = 0.5;   ///< floor of the per-frame noise estimate (quantisation) [grey]; > 0
   double min_source_ratio = 3.0;       ///< core: I - black >= this x (B - black), unless saturated; >= 1
   int saturation_grey = 250;           ///< 1..255: at or above, a pixel is clipped (true value unknown)
-  double min_peak_ratio = 3.0;         ///< blob: peak - black >= this x (median - black), unless saturated; >= 0
+  /// blob: peak - black >= this x (median - black), unless saturated; >= 0. A lamp's luminance is
+  /// >= 100 x the room's; through a gamma-2.2 encoding (the least contrast an 8-bit camera gives)
+  /// that is 100^(1/2.2) = 8 in grey levels above black.
+  double min_peak_ratio = 8.0;
   double min_surround_contrast = 0.25; ///< blob: contrast above its 2-px ring, 0..1
   int threshold_grey = 0;              ///< core: I > this; 0 = no absolute level (0..254)
   int min_area_px = 2;                 ///< smaller blobs are dropped (noise)
@@ -70,7 +77,7 @@ struct LampBlobOptions {
 
 /// The per-frame statistics the lamp criteria are relative to (over the usable pixels).
 struct FrameStatistics {
-  double black_grey = 0.0;        ///< 0.5th percentile: the darkest the scene gets
+  double black_grey = 0.0;        ///< dark level: 0.5th percentile + 2.576 noise sigma, at most the median
   double median_grey = 0.0;       ///< the scene's typical level
   double noise_sigma_grey = 0.0;  ///< robust noise estimate, floored at min_noise_sigma_grey
 };

@@ -2,13 +2,15 @@
 // image -> bearings (azimuth, elevation) with a covariance propagated from pixel noise.
 //
 // Pipeline: lamp blobs relative to the frame and to the lamp-scale local background
-// (detectLampBlobs, bright_blobs.h) over the usable pixels (the camera's field of view and an
-// optional mask), shape filter (elongation = weighted major axis / equivalent-disc diameter),
+// (detectLampBlobs, bright_blobs.h; the background window from the camera's pixel scale) over the
+// usable pixels (the camera's field of view and an optional mask), shape filter (elongation =
+// weighted major axis / equivalent-disc diameter; clipped blobs, i.e. tubes, may be longer),
 // blobs cut by the image border or the mask dropped or flagged, then camera.unproject(centroid) ->
 // d_C -> robot-parallel axes with the mounting yaw -> (az, el).
 // Covariance: bearingCovarianceFromPixel(camera, centroid, sigma_px) with
 //   sigma_px^2 = sigma_n^2 * area * lambda_max / mass^2  +  pixel_sigma_floor_px^2
-// (first term: the centroid's spread from independent grey-level noise sigma_n, second: threshold
+// (first term: the centroid's spread from independent grey-level noise sigma_n, by default the
+// frame's own estimate; second: threshold
 // truncation, blur and quantisation, a documented config value). A yaw about z leaves the (az, el)
 // covariance unchanged, so the camera-frame covariance is the robot-parallel one.
 // Nothing here knows the truth: every blob that passes the filters is reported.
@@ -36,8 +38,22 @@ enum class TruncatedBlobs {
 
 struct CeilingLightOptions {
   LampBlobOptions blobs;             ///< lamp criteria, area, connectivity (bright_blobs.h)
-  double max_elongation = 4.0;       ///< major axis / equivalent-disc diameter; >= 1 (round lamps; tubes need more)
-  double noise_sigma_grey = 2.0;     ///< image noise (grey levels) used for the centroid sigma; >= 0
+  /// Angular side of the background's median window [rad], used when blobs.background_window_px
+  /// is 0 (default): window_px = this x the camera's pixel scale (median px/rad over the field of
+  /// view), rounded to odd, 3..255. A median window ignores a disc narrower than 1 / 1.25 of it and
+  /// a bar (any direction) narrower than 1 / 2.83; a bright area wider than half of it becomes
+  /// background. 0.15 rad: round lamps up to 0.12 rad across (0.6 m at 5 m), tubes up to 0.053 rad
+  /// (a 5 cm wide tube at 1 m); bright areas (lit ceiling, windows) wider than 0.075 rad are background.
+  double background_window_rad = 0.15;
+  /// Shape filter, elongation = weighted major axis / equivalent-disc diameter (~ sqrt(aspect)):
+  /// blobs whose peak is not clipped (round lamps, spots) up to max_elongation; >= 1.
+  double max_elongation = 4.0;
+  /// Clipped blobs (peak >= saturation_grey: a light source, e.g. a tube, at an exposure set for the
+  /// room) up to this; >= max_elongation. 8: tubes up to ~60:1 (a 1.5 m T8 tube is 58:1).
+  double max_clipped_elongation = 8.0;
+  /// Image noise (grey levels) for the centroid sigma; nullopt (default) = the frame's own robust
+  /// estimate (FrameStatistics::noise_sigma_grey); >= 0.
+  std::optional<double> noise_sigma_grey;
   double pixel_sigma_floor_px = 0.3; ///< added in quadrature to the centroid sigma [px]; > 0
   TruncatedBlobs truncated_blobs = TruncatedBlobs::kDrop;
 };
@@ -67,11 +83,17 @@ class CeilingLightDetector {
   /// Statistics of the last detect() call's frame (for logs and tests; not thread-safe).
   const FrameStatistics& lastFrameStatistics() const { return last_stats_; }
   const CeilingLightOptions& options() const { return opt_; }
+  /// The background window used [px] (options' value, or derived from background_window_rad).
+  int backgroundWindowPx() const { return blobs_.background_window_px; }
+  /// The camera's pixel scale: median over the field of view of 1 / sqrt(det(J_d_px^T J_d_px)) [px/rad].
+  double pixelScalePxPerRad() const { return scale_px_per_rad_; }
 
  private:
   const camera::CameraModel& camera_;
   camera::CameraMounting mounting_;
   CeilingLightOptions opt_;
+  LampBlobOptions blobs_;  ///< opt_.blobs with the background window resolved
+  double scale_px_per_rad_ = 0.0;
   cv::Mat field_of_view_;  ///< CV_8U, 255 where the camera model gives a bearing
   mutable FrameStatistics last_stats_;
 };

@@ -33,7 +33,8 @@ const std::string kDir = omnislam::testing::datasetPath("omni-images/opencv-omni
 
 struct Tube {
   Eigen::Vector2d e1, e2;
-  bool truncated = false;
+  bool truncated = false;  // cut by the image border
+  bool occluded = false;   // partly hidden by something in front (the checkerboard)
   Eigen::Vector2d centre() const { return 0.5 * (e1 + e2); }
   double length() const { return (e2 - e1).norm(); }
   // Distance of p from the labelled axis segment [px].
@@ -55,9 +56,10 @@ std::map<std::string, std::map<std::string, Tube>> readLabels() {
     std::istringstream s(line);
     std::string img, name;
     Tube t;
-    int trunc = 0;
-    s >> img >> name >> t.e1.x() >> t.e1.y() >> t.e2.x() >> t.e2.y() >> trunc;
+    int trunc = 0, occl = 0;
+    s >> img >> name >> t.e1.x() >> t.e1.y() >> t.e2.x() >> t.e2.y() >> trunc >> occl;
     t.truncated = trunc != 0;
+    t.occluded = occl != 0;
     out[img][name] = t;
   }
   return out;
@@ -68,23 +70,28 @@ double imageAngleDeg(double u, double v) { return rad2deg(std::atan2(v - 399.5, 
 
 }  // namespace
 
-// Acceptance on the 17 real images: all three tubes in >= 90 % of the frames, median false blobs
-// per frame <= 2 (published, i.e. not cut by the border), each tube's azimuth within 0.3 deg over
-// the exposure changes. Tubes are recognised by the labels of frame 000 (the camera is static):
-// a blob whose centroid lies within 4 px of a tube's labelled axis and within a quarter of its
-// length of the labelled centre.
+// Acceptance on the 17 real images with the DEFAULT detector settings (the config holds only the
+// camera): all three tubes in >= 90 % of the frames, median false blobs per frame <= 2 (published,
+// i.e. not cut by the border), each tube's azimuth within 0.3 deg over the exposure changes (frames
+// where the labels say it is whole; an occluded tube's centroid moves with the occluder, printed).
+// A blob is a tube when its centroid lies within 4 px of that frame's labelled axis and within a
+// quarter of its labelled length of the labelled centre.
 TEST(FisheyeTubes, AllThreeTubesFoundWithStableAzimuthAndFewFalseBlobs) {
   if (!fs::exists(kDir + "/stereo_pair_000.jpg")) GTEST_SKIP() << "fisheye images not found in " << kDir << "; skipped";
   const auto labels = readLabels();
-  ASSERT_EQ(labels.size(), 3u);
-  auto setup = features::ceilingLightSetup(
-      config::Node::loadFile(std::string(OMNISLAM_SOURCE_DIR) + "/config/features/opencv_omnidir_fisheye_lights.yaml"));
-  // Keep the truncated blobs (flagged) to check the flag; the config drops them from the output.
-  ASSERT_EQ(setup.options.truncated_blobs, vision::TruncatedBlobs::kDrop);
-  setup.options.truncated_blobs = vision::TruncatedBlobs::kKeep;
-  const vision::CeilingLightDetector det(*setup.camera, setup.mounting, setup.options);
-  const auto& ref = labels.at("stereo_pair_000.jpg");
-  std::map<std::string, std::vector<double>> az;  // tube -> image angle per frame [deg]
+  ASSERT_EQ(labels.size(), 17u);
+  const auto root =
+      config::Node::loadFile(std::string(OMNISLAM_SOURCE_DIR) + "/config/features/opencv_omnidir_fisheye_lights.yaml");
+  EXPECT_FALSE(root.has("ceiling_lights")) << "the real-set config must hold only the camera";
+  auto setup = features::ceilingLightSetup(root);
+  vision::CeilingLightOptions defaults;
+  // Keep the truncated blobs (flagged) to check the flag; by default they are not published.
+  ASSERT_EQ(defaults.truncated_blobs, vision::TruncatedBlobs::kDrop);
+  defaults.truncated_blobs = vision::TruncatedBlobs::kKeep;
+  const vision::CeilingLightDetector det(*setup.camera, setup.mounting, defaults);
+  std::cout << "background window " << det.backgroundWindowPx() << " px (pixel scale " << det.pixelScalePxPerRad()
+            << " px/rad)\n";
+  std::map<std::string, std::vector<double>> az;  // tube -> image angle per frame where it is whole [deg]
   std::vector<int> false_published;
   int frames_all_three = 0;
   for (int k = 0; k <= 16; ++k) {
@@ -92,8 +99,10 @@ TEST(FisheyeTubes, AllThreeTubesFoundWithStableAzimuthAndFewFalseBlobs) {
     std::snprintf(name, sizeof name, "stereo_pair_%03d.jpg", k);
     const cv::Mat g = cv::imread(kDir + "/" + name, cv::IMREAD_GRAYSCALE);
     ASSERT_FALSE(g.empty()) << name;
+    const auto& ref = labels.at(name);
     const auto lights = det.detect(g);
-    int found = 0, falses = 0, falses_cut = 0;
+    std::map<std::string, int> found;
+    int falses = 0, falses_cut = 0;
     std::ostringstream line;
     for (const auto& L : lights) {
       const Eigen::Vector2d p(L.blob.u_px, L.blob.v_px);
@@ -102,20 +111,22 @@ TEST(FisheyeTubes, AllThreeTubesFoundWithStableAzimuthAndFewFalseBlobs) {
         if (lab.distance(p) <= 4.0 && (p - lab.centre()).norm() <= 0.25 * lab.length()) which = t;
       if (which.empty()) {
         (L.blob.truncated ? falses_cut : falses) += 1;
+        line << " false (" << p.x() << ", " << p.y() << ")" << (L.blob.truncated ? " cut" : "") << ";";
         continue;
       }
-      ++found;
-      EXPECT_EQ(L.blob.truncated, ref.at(which).truncated) << name << " tube " << which;
-      az[which].push_back(imageAngleDeg(p.x(), p.y()));
-      line << " " << which << " (" << p.x() << ", " << p.y() << ") len " << L.blob.major_axis_px << " width "
-           << L.blob.minor_axis_px << " axis " << rad2deg(L.blob.axis_angle_rad) << " deg;";
-      // Against this frame's own labels where they exist (a truncated tube's centroid is biased).
-      if (labels.count(name) && !ref.at(which).truncated)
-        EXPECT_LT((p - labels.at(name).at(which).centre()).norm(), 3.0) << name << " tube " << which;
+      ++found[which];
+      const Tube& lab = ref.at(which);
+      EXPECT_EQ(L.blob.truncated, lab.truncated) << name << " tube " << which;
+      if (!lab.occluded) az[which].push_back(imageAngleDeg(p.x(), p.y()));
+      line << " " << which << " (" << p.x() << ", " << p.y() << ") off " << (p - lab.centre()).norm() << " px"
+           << (lab.occluded ? " occluded" : "") << ";";
+      // A truncated tube's centroid is biased towards its visible part.
+      if (!lab.truncated) EXPECT_LT((p - lab.centre()).norm(), 3.0) << name << " tube " << which;
     }
-    frames_all_three += found == 3 ? 1 : 0;
+    for (const auto& [t, n] : found) EXPECT_EQ(n, 1) << name << " tube " << t << " found more than once";
+    frames_all_three += found.size() == 3 ? 1 : 0;
     false_published.push_back(falses);
-    std::cout << name << ": tubes " << found << ", false blobs " << falses << " (+" << falses_cut
+    std::cout << name << ": tubes " << found.size() << ", false blobs " << falses << " (+" << falses_cut
               << " cut by the border, not published); black " << det.lastFrameStatistics().black_grey << " median "
               << det.lastFrameStatistics().median_grey << " noise " << det.lastFrameStatistics().noise_sigma_grey
               << ";" << line.str() << "\n";
@@ -129,7 +140,7 @@ TEST(FisheyeTubes, AllThreeTubesFoundWithStableAzimuthAndFewFalseBlobs) {
   for (const auto& [t, v] : az) {
     const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
     std::cout << "tube " << t << ": image-angle azimuth spread " << (*hi - *lo) << " deg over " << v.size()
-              << " frames\n";
+              << " frames where it is whole\n";
     EXPECT_LE(*hi - *lo, 0.3) << "tube " << t;
   }
 }
@@ -184,9 +195,7 @@ TEST(LampCriteria, MaskedPixelsAreNotUsedAndABlobAtTheMaskEdgeIsFlagged) {
 // small blobs (at most one per corner; the lit ceiling's too once it is 5 x the room).
 TEST(LampCriteria, SaturatedWindowAndPaperAreRefusedATubeKeptWithItsAxis) {
   const camera::PajdlaBaksteinCamera cam;
-  vision::CeilingLightOptions o;
-  o.max_elongation = 8.0;
-  const vision::CeilingLightDetector det(cam, {}, o);
+  const vision::CeilingLightDetector det(cam, {});  // defaults: the clipped tube passes the shape filter
   // Not held (measured): on a ceiling at 200 (5 x the room) the tube, 255 next to 200, fails the
   // surround contrast and is lost, and that ceiling's corners come out instead.
   for (double ceiling : {40.0, 120.0}) {

@@ -211,8 +211,8 @@ class LightsDetector final : public Detector {
       f.size_px = L.blob.area_px;
       f.length_px = L.blob.major_axis_px;
       f.strength = L.blob.peak_grey;
-      // Mean grey of the blob (the IR image is grey): mass / area + background.
-      const float mean = static_cast<float>(L.blob.mass / std::max(1, L.blob.area_px) + det_.options().blobs.background_grey);
+      // Mean grey of the blob (the IR image is grey): mass / area + its local background.
+      const float mean = static_cast<float>(L.blob.mass / std::max(1, L.blob.area_px) + L.blob.background_grey);
       for (int i = 0; i < 3; ++i) f.colour_a[i] = mean;
       out.push_back(f);
     }
@@ -291,20 +291,48 @@ class LinesDetector final : public Detector {
   mutable std::vector<vision::VerticalLine> last_;
 };
 
+vision::LampBlobOptions parseLampBlobs(const Node& n) {
+  vision::LampBlobOptions o;
+  o.background_window_px = static_cast<int>(n.getInt("background_window_px", 0, 255, o.background_window_px));
+  if (o.background_window_px != 0 && (o.background_window_px < 3 || o.background_window_px % 2 == 0))
+    throw ConfigError(n.where("background_window_px") + " must be 0 (from background_window_rad) or odd, in [3, 255]");
+  o.noise_margin_sigma = n.getDouble("noise_margin_sigma", 0.1, 100.0, o.noise_margin_sigma);
+  o.min_noise_sigma_grey = n.getDouble("min_noise_sigma_grey", 0.01, 100.0, o.min_noise_sigma_grey);
+  o.min_source_ratio = n.getDouble("min_source_ratio", 1.0, 1000.0, o.min_source_ratio);
+  o.saturation_grey = static_cast<int>(n.getInt("saturation_grey", 1, 255, o.saturation_grey));
+  o.min_peak_ratio = n.getDouble("min_peak_ratio", 0.0, 1000.0, o.min_peak_ratio);
+  o.min_surround_contrast = n.getDouble("min_surround_contrast", 0.0, 1.0, o.min_surround_contrast);
+  o.threshold_grey = static_cast<int>(n.getInt("threshold_grey", 0, 254, o.threshold_grey));
+  o.min_area_px = static_cast<int>(n.getInt("min_area_px", 1, 1'000'000, o.min_area_px));
+  o.max_area_px = static_cast<int>(n.getInt("max_area_px", 1, 10'000'000, o.max_area_px));
+  if (o.max_area_px < o.min_area_px) throw ConfigError(n.where("max_area_px") + " must be >= min_area_px");
+  o.connectivity = static_cast<int>(n.getInt("connectivity", 4, 8, o.connectivity));
+  if (o.connectivity != 4 && o.connectivity != 8) throw ConfigError(n.where("connectivity") + " must be 4 or 8");
+  return o;
+}
+
 vision::CeilingLightOptions parseLights(const Node& n) {
-  n.rejectUnknownKeys({"threshold_grey", "background_grey", "min_area_px", "max_area_px", "connectivity",
-                       "max_elongation", "noise_sigma_grey", "pixel_sigma_floor_px"});
+  if (n.has("background_grey"))
+    throw ConfigError(n.where("background_grey") +
+                      " was removed: the background is now measured around each blob (a median over"
+                      " background_window_px / background_window_rad); delete the key");
+  n.rejectUnknownKeys({"background_window_px", "background_window_rad", "noise_margin_sigma", "min_noise_sigma_grey",
+                       "min_source_ratio", "saturation_grey", "min_peak_ratio", "min_surround_contrast",
+                       "threshold_grey", "min_area_px", "max_area_px", "connectivity", "max_elongation",
+                       "max_clipped_elongation", "noise_sigma_grey", "pixel_sigma_floor_px", "truncated_blobs"});
   vision::CeilingLightOptions o;
-  o.blobs.threshold_grey = static_cast<int>(n.getInt("threshold_grey", 0, 254, o.blobs.threshold_grey));
-  o.blobs.background_grey = n.getDouble("background_grey", 0.0, 254.0, o.blobs.background_grey);
-  o.blobs.min_area_px = static_cast<int>(n.getInt("min_area_px", 1, 1'000'000, o.blobs.min_area_px));
-  o.blobs.max_area_px = static_cast<int>(n.getInt("max_area_px", 1, 10'000'000, o.blobs.max_area_px));
-  if (o.blobs.max_area_px < o.blobs.min_area_px) throw ConfigError(n.where("max_area_px") + " must be >= min_area_px");
-  o.blobs.connectivity = static_cast<int>(n.getInt("connectivity", 4, 8, o.blobs.connectivity));
-  if (o.blobs.connectivity != 4 && o.blobs.connectivity != 8) throw ConfigError(n.where("connectivity") + " must be 4 or 8");
+  o.blobs = parseLampBlobs(n);
+  o.background_window_rad = n.getDouble("background_window_rad", 1e-3, 1.0, o.background_window_rad);
   o.max_elongation = n.getDouble("max_elongation", 1.0, 100.0, o.max_elongation);
-  o.noise_sigma_grey = n.getDouble("noise_sigma_grey", 0.0, 100.0, o.noise_sigma_grey);
+  o.max_clipped_elongation = n.getDouble("max_clipped_elongation", 1.0, 100.0, std::max(o.max_elongation, o.max_clipped_elongation));
+  if (o.max_clipped_elongation < o.max_elongation)
+    throw ConfigError(n.where("max_clipped_elongation") + " must be >= max_elongation");
+  // "auto" (or absent): the frame's own noise estimate.
+  if (n.has("noise_sigma_grey") && n.getString("noise_sigma_grey") != "auto")
+    o.noise_sigma_grey = n.getDouble("noise_sigma_grey", 0.0, 100.0);
   o.pixel_sigma_floor_px = n.getDouble("pixel_sigma_floor_px", 1e-3, 100.0, o.pixel_sigma_floor_px);
+  o.truncated_blobs = n.getEnum("truncated_blobs", {"drop", "keep"}, "drop") == "drop" ? vision::TruncatedBlobs::kDrop
+                                                                                      : vision::TruncatedBlobs::kKeep;
   return o;
 }
 
@@ -369,6 +397,17 @@ vision::VerticalLineOptions verticalLineOptions(const Node& root) {
   const CameraSetup cam = parseCamera(root.child("camera"));
   checkLevelForLines(root.child("camera"), cam);
   return parseLines(root.child("vertical_lines"), cam);
+}
+
+CeilingLightSetup ceilingLightSetup(const Node& root) {
+  CameraSetup cam = parseCamera(root.child("camera"));
+  if (!cam.model)
+    throw ConfigError(root.child("camera").where("model") + " ceiling_lights needs a camera model (world or ocamcalib)");
+  CeilingLightSetup s;
+  s.camera = std::move(cam.model);
+  s.mounting = cam.mounting;
+  if (root.has("ceiling_lights")) s.options = parseLights(root.child("ceiling_lights"));
+  return s;
 }
 
 }  // namespace omnislam::features

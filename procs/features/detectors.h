@@ -13,6 +13,7 @@
 #include "omnislam/core/camera/camera_model.h"
 #include "omnislam/core/camera/mounting.h"
 #include "omnislam/feature_t.hpp"
+#include "omnislam/vision/ceiling_lights.h"
 #include "omnislam/vision/vertical_lines.h"
 
 namespace omnislam::features {
@@ -42,5 +43,15 @@ std::unique_ptr<Detector> makeDetector(const config::Node& root);
 /// sections), validated exactly as makeDetector() does; for tools and tests that run the
 /// library detector directly.
 vision::VerticalLineOptions verticalLineOptions(const config::Node& root);
+
+/// The camera and ceiling-light options of a features config file (its camera and ceiling_lights
+/// sections), validated exactly as makeDetector() does; for tools and tests that run the library
+/// detector directly (vision::CeilingLightDetector keeps a reference to `camera`).
+struct CeilingLightSetup {
+  std::unique_ptr<camera::CameraModel> camera;
+  camera::CameraMounting mounting;
+  vision::CeilingLightOptions options;
+};
+CeilingLightSetup ceilingLightSetup(const config::Node& root);
 
 }  // namespace omnislam::features

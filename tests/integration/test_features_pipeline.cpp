@@ -281,6 +281,13 @@ TEST(FeaturesProcess, BadConfigStopsWithExitCodeTwoNamingTheKey) {
        "ceiling_lights.threshold_grey"},
       {"detector: ceiling_lights\ncamera: {model: world, world: " + world + "}\nceiling_lights: {sigma_floor: 1}\n",
        "sigma_floor"},
+      // A key of the former fixed-threshold detector: named, with what replaced it.
+      {"detector: ceiling_lights\ncamera: {model: world, world: " + world + "}\nceiling_lights: {background_grey: 12}\n",
+       "key 'ceiling_lights.background_grey' was removed: the background is now measured around each blob"},
+      {"detector: ceiling_lights\ncamera: {model: world, world: " + world + "}\nceiling_lights: {noise_sigma_grey: fast}\n",
+       "ceiling_lights.noise_sigma_grey"},
+      {"detector: ceiling_lights\ncamera: {model: world, world: " + world + "}\nceiling_lights: {background_window_px: 30}\n",
+       "ceiling_lights.background_window_px"},
       {"detector: edges\ncamera: {model: world, world: " + world + "}\n", "detector"},
       {"detector: vertical_lines\ncamera: {model: centre_only, width_px: 640, height_px: 480, mounting: {z_m: 1}}\n"
        "vertical_lines: {centre_u_px: 320, centre_v_px: 240, r_min_px: 50, r_max_px: 20}\n",

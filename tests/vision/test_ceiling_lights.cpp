@@ -10,7 +10,9 @@
 #include <map>
 #include <random>
 
+#include "detectors.h"
 #include "omnislam/config/world_config.h"
+#include "omnislam/config/yaml_node.h"
 #include "omnislam/core/camera/bearing_jacobians.h"
 #include "omnislam/core/camera/pajdla_bakstein.h"
 #include "omnislam/sim/trajectory.h"
@@ -77,10 +79,15 @@ TEST(CeilingLights, SportsHallDetectionRateAndBearingRms) {
   nz.window_wall_enabled = false;
   const vision::CeilingLightRenderer renderer(cam, world.camera.mounting, nz);
   const vision::CeilingLightDetector det(cam, world.camera.mounting);
-  // The sigma floor of config/features/ceiling_lights.yaml (tuned to these simulated images).
-  vision::CeilingLightOptions tuned;
-  tuned.pixel_sigma_floor_px = 0.06;
+  // The options of config/features/ceiling_lights.yaml (its sigma floor is measured on these images).
+  const auto setup = features::ceilingLightSetup(
+      config::Node::loadFile(std::string(OMNISLAM_SOURCE_DIR) + "/config/features/ceiling_lights.yaml"));
+  const vision::CeilingLightOptions tuned = setup.options;
   const vision::CeilingLightDetector det_tuned(cam, world.camera.mounting, tuned);
+  // The measurement of that floor: mean NEES for candidate floors (the covariance is recomputed
+  // from each light's noise term, sigma_px^2 - floor^2, so the blobs are the same).
+  const std::vector<double> floors{0.02, 0.025, 0.03, 0.035, 0.04, 0.05, 0.06, 0.1, 0.3};
+  std::vector<double> nees_floor(floors.size(), 0.0);
   double nees_tuned = 0, max_zenith_deg = 0;
   std::map<int64_t, std::pair<int, int>> per_light;  // id -> (in view, detected)
   const sim::Trajectory traj(world.trajectory_options, world.segments);
@@ -131,6 +138,12 @@ TEST(CeilingLights, SportsHallDetectionRateAndBearingRms) {
       worst_deg = std::max(worst_deg, rad2deg(ang));
       nees += e.dot(f.covariance.inverse() * e);
       nees_tuned += e.dot(lights_tuned[static_cast<size_t>(best)].covariance.inverse() * e);
+      const double s2_noise = f.sigma_px * f.sigma_px - det.options().pixel_sigma_floor_px * det.options().pixel_sigma_floor_px;
+      for (size_t k = 0; k < floors.size(); ++k) {
+        const auto cov = camera::bearingCovarianceFromPixel(
+            cam, Eigen::Vector2d(f.blob.u_px, f.blob.v_px), std::sqrt(s2_noise + floors[k] * floors[k]));
+        if (cov) nees_floor[k] += e.dot(cov->inverse() * e);
+      }
     }
     for (bool u : used) unmatched += u ? 0 : 1;
   }
@@ -141,8 +154,10 @@ TEST(CeilingLights, SportsHallDetectionRateAndBearingRms) {
   if (missed_edge) std::cout << " at zenith " << min_missed_zenith << ".." << worst_missed_zenith << " deg";
   std::cout << "; bearing error RMS " << rms_deg << " deg, worst " << worst_deg << " deg; mean NEES "
             << nees / found << " with the library's default sigma floor 0.3 px, " << nees_tuned / found
-            << " with the config's 0.06 px (2 expected); features not matched to a light " << unmatched
-            << " (false blobs rendered " << false_blobs << ")\n";
+            << " with the config's " << tuned.pixel_sigma_floor_px << " px (2 expected); features not matched to a light "
+            << unmatched << " (false blobs rendered " << false_blobs << ")\nmean NEES by sigma floor [px]:";
+  for (size_t k = 0; k < floors.size(); ++k) std::cout << " " << floors[k] << ": " << nees_floor[k] / found << ";";
+  std::cout << "\n";
   double worst_light_rate = 1.0;
   int64_t worst_id = -1;
   for (const auto& [id, c] : per_light) {
@@ -174,6 +189,32 @@ TEST(CeilingLights, ElongatedAndTinyBlobsAreFilteredRoundOnesKept) {
   ASSERT_EQ(lights.size(), 1u);
   EXPECT_NEAR(lights[0].blob.u_px, 400.0, 0.05);
   EXPECT_NEAR(lights[0].blob.v_px, 300.0, 0.05);
+  // A tube is a light source: clipped along its length, it may be longer (max_clipped_elongation),
+  // with its centroid at its middle; the unclipped streak is still refused.
+  cv::line(img, {180, 380}, {300, 380}, cv::Scalar(255), 4);  // 121 x 5 px
+  const auto with_tube = det.detect(img);
+  ASSERT_EQ(with_tube.size(), 2u);
+  const auto& tube = with_tube[0].blob.u_px < 300 ? with_tube[0] : with_tube[1];
+  EXPECT_GT(tube.elongation, det.options().max_elongation);
+  EXPECT_NEAR(tube.blob.u_px, 240.0, 0.05);
+  EXPECT_NEAR(tube.blob.v_px, 380.0, 0.05);
+}
+
+// The background window follows the camera: background_window_rad x the pixel scale, odd; a
+// window given in pixels is kept.
+TEST(CeilingLights, BackgroundWindowFromTheCameraOrTheUser) {
+  const camera::PajdlaBaksteinCamera cam;
+  const vision::CeilingLightDetector det(cam, {});
+  const double scale = det.pixelScalePxPerRad();
+  EXPECT_GT(scale, 100.0);
+  EXPECT_LT(scale, 400.0);
+  EXPECT_EQ(det.backgroundWindowPx() % 2, 1);
+  EXPECT_LE(std::abs(det.backgroundWindowPx() - det.options().background_window_rad * scale), 1.0);
+  vision::CeilingLightOptions o;
+  o.blobs.background_window_px = 41;
+  EXPECT_EQ(vision::CeilingLightDetector(cam, {}, o).backgroundWindowPx(), 41);
+  o.blobs.background_window_px = 40;
+  EXPECT_THROW(vision::CeilingLightDetector(cam, {}, o), std::invalid_argument);
 }
 
 TEST(CeilingLights, ImagesOfAnotherSizeOrFormatAreRefused) {

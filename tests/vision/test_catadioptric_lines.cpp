@@ -60,7 +60,7 @@ constexpr double kMinRealFraction = 0.9;
 struct Label {
   int image = 0;
   double azimuth_deg = 0.0, tolerance_deg = 0.0;
-  std::string kind, description;
+  std::string kind, reason, description;  // reason: first_pass or review_unmatched (the CSV's header)
 };
 
 std::vector<Label> readLabels() {
@@ -79,6 +79,7 @@ std::vector<Label> readLabels() {
     std::getline(ss, field, ',');
     l.tolerance_deg = std::stod(field);
     std::getline(ss, l.kind, ',');
+    std::getline(ss, l.reason, ',');
     std::getline(ss, l.description);
     out.push_back(l);
   }

@@ -1,8 +1,9 @@
 // The vertical-line detector on the real catadioptric images of OpenCV's omnidir sample set
 // (../shared/datasets/omni-images/opencv-omnidir-catadioptric/1..9.jpg, 1280 x 960) with the shipped
 // config/features/opencv_omnidir_catadioptric.yaml (its mask included), against hand-made labels
-// (tests/data/opencv_omnidir_catadioptric_lines.csv: azimuths of the real vertical edges, made by
-// looking at the images before the detector was run on them). Skipped when the images are absent.
+// (tests/data/opencv_omnidir_catadioptric_lines.csv: image angles about the mirror's centre of the real
+// vertical edges; a first pass made before the detector was run, then edges added after looking at each
+// unmatched detection, its column `reason` says which). Skipped when the images are absent.
 //
 // Matching: per image, line-label pairs within the label's tolerance, closest first, one to one. A
 // line matched to a label is real; a line matched to none is false (a second line on one label

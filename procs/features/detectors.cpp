@@ -15,6 +15,7 @@
 #include "omnislam/vision/annotate.h"
 #include "omnislam/vision/calibration_files.h"
 #include "omnislam/vision/ceiling_lights.h"
+#include "omnislam/vision/image_mask.h"
 #include "omnislam/vision/vertical_lines.h"
 
 namespace omnislam::features {
@@ -29,6 +30,7 @@ struct CameraSetup {
   int width_px = 0, height_px = 0;
   std::optional<Eigen::Vector2d> centre_px;  ///< the model's image centre, when it has one
   std::string description;
+  cv::Mat mask;  ///< CV_8UC1 of the camera's size, 255 = pixels the detectors use; empty = all (parseMask)
 };
 
 /// The largest tilt of the optical axis from the robot's vertical (roll and pitch of the mounting)
@@ -130,9 +132,34 @@ void fileSetup(const Node& c, const std::string& model, CameraSetup* s) {
   s->description = cal.description + (optics == camera::OcamOptics::kCatadioptric ? ", catadioptric" : ", dioptric");
 }
 
+// camera.mask (an image file, non-zero = use) and camera.mask_annulus (a ring about the mirror's
+// centre), combined by AND (image_mask.h); loaded once at start. Empty when neither is given.
+cv::Mat parseMask(const Node& c, int width_px, int height_px) {
+  cv::Mat mask;
+  if (c.has("mask")) {
+    vision::MaskFile f = vision::readMask(c.getPath("mask"), width_px, height_px);
+    if (!f.error.empty()) throw ConfigError(c.where("mask") + " " + f.error);
+    mask = f.mask;
+  }
+  if (c.has("mask_annulus")) {
+    const Node a = c.child("mask_annulus");
+    a.rejectUnknownKeys({"centre_u_px", "centre_v_px", "r_min_px", "r_max_px"});
+    vision::MaskAnnulus an;
+    an.centre_u_px = a.getDouble("centre_u_px", -0.5, width_px - 0.5);
+    an.centre_v_px = a.getDouble("centre_v_px", -0.5, height_px - 0.5);
+    an.r_min_px = a.getDouble("r_min_px", 0.0, 1e5);
+    an.r_max_px = a.getDouble("r_max_px", 1.0, 1e5);
+    if (!(an.r_max_px > an.r_min_px)) throw ConfigError(a.where("r_max_px") + " must be > r_min_px");
+    mask = vision::combineMasks(mask, vision::annulusMask(an, width_px, height_px));
+  }
+  if (!mask.empty() && cv::countNonZero(mask) == 0)
+    throw ConfigError(c.where(c.has("mask_annulus") ? "mask_annulus" : "mask") + " leaves no pixel to use");
+  return mask;
+}
+
 CameraSetup parseCamera(const Node& c) {
   c.rejectUnknownKeys({"model", "world", "file", "kalibr_camera", "optics", "min_elevation_deg", "max_elevation_deg",
-                       "min_radius_px", "max_radius_px", "width_px", "height_px", "mounting"});
+                       "min_radius_px", "max_radius_px", "width_px", "height_px", "mounting", "mask", "mask_annulus"});
   CameraSetup s;
   const std::string model = c.getEnum(
       "model", {"world", "auto", "opencv_omnidir", "opencv_fisheye", "kalibr", "ocamcalib", "centre_only"});
@@ -156,6 +183,7 @@ CameraSetup parseCamera(const Node& c) {
     s.width_px = static_cast<int>(c.getInt("width_px", 1, 16384));
     s.height_px = static_cast<int>(c.getInt("height_px", 1, 16384));
   }
+  s.mask = parseMask(c, s.width_px, s.height_px);
   return s;
 }
 
@@ -235,7 +263,7 @@ class LinesDetector final : public Detector {
  public:
   LinesDetector(CameraSetup cam, const vision::VerticalLineOptions& opt, int max_features)
       : cam_(std::move(cam)),
-        det_(opt, cam_.width_px, cam_.height_px, cam_.model.get(), cam_.mounting),
+        det_(opt, cam_.width_px, cam_.height_px, cam_.model.get(), cam_.mounting, cam_.mask),
         max_features_(max_features) {}
   std::string name() const override { return "vertical_lines"; }
   std::optional<std::string> check(const cv::Mat& img) const override {
@@ -281,6 +309,7 @@ class LinesDetector final : public Detector {
     std::ostringstream s;
     s << "vertical lines, " << cam_.description << ", panorama centre (" << p.centre_u_px << ", " << p.centre_v_px
       << ") px, radii " << p.r_min_px << ".." << p.r_max_px << " px, " << p.columns << " columns";
+    if (!cam_.mask.empty()) s << ", mask uses " << std::lround(100.0 * vision::usedFraction(cam_.mask)) << " % of the pixels";
     return s.str();
   }
 
@@ -340,7 +369,9 @@ vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
   n.rejectUnknownKeys({"centre_u_px", "centre_v_px", "r_min_px", "r_max_px", "columns", "rows", "pad_columns",
                        "edge_threshold", "min_run_rows", "max_gap_rows", "merge_columns", "merge_gap_rows",
                        "min_length_rows", "max_drift_columns", "max_rms_columns", "colour_offset_columns",
-                       "colour_width_columns", "pixel_sigma_px"});
+                       "colour_width_columns", "pixel_sigma_px", "max_opposite_fraction", "bar_max_width_px",
+                       "contrast_exponent", "contrast_reference_grey", "contrast_offset_grey", "contrast_window_columns",
+                       "clahe_clip_limit", "clahe_tile_columns"});
   vision::VerticalLineOptions o;
   auto& p = o.panorama;
   if (cam.centre_px && !n.has("centre_u_px") && !n.has("centre_v_px")) {
@@ -371,6 +402,14 @@ vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
   o.colour_offset_columns = static_cast<int>(n.getInt("colour_offset_columns", 1, 1000, o.colour_offset_columns));
   o.colour_width_columns = static_cast<int>(n.getInt("colour_width_columns", 1, 1000, o.colour_width_columns));
   o.pixel_sigma_px = n.getDouble("pixel_sigma_px", 1e-3, 100.0, o.pixel_sigma_px);
+  o.max_opposite_fraction = n.getDouble("max_opposite_fraction", 0.0, 1.0, o.max_opposite_fraction);
+  o.bar_max_width_px = n.getDouble("bar_max_width_px", 0.0, 1000.0, o.bar_max_width_px);
+  o.contrast_exponent = n.getDouble("contrast_exponent", 0.0, 1.0, o.contrast_exponent);
+  o.contrast_reference_grey = n.getDouble("contrast_reference_grey", 1.0, 255.0, o.contrast_reference_grey);
+  o.contrast_offset_grey = n.getDouble("contrast_offset_grey", 0.0, 255.0, o.contrast_offset_grey);
+  o.contrast_window_columns = static_cast<int>(n.getInt("contrast_window_columns", 1, 100, o.contrast_window_columns));
+  o.clahe_clip_limit = n.getDouble("clahe_clip_limit", 0.0, 100.0, o.clahe_clip_limit);
+  o.clahe_tile_columns = static_cast<int>(n.getInt("clahe_tile_columns", 8, 20000, o.clahe_tile_columns));
   return o;
 }
 
@@ -409,5 +448,7 @@ CeilingLightSetup ceilingLightSetup(const Node& root) {
   if (root.has("ceiling_lights")) s.options = parseLights(root.child("ceiling_lights"));
   return s;
 }
+
+cv::Mat cameraMask(const Node& root) { return parseCamera(root.child("camera")).mask; }
 
 }  // namespace omnislam::features

@@ -54,4 +54,8 @@ struct CeilingLightSetup {
 };
 CeilingLightSetup ceilingLightSetup(const config::Node& root);
 
+/// The camera's mask of a features config file (camera.mask, camera.mask_annulus; CV_8UC1, 255 =
+/// use), loaded and validated exactly as makeDetector() does; empty when the file has none.
+cv::Mat cameraMask(const config::Node& root);
+
 }  // namespace omnislam::features

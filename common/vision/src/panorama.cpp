@@ -79,13 +79,22 @@ Eigen::Vector2d Panorama::pixelAt(double col, double row) const {
   return {opt_.centre_u_px + rho * std::cos(a), opt_.centre_v_px + rho * std::sin(a)};
 }
 
-cv::Mat Panorama::validMask() const {
+cv::Mat Panorama::validMask(const cv::Mat& image_mask) const {
+  if (!image_mask.empty() && (image_mask.type() != CV_8UC1 || image_mask.cols != w_ || image_mask.rows != h_))
+    throw std::invalid_argument("panorama: the image mask must be CV_8UC1 of the image's size");
   cv::Mat m(rows_, totalColumns(), CV_8U);
   for (int r = 0; r < rows_; ++r) {
     uint8_t* p = m.ptr<uint8_t>(r);
     for (int c = 0; c < m.cols; ++c) {
       const Eigen::Vector2d px = pixelAt(c, r);
-      p[c] = (px.x() >= 0.0 && px.y() >= 0.0 && px.x() <= w_ - 1.0 && px.y() <= h_ - 1.0) ? 255 : 0;
+      bool ok = px.x() >= 0.0 && px.y() >= 0.0 && px.x() <= w_ - 1.0 && px.y() <= h_ - 1.0;
+      if (ok && !image_mask.empty()) {  // the bilinear neighbours (floor, floor + 1; clamped at the last pixel)
+        const int u0 = static_cast<int>(px.x()), v0 = static_cast<int>(px.y());
+        const int u1 = std::min(u0 + 1, w_ - 1), v1 = std::min(v0 + 1, h_ - 1);
+        ok = image_mask.at<uint8_t>(v0, u0) && image_mask.at<uint8_t>(v0, u1) && image_mask.at<uint8_t>(v1, u0) &&
+             image_mask.at<uint8_t>(v1, u1);
+      }
+      p[c] = ok ? 255 : 0;
     }
   }
   return m;

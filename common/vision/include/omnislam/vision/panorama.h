@@ -61,7 +61,9 @@ class Panorama {
   const PanoramaOptions& options() const { return opt_; }
   /// 255 where the panorama pixel samples inside the image (all four bilinear neighbours), else 0;
   /// rows x totalColumns(), CV_8U. Pixels outside are 0 in unwarp() and do not turn with the scene.
-  cv::Mat validMask() const;
+  /// With an image mask (CV_8UC1 of the image's size, non-zero = use; image_mask.h), all four
+  /// neighbours must also be used pixels. Throws std::invalid_argument on a mask of another size.
+  cv::Mat validMask(const cv::Mat& image_mask = cv::Mat()) const;
 
  private:
   PanoramaOptions opt_;

@@ -222,7 +222,7 @@ class LightsDetector final : public Detector {
     return why.empty() ? std::nullopt : std::optional<std::string>(why);
   }
   std::vector<feature_t> detect(const cv::Mat& img) const override {
-    auto lights = det_.detect(img);
+    auto lights = det_.detect(img, cam_.mask);  // camera.mask: blobs touching it are cut (truncated)
     if (static_cast<int>(lights.size()) > max_features_) lights.resize(static_cast<size_t>(max_features_));
     last_ = lights;
     std::vector<feature_t> out;

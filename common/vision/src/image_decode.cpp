@@ -1,0 +1,120 @@
+// Checked decoding of encoded images: see image_decode.h.
+#include "omnislam/vision/image_decode.h"
+
+#include <cstdint>
+#include <fstream>
+#include <system_error>
+
+namespace omnislam::vision {
+
+std::optional<std::string> checkLimits(const ImageHeader& h, const ImageLimits& lim) {
+  if (h.width_px > lim.max_side_px || h.height_px > lim.max_side_px)
+    return h.describe() + ": a side beyond the limit of " + std::to_string(lim.max_side_px) + " px";
+  if (h.pixels() > lim.max_pixels)
+    return h.describe() + ": " + std::to_string(h.pixels()) + " pixels, beyond the limit of " +
+           std::to_string(lim.max_pixels);
+  if (h.decodedBytes() > lim.max_decoded_bytes)
+    return h.describe() + ": would decode into " + std::to_string(h.decodedBytes()) + " bytes, beyond the limit of " +
+           std::to_string(lim.max_decoded_bytes);
+  return std::nullopt;
+}
+
+bool isCorruption(ImageFault f) {
+  return f == ImageFault::kHeader || f == ImageFault::kTruncated || f == ImageFault::kUndecodable;
+}
+
+Inspection inspectImage(const uint8_t* bytes, size_t size, const ImageLimits& limits, const HeaderCheck& check) {
+  Inspection out;
+  auto refuse = [&](ImageFault f, std::string why) {
+    out.fault = f;
+    out.error = std::move(why);
+    return out;
+  };
+  auto parsed = readImageHeader(bytes, size);
+  if (!parsed.header) return refuse(ImageFault::kHeader, parsed.error);
+  out.header = parsed.header;
+  if (auto why = checkLimits(*out.header, limits)) return refuse(ImageFault::kLimits, *why);
+  if (auto bad = check ? check(*out.header) : std::nullopt) return refuse(ImageFault::kCheck, *bad);
+  if (auto cut = checkComplete(*out.header, bytes, size)) return refuse(ImageFault::kTruncated, *cut);
+  return out;
+}
+
+cv::Mat decodeInspected(const uint8_t* bytes, size_t size, const ImageHeader& h, int flags, std::string* why) {
+  auto fail = [&](const std::string& w) {
+    if (why) *why = w;
+    return cv::Mat();
+  };
+  if (size > static_cast<size_t>(INT32_MAX)) return fail("encoded image of " + std::to_string(size) + " bytes: too large");
+  if (flags >= 0) flags |= cv::IMREAD_IGNORE_ORIENTATION;
+  cv::Mat img;
+  try {
+    // A header over the caller's bytes (no copy); imdecode only reads it.
+    const cv::Mat buf(1, static_cast<int>(size), CV_8U, const_cast<uint8_t*>(bytes));
+    img = cv::imdecode(buf, flags);
+  } catch (const cv::Exception& e) {  // never let a bad image escape into a callback
+    return fail(std::string(codecName(h.codec)) + " does not decode: " + e.what());
+  } catch (const std::exception& e) {
+    return fail(std::string(codecName(h.codec)) + " does not decode: " + e.what());
+  }
+  if (img.empty()) return fail(std::string(codecName(h.codec)) + " does not decode (" + h.describe() + ")");
+  if (img.cols != h.width_px || img.rows != h.height_px)
+    return fail("decoded size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) + " differs from the header's " +
+                std::to_string(h.width_px) + "x" + std::to_string(h.height_px));
+  const bool depth_ok = flags >= 0 && (flags & cv::IMREAD_ANYDEPTH) == 0
+                            ? img.depth() == CV_8U
+                            : img.depth() == (h.bytesPerChannel() == 1 ? CV_8U : CV_16U);
+  if (!depth_ok) return fail("decoded depth differs from the header's (" + h.describe() + ")");
+  return img;
+}
+
+DecodedImage decodeImageBytes(const uint8_t* bytes, size_t size, const DecodeOptions& opt) {
+  DecodedImage out;
+  Inspection ins = inspectImage(bytes, size, opt.limits, opt.check);
+  out.header = ins.header;
+  out.fault = ins.fault;
+  out.error = ins.error;
+  if (!ins.ok()) return out;
+  out.image = decodeInspected(bytes, size, *ins.header, opt.flags, &out.error);
+  if (out.image.empty()) out.fault = ImageFault::kUndecodable;
+  return out;
+}
+
+std::optional<std::vector<uint8_t>> readFileBytes(const std::filesystem::path& path, int64_t max_bytes,
+                                                  std::string* why) {
+  auto fail = [&](const std::string& w) -> std::optional<std::vector<uint8_t>> {
+    if (why) *why = w;
+    return std::nullopt;
+  };
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) return fail("cannot read: " + ec.message());
+  if (static_cast<uint64_t>(size) > static_cast<uint64_t>(max_bytes))
+    return fail("file of " + std::to_string(size) + " bytes, beyond the limit of " + std::to_string(max_bytes));
+  std::ifstream f(path, std::ios::binary);
+  std::vector<uint8_t> bytes(static_cast<size_t>(size));
+  if (!f || !f.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))
+    return fail("cannot read the file's " + std::to_string(size) + " bytes");
+  return bytes;
+}
+
+DecodedImage readImageFile(const std::filesystem::path& path, const DecodeOptions& opt) {
+  DecodedImage out;
+  const auto bytes = readFileBytes(path, opt.limits.max_encoded_bytes, &out.error);
+  if (!bytes) {
+    out.fault = ImageFault::kFile;
+    return out;
+  }
+  return decodeImageBytes(bytes->data(), bytes->size(), opt);
+}
+
+HeaderProbe::HeaderProbe(const ImageHeader& h) {
+  const int depth = h.bytesPerChannel() == 1 ? CV_8U : CV_16U;
+  const int channels = h.channels < 1 ? 1 : h.channels > 4 ? 4 : h.channels;
+  const int type = CV_MAKETYPE(depth, channels);
+  const int sizes[2] = {static_cast<int>(h.height_px), static_cast<int>(h.width_px)};
+  row_.assign(static_cast<size_t>(h.width_px) * CV_ELEM_SIZE(type), 0);
+  const size_t steps[1] = {0};  // every row is row_
+  image_ = cv::Mat(2, sizes, type, row_.data(), steps);
+}
+
+}  // namespace omnislam::vision

@@ -234,7 +234,9 @@ TEST(ImageHeader, ATruncatedJpegThatImdecodeAcceptsIsRefused) {
     auto cut = buf;
     cut.resize(buf.size() * 6 / 10);
     const cv::Mat lenient = cv::imdecode(cut, cv::IMREAD_UNCHANGED);
-    if (!progressive) EXPECT_FALSE(lenient.empty()) << "OpenCV decodes a truncated JPEG (the case this check is for)";
+    if (!progressive) {
+      EXPECT_FALSE(lenient.empty()) << "OpenCV decodes a truncated JPEG (the case this check is for)";
+    }
     const DecodedImage d = decodeImageBytes(cut.data(), cut.size());
     EXPECT_EQ(d.fault, ImageFault::kTruncated) << progressive;
     EXPECT_TRUE(isCorruption(d.fault));
@@ -247,6 +249,42 @@ TEST(ImageHeader, ATruncatedJpegThatImdecodeAcceptsIsRefused) {
     auto no_eoi = buf;
     no_eoi.pop_back();
     EXPECT_EQ(decodeImageBytes(no_eoi.data(), no_eoi.size()).fault, ImageFault::kTruncated);
+  }
+}
+
+// A JPEG whose scan lost a block of its data but still ends with EOI (a copy that dropped bytes):
+// cv::imdecode returns it with invented blocks, libjpeg's "premature end of data segment" on
+// stderr the only trace. decodeImageBytes decodes JPEGs with libjpeg itself and refuses it.
+TEST(ImageHeader, AJpegWithDamagedScanDataIsRefusedWithLibjpegsReason) {
+  cv::Mat img(240, 320, CV_8UC3);
+  cv::randu(img, 0, 255);
+  std::vector<uint8_t> buf;
+  cv::imencode(".jpg", img, buf);
+  auto cut = buf;
+  cut.erase(cut.begin() + static_cast<std::ptrdiff_t>(buf.size() / 2),
+            cut.begin() + static_cast<std::ptrdiff_t>(buf.size() / 2 + buf.size() / 4));
+  ASSERT_FALSE(checkComplete(*readImageHeader(cut.data(), cut.size()).header, cut.data(), cut.size()).has_value())
+      << "still ends with EOI";
+  EXPECT_FALSE(cv::imdecode(cut, cv::IMREAD_UNCHANGED).empty()) << "OpenCV decodes it (the case this check is for)";
+  const DecodedImage d = decodeImageBytes(cut.data(), cut.size());
+  EXPECT_EQ(d.fault, ImageFault::kUndecodable);
+  EXPECT_EQ(d.error, "corrupt JPEG: libjpeg: Corrupt JPEG data: premature end of data segment");
+}
+
+// The JPEGs decoded through libjpeg directly are exactly what cv::imdecode makes, for each flag.
+TEST(ImageHeader, JpegsDecodeAsImdecodeDecodesThem) {
+  for (const Case& c : cases()) {
+    if (c.codec != ImageCodec::kJpeg) continue;
+    const auto buf = encode(c, 64, 48);
+    for (const int flags : {cv::IMREAD_UNCHANGED, cv::IMREAD_GRAYSCALE, cv::IMREAD_COLOR}) {
+      DecodeOptions opt;
+      opt.flags = flags;
+      const DecodedImage d = decodeImageBytes(buf.data(), buf.size(), opt);
+      ASSERT_TRUE(d.ok()) << name(c) << " flags " << flags << ": " << d.error;
+      const cv::Mat ref = cv::imdecode(buf, flags);
+      ASSERT_EQ(d.image.type(), ref.type()) << name(c) << " flags " << flags;
+      EXPECT_EQ(cv::norm(d.image, ref, cv::NORM_INF), 0.0) << name(c) << " flags " << flags;
+    }
   }
 }
 

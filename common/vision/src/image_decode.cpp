@@ -1,11 +1,113 @@
 // Checked decoding of encoded images: see image_decode.h.
 #include "omnislam/vision/image_decode.h"
 
+#include <opencv2/imgproc.hpp>
+
+#include <csetjmp>
 #include <cstdint>
+#include <cstdio>  // before jpeglib.h, which uses FILE
 #include <fstream>
 #include <system_error>
 
+#include <jpeglib.h>
+#include <jerror.h>  // after jpeglib.h
+
 namespace omnislam::vision {
+namespace {
+
+// ---------------------------------------------------------------- JPEG through libjpeg
+// OpenCV's JPEG decoder prints libjpeg's warnings on stderr and returns the image: a frame whose
+// entropy-coded data is damaged comes back with invented blocks. Decoding with libjpeg itself (the
+// library OpenCV's decoder uses, with the same settings) lets the warnings that mean lost or
+// invented pixels refuse the frame.
+
+struct JpegErrors {
+  jpeg_error_mgr mgr;  // first: libjpeg hands back a pointer to it
+  std::jmp_buf jump;
+  std::string message;  ///< the fatal error, or the first warning that refuses the image
+  int refusing_warnings = 0;
+};
+
+/// Warnings of damaged data: pixels lost or invented. Others (extraneous bytes between segments, a
+/// camera's non-standard SOS or ICC marker) leave the pixels as coded and are not reasons to refuse.
+bool meansDamagedData(int code) {
+  return code == JWRN_HIT_MARKER || code == JWRN_HUFF_BAD_CODE || code == JWRN_JPEG_EOF ||
+         code == JWRN_MUST_RESYNC || code == JWRN_BOGUS_PROGRESSION;
+}
+
+std::string formatted(j_common_ptr c) {
+  char buf[JMSG_LENGTH_MAX];
+  (*c->err->format_message)(c, buf);
+  return buf;
+}
+
+void onJpegError(j_common_ptr c) {
+  auto* e = reinterpret_cast<JpegErrors*>(c->err);
+  e->message = formatted(c);
+  std::longjmp(e->jump, 1);
+}
+
+void onJpegMessage(j_common_ptr c, int level) {  // nothing goes to stderr
+  auto* e = reinterpret_cast<JpegErrors*>(c->err);
+  if (level >= 0 || !meansDamagedData(c->err->msg_code)) return;
+  if (e->refusing_warnings++ == 0) e->message = formatted(c);
+}
+
+/// What the libjpeg run works on: outside the function that calls setjmp, so that nothing it
+/// changes is a local of that function (their values would be indeterminate after longjmp).
+struct JpegRun {
+  jpeg_decompress_struct cinfo{};
+  JpegErrors errors{};
+  cv::Mat out;
+  bool fall_back = false;  ///< 4 components (CMYK / YCCK): left to OpenCV
+};
+
+/// false on a fatal libjpeg error (run.errors.message).
+bool runLibjpeg(const uint8_t* d, size_t n, bool grey, JpegRun& run) {
+  run.cinfo.err = jpeg_std_error(&run.errors.mgr);
+  run.errors.mgr.error_exit = onJpegError;
+  run.errors.mgr.emit_message = onJpegMessage;
+  if (setjmp(run.errors.jump)) {
+    jpeg_destroy_decompress(&run.cinfo);
+    return false;
+  }
+  jpeg_create_decompress(&run.cinfo);
+  jpeg_mem_src(&run.cinfo, d, static_cast<unsigned long>(n));
+  jpeg_read_header(&run.cinfo, TRUE);
+  if (run.cinfo.num_components == 4) {
+    run.fall_back = true;
+    jpeg_destroy_decompress(&run.cinfo);
+    return true;
+  }
+  run.cinfo.out_color_space = grey || run.cinfo.num_components == 1 ? JCS_GRAYSCALE : JCS_EXT_BGR;
+  jpeg_start_decompress(&run.cinfo);
+  run.out.create(static_cast<int>(run.cinfo.output_height), static_cast<int>(run.cinfo.output_width),
+                 CV_8UC(run.cinfo.output_components));
+  while (run.cinfo.output_scanline < run.cinfo.output_height) {
+    JSAMPROW row = run.out.ptr(static_cast<int>(run.cinfo.output_scanline));
+    jpeg_read_scanlines(&run.cinfo, &row, 1);
+  }
+  jpeg_finish_decompress(&run.cinfo);
+  jpeg_destroy_decompress(&run.cinfo);
+  return true;
+}
+
+/// A JPEG decoded as cv::imdecode would (flags IMREAD_UNCHANGED, GRAYSCALE or COLOR), refused when
+/// libjpeg fails or warns of damaged data. *fall_back: not handled here (CMYK), use OpenCV.
+cv::Mat decodeJpegStrictly(const uint8_t* d, size_t n, int flags, bool* fall_back, std::string* why) {
+  JpegRun run;
+  const bool ok = runLibjpeg(d, n, flags == cv::IMREAD_GRAYSCALE, run);
+  *fall_back = run.fall_back;
+  if (ok && run.errors.refusing_warnings == 0) return run.out;
+  if (why) {
+    *why = "corrupt JPEG: libjpeg: " + run.errors.message;
+    if (run.errors.refusing_warnings > 1)
+      *why += " (and " + std::to_string(run.errors.refusing_warnings - 1) + " more warnings of damaged data)";
+  }
+  return cv::Mat();
+}
+
+}  // namespace
 
 std::optional<std::string> checkLimits(const ImageHeader& h, const ImageLimits& lim) {
   if (h.width_px > lim.max_side_px || h.height_px > lim.max_side_px)
@@ -45,16 +147,26 @@ cv::Mat decodeInspected(const uint8_t* bytes, size_t size, const ImageHeader& h,
     return cv::Mat();
   };
   if (size > static_cast<size_t>(INT32_MAX)) return fail("encoded image of " + std::to_string(size) + " bytes: too large");
-  if (flags >= 0) flags |= cv::IMREAD_IGNORE_ORIENTATION;
   cv::Mat img;
-  try {
-    // A header over the caller's bytes (no copy); imdecode only reads it.
-    const cv::Mat buf(1, static_cast<int>(size), CV_8U, const_cast<uint8_t*>(bytes));
-    img = cv::imdecode(buf, flags);
-  } catch (const cv::Exception& e) {  // never let a bad image escape into a callback
-    return fail(std::string(codecName(h.codec)) + " does not decode: " + e.what());
-  } catch (const std::exception& e) {
-    return fail(std::string(codecName(h.codec)) + " does not decode: " + e.what());
+  const bool strict_jpeg = h.codec == ImageCodec::kJpeg && h.bit_depth == 8 &&
+                           (flags == cv::IMREAD_UNCHANGED || flags == cv::IMREAD_GRAYSCALE || flags == cv::IMREAD_COLOR);
+  if (strict_jpeg) {
+    bool fall_back = false;
+    img = decodeJpegStrictly(bytes, size, flags, &fall_back, why);
+    if (img.empty() && !fall_back) return img;
+    if (!img.empty() && flags == cv::IMREAD_COLOR && img.channels() == 1) cv::cvtColor(img, img, cv::COLOR_GRAY2BGR);
+  }
+  if (flags >= 0) flags |= cv::IMREAD_IGNORE_ORIENTATION;
+  if (img.empty()) {
+    try {
+      // A header over the caller's bytes (no copy); imdecode only reads it.
+      const cv::Mat buf(1, static_cast<int>(size), CV_8U, const_cast<uint8_t*>(bytes));
+      img = cv::imdecode(buf, flags);
+    } catch (const cv::Exception& e) {  // never let a bad image escape into a callback
+      return fail(std::string(codecName(h.codec)) + " does not decode: " + e.what());
+    } catch (const std::exception& e) {
+      return fail(std::string(codecName(h.codec)) + " does not decode: " + e.what());
+    }
   }
   if (img.empty()) return fail(std::string(codecName(h.codec)) + " does not decode (" + h.describe() + ")");
   if (img.cols != h.width_px || img.rows != h.height_px)

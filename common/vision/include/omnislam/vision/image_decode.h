@@ -47,7 +47,7 @@ enum class ImageFault {
   kLimits,      ///< beyond ImageLimits
   kCheck,       ///< the consumer's HeaderCheck refused it (its camera's size, depth, channels)
   kTruncated,   ///< checkComplete: the data ends early (no JPEG EOI, no PNG IEND, short raster)
-  kUndecodable  ///< OpenCV could not decode it, or made an image other than the header said
+  kUndecodable  ///< the decoder failed or reported damaged data, or made another size than the header
 };
 
 /// True for the faults of a damaged file or message (header, truncated, undecodable).
@@ -65,9 +65,12 @@ struct Inspection {
 Inspection inspectImage(const uint8_t* bytes, size_t size, const ImageLimits& limits = {},
                         const HeaderCheck& check = nullptr);
 
-/// cv::imdecode of inspected bytes with `flags` (IMREAD_*; EXIF orientation is ignored: camera
-/// frames stay in sensor pixels). Never throws: an empty Mat and *why when OpenCV refuses the data
-/// or the image it makes is not the header's size and depth.
+/// Decodes inspected bytes as cv::imdecode does with `flags` (IMREAD_*; EXIF orientation is ignored:
+/// camera frames stay in sensor pixels). An 8-bit JPEG (1 or 3 components; flags UNCHANGED,
+/// GRAYSCALE or COLOR) is decoded by libjpeg directly, with OpenCV's settings (identical output),
+/// and refused when libjpeg warns of damaged data (premature end of data segment, bad Huffman code,
+/// premature end of file, resync, bogus progression), which OpenCV only prints. Never throws: an
+/// empty Mat and *why when the data is refused or the image is not the header's size and depth.
 cv::Mat decodeInspected(const uint8_t* bytes, size_t size, const ImageHeader& header, int flags, std::string* why);
 
 struct DecodeOptions {

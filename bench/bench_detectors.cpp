@@ -11,7 +11,8 @@
 // blur) rendered at a pose that sees all lights; a synthetic omnidirectional image of 24 grey sectors
 // (radial edges) with noise for the lines.
 // 1280 x 960 frames (BM_1280_*, argument 0 = a real image, 1 = a synthetic one): each detector and
-// each operation it is made of, one by one (imdecode of the frame's JPEG, BGR -> grey, threshold,
+// each operation it is made of, one by one (imdecode of the frame's JPEG, the project's checked
+// decode of it (vision::decodeImageBytes), BGR -> grey, threshold,
 // connectedComponentsWithStats, the panorama's remap, Sobel); after the run a table gives each
 // detector's CPU time as a ratio of its operations' and of decoding the frame. The real frame is
 // omni-images/opencv-omnidir-catadioptric/1.jpg of the shared datasets ($OMNISLAM_DATASETS, else
@@ -304,6 +305,18 @@ void BM_1280_ImdecodeJpegGrey(benchmark::State& st) {
   }
 }
 
+void BM_1280_CheckedDecodeBgr(benchmark::State& st) {  // vision::decodeImageBytes: checks + libjpeg
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  vision::DecodeOptions opt;
+  opt.flags = cv::IMREAD_COLOR;
+  for (auto _ : st) {
+    const auto d = vision::decodeImageBytes(f->jpeg.data(), f->jpeg.size(), opt);
+    benchmark::DoNotOptimize(d.image.data);
+  }
+}
+
 void BM_1280_HeaderChecks(benchmark::State& st) {  // what the checked decode adds: header + EOI walk
   const OneOpenCvThread one;
   const Frame1280* f = frameOrSkip(st);
@@ -439,6 +452,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
                   remap_sobel + ms("BgrToGrey"), lines / decode);
       std::printf("  header checks (header + EOI walk) %.3f = %.4fx imdecode\n", ms("HeaderChecks"),
                   ms("HeaderChecks") / decode);
+      std::printf("  checked decode (checks + libjpeg) %.2f = %.2fx imdecode\n", ms("CheckedDecodeBgr"),
+                  ms("CheckedDecodeBgr") / decode);
     }
   }
 
@@ -457,6 +472,7 @@ BENCHMARK(BM_RoomRenderer)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PlainRemapBgr)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_1280_ImdecodeJpegBgr)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_1280_ImdecodeJpegGrey)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_CheckedDecodeBgr)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_1280_HeaderChecks)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_1280_BgrToGrey)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_1280_Threshold)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);

@@ -148,7 +148,8 @@ TEST(HostileImages, BombsAreRefusedOfflineWithoutDecodingThem) {
 
 // A bomb within the limits (8192 x 8192 8-bit: 64 MiB, what the contract's largest frame may hold)
 // is refused by the camera's size, also before decoding; a truncated JPEG as truncated, without
-// libjpeg's "Premature end of JPEG file" (it is never decoded).
+// libjpeg's "Premature end of JPEG file" (it is never decoded); a JPEG whose scan lost data but
+// kept its EOI with libjpeg's reason, which is not printed on its own.
 TEST(HostileImages, TheCameraSizeAndTruncationAreCheckedOffline) {
   t::TempDir dir;
   std::vector<uint8_t> big;
@@ -164,6 +165,10 @@ TEST(HostileImages, TheCameraSizeAndTruncationAreCheckedOffline) {
   writeBytes(dir.file("good.jpg"), jpg);
   t::TempDir good_only;
   writeBytes(good_only.file("good.jpg"), jpg);
+  auto damaged = jpg;  // a block of the scan lost, EOI kept: libjpeg's "premature end of data segment"
+  damaged.erase(damaged.begin() + static_cast<std::ptrdiff_t>(jpg.size() / 2),
+                damaged.begin() + static_cast<std::ptrdiff_t>(jpg.size() / 2 + jpg.size() / 4));
+  writeBytes(dir.file("damaged.jpg"), damaged);
   jpg.resize(jpg.size() / 2);
   writeBytes(dir.file("half.jpg"), jpg);
   const std::string config = t::sourcePath("config/features/ceiling_lights.yaml");
@@ -182,8 +187,13 @@ TEST(HostileImages, TheCameraSizeAndTruncationAreCheckedOffline) {
             std::string::npos)
       << r.output;
   EXPECT_EQ(r.output.find("Premature end of JPEG file"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("damaged.jpg: corrupt JPEG: libjpeg: Corrupt JPEG data: premature end of data segment; "
+                          "skipped"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(countOf(r.output, "Corrupt JPEG data"), 1) << "libjpeg's own warning is not printed:\n" << r.output;
   EXPECT_NE(r.output.find("good.jpg: 1 features (decode "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("1 images processed, 2 skipped (1 corrupt or truncated); per processed image: decode "),
+  EXPECT_NE(r.output.find("1 images processed, 3 skipped (2 corrupt or truncated); per processed image: decode "),
             std::string::npos)
       << r.output;
   // Decoding the 64 MiB image would add 64 MiB to the peak of the run on the good frame alone.

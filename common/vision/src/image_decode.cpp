@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>  // before jpeglib.h, which uses FILE
 #include <fstream>
+#include <stdexcept>
 #include <system_error>
 
 #include <jpeglib.h>
@@ -106,6 +107,10 @@ cv::Mat decodeJpegStrictly(const uint8_t* d, size_t n, int flags, bool* fall_bac
   }
   return cv::Mat();
 }
+
+/// HeaderProbe's bound on a side (its one row: at most 64 Ki px x 4 channels x 2 bytes = 512 KiB);
+/// the default limits are far below.
+constexpr int64_t kMaxProbeSidePx = int64_t{1} << 16;
 
 }  // namespace
 
@@ -220,6 +225,8 @@ DecodedImage readImageFile(const std::filesystem::path& path, const DecodeOption
 }
 
 HeaderProbe::HeaderProbe(const ImageHeader& h) {
+  if (h.width_px < 1 || h.height_px < 1 || h.width_px > kMaxProbeSidePx || h.height_px > kMaxProbeSidePx)
+    throw std::invalid_argument("HeaderProbe of " + h.describe() + ": check the header's limits first");
   const int depth = h.bytesPerChannel() == 1 ? CV_8U : CV_16U;
   const int channels = h.channels < 1 ? 1 : h.channels > 4 ? 4 : h.channels;
   const int type = CV_MAKETYPE(depth, channels);

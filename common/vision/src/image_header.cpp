@@ -89,10 +89,9 @@ std::optional<std::string> pngComplete(const uint8_t* d, size_t n) {
   size_t where = 0;
   if (findPngChunk(d, n, "IEND", &where)) return std::nullopt;
   if (where + 8 <= n) {
-    char type[5] = {};
-    std::memcpy(type, d + where + 4, 4);
+    std::string type(reinterpret_cast<const char*>(d + where + 4), 4);
     for (char& c : type) c = (c >= 32 && c < 127) ? c : '?';
-    return "truncated PNG: chunk '" + std::string(type) + "'" + at(where) + " declares " +
+    return "truncated PNG: chunk '" + type + "'" + at(where) + " declares " +
            std::to_string(bigEndian(d + where, 4)) + " bytes, " + std::to_string(n - where - 8) +
            " are left (no complete IEND chunk)";
   }

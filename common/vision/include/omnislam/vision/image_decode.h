@@ -105,6 +105,7 @@ DecodedImage readImageFile(const std::filesystem::path& path, const DecodeOption
 /// at most max_side_px x 4 channels x 2 bytes (64 KiB) after checkLimits. Read-only; its pixels are
 /// meaningless.
 struct HeaderProbe {
+  /// Throws std::invalid_argument for a side outside 1..65536 (check the limits first).
   explicit HeaderProbe(const ImageHeader& header);
   HeaderProbe(const HeaderProbe&) = delete;
   HeaderProbe& operator=(const HeaderProbe&) = delete;

@@ -1,5 +1,5 @@
-// Milliseconds per 640 x 480 frame of each detector, beside the plain OpenCV operations they are
-// built on, on the same frame in the same run (docs/detectors.md):
+// Milliseconds per frame of each detector, beside the plain OpenCV operations they are built on, on
+// the same frame in the same run (docs/detectors.md, docs/benchmarks.md):
 //   BM_CeilingLightDetector   vs  BM_PlainThresholdConnectedComponents (cv::threshold +
 //                                 cv::connectedComponentsWithStats)        target ratio <= 1.5
 //   BM_VerticalLineDetector   vs  BM_PlainRemapSobel (cv::remap + cv::Sobel) target ratio <= 2
@@ -7,20 +7,37 @@
 //                                 the room scenario's simulated catadioptric camera
 //                                 (config/worlds/room.yaml, 2 x 2 rays per pixel, blur and noise);
 //                                 the capture process renders one per frame (docs/room-scenario.md)
-// Frames: the sports hall's fish-eye (default camera, 16 lights, the world's noise and blur)
-// rendered at a pose that sees all lights; a synthetic omnidirectional image of 24 grey sectors
-// (radial edges) with noise for the lines. Run: build/bin/bench_detectors (or
-// scripts/run-bench.sh).
+// 640 x 480 frames: the sports hall's fish-eye (default camera, 16 lights, the world's noise and
+// blur) rendered at a pose that sees all lights; a synthetic omnidirectional image of 24 grey sectors
+// (radial edges) with noise for the lines.
+// 1280 x 960 frames (BM_1280_*, argument 0 = a real image, 1 = a synthetic one): each detector and
+// each operation it is made of, one by one (imdecode of the frame's JPEG, the project's checked
+// decode of it (vision::decodeImageBytes), BGR -> grey, threshold,
+// connectedComponentsWithStats, the panorama's remap, Sobel); after the run a table gives each
+// detector's CPU time as a ratio of its operations' and of decoding the frame. The real frame is
+// omni-images/opencv-omnidir-catadioptric/1.jpg of the shared datasets ($OMNISLAM_DATASETS, else
+// ../shared/datasets beside the source tree); without it the real-frame runs are skipped with a
+// message. The synthetic frame: 24 sectors of grey 8 and 36 in turn about the real mirror's centre (edges for the lines, below the
+// lights' threshold) and 16 discs of grey 220 (lights), noise sigma 2, blur 0.6 px, JPEG quality 95.
+// OpenCV runs single-threaded in the 1280 x 960 runs (cv::setNumThreads(1), restored after), so
+// that the CPU time of the benchmark's thread is all the work done.
+// Run: build/bin/bench_detectors (or scripts/run-bench.sh detectors).
 #include <benchmark/benchmark.h>
 
 #include <opencv2/imgproc.hpp>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <map>
 #include <random>
 
 #include "omnislam/config/world_config.h"
 #include "omnislam/core/camera/pajdla_bakstein.h"
 #include "omnislam/vision/ceiling_lights.h"
+#include "omnislam/vision/image_decode.h"
 #include "omnislam/vision/render_lights.h"
 #include "omnislam/vision/render_room.h"
 #include "omnislam/vision/vertical_lines.h"
@@ -158,6 +175,292 @@ void BM_PlainRemapBgr(benchmark::State& st) {
   }
 }
 
+// ---------------------------------------------------------------- 1280 x 960 frames
+struct Frame1280 {
+  std::vector<uint8_t> jpeg;  ///< the encoded frame (the file's bytes for the real one)
+  cv::Mat bgr, grey;
+  std::string source;         ///< path, or why there is none
+};
+
+cv::Mat synthetic1280() {
+  cv::Mat m(960, 1280, CV_8UC1, cv::Scalar(10));
+  std::mt19937_64 rng(46);
+  std::normal_distribution<double> noise(0.0, 2.0);
+  for (int v = 0; v < m.rows; ++v)
+    for (int u = 0; u < m.cols; ++u) {
+      const double r = std::hypot(u - 629.0, v - 436.0);
+      if (r > 520) continue;
+      const double a = std::atan2(v - 436.0, u - 629.0);
+      const int sector = static_cast<int>(std::floor((a + kPi) / (2 * kPi) * 24)) % 24;
+      m.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>((sector % 2 == 0 ? 8 : 36) + noise(rng));
+    }
+  for (int k = 0; k < 16; ++k) {
+    const double a = k * 2 * kPi / 16, r = 120.0 + 20.0 * (k % 5) * 4;
+    cv::circle(m, {static_cast<int>(629 + r * std::cos(a)), static_cast<int>(436 + r * std::sin(a))}, 8,
+               cv::Scalar(220), cv::FILLED);
+  }
+  cv::GaussianBlur(m, m, cv::Size(0, 0), 0.6);
+  cv::Mat bgr;
+  cv::cvtColor(m, bgr, cv::COLOR_GRAY2BGR);
+  return bgr;
+}
+
+Frame1280 realFrame() {
+  Frame1280 f;
+  const char* env = std::getenv("OMNISLAM_DATASETS");
+  const std::string root = env && *env ? std::string(env) : std::string(OMNISLAM_SOURCE_DIR) + "/../shared/datasets";
+  f.source = root + "/omni-images/opencv-omnidir-catadioptric/1.jpg";
+  std::string why;
+  if (auto bytes = vision::readFileBytes(f.source, int64_t{64} << 20, &why)) {
+    f.jpeg = *bytes;
+    f.bgr = cv::imdecode(f.jpeg, cv::IMREAD_COLOR);
+  }
+  if (f.bgr.size() != cv::Size(1280, 960)) {
+    f.source += " not found or not 1280 x 960 (" + why + "); set OMNISLAM_DATASETS";
+    f.bgr = cv::Mat();
+    return f;
+  }
+  cv::cvtColor(f.bgr, f.grey, cv::COLOR_BGR2GRAY);
+  return f;
+}
+
+Frame1280 syntheticFrame() {
+  Frame1280 f;
+  f.bgr = synthetic1280();
+  cv::imencode(".jpg", f.bgr, f.jpeg, {cv::IMWRITE_JPEG_QUALITY, 95});
+  cv::cvtColor(f.bgr, f.grey, cv::COLOR_BGR2GRAY);
+  f.source = "synthetic";
+  return f;
+}
+
+/// kind 0: the real frame (empty bgr when absent), 1: the synthetic one.
+const Frame1280& frame1280(int kind) {
+  static const Frame1280 real = realFrame(), synthetic = syntheticFrame();
+  return kind == 0 ? real : synthetic;
+}
+
+/// OpenCV single-threaded for the life of the object (its parallel_for workers' CPU time would not
+/// count in the benchmark thread's).
+class OneOpenCvThread {
+ public:
+  OneOpenCvThread() : before_(cv::getNumThreads()) { cv::setNumThreads(1); }
+  ~OneOpenCvThread() { cv::setNumThreads(before_); }
+  OneOpenCvThread(const OneOpenCvThread&) = delete;
+  OneOpenCvThread& operator=(const OneOpenCvThread&) = delete;
+
+ private:
+  int before_;
+};
+
+/// The frame of the benchmark's argument, or nothing (the run skipped with the reason).
+const Frame1280* frameOrSkip(benchmark::State& st) {
+  const Frame1280& f = frame1280(static_cast<int>(st.range(0)));
+  if (f.bgr.empty()) {
+    st.SkipWithError(("no real frame: " + f.source).c_str());
+    return nullptr;
+  }
+  return &f;
+}
+
+/// The project's default fish-eye scaled to 1280 x 960 (every length in px doubled).
+const camera::PajdlaBaksteinCamera& cam1280() {
+  static const camera::PajdlaBaksteinCamera c = [] {
+    camera::PajdlaBaksteinParams p;
+    p.a_px *= 2, p.c_px *= 2, p.u0_px *= 2, p.v0_px *= 2, p.width_px *= 2, p.height_px *= 2;
+    return camera::PajdlaBaksteinCamera(p);
+  }();
+  return c;
+}
+
+/// Panorama band of the real frame's mirror (centre (629, 436) px, rim ~528 px: datasets README),
+/// used for both frames: 1440 columns x 401 rows.
+vision::VerticalLineOptions lineOptions1280() {
+  vision::VerticalLineOptions o;
+  o.panorama.centre_u_px = 629.0;
+  o.panorama.centre_v_px = 436.0;
+  o.panorama.r_min_px = 110.0;
+  o.panorama.r_max_px = 510.0;
+  return o;
+}
+
+void BM_1280_ImdecodeJpegBgr(benchmark::State& st) {
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  for (auto _ : st) {
+    const cv::Mat m = cv::imdecode(f->jpeg, cv::IMREAD_COLOR);
+    benchmark::DoNotOptimize(m.data);
+  }
+  st.counters["jpeg_kB"] = static_cast<double>(f->jpeg.size()) / 1024.0;
+}
+
+void BM_1280_ImdecodeJpegGrey(benchmark::State& st) {
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  for (auto _ : st) {
+    const cv::Mat m = cv::imdecode(f->jpeg, cv::IMREAD_GRAYSCALE);
+    benchmark::DoNotOptimize(m.data);
+  }
+}
+
+void BM_1280_CheckedDecodeBgr(benchmark::State& st) {  // vision::decodeImageBytes: checks + libjpeg
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  vision::DecodeOptions opt;
+  opt.flags = cv::IMREAD_COLOR;
+  for (auto _ : st) {
+    const auto d = vision::decodeImageBytes(f->jpeg.data(), f->jpeg.size(), opt);
+    benchmark::DoNotOptimize(d.image.data);
+  }
+}
+
+void BM_1280_HeaderChecks(benchmark::State& st) {  // what the checked decode adds: header + EOI walk
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  for (auto _ : st) {
+    const auto ins = vision::inspectImage(f->jpeg.data(), f->jpeg.size());
+    benchmark::DoNotOptimize(ins.fault);
+  }
+}
+
+void BM_1280_BgrToGrey(benchmark::State& st) {
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  cv::Mat g;
+  for (auto _ : st) {
+    cv::cvtColor(f->bgr, g, cv::COLOR_BGR2GRAY);
+    benchmark::DoNotOptimize(g.data);
+  }
+}
+
+void BM_1280_Threshold(benchmark::State& st) {
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  cv::Mat mask;
+  for (auto _ : st) {
+    cv::threshold(f->grey, mask, vision::CeilingLightOptions{}.blobs.threshold_grey, 255, cv::THRESH_BINARY);
+    benchmark::DoNotOptimize(mask.data);
+  }
+}
+
+void BM_1280_ConnectedComponentsWithStats(benchmark::State& st) {
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  cv::Mat mask, labels, stats, centroids;
+  cv::threshold(f->grey, mask, vision::CeilingLightOptions{}.blobs.threshold_grey, 255, cv::THRESH_BINARY);
+  int n = 0;
+  for (auto _ : st) {
+    n = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
+    benchmark::DoNotOptimize(n);
+  }
+  st.counters["components"] = n;
+}
+
+void BM_1280_CeilingLightDetector(benchmark::State& st) {
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  const vision::CeilingLightDetector det(cam1280(), {});
+  size_t n = 0;
+  for (auto _ : st) {
+    auto lights = det.detect(f->grey);
+    n = lights.size();
+    benchmark::DoNotOptimize(lights.data());
+  }
+  st.counters["features"] = static_cast<double>(n);
+}
+
+void BM_1280_PanoramaRemap(benchmark::State& st) {
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  const vision::Panorama pano(lineOptions1280().panorama, 1280, 960);
+  cv::Mat p;
+  for (auto _ : st) {
+    pano.unwarp(f->grey, p);
+    benchmark::DoNotOptimize(p.data);
+  }
+}
+
+void BM_1280_Sobel(benchmark::State& st) {
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  const cv::Mat p = vision::Panorama(lineOptions1280().panorama, 1280, 960).unwarp(f->grey);
+  cv::Mat gx;
+  for (auto _ : st) {
+    cv::Sobel(p, gx, CV_16S, 1, 0, 3, 1.0, 0.0, cv::BORDER_REPLICATE);
+    benchmark::DoNotOptimize(gx.data);
+  }
+}
+
+void BM_1280_VerticalLineDetector(benchmark::State& st) {  // on the BGR frame, as the process gets it
+  const OneOpenCvThread one;
+  const Frame1280* f = frameOrSkip(st);
+  if (!f) return;
+  const vision::VerticalLineDetector det(lineOptions1280(), 1280, 960);
+  size_t n = 0;
+  for (auto _ : st) {
+    auto lines = det.detect(f->bgr);
+    n = lines.size();
+    benchmark::DoNotOptimize(lines.data());
+  }
+  st.counters["features"] = static_cast<double>(n);
+}
+
+/// The console output, plus a table of the 1280 x 960 ratios at the end (CPU time; the median of
+/// repetitions when there are several).
+class RatioReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    ConsoleReporter::ReportRuns(runs);
+    for (const auto& r : runs) {
+      if (r.error_occurred) continue;
+      const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
+      if (r.run_type == Run::RT_Aggregate && !median) continue;
+      const std::string key = r.run_name.function_name + "/" + r.run_name.args;
+      if (median || !final_.count(key)) cpu_ms_[key] = r.GetAdjustedCPUTime() * 1e3 / benchmark::GetTimeUnitMultiplier(r.time_unit);
+      if (median) final_[key] = true;
+    }
+  }
+  void printRatios() const {
+    for (int kind = 0; kind < 2; ++kind) {
+      auto ms = [&](const std::string& name) {
+        const auto it = cpu_ms_.find("BM_1280_" + name + "/" + std::to_string(kind));
+        return it == cpu_ms_.end() ? std::nan("") : it->second;
+      };
+      const double lights = ms("CeilingLightDetector"), lines = ms("VerticalLineDetector");
+      const double decode = ms("ImdecodeJpegBgr"), tcc = ms("Threshold") + ms("ConnectedComponentsWithStats");
+      const double remap_sobel = ms("PanoramaRemap") + ms("Sobel");
+      std::printf("\n1280 x 960, %s (%s), CPU ms per frame:\n", kind == 0 ? "real frame" : "synthetic frame",
+                  frame1280(kind).source.c_str());
+      if (std::isnan(lights) && std::isnan(lines)) {
+        std::printf("  not run\n");
+        continue;
+      }
+      std::printf("  ceiling lights %.2f = %.2fx (threshold + connectedComponentsWithStats %.2f) = %.2fx imdecode %.2f\n",
+                  lights, lights / tcc, tcc, lights / decode, decode);
+      std::printf("  vertical lines %.2f = %.2fx (remap + Sobel %.2f) = %.2fx (BGR->grey + remap + Sobel %.2f) = %.2fx imdecode\n",
+                  lines, lines / remap_sobel, remap_sobel, lines / (remap_sobel + ms("BgrToGrey")),
+                  remap_sobel + ms("BgrToGrey"), lines / decode);
+      std::printf("  header checks (header + EOI walk) %.3f = %.4fx imdecode\n", ms("HeaderChecks"),
+                  ms("HeaderChecks") / decode);
+      std::printf("  checked decode (checks + libjpeg) %.2f = %.2fx imdecode\n", ms("CheckedDecodeBgr"),
+                  ms("CheckedDecodeBgr") / decode);
+    }
+  }
+
+ private:
+  std::map<std::string, double> cpu_ms_;
+  std::map<std::string, bool> final_;
+};
+
 }  // namespace
 
 BENCHMARK(BM_CeilingLightDetector)->Unit(benchmark::kMillisecond);
@@ -166,4 +469,24 @@ BENCHMARK(BM_VerticalLineDetector)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PlainRemapSobel)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RoomRenderer)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PlainRemapBgr)->Unit(benchmark::kMillisecond);
-BENCHMARK_MAIN();
+BENCHMARK(BM_1280_ImdecodeJpegBgr)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_ImdecodeJpegGrey)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_CheckedDecodeBgr)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_HeaderChecks)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_BgrToGrey)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_Threshold)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_ConnectedComponentsWithStats)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_CeilingLightDetector)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_PanoramaRemap)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_Sobel)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_1280_VerticalLineDetector)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  RatioReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  reporter.printRatios();
+  benchmark::Shutdown();
+  return 0;
+}

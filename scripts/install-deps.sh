@@ -11,6 +11,7 @@ PKGS=(
   libeigen3-dev                                       # core maths
   libopencv-dev                                       # image processing, rendering, image I/O
   libopencv-contrib-dev                               # cv::omnidir (ccalib): calibration tool, model checks
+  libjpeg-dev                                         # libjpeg (OpenCV's): JPEG decoding that reports damaged data
   libyaml-cpp-dev                                     # world / config files
   libcli11-dev                                        # command-line flags
   libgtest-dev libgmock-dev googletest                # unit and integration tests

@@ -4,7 +4,9 @@
 //           ceiling lights for a world with `lights` (paper 000), the colour catadioptric image
 //           of the room for a world with `room` (paper 002; published BGR unless --format says
 //           otherwise);
-//   dir     publishes the image files of a directory in name order at a fixed rate;
+//   dir     publishes the image files of a directory in name order at a fixed rate (each file's
+//           header is checked before it is decoded: vision/image_decode.h; refused files are
+//           counted in PROCESS_STATUS rejected_inputs and skipped);
 //   device  grabs frames from a camera through OpenCV (utime = the grab time).
 #include <CLI/CLI.hpp>
 
@@ -30,6 +32,7 @@
 #include "omnislam/lcmio/signals.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/sim/image_clock.h"
+#include "omnislam/vision/image_decode.h"
 #include "omnislam/vision/image_files.h"
 #include "omnislam/vision/render_lights.h"
 #include "omnislam/vision/render_room.h"
@@ -144,6 +147,11 @@ int runDir(lcmio::Node& node, Publisher& pub, const std::string& dir, double rat
   node.setState(process_status_t::STATE_RUNNING);
   const auto wall0 = std::chrono::steady_clock::now();
   const int64_t period_us = std::llround(1e6 / rate_hz);
+  vision::DecodeOptions decode;  // default limits: the largest frame OMNI_IMAGE carries
+  decode.check = [](const vision::ImageHeader& h) -> std::optional<std::string> {
+    if (h.bit_depth > 8) return h.describe() + ": OMNI_IMAGE carries 8-bit images";
+    return std::nullopt;
+  };
   size_t done = 0, published = 0;
   for (size_t i = 0; i < files.size() && !lcmio::stopRequested(); ++i, done = i) {
     if (speedup > 0) {
@@ -151,12 +159,19 @@ int runDir(lcmio::Node& node, Publisher& pub, const std::string& dir, double rat
       while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < due) node.handleFor(0.02);
       if (lcmio::stopRequested()) break;
     }
-    cv::Mat img = cv::imread(files[i].string(), cv::IMREAD_UNCHANGED);
+    // The header is checked before decoding (limits, 8 bits, a truncated JPEG or PNG): a refused
+    // file is counted in rejected_inputs with its name and skipped.
+    const vision::DecodedImage read = vision::readImageFile(files[i], decode);
+    if (!read.ok()) {
+      node.reject("image file", files[i].string() + ": " + read.error + "; skipped");
+      continue;
+    }
+    cv::Mat img = read.image;
     // An alpha channel is dropped: RGBA and grey + alpha PNGs are ordinary colour and grey images.
-    if (!img.empty() && img.depth() == CV_8U && img.channels() == 4) cv::cvtColor(img, img, cv::COLOR_BGRA2BGR);
-    if (!img.empty() && img.depth() == CV_8U && img.channels() == 2) cv::extractChannel(img, img, 0);
-    if (img.empty() || img.depth() != CV_8U || (img.channels() != 1 && img.channels() != 3)) {
-      node.error("cannot read an 8-bit grey or colour image from " + files[i].string() + "; skipped");
+    if (img.depth() == CV_8U && img.channels() == 4) cv::cvtColor(img, img, cv::COLOR_BGRA2BGR);
+    if (img.depth() == CV_8U && img.channels() == 2) cv::extractChannel(img, img, 0);
+    if (img.depth() != CV_8U || (img.channels() != 1 && img.channels() != 3)) {
+      node.reject("image file", files[i].string() + ": not an 8-bit grey or colour image; skipped");
       continue;
     }
     published += pub.publish(img, start_utime + static_cast<int64_t>(i) * period_us) ? 1 : 0;

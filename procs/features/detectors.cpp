@@ -200,16 +200,19 @@ void checkLevelForLines(const Node& c, const CameraSetup& s) {
   }
 }
 
+// Reads only the image's header fields (omnislam-features also runs it on vision::HeaderProbe, the
+// dimensions of an encoded image before decoding). The size is judged first: a frame of another
+// camera is named as such whatever its format; the message gives what came and what is needed.
 std::string checkSizeAndFormat(const cv::Mat& img, int w, int h, bool colour_ok) {
   if (img.empty()) return "empty image";
-  if (img.depth() != CV_8U) return "not an 8-bit image";
-  if (img.channels() != 1 && !(colour_ok && img.channels() == 3))
-    return std::string("format with ") + std::to_string(img.channels()) + " channels; the detector needs " +
-           (colour_ok ? "grey or BGR" : "8-bit grey");
-  if (img.cols != w || img.rows != h)
-    return "size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) + " does not match the camera's " +
-           std::to_string(w) + "x" + std::to_string(h);
-  return {};
+  const bool size_ok = img.cols == w && img.rows == h;
+  if (size_ok && img.depth() == CV_8U && (img.channels() == 1 || (colour_ok && img.channels() == 3))) return {};
+  static const char* const kDepth[] = {"8-bit", "8-bit signed", "16-bit", "16-bit signed", "32-bit integer",
+                                       "32-bit float", "64-bit float", "16-bit float"};
+  auto dims = [](int cols, int rows) { return std::to_string(cols) + "x" + std::to_string(rows); };
+  return (size_ok ? std::string("format") : "size " + dims(img.cols, img.rows)) + " does not match the camera (received " +
+         dims(img.cols, img.rows) + ", " + std::to_string(img.channels()) + (img.channels() == 1 ? " channel, " : " channels, ") +
+         kDepth[img.depth()] + "; the camera needs " + dims(w, h) + ", 8-bit " + (colour_ok ? "grey or BGR)" : "grey)");
 }
 
 class LightsDetector final : public Detector {

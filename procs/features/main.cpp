@@ -4,14 +4,18 @@
 //   vertical_lines  radial edges of a catadioptric image via a panorama (paper 002)
 // Each OMNI_FEATURES message carries the frame's own utime, image_seq = the image's seq, and this
 // process's seq. Images that do not match the configured camera (size, format) or are corrupt are
-// counted (PROCESS_STATUS rejected_inputs) and skipped.
-// Offline: --images DIR runs the detector on every image file of DIR (name order) and, with
-// --annotate OUTDIR, writes OUTDIR/<name>.png with the features drawn and OUTDIR/features.csv.
+// counted (PROCESS_STATUS rejected_inputs) and skipped; a compressed frame's size and format are
+// checked on its header, before its pixels are decoded (vision/image_decode.h).
+// Offline: --images DIR runs the detector on every image file of DIR (name order), printing each
+// image's features and its decode and detect times, and a summary line; with --annotate OUTDIR it
+// writes OUTDIR/<name>.png with the features drawn and OUTDIR/features.csv.
 #include <CLI/CLI.hpp>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -27,6 +31,7 @@
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
+#include "omnislam/vision/image_decode.h"
 #include "omnislam/vision/image_files.h"
 
 using namespace omnislam;
@@ -50,14 +55,20 @@ features_t makeMsg(const features::Detector& det, int64_t utime, int64_t seq, in
   return m;
 }
 
+/// The detector's size and format check on an encoded image's header, before it is decoded.
+std::optional<std::string> checkHeader(const features::Detector& det, const vision::ImageHeader& h) {
+  const vision::HeaderProbe probe(h);  // the header's dimensions without its pixels
+  return det.check(probe.image());
+}
+
 int runBus(const features::Detector& det, const std::string& url, const std::string& name) {
   lcmio::Node node(name, app::lcmUrl(url));
   int64_t seq = 0, frames = 0, total = 0;
   node.subscribe<image_t>(channels::kOmniImage, [&](const image_t& msg) {
-    std::string why;
-    const auto img = lcmio::decodeImage(msg, &why);
+    std::string why;  // a compressed frame's size and format are checked on its header, before decoding
+    const auto img = lcmio::decodeImage(msg, &why, [&](const vision::ImageHeader& h) { return checkHeader(det, h); });
     if (!img) {
-      node.reject(channels::kOmniImage, "frame seq " + std::to_string(msg.seq) + ": corrupt image: " + why);
+      node.reject(channels::kOmniImage, "frame seq " + std::to_string(msg.seq) + ": " + why);
       return;
     }
     if (auto bad = det.check(*img)) {
@@ -76,6 +87,84 @@ int runBus(const features::Detector& det, const std::string& url, const std::str
   node.spin();
   return app::kOk;
 }
+
+std::string fmt1(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f", x);
+  return buf;
+}
+
+/// One image file read for the detector: decoded and checked, or why not; the time it took.
+struct LoadedImage {
+  cv::Mat image;  ///< empty when refused
+  std::string why;
+  bool corrupt = false;  ///< refused as a damaged file (unreadable header, truncated, undecodable)
+  double ms = 0.0;       ///< reading, header checks and decoding
+};
+
+/// Reads `path` with its header checked against the detector before any pixel is decoded (limits,
+/// the camera's size and format, a truncated JPEG or PNG). A colour file of a grey camera (e.g. a
+/// JPEG saved with 3 channels) is decoded as grey when the detector takes only grey.
+LoadedImage loadImage(const features::Detector& det, const fs::path& path) {
+  const auto t0 = std::chrono::steady_clock::now();
+  LoadedImage out;
+  int flags = cv::IMREAD_UNCHANGED;
+  const vision::HeaderCheck check = [&](const vision::ImageHeader& h) -> std::optional<std::string> {
+    auto bad = checkHeader(det, h);
+    if (bad && h.channels == 3 && h.bit_depth <= 8) {
+      vision::ImageHeader grey = h;
+      grey.channels = 1;
+      if (!checkHeader(det, grey)) {
+        flags = cv::IMREAD_GRAYSCALE;
+        return std::nullopt;
+      }
+    }
+    return bad;
+  };
+  const auto bytes = vision::readFileBytes(path, vision::ImageLimits{}.max_encoded_bytes, &out.why);
+  if (bytes) {
+    const auto ins = vision::inspectImage(bytes->data(), bytes->size(), {}, check);
+    out.corrupt = vision::isCorruption(ins.fault);
+    if (ins.ok()) out.image = vision::decodeInspected(bytes->data(), bytes->size(), *ins.header, flags, &out.why);
+    else out.why = ins.error;
+    out.corrupt = out.corrupt || (ins.ok() && out.image.empty());
+  }
+  if (!out.image.empty()) {  // the decoded image is checked too: the header check is a prediction
+    if (auto bad = det.check(out.image)) out.why = *bad, out.image = cv::Mat();
+  }
+  out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+void printFeatures(const std::string& name, const std::vector<feature_t>& f, double decode_ms, double detect_ms) {
+  std::cout << name << ": " << f.size() << " features (decode " << fmt1(decode_ms) << " ms, detect "
+            << fmt1(detect_ms) << " ms)";
+  for (const auto& x : f) {
+    std::cout << (x.has_elevation ? " (" : " ") << std::fixed;
+    std::cout.precision(2);
+    std::cout << rad2deg(x.azimuth_rad);
+    if (x.has_elevation) std::cout << ", " << rad2deg(x.elevation_rad) << ")";
+  }
+  std::cout.unsetf(std::ios::fixed);
+  std::cout << "\n";
+}
+
+void writeCsvRows(std::ofstream& csv, const std::string& name, const std::vector<feature_t>& f) {
+  for (const auto& x : f)
+    csv << name << "," << static_cast<int>(x.kind) << "," << rad2deg(x.azimuth_rad) << "," << rad2deg(x.elevation_rad)
+        << "," << rad2deg(std::sqrt(x.covariance[0][0])) << "," << x.u_px << "," << x.v_px << "," << x.size_px << ","
+        << x.length_px << "," << x.strength << "," << x.colour_a[0] << "," << x.colour_a[1] << "," << x.colour_a[2]
+        << "," << x.colour_b[0] << "," << x.colour_b[1] << "," << x.colour_b[2] << "\n";
+}
+
+/// Per-image times of an offline run (milliseconds), for its summary line.
+struct Times {
+  double sum = 0.0, max = 0.0;
+  void add(double ms) { sum += ms, max = std::max(max, ms); }
+  std::string describe(size_t n) const {
+    return n == 0 ? "-" : fmt1(sum / static_cast<double>(n)) + " ms mean, " + fmt1(max) + " ms max";
+  }
+};
 
 int runImages(const features::Detector& det, const std::string& dir, const std::string& outdir) {
   std::vector<fs::path> files;
@@ -96,54 +185,37 @@ int runImages(const features::Detector& det, const std::string& dir, const std::
   std::cerr << det.describe() << std::endl;
   // A stop (Ctrl-C, SIGTERM) ends the loop after the current image; what was written is kept.
   lcmio::installStopHandlers();
-  int skipped = 0;
-  size_t done = 0;
+  size_t done = 0, skipped = 0, corrupt = 0;
+  Times decode, detect, refuse;
   for (const auto& p : files) {
     if (lcmio::stopRequested()) break;
     ++done;
-    cv::Mat img = cv::imread(p.string(), cv::IMREAD_UNCHANGED);
-    // A colour file of a grey camera (e.g. a JPEG saved with 3 channels) is read as grey when the
-    // detector takes only grey.
-    if (!img.empty() && img.channels() == 3 && det.check(img)) {
-      cv::Mat g = cv::imread(p.string(), cv::IMREAD_GRAYSCALE);
-      if (!det.check(g)) img = g;
-    }
-    if (img.empty()) {
-      std::cerr << p.filename().string() << ": cannot read; skipped\n";
-      ++skipped;
+    const LoadedImage img = loadImage(det, p);
+    if (img.image.empty()) {
+      std::cerr << p.filename().string() << ": " << img.why << "; skipped (after " << fmt1(img.ms) << " ms)\n";
+      ++skipped, corrupt += img.corrupt ? 1 : 0;
+      refuse.add(img.ms);
       continue;
     }
-    if (auto bad = det.check(img)) {
-      std::cerr << p.filename().string() << ": " << *bad << "; skipped\n";
-      ++skipped;
-      continue;
-    }
-    const auto f = det.detect(img);
-    std::cout << p.filename().string() << ": " << f.size() << " features";
-    for (const auto& x : f) {
-      std::cout << (x.has_elevation ? " (" : " ") << std::fixed;
-      std::cout.precision(2);
-      std::cout << rad2deg(x.azimuth_rad);
-      if (x.has_elevation) std::cout << ", " << rad2deg(x.elevation_rad) << ")";
-    }
-    std::cout.unsetf(std::ios::fixed);
-    std::cout << "\n";
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto f = det.detect(img.image);
+    const double detect_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    decode.add(img.ms), detect.add(detect_ms);
+    printFeatures(p.filename().string(), f, img.ms, detect_ms);
     if (!outdir.empty()) {
-      cv::imwrite(outdir + "/" + p.stem().string() + ".png", det.annotate(img, f));
-      for (const auto& x : f)
-        csv << p.filename().string() << "," << static_cast<int>(x.kind) << "," << rad2deg(x.azimuth_rad) << ","
-            << rad2deg(x.elevation_rad) << "," << rad2deg(std::sqrt(x.covariance[0][0])) << "," << x.u_px << ","
-            << x.v_px << "," << x.size_px << "," << x.length_px << "," << x.strength << "," << x.colour_a[0] << ","
-            << x.colour_a[1] << "," << x.colour_a[2] << "," << x.colour_b[0] << "," << x.colour_b[1] << ","
-            << x.colour_b[2] << "\n";
+      cv::imwrite(outdir + "/" + p.stem().string() + ".png", det.annotate(img.image, f));
+      writeCsvRows(csv, p.filename().string(), f);
       csv.flush();  // each image's rows are on disk with its PNG
       if (!csv) throw std::runtime_error("cannot write '" + outdir + "/features.csv'");
     }
   }
-  std::cerr << done - skipped << " images processed, " << skipped << " skipped";
+  const size_t processed = done - skipped;
+  std::cerr << processed << " images processed, " << skipped << " skipped (" << corrupt
+            << " corrupt or truncated); per processed image: decode " << decode.describe(processed) << ", detect "
+            << detect.describe(processed) << "; per skipped image: " << refuse.describe(skipped);
   if (done < files.size()) std::cerr << "; stopped by a signal before the last " << files.size() - done;
   std::cerr << std::endl;
-  return done > 0 && skipped == static_cast<int>(done) ? app::kFailure : app::kOk;
+  return done > 0 && skipped == done ? app::kFailure : app::kOk;
 }
 
 }  // namespace

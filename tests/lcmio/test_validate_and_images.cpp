@@ -272,12 +272,12 @@ TEST(ImageMsg, CorruptCompressedImagesAreRefusedWithAReason) {
   m.width = 64, m.height = 48, m.pixel_format = image_t::FORMAT_PNG, m.data.assign(100, 7), m.size = 100;
   std::string why;
   EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
-  EXPECT_EQ(why, "compressed image has no readable size in its header");
+  EXPECT_EQ(why, "not a PNG, JPEG, BMP or PGM/PPM/PBM image (unknown signature)");
   cv::Mat grey(48, 64, CV_8UC1, cv::Scalar(9));
   lcmio::encodeImage(grey, image_t::FORMAT_PNG, m);
   m.data.resize(m.data.size() / 2);  // a valid header, truncated image data
   EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
-  EXPECT_NE(why.find("does not decode"), std::string::npos) << why;
+  EXPECT_EQ(why.rfind("truncated PNG: ", 0), 0u) << why;
   lcmio::encodeImage(grey, image_t::FORMAT_PNG, m);
   m.width = 65;  // header lies about the size
   EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
@@ -299,8 +299,9 @@ void putBigEndian(std::vector<uint8_t>& d, size_t at, uint32_t v) {
 }
 
 // A small PNG whose IHDR says 60000 x 60000 made cv::imdecode throw (CV_IO_MAX_IMAGE_PIXELS) out
-// of the LCM callback of omnislam-features and omnislam-viewer, which exited. It is refused with a
-// reason, whether or not the message's own size agrees with the lie; JPEG's frame header likewise.
+// of the LCM callback of omnislam-features and omnislam-viewer, which exited. It is refused from its
+// header (beyond the contract's 8192 px), whether or not the message's own size agrees with the
+// lie; JPEG's frame header likewise.
 TEST(ImageMsg, AHeaderClaimingAHugeImageIsRefusedNotThrown) {
   cv::Mat grey(48, 64, CV_8UC1, cv::Scalar(9));
   image_t m{};
@@ -310,11 +311,11 @@ TEST(ImageMsg, AHeaderClaimingAHugeImageIsRefusedNotThrown) {
   putBigEndian(m.data, 29, crc32(m.data.data() + 12, 17));  // type + 13 bytes of IHDR data
   std::string why;
   EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
-  EXPECT_EQ(why, "compressed image's own header says 60000x60000, the message's 64x48");
-  m.width = m.height = 60000;  // a message that agrees with its image's lie reaches OpenCV
+  EXPECT_EQ(why, "60000x60000, 1 channel, 8-bit PNG: a side beyond the limit of 8192 px");
+  m.width = m.height = 60000;  // a message that agrees with its image's lie never reaches OpenCV
   why.clear();
   EXPECT_NO_THROW(EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value()));
-  EXPECT_NE(why.find("does not decode"), std::string::npos) << why;
+  EXPECT_EQ(why, "60000x60000, 1 channel, 8-bit PNG: a side beyond the limit of 8192 px");
 
   image_t j{};
   lcmio::encodeImage(grey, image_t::FORMAT_JPEG, j);
@@ -323,11 +324,64 @@ TEST(ImageMsg, AHeaderClaimingAHugeImageIsRefusedNotThrown) {
   ASSERT_LT(sof + 9, j.data.size());
   j.data[sof + 5] = j.data[sof + 6] = 0xEA;  // height 60138
   EXPECT_FALSE(lcmio::decodeImage(j, &why).has_value());
-  EXPECT_EQ(why, "compressed image's own header says 64x60138, the message's 64x48");
+  EXPECT_EQ(why, "64x60138, 1 channel, 8-bit JPEG: a side beyond the limit of 8192 px");
+  j.data[sof + 5] = 0, j.data[sof + 6] = 49;  // height 49: within the limits, not the message's 48
+  EXPECT_FALSE(lcmio::decodeImage(j, &why).has_value());
+  EXPECT_EQ(why, "compressed image's own header says 64x49, the message's 64x48");
   image_t bad{};
   bad.width = 64, bad.height = 48, bad.pixel_format = image_t::FORMAT_JPEG, bad.data = {0xFF, 0xD8, 0xFF, 0xDA, 0, 2};
   EXPECT_FALSE(lcmio::decodeImage(bad, &why).has_value());
-  EXPECT_EQ(why, "compressed image has no readable size in its header");
+  EXPECT_EQ(why, "JPEG: marker 0xFFDA at byte 3 before any frame header");
+}
+
+// The decompression bomb of issue 46 (an 8192 x 8192 16-bit PNG of a few hundred kB: 128 MiB of
+// pixels) is refused from its header, and so are a 16-bit image within the limits, a truncated
+// JPEG (which OpenCV decodes anyway), data of the other codec, and what a consumer's own check
+// refuses (its camera's size) before a pixel is allocated.
+TEST(ImageMsg, HeadersAreCheckedBeforeAnyPixelIsDecoded) {
+  cv::Mat grey(48, 64, CV_8UC1, cv::Scalar(9));
+  image_t m{};
+  lcmio::encodeImage(grey, image_t::FORMAT_PNG, m);
+  auto doctor = [&](uint32_t w, uint32_t h, uint8_t depth) {
+    putBigEndian(m.data, 16, w);
+    putBigEndian(m.data, 20, h);
+    m.data[24] = depth;
+    putBigEndian(m.data, 29, crc32(m.data.data() + 12, 17));
+    m.width = static_cast<int32_t>(w), m.height = static_cast<int32_t>(h);
+  };
+  doctor(8192, 8192, 16);
+  std::string why;
+  EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
+  EXPECT_EQ(why, "8192x8192, 1 channel, 16-bit PNG: would decode into 134217728 bytes, beyond the limit of 67108864");
+  doctor(64, 48, 16);
+  EXPECT_FALSE(lcmio::decodeImage(m, &why).has_value());
+  EXPECT_EQ(why, "64x48, 1 channel, 16-bit PNG: OMNI_IMAGE carries 8-bit images");
+  doctor(4096, 4096, 8);  // 16 MiB of pixels: within the limits; the consumer's camera is 64 x 48
+  int checked = 0;
+  const vision::HeaderCheck camera = [&](const vision::ImageHeader& h) -> std::optional<std::string> {
+    ++checked;
+    if (h.width_px != 64 || h.height_px != 48) return std::string("not the camera's size");
+    return std::nullopt;
+  };
+  EXPECT_FALSE(lcmio::decodeImage(m, &why, camera).has_value());
+  EXPECT_EQ(why, "not the camera's size");
+  EXPECT_EQ(checked, 1);
+
+  image_t j{};
+  lcmio::encodeImage(grey, image_t::FORMAT_JPEG, j);
+  j.data.resize(j.data.size() - 30);
+  j.size = static_cast<int32_t>(j.data.size());
+  EXPECT_FALSE(lcmio::decodeImage(j, &why).has_value());
+  EXPECT_EQ(why.rfind("truncated JPEG: no end-of-image marker (EOI)", 0), 0u) << why;
+  image_t p{};
+  lcmio::encodeImage(grey, image_t::FORMAT_PNG, p);
+  p.pixel_format = image_t::FORMAT_JPEG;
+  EXPECT_FALSE(lcmio::decodeImage(p, &why).has_value());
+  EXPECT_EQ(why, "pixel_format says JPEG, the data is a PNG");
+  lcmio::encodeImage(grey, image_t::FORMAT_JPEG, j);
+  const auto ok = lcmio::decodeImage(j, &why, camera);
+  ASSERT_TRUE(ok.has_value()) << why;
+  EXPECT_EQ(ok->size(), grey.size());
 }
 
 // Seeded corruptions of a PNG and a JPEG (bytes changed, headers included, and truncations):

@@ -4,6 +4,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "omnislam/lcmio/validate.h"
+
 #include <algorithm>
 #include <stdexcept>
 #include <utility>
@@ -12,45 +14,28 @@ namespace omnislam::lcmio {
 
 namespace {
 
-uint32_t bigEndian(const std::vector<uint8_t>& d, size_t at, int bytes) {
-  uint32_t v = 0;
-  for (int i = 0; i < bytes; ++i) v = (v << 8) | d[at + static_cast<size_t>(i)];
-  return v;
+/// The decoding limits of a receiver: the contract's (validate.h). A compressed frame may not
+/// decode into more bytes than the same frame could carry uncompressed.
+vision::ImageLimits receiverLimits() {
+  const Limits contract;
+  vision::ImageLimits lim;
+  lim.max_side_px = contract.max_image_side_px;
+  lim.max_pixels = lim.max_side_px * lim.max_side_px;
+  lim.max_decoded_bytes = contract.max_image_bytes;
+  lim.max_encoded_bytes = contract.max_image_bytes;
+  return lim;
 }
 
-/// Width and height written in a PNG's IHDR or a JPEG's first SOF segment; nothing if the bytes do
-/// not hold one. Read before decoding, so that a header claiming a huge image is refused instead of
-/// making OpenCV allocate it or throw (CV_IO_MAX_IMAGE_PIXELS).
-std::optional<std::pair<uint32_t, uint32_t>> compressedImageSize(const std::vector<uint8_t>& d, int8_t format) {
-  if (format == image_t::FORMAT_PNG) {
-    static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    if (d.size() < 24 || !std::equal(kSignature, kSignature + 8, d.begin())) return std::nullopt;
-    if (d[12] != 'I' || d[13] != 'H' || d[14] != 'D' || d[15] != 'R') return std::nullopt;
-    return std::make_pair(bigEndian(d, 16, 4), bigEndian(d, 20, 4));
-  }
-  // JPEG: SOI, then segments (0xFF, marker, 2-byte length including itself) up to a SOFn.
-  if (d.size() < 4 || d[0] != 0xFF || d[1] != 0xD8) return std::nullopt;
-  size_t i = 2;
-  while (i + 4 <= d.size()) {
-    if (d[i] != 0xFF) return std::nullopt;
-    const uint8_t marker = d[i + 1];
-    if (marker == 0xFF) {  // fill byte
-      ++i;
-      continue;
-    }
-    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) {  // no length
-      i += 2;
-      continue;
-    }
-    const uint32_t len = bigEndian(d, i + 2, 2);
-    const bool sof = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
-    if (sof) {
-      if (len < 7 || i + 9 > d.size()) return std::nullopt;
-      return std::make_pair(bigEndian(d, i + 7, 2), bigEndian(d, i + 5, 2));  // height first in SOF
-    }
-    if (marker == 0xDA || len < 2) return std::nullopt;  // scan data before any frame header
-    i += 2 + len;
-  }
+/// What every receiver requires of a compressed frame's header before decoding: the codec its
+/// pixel_format names, the message's own width and height, 8 bits per channel.
+std::optional<std::string> checkAgainstMessage(const vision::ImageHeader& h, const image_t& msg) {
+  const auto codec = msg.pixel_format == image_t::FORMAT_PNG ? vision::ImageCodec::kPng : vision::ImageCodec::kJpeg;
+  if (h.codec != codec)
+    return std::string("pixel_format says ") + vision::codecName(codec) + ", the data is a " + vision::codecName(h.codec);
+  if (h.width_px != msg.width || h.height_px != msg.height)
+    return "compressed image's own header says " + std::to_string(h.width_px) + "x" + std::to_string(h.height_px) +
+           ", the message's " + std::to_string(msg.width) + "x" + std::to_string(msg.height);
+  if (h.bit_depth > 8) return h.describe() + ": OMNI_IMAGE carries 8-bit images";
   return std::nullopt;
 }
 
@@ -92,7 +77,7 @@ void encodeImage(const cv::Mat& img, int8_t format, image_t& msg) {
   msg.size = static_cast<int32_t>(msg.data.size());
 }
 
-std::optional<cv::Mat> decodeImage(const image_t& msg, std::string* why) {
+std::optional<cv::Mat> decodeImage(const image_t& msg, std::string* why, const vision::HeaderCheck& check) {
   auto fail = [&](const std::string& w) -> std::optional<cv::Mat> {
     if (why) *why = w;
     return std::nullopt;
@@ -123,24 +108,18 @@ std::optional<cv::Mat> decodeImage(const image_t& msg, std::string* why) {
     }
     case image_t::FORMAT_JPEG:
     case image_t::FORMAT_PNG: {
-      const auto header = compressedImageSize(msg.data, msg.pixel_format);
-      if (!header) return fail("compressed image has no readable size in its header");
-      if (header->first != static_cast<uint32_t>(msg.width) || header->second != static_cast<uint32_t>(msg.height))
-        return fail("compressed image's own header says " + std::to_string(header->first) + "x" +
-                    std::to_string(header->second) + ", the message's " + std::to_string(msg.width) + "x" +
-                    std::to_string(msg.height));
-      cv::Mat img;
-      try {
-        img = cv::imdecode(msg.data, cv::IMREAD_UNCHANGED);
-      } catch (const cv::Exception& e) {  // never let a bad image escape into an LCM callback
-        return fail(std::string("compressed image does not decode: ") + e.what());
-      }
-      if (img.empty()) return fail("compressed image does not decode");
-      if (img.cols != msg.width || img.rows != msg.height)
-        return fail("decoded size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +
-                    " differs from the header's " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
-      if (img.depth() != CV_8U) return fail("compressed image is not 8-bit");
-      return img;
+      // Header first: limits, the message's own size, the caller's check, complete data; only then
+      // are pixels allocated.
+      const vision::HeaderCheck both = [&](const vision::ImageHeader& h) {
+        if (auto bad = checkAgainstMessage(h, msg)) return bad;
+        return check ? check(h) : std::nullopt;
+      };
+      vision::DecodeOptions opt;
+      opt.limits = receiverLimits();
+      opt.check = both;
+      auto decoded = vision::decodeImageBytes(msg.data.data(), msg.data.size(), opt);
+      if (!decoded.ok()) return fail(decoded.error);
+      return decoded.image;
     }
     default: return fail("unknown pixel format");
   }

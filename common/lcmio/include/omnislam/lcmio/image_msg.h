@@ -7,6 +7,7 @@
 #include <string>
 
 #include "omnislam/image_t.hpp"
+#include "omnislam/vision/image_decode.h"
 
 namespace omnislam::lcmio {
 
@@ -14,8 +15,13 @@ namespace omnislam::lcmio {
 /// `format` (image_t::FORMAT_*). Throws std::invalid_argument for an unsupported combination.
 void encodeImage(const cv::Mat& img, int8_t format, image_t& msg);
 
-/// Decodes a (validated) message into a grey or BGR image; nothing plus `why` if it is corrupt.
-std::optional<cv::Mat> decodeImage(const image_t& msg, std::string* why = nullptr);
+/// Decodes a (validated) message into a grey or BGR image; nothing plus `why` (one line) if it is
+/// refused. A JPEG or PNG is refused from its header, before any pixel is allocated, when the header
+/// is unreadable, beyond the contract's limits (sides 8192 px, 64 MiB decoded), not the message's
+/// width x height or pixel_format, deeper than 8 bits, or fails `check` (a consumer's own, e.g. its
+/// camera's size: vision::HeaderProbe); and when its data is truncated (no JPEG EOI, no PNG IEND).
+std::optional<cv::Mat> decodeImage(const image_t& msg, std::string* why = nullptr,
+                                   const vision::HeaderCheck& check = nullptr);
 
 /// Parses "gray", "bgr", "rgb", "jpeg", "png" into image_t::FORMAT_*; nothing if unknown.
 std::optional<int8_t> parsePixelFormat(const std::string& name);

@@ -159,8 +159,14 @@ TEST(HostileImages, TheCameraSizeAndTruncationAreCheckedOffline) {
   }
   writeBytes(dir.file("big.png"), big);
   std::vector<uint8_t> jpg;
+  // Sensor noise over the frame (not a flat image, whose JPEG would be tiny): a scan large enough to
+  // be cut in its middle. Noise a camera could have, so the detector still sees one lamp.
   cv::Mat noisy = cameraFrame();
-  cv::randu(noisy.rowRange(0, 200), 0, 255);
+  cv::Mat noise(noisy.size(), CV_16S);
+  cv::randn(noise, 0, 4);
+  noisy.convertTo(noisy, CV_16S);
+  noisy += noise;
+  noisy.convertTo(noisy, CV_8U);
   cv::imencode(".jpg", noisy, jpg);
   writeBytes(dir.file("good.jpg"), jpg);
   t::TempDir good_only;

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <stdexcept>
+#include <type_traits>
 
 #include "omnislam/core/slam/filter_stages.h"
 #include "omnislam/core/slam/landmark_type.h"
@@ -59,8 +61,9 @@ TEST(slam_Stages, HierarchicalAssociationLevel1IsTheBruteForceMinimumAndFeedsThe
       cost_new[l] = u(gen);
       for (int j = 0; j < n; ++j) cost(l, j) = u(gen) < 4.0 ? kInf : u(gen);
     }
-    const stages::MapLevelInput level1{cost, cost_new, AssociationMethod::kHungarian};
-    const stages::CandidateLevelInput level2{no_candidates, no_measurements, options, false, nullptr};
+    const stages::MapLevelInput level1{cost, cost_new, stages::HungarianAssociation{}};
+    const stages::CandidateLevelInput level2{no_candidates, no_measurements, options, stages::HungarianAssociation{},
+                                             false, nullptr};
     int calls = 0;
     const Pose2 proposed{1.0, 2.0, 0.5};
     const auto propose = [&](const stages::MapAssociation& l1) {
@@ -108,7 +111,7 @@ TEST(slam_Stages, MissesCountDownAndDelete) {
   map.apply({}, {seen_often, last_chance, far});
   stages::ParticleUpdate up;
   std::vector<LandmarkMap::Ref> near;
-  stages::accountMisses(map, Pose2{0.0, 0.0, 0.0}, Eigen::Vector3d::Zero(), o, near, up);
+  stages::accountMisses(map, Pose2{0.0, 0.0, 0.0}, Eigen::Vector3d::Zero(), o, stages::WeightAlg4{}, near, up);
   EXPECT_DOUBLE_EQ(up.log_w, 2.0 * std::log(1.0 - o.perception.detection_probability));
   ASSERT_EQ(up.edits.size(), 2u);
   EXPECT_EQ(up.num_deleted, 1);
@@ -136,6 +139,45 @@ TEST(slam_Stages, TypeIAndIIRule) {
   EXPECT_TRUE(correctsPoseAndWeighs(l));
   l.type = LandmarkType::kTypeII;
   EXPECT_FALSE(correctsPoseAndWeighs(l));
+}
+
+// The options map to one variant; a combination that makes no sense cannot be written as a type
+// (static_asserts) and is refused from the options with validate()'s message.
+static_assert(!std::is_constructible_v<stages::DeterministicAssociation, stages::AssociationSampling>,
+              "FastSLAM 2.0 and level 2 cannot sample their association");
+static_assert(!std::is_constructible_v<stages::FilterVariant, stages::AssociationSampling>);
+
+TEST(slam_Stages, OptionsMapToOneVariant) {
+  FastSlamOptions o;
+  const stages::FilterVariant paper = stages::filterVariantOf(o);
+  ASSERT_TRUE(std::holds_alternative<stages::FastSlam2>(paper));
+  EXPECT_TRUE(std::holds_alternative<stages::CorrectedPairScore>(std::get<stages::FastSlam2>(paper).pair_score));
+  EXPECT_TRUE(std::holds_alternative<stages::WeightAlg4>(stages::weightingOf(paper)));
+  EXPECT_TRUE(std::holds_alternative<stages::HungarianAssociation>(stages::mapAssociationOf(paper)));
+
+  o.proposal = ProposalKind::kFastSlam1;
+  o.association = AssociationMethod::kSampled;
+  o.clutter_density = 0.5;
+  const stages::FilterVariant sampled = stages::filterVariantOf(o);
+  ASSERT_TRUE(std::holds_alternative<stages::FastSlam1>(sampled));
+  const auto& s = std::get<stages::AssociationSampling>(std::get<stages::FastSlam1>(sampled).association);
+  EXPECT_EQ(s.clutter_density, 0.5);
+  EXPECT_TRUE(std::holds_alternative<stages::WeightAssociationSum>(stages::weightingOf(sampled)));
+  EXPECT_TRUE(std::holds_alternative<stages::HungarianAssociation>(stages::candidateAssociationOf(sampled)));
+
+  o.association = AssociationMethod::kMaximumLikelihood;
+  EXPECT_TRUE(std::holds_alternative<stages::WeightMarginal>(stages::weightingOf(stages::filterVariantOf(o))));
+  EXPECT_TRUE(std::holds_alternative<stages::MaximumLikelihoodAssociation>(
+      stages::candidateAssociationOf(stages::filterVariantOf(o))));
+
+  o.proposal = ProposalKind::kFastSlam2;
+  o.association = AssociationMethod::kSampled;
+  try {
+    (void)stages::filterVariantOf(o);
+    FAIL() << "FastSLAM 2.0 with sampled association was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("kSampled needs proposal kFastSlam1"), std::string::npos) << e.what();
+  }
 }
 
 // The detection counter: +1 at p_in >= 0.5, otherwise enough that the nominal rate does not drift down.

@@ -8,6 +8,7 @@
 #include <limits>
 #include <stdexcept>
 #include <unordered_set>
+#include <variant>
 
 #include "omnislam/core/slam/filter_stages.h"
 #include "omnislam/core/slam/resampling.h"
@@ -63,9 +64,8 @@ struct FastSlam::ParticleStepInfo {
   int num_associated = 0, num_to_candidates = 0, num_new_candidates = 0, num_initialised = 0, num_deleted = 0;
 };
 
-FastSlam::FastSlam(const FastSlamOptions& options, std::uint64_t seed) : options_(options), rng_(seed) {
-  const std::string msg = options_.validate();
-  if (!msg.empty()) throw std::invalid_argument("FastSlamOptions: " + msg);
+FastSlam::FastSlam(const FastSlamOptions& options, std::uint64_t seed)
+    : options_(options), variant_(stages::filterVariantOf(options_)), rng_(seed) {
   last_p_CinR_m_ = options_.perception.default_p_CinR_m;
 }
 
@@ -165,51 +165,43 @@ StepResult FastSlam::stepInPlace(const Pose2& odom_prev, const Pose2& odom_now,
 }
 
 // ---------------------------------------------------------------------------------------------
-namespace {
-
-// How a type I landmark weighs the particle, from the options (validate() refuses the rest).
-stages::WeightForm weightForm(const FastSlamOptions& o) {
-  if (o.association == AssociationMethod::kSampled) return stages::WeightForm::kAssociationSum;
-  if (o.proposal == ProposalKind::kFastSlam1) return stages::WeightForm::kMarginal;
-  return o.weight_at_predicted_pose ? stages::WeightForm::kPredictedPose : stages::WeightForm::kAlg4;
-}
-
-}  // namespace
-
 FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u,
                                                      const std::vector<stages::Measurement>& Z,
                                                      const Eigen::Vector3d& p_CinR_vis_m) {
   const FastSlamOptions& o = options_;
-  const bool fs1 = o.proposal == ProposalKind::kFastSlam1;
-  const bool sampled = o.association == AssociationMethod::kSampled;
+  const stages::FastSlam2* fs2 = std::get_if<stages::FastSlam2>(&variant_);  // else FastSLAM 1.0
   const stages::MotionPrediction pred = stages::predictMotion(p.pose, u, o.motion);  // Alg. 1 line 3
   std::vector<LandmarkMap::Ref> near, vis;
   stages::predictVisibleLandmarks(p.map, pred.x_hat, p_CinR_vis_m, o.perception, near, vis);
 
   // Alg. 2. FastSLAM 1.0 samples x_t from the motion model first and scores the pairs there.
   Pose2 x_fs1;
-  if (fs1) x_fs1 = stages::sampleMotionModel(pred, rng_);
-  const Eigen::MatrixXd cost = fs1 ? stages::scorePairsAtPose(vis, Z, x_fs1, o.descriptor_gate)
-                               : o.association_predictive ? stages::scorePairsPredictive(vis, Z, pred, o.descriptor_gate)
-                                                          : stages::scorePairsCorrected(vis, Z, pred, o.descriptor_gate);
+  if (!fs2) x_fs1 = stages::sampleMotionModel(pred, rng_);
+  const Eigen::MatrixXd cost = fs2 ? stages::scorePairs(*fs2, vis, Z, pred, o.descriptor_gate)
+                                   : stages::scorePairsAtPose(vis, Z, x_fs1, o.descriptor_gate);
   std::vector<double> cost_new(Z.size());
   for (std::size_t l = 0; l < Z.size(); ++l) cost_new[l] = Z[l].neg_log_p_new;
-  std::vector<double> log_prior;
-  if (sampled) log_prior = stages::sampledAssociationLogPrior(vis, x_fs1, p_CinR_vis_m, o.perception, o.clutter_density);
+  const stages::MapAssociationMethod method = stages::mapAssociationOf(variant_);
+  std::vector<double> log_prior;  // of the sampled association (FastSLAM 1.0 only: x_t is known)
+  if (const auto* sampling = std::get_if<stages::AssociationSampling>(&method)) {
+    log_prior = stages::sampledAssociationLogPrior(vis, x_fs1, p_CinR_vis_m, o.perception, sampling->clutter_density);
+  }
 
   // Sec. III-C: level 1 (the map), the proposal (Alg. 3), level 2 (the candidates, at x_t).
-  const stages::MapLevelInput level1{cost, cost_new, o.association, sampled ? &log_prior : nullptr};
-  const stages::CandidateLevelInput level2{p.candidates, Z, o, o.update_map, &candidate_cost_buffer_};
+  const stages::MapLevelInput level1{cost, cost_new, method, &log_prior};
+  const stages::CandidateLevelInput level2{p.candidates, Z, o, stages::candidateAssociationOf(variant_), o.update_map,
+                                           &candidate_cost_buffer_};
   const auto propose = [&](const stages::MapAssociation& l1) {
-    return fs1 ? x_fs1 : stages::sampleFastSlam2Pose(pred, vis, Z, l1.landmark_of_measurement, rng_);
+    return fs2 ? stages::sampleFastSlam2Pose(pred, vis, Z, l1.landmark_of_measurement, rng_) : x_fs1;
   };
   const stages::HierarchicalAssociation a = stages::associateHierarchically(level1, rng_, propose, level2);
   const Pose2& x_t = a.x_t;
 
   // Alg. 4: landmark EKFs, the weight, types I/II, misses; P_new for the rest when asked.
+  const stages::Weighting weighting = stages::weightingOf(variant_);
   stages::ParticleUpdate up;
-  stages::updateObservedLandmarks(pred, x_t, vis, Z, a.level1.landmark_of_measurement, o, weightForm(o), up);
-  stages::accountMisses(p.map, x_t, p_CinR_vis_m, o, near, up);
+  stages::updateObservedLandmarks(pred, x_t, vis, Z, a.level1.landmark_of_measurement, o, weighting, up);
+  stages::accountMisses(p.map, x_t, p_CinR_vis_m, o, weighting, near, up);
   if (o.weight_unassociated_with_p_new) {
     for (const int l : a.leftover) up.log_w -= Z[l].neg_log_p_new;
   }

@@ -9,6 +9,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <variant>
 
 #include "omnislam/core/slam/landmark_type.h"
 
@@ -18,6 +19,19 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 const double kLog2Pi = std::log(2.0 * kPi);
+
+template <class... F>
+struct Overloaded : F... {
+  using F::operator()...;
+};
+template <class... F>
+Overloaded(F...) -> Overloaded<F...>;
+
+// associate()'s enum for a deterministic method.
+AssociationMethod methodEnum(const DeterministicAssociation& m) {
+  return std::holds_alternative<HungarianAssociation>(m) ? AssociationMethod::kHungarian
+                                                         : AssociationMethod::kMaximumLikelihood;
+}
 
 // Running mean of a descriptor (the first valid one is taken as is).
 void blendDescriptor(ColourDescriptor& into, const ColourDescriptor& z, double rate) {
@@ -126,6 +140,55 @@ Eigen::MatrixXd scorePairsAtPrediction(const std::vector<LandmarkMap::Ref>& visi
 
 }  // namespace
 
+// --- Variants -----------------------------------------------------------------------------------------
+FilterVariant filterVariantOf(const FastSlamOptions& o) {
+  const std::string msg = o.validate();
+  if (!msg.empty()) throw std::invalid_argument("FastSlamOptions: " + msg);
+  const DeterministicAssociation deterministic = o.association == AssociationMethod::kMaximumLikelihood
+                                                     ? DeterministicAssociation{MaximumLikelihoodAssociation{}}
+                                                     : DeterministicAssociation{HungarianAssociation{}};
+  if (o.proposal == ProposalKind::kFastSlam1) {
+    if (o.association == AssociationMethod::kSampled) return FastSlam1{AssociationSampling{o.clutter_density}};
+    return FastSlam1{std::visit([](auto m) { return MapAssociationMethod{m}; }, deterministic)};
+  }
+  FastSlam2 v{deterministic, CorrectedPairScore{}, WeightAlg4{}};
+  if (o.association_predictive) v.pair_score = PredictivePairScore{};
+  if (o.weight_at_predicted_pose) v.weight = WeightAtPredictedPose{};
+  return v;
+}
+
+Weighting weightingOf(const FilterVariant& v) {
+  return std::visit(Overloaded{[](const FastSlam1& f) -> Weighting {
+                                 if (std::holds_alternative<AssociationSampling>(f.association)) {
+                                   return WeightAssociationSum{};
+                                 }
+                                 return WeightMarginal{};
+                               },
+                               [](const FastSlam2& f) {
+                                 return std::visit([](auto w) { return Weighting{w}; }, f.weight);
+                               }},
+                    v);
+}
+
+MapAssociationMethod mapAssociationOf(const FilterVariant& v) {
+  return std::visit(Overloaded{[](const FastSlam1& f) { return f.association; },
+                               [](const FastSlam2& f) {
+                                 return std::visit([](auto m) { return MapAssociationMethod{m}; }, f.association);
+                               }},
+                    v);
+}
+
+DeterministicAssociation candidateAssociationOf(const FilterVariant& v) {
+  return std::visit(Overloaded{[](const FastSlam1& f) -> DeterministicAssociation {
+                                 if (std::holds_alternative<MaximumLikelihoodAssociation>(f.association)) {
+                                   return MaximumLikelihoodAssociation{};
+                                 }
+                                 return HungarianAssociation{};  // Hungarian, or under sampling
+                               },
+                               [](const FastSlam2& f) { return f.association; }},
+                    v);
+}
+
 // --- Measurements ------------------------------------------------------------------------------------
 std::optional<Measurement> prepareMeasurement(const BearingMeasurement& m, std::size_t input_index,
                                               bool inflate_azimuth_near_zenith, double p_new_mahalanobis_sq) {
@@ -201,6 +264,14 @@ Eigen::MatrixXd scorePairsPredictive(const std::vector<LandmarkMap::Ref>& visibl
   return scorePairsAtPrediction(visible, Z, pred, descriptor_gate, predictivePairCost);
 }
 
+Eigen::MatrixXd scorePairs(const FastSlam2& variant, const std::vector<LandmarkMap::Ref>& visible,
+                           const std::vector<Measurement>& Z, const MotionPrediction& pred, double descriptor_gate) {
+  if (std::holds_alternative<PredictivePairScore>(variant.pair_score)) {
+    return scorePairsPredictive(visible, Z, pred, descriptor_gate);
+  }
+  return scorePairsCorrected(visible, Z, pred, descriptor_gate);
+}
+
 Eigen::MatrixXd scorePairsAtPose(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
                                  const Pose2& x_t, double descriptor_gate) {
   const int nz = static_cast<int>(Z.size()), nv = static_cast<int>(visible.size());
@@ -233,18 +304,17 @@ HierarchicalAssociation associateHierarchically(const MapLevelInput& level1, Rng
     if (lm_of_meas[l] < 0) a.leftover.push_back(l);
   }
   if (!level2.enabled) return a;
-  // Candidates do not weigh the particle, so a draw here would have no weight to go with it: under
-  // sampled association at the map level, this level keeps the Hungarian method.
-  const AssociationMethod m2 =
-      level1.method == AssociationMethod::kSampled ? AssociationMethod::kHungarian : level1.method;
-  a.candidate_of_leftover = associateWithCandidates(level2, a.x_t, a.leftover, m2);  // level 2: the candidates
+  a.candidate_of_leftover = associateWithCandidates(level2, a.x_t, a.leftover);  // level 2: the candidates
   return a;
 }
 
 MapAssociation associateWithMap(const MapLevelInput& in, Rng& rng) {
   MapAssociation out;
-  if (in.method != AssociationMethod::kSampled) {
-    out.landmark_of_measurement = associate(in.cost, in.cost_new, in.method);
+  if (!std::holds_alternative<AssociationSampling>(in.method)) {
+    const AssociationMethod m = std::holds_alternative<HungarianAssociation>(in.method)
+                                    ? AssociationMethod::kHungarian
+                                    : AssociationMethod::kMaximumLikelihood;
+    out.landmark_of_measurement = associate(in.cost, in.cost_new, m);
     return out;
   }
   // One joint assignment drawn with probability proportional to its likelihood ratio against "all
@@ -279,7 +349,7 @@ std::vector<double> sampledAssociationLogPrior(const std::vector<LandmarkMap::Re
 }
 
 std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Pose2& x_t,
-                                         const std::vector<int>& leftover, AssociationMethod method) {
+                                         const std::vector<int>& leftover) {
   const FastSlamOptions& o = in.options;
   const int nl = static_cast<int>(leftover.size());
   const int nc = static_cast<int>(in.candidates.size());
@@ -303,7 +373,7 @@ std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Po
       cost(r, c) = -candidateLogLikelihood(cand, now, min_range_m, max_range_m, predictions[c]);
     }
   }
-  return associate(cost, cost_new, method);
+  return associate(cost, cost_new, methodEnum(in.method));
 }
 
 // --- Alg. 3 -------------------------------------------------------------------------------------------
@@ -393,34 +463,33 @@ std::optional<Innovation> updateLandmarkEkf(const Landmark& L, const Measurement
   return Innovation{nu, Qt, Hx};
 }
 
-// Lines 11-14: log w^_j of a type I landmark, or nothing (no term: kAssociationSum, or no
+// Lines 11-14: log w^_j of a type I landmark, or nothing (no term: WeightAssociationSum, or no
 // prediction at xhat_t).
-std::optional<double> typeIWeight(WeightForm form, const Landmark& L, const Measurement& m, const Innovation& in,
-                                  const MotionPrediction& pred) {
-  switch (form) {
-    case WeightForm::kAssociationSum:
-      return std::nullopt;  // the weight is the sum over assignments (MapAssociation::log_w_association)
-    case WeightForm::kMarginal:
-      return logGaussian(in.nu, in.Qt);  // FastSLAM 1.0: w = N(z; h(L, x_t), Qt)
-    case WeightForm::kPredictedPose: {
-      MeasJac Hxp, Hmp;
-      const auto zp = predictMeasurement(L.kind, L.p_LinW_m, pred.x_hat, m.p_CinR_m, &Hxp, &Hmp);
-      if (!zp) return std::nullopt;
-      const MeasMat Lp = Hxp * pred.R * Hxp.transpose() + m.Q + Hmp * L.cov_LinW_m2 * Hmp.transpose();
-      return logGaussian(innovation(m.z, *zp), Lp);
-    }
-    case WeightForm::kAlg4:
-      break;
-  }
-  const MeasMat Lw = in.Hx * pred.R * in.Hx.transpose() + in.Qt;  // line 13
-  return logGaussian(in.nu, Lw);
+std::optional<double> typeIWeight(const Weighting& weighting, const Landmark& L, const Measurement& m,
+                                  const Innovation& in, const MotionPrediction& pred) {
+  return std::visit(
+      Overloaded{
+          [](WeightAssociationSum) -> std::optional<double> { return std::nullopt; },  // MapAssociation's sum
+          [&](WeightMarginal) -> std::optional<double> { return logGaussian(in.nu, in.Qt); },  // N(z; h(L, x_t), Qt)
+          [&](WeightAtPredictedPose) -> std::optional<double> {
+            MeasJac Hxp, Hmp;
+            const auto zp = predictMeasurement(L.kind, L.p_LinW_m, pred.x_hat, m.p_CinR_m, &Hxp, &Hmp);
+            if (!zp) return std::nullopt;
+            const MeasMat Lp = Hxp * pred.R * Hxp.transpose() + m.Q + Hmp * L.cov_LinW_m2 * Hmp.transpose();
+            return logGaussian(innovation(m.z, *zp), Lp);
+          },
+          [&](WeightAlg4) -> std::optional<double> {
+            const MeasMat Lw = in.Hx * pred.R * in.Hx.transpose() + in.Qt;  // line 13
+            return logGaussian(in.nu, Lw);
+          }},
+      weighting);
 }
 
 }  // namespace
 
 void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t, const std::vector<LandmarkMap::Ref>& visible,
                              const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
-                             const FastSlamOptions& o, WeightForm weight, ParticleUpdate& out) {
+                             const FastSlamOptions& o, const Weighting& weight, ParticleUpdate& out) {
   for (int l = 0; l < static_cast<int>(landmark_of_measurement.size()); ++l) {
     const int j = landmark_of_measurement[l];
     if (j < 0) continue;
@@ -443,9 +512,10 @@ void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t, con
 }
 
 void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector3d& p_CinR_vis_m,
-                   const FastSlamOptions& o, std::vector<LandmarkMap::Ref>& near, ParticleUpdate& out) {
+                   const FastSlamOptions& o, const Weighting& weight, std::vector<LandmarkMap::Ref>& near,
+                   ParticleUpdate& out) {
   const PerceptionOptions& per = o.perception;
-  const bool sampled = o.association == AssociationMethod::kSampled;
+  const bool sampled = std::holds_alternative<WeightAssociationSum>(weight);
   std::vector<const Landmark*>& updated = out.updated;
   std::sort(updated.begin(), updated.end());
   near.clear();

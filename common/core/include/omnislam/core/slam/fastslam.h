@@ -20,6 +20,7 @@
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/candidate.h"
 #include "omnislam/core/slam/data_association.h"
+#include "omnislam/core/slam/filter_variant.h"
 #include "omnislam/core/slam/landmark_map.h"
 #include "omnislam/core/slam/motion_model.h"
 #include "omnislam/core/slam/perception.h"
@@ -185,6 +186,7 @@ class FastSlam {
   void finishStep(StepResult& result, const std::vector<ParticleStepInfo>& infos);
 
   FastSlamOptions options_;
+  stages::FilterVariant variant_;  ///< the proposal, association and weighting options_ name
   Rng rng_;
   std::vector<Particle> particles_;
   std::vector<double> weights_;

@@ -21,6 +21,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <variant>
 #include <vector>
 
 #include "omnislam/core/pose2.h"
@@ -28,6 +29,7 @@
 #include "omnislam/core/slam/candidate.h"
 #include "omnislam/core/slam/data_association.h"
 #include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/filter_variant.h"
 #include "omnislam/core/slam/landmark_map.h"
 #include "omnislam/core/slam/random.h"
 
@@ -48,6 +50,18 @@ struct Measurement {
 /// covariance not symmetric positive definite). p_new_mahalanobis_sq: FastSlamOptions'.
 std::optional<Measurement> prepareMeasurement(const BearingMeasurement& m, std::size_t input_index,
                                               bool inflate_azimuth_near_zenith, double p_new_mahalanobis_sq);
+
+// --- The filter's variants (filter_variant.h) -------------------------------------------------------
+/// The variant the options name. Throws std::invalid_argument (with validate()'s message) when
+/// they name none; FastSlam's constructor has validated them before.
+FilterVariant filterVariantOf(const FastSlamOptions& o);
+/// The weighting the variant implies.
+Weighting weightingOf(const FilterVariant& v);
+/// Level 1's method.
+MapAssociationMethod mapAssociationOf(const FilterVariant& v);
+/// Level 2's method: level 1's, except the Hungarian method under sampled association (candidates
+/// carry no weight, so a draw there would have no weight to go with it).
+DeterministicAssociation candidateAssociationOf(const FilterVariant& v);
 
 // --- Alg. 1 line 3 --------------------------------------------------------------------------------
 struct MotionPrediction {
@@ -84,6 +98,9 @@ Eigen::MatrixXd scorePairsPredictive(const std::vector<LandmarkMap::Ref>& visibl
 /// FastSLAM 1.0: N(z_l; h(mu_j, x_t), Q_l + H_m Sigma_j H_m^T) at the sampled pose x_t.
 Eigen::MatrixXd scorePairsAtPose(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
                                  const Pose2& x_t, double descriptor_gate);
+/// FastSLAM 2.0 with its pair score (one of the two above).
+Eigen::MatrixXd scorePairs(const FastSlam2& variant, const std::vector<LandmarkMap::Ref>& visible,
+                           const std::vector<Measurement>& Z, const MotionPrediction& pred, double descriptor_gate);
 
 // --- Sec. III-C: the hierarchical association ------------------------------------------------------
 /// Level 1: measurements against the visible map landmarks.
@@ -95,8 +112,8 @@ struct MapAssociation {
 struct MapLevelInput {
   const Eigen::MatrixXd& cost;          ///< Alg. 2, N_z x N_vis
   const std::vector<double>& cost_new;  ///< -log P_new,l per measurement
-  AssociationMethod method;
-  /// kSampled only: per column log(p_in / (clutter_density (1 - p_in)^[in range of x_t])).
+  MapAssociationMethod method;
+  /// AssociationSampling only: per column log(p_in / (clutter_density (1 - p_in)^[in range of x_t])).
   const std::vector<double>* sampled_log_prior = nullptr;
 };
 /// Level 2: the measurements level 1 left against the particle's candidates, at the sampled x_t.
@@ -104,6 +121,7 @@ struct CandidateLevelInput {
   const std::vector<std::shared_ptr<const Candidate>>& candidates;
   const std::vector<Measurement>& Z;
   const FastSlamOptions& options;
+  DeterministicAssociation method;   ///< candidateAssociationOf()
   bool enabled = true;               ///< false (localisation only): no level 2
   std::vector<double>* cost_buffer;  ///< scratch for the cost matrix, reused across calls
 };
@@ -116,7 +134,6 @@ struct HierarchicalAssociation {
 /// The paper's hierarchical association, both levels: level 1 on the map; then `propose` samples
 /// x_t given level 1 (Alg. 3; FastSLAM 1.0 returns the pose it sampled before Alg. 2), because the
 /// candidates' likelihoods are evaluated at x_t; then level 2 on the candidates with the rest.
-/// Under sampled association, level 2 keeps the Hungarian method (candidates carry no weight).
 HierarchicalAssociation associateHierarchically(const MapLevelInput& level1, Rng& rng,
                                                 const std::function<Pose2(const MapAssociation&)>& propose,
                                                 const CandidateLevelInput& level2);
@@ -130,7 +147,7 @@ std::vector<double> sampledAssociationLogPrior(const std::vector<LandmarkMap::Re
                                                double clutter_density);
 /// Level 2 on its own: per leftover measurement, the candidate index or -1 (a new candidate).
 std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Pose2& x_t,
-                                         const std::vector<int>& leftover, AssociationMethod method);
+                                         const std::vector<int>& leftover);
 
 // --- Alg. 3: the FastSLAM 2.0 proposal -------------------------------------------------------------
 /// x_t ~ N(mu_x, Sigma_x) folded in from the associated type I landmarks, ordered by trace(Sigma_j),
@@ -140,13 +157,6 @@ Pose2 sampleFastSlam2Pose(const MotionPrediction& pred, const std::vector<Landma
                           Rng& rng);
 
 // --- Alg. 4: landmark updates and the weight ---------------------------------------------------------
-/// How a type I landmark weighs the particle (Alg. 4 lines 11-14).
-enum class WeightForm : std::uint8_t {
-  kAlg4,            ///< the paper: N(z; h(mu_j, x_t), H_x R_t H_x^T + Q~_j) at the sampled pose
-  kPredictedPose,   ///< FastSLAM 2.0 (Probabilistic Robotics Table 13.3): at xhat_t
-  kMarginal,        ///< FastSLAM 1.0: N(z; h(mu_j, x_t), Q~_j)
-  kAssociationSum,  ///< sampled association: the sum over assignments (MapAssociation), none here
-};
 struct ParticleUpdate {
   std::vector<LandmarkMap::Edit> edits;  ///< to apply to the particle's map
   std::vector<const Landmark*> updated;  ///< the observed landmarks (sorted by accountMisses)
@@ -158,12 +168,13 @@ struct ParticleUpdate {
 /// are kept only when update_map.
 void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t, const std::vector<LandmarkMap::Ref>& visible,
                              const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
-                             const FastSlamOptions& o, WeightForm weight, ParticleUpdate& out);
+                             const FastSlamOptions& o, const Weighting& weight, ParticleUpdate& out);
 /// Alg. 4 lines 18-25: w *= 1 - p_in and i_j - 1 for each unseen landmark inside the perceptual
-/// range of x_t; deleted when i_j < 0. sampled: every landmark in range counts 1 - p_in (its ratio
-/// divides it out again), the map edits as above. Only the weight when !update_map.
+/// range of x_t; deleted when i_j < 0. WeightAssociationSum: every landmark in range counts 1 - p_in
+/// (its ratio divides it out again), the map edits as above. Only the weight when !update_map.
 void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector3d& p_CinR_vis_m,
-                   const FastSlamOptions& o, std::vector<LandmarkMap::Ref>& near, ParticleUpdate& out);
+                   const FastSlamOptions& o, const Weighting& weight, std::vector<LandmarkMap::Ref>& near,
+                   ParticleUpdate& out);
 
 // --- Sec. III-F 1: updateCandidateLandmarks() --------------------------------------------------------
 struct CandidateUpdate {

@@ -22,6 +22,17 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 Pose2 poseFromVec(const Eigen::Vector3d& v) { return Pose2::fromVec(v); }
 
+// Per measurement: the id of the landmark level 1 associated it with, -1 otherwise.
+std::vector<std::int64_t> landmarkIdsOf(const std::vector<int>& landmark_of_measurement,
+                                        const std::vector<LandmarkMap::Ref>& visible) {
+  std::vector<std::int64_t> ids(landmark_of_measurement.size(), -1);
+  for (std::size_t l = 0; l < ids.size(); ++l) {
+    const int j = landmark_of_measurement[l];
+    if (j >= 0) ids[l] = static_cast<std::int64_t>(visible[j].landmark->id);
+  }
+  return ids;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -207,11 +218,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
   }
 
   ParticleStepInfo info;
-  info.landmark_of_measurement.assign(Z.size(), -1);
-  for (std::size_t l = 0; l < Z.size(); ++l) {
-    const int j = a.level1.landmark_of_measurement[l];
-    if (j >= 0) info.landmark_of_measurement[l] = static_cast<std::int64_t>(vis[j].landmark->id);
-  }
+  info.landmark_of_measurement = landmarkIdsOf(a.level1.landmark_of_measurement, vis);
   info.num_associated = up.num_associated;
   info.num_deleted = up.num_deleted;
   std::vector<Landmark> inserts;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "omnislam/core/slam/landmark_type.h"
 #include "omnislam/core/slam/triangulation.h"
 #include "omnislam/core/slam/validation.h"
 
@@ -54,8 +55,6 @@ CandidateObservation makeObservation(LandmarkKind kind, const Pose2& T_WtoR, con
 }
 
 namespace {
-
-double xyDistance(const Pose2& T, const Eigen::Vector3d& p) { return std::hypot(p.x() - T.x_m, p.y() - T.y_m); }
 
 // Sigma_0 for the point X given the candidate's rays.
 Eigen::Matrix3d initialCovariance(const Candidate& c, const Eigen::Vector3d& X, const CandidateOptions& o) {
@@ -218,9 +217,8 @@ CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions
   }
   if (ev.has_best) {
     ev.cov_m2 = initialCovariance(c, ev.best_p_LinW_m, o);
-    const bool near = xyDistance(c.observations[best_a].T_WtoR, ev.best_p_LinW_m) < o.d_min_m &&
-                      xyDistance(c.observations[best_b].T_WtoR, ev.best_p_LinW_m) < o.d_min_m;
-    ev.type = near ? LandmarkType::kTypeI : LandmarkType::kTypeII;
+    ev.type = initialLandmarkType(c.observations[best_a].T_WtoR, c.observations[best_b].T_WtoR, ev.best_p_LinW_m,
+                                  o.d_min_m);
   }
   return ev;
 }

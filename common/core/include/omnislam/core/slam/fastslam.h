@@ -20,6 +20,7 @@
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/candidate.h"
 #include "omnislam/core/slam/data_association.h"
+#include "omnislam/core/slam/filter_variant.h"
 #include "omnislam/core/slam/landmark_map.h"
 #include "omnislam/core/slam/motion_model.h"
 #include "omnislam/core/slam/perception.h"
@@ -27,6 +28,10 @@
 #include "omnislam/core/slam/types.h"
 
 namespace omnislam::slam {
+
+namespace stages {
+struct Measurement;  // filter_stages.h
+}  // namespace stages
 
 /// How a particle's new pose is drawn.
 enum class ProposalKind : std::uint8_t {
@@ -173,22 +178,21 @@ class FastSlam {
   std::uint64_t numSteps() const { return num_steps_; }
 
  private:
-  struct Meas;                // a validated measurement (filter internal)
-  struct ParticleStepInfo;    // what one particle did in a step
+  struct ParticleStepInfo;  // what one particle did in a step
   StepResult stepInPlace(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z);
-  ParticleStepInfo processParticle(Particle& p, const Pose2& u, const std::vector<Meas>& Z,
+  /// Alg. 1 lines 3-7 for one particle: the stages of filter_stages.h in order.
+  ParticleStepInfo processParticle(Particle& p, const Pose2& u, const std::vector<stages::Measurement>& Z,
                                    const Eigen::Vector3d& p_CinR_vis_m);
-  void updateCandidates(Particle& p, const Pose2& x_t, const std::vector<Meas>& Z, const std::vector<int>& leftover,
-                        std::vector<Landmark>& inserts, ParticleStepInfo& info);
   void finishStep(StepResult& result, const std::vector<ParticleStepInfo>& infos);
 
   FastSlamOptions options_;
+  stages::FilterVariant variant_;  ///< the proposal, association and weighting options_ name
   Rng rng_;
   std::vector<Particle> particles_;
   std::vector<double> weights_;
   std::vector<Pose2> poses_before_resampling_;
   std::vector<double> weights_before_resampling_;
-  std::vector<double> candidate_cost_buffer_;  ///< updateCandidates's cost matrix (scratch, reused)
+  std::vector<double> candidate_cost_buffer_;  ///< level-2 association's cost matrix (scratch, reused)
   double ess_ = 0.0;
   int best_index_ = 0;
   std::uint64_t next_landmark_id_ = 0;

@@ -1,0 +1,198 @@
+// The stages of one particle's step of the filter (paper 000, Alg. 1 lines 3-7, Alg. 2-4), each a
+// function that a test can call on its own; FastSlam::processParticle runs them in this order:
+//
+//   predictMotion            Alg. 1 line 3     xhat_t = g(x_{t-1}, u_t), R_t
+//   predictVisibleLandmarks  (before Alg. 2)   the landmarks that can be seen from xhat_t
+//   scorePairs*              Alg. 2            -log phi_{l,j} for every measurement-landmark pair
+//   associateHierarchically  Sec. III-C        level 1 (map, Alg. 1 line 5), the proposal, level 2
+//     associateWithMap         level 1           Hungarian / ML / sampled on the map landmarks
+//     sampleFastSlam2Pose      Alg. 3            the FastSLAM 2.0 proposal (FastSLAM 1.0: before Alg. 2)
+//     associateWithCandidates  level 2           Hungarian / ML on the candidates (Alg. 4 line 28)
+//   updateObservedLandmarks  Alg. 4 lines 3-17 landmark EKFs, the type I weights, types I/II
+//   accountMisses            Alg. 4 lines 18-25 counters of unseen landmarks in range, deletion
+//   updateCandidates         Sec. III-F 1      candidate rays, delayed initialisation, new candidates
+//
+// Pure functions of their arguments (the random generator passed in); the filter's behaviour is
+// the composition, bit for bit (scripts/check-replay-regression.sh). Frames and units: fastslam.h.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <variant>
+#include <vector>
+
+#include "omnislam/core/pose2.h"
+#include "omnislam/core/slam/bearing_model.h"
+#include "omnislam/core/slam/candidate.h"
+#include "omnislam/core/slam/data_association.h"
+#include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/filter_variant.h"
+#include "omnislam/core/slam/landmark_map.h"
+#include "omnislam/core/slam/random.h"
+
+namespace omnislam::slam::stages {
+
+/// A validated measurement z_{t,l} with its covariance Q_{l,t} and -log P_new,l.
+struct Measurement {
+  std::size_t input_index = 0;  ///< index in the step's input vector
+  LandmarkKind kind = LandmarkKind::kPoint3D;
+  MeasVec z;  ///< (azimuth, elevation) or (azimuth) [rad], azimuth wrapped
+  MeasMat Q;  ///< Q_{l,t} [rad^2]
+  Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();
+  double neg_log_p_new = 0.0;  ///< -log P_new,l
+  ColourDescriptor descriptor;
+};
+
+/// The measurement, or nothing when it is refused (unknown kind, non-finite, |elevation| > pi/2,
+/// covariance not symmetric positive definite). p_new_mahalanobis_sq: FastSlamOptions'.
+std::optional<Measurement> prepareMeasurement(const BearingMeasurement& m, std::size_t input_index,
+                                              bool inflate_azimuth_near_zenith, double p_new_mahalanobis_sq);
+
+// --- The filter's variants (filter_variant.h) -------------------------------------------------------
+/// The variant the options name. Throws std::invalid_argument (with validate()'s message) when
+/// they name none; FastSlam's constructor has validated them before.
+FilterVariant filterVariantOf(const FastSlamOptions& o);
+/// The weighting the variant implies.
+Weighting weightingOf(const FilterVariant& v);
+/// Level 1's method.
+MapAssociationMethod mapAssociationOf(const FilterVariant& v);
+/// Level 2's method: level 1's, except the Hungarian method under sampled association (candidates
+/// carry no weight, so a draw there would have no weight to go with it).
+DeterministicAssociation candidateAssociationOf(const FilterVariant& v);
+
+// --- Alg. 1 line 3 --------------------------------------------------------------------------------
+struct MotionPrediction {
+  Pose2 x_prev;            ///< x_{t-1}
+  Pose2 x_hat;             ///< xhat_t = g(x_{t-1}, u_t)
+  Eigen::Matrix3d R;       ///< R_t (motion_model.h)
+  Eigen::Matrix3d R_inv;   ///< R_t^-1
+};
+/// R_t of the step; throws std::invalid_argument when it or x_prev is not finite (an overflowed
+/// odometry increment), which leaves the filter as it was (FastSlam::step is all-or-nothing).
+Eigen::Matrix3d checkedMotionCovariance(const Pose2& x_prev, const Pose2& u, const MotionNoiseOptions& motion);
+MotionPrediction predictMotion(const Pose2& x_prev, const Pose2& u, const MotionNoiseOptions& motion);
+/// x_t ~ p(x_t | x_{t-1}, u_t) = N(xhat_t, R_t) (Alg. 3 line 2; FastSLAM 1.0's proposal).
+Pose2 sampleMotionModel(const MotionPrediction& pred, Rng& rng);
+
+// --- Visible landmarks ------------------------------------------------------------------------------
+/// The landmarks inside the perceptual range of xhat_t widened by the association margins (these
+/// columns enter the association matrix). `near` is scratch (the map's cells around the camera).
+void predictVisibleLandmarks(const LandmarkMap& map, const Pose2& x_hat, const Eigen::Vector3d& p_CinR_vis_m,
+                             const PerceptionOptions& per, std::vector<LandmarkMap::Ref>& near,
+                             std::vector<LandmarkMap::Ref>& visible);
+
+// --- Alg. 2: measurement-landmark likelihoods ------------------------------------------------------
+// Each returns the N_z x N_vis matrix of -log phi_{l,j}; +infinity where the pair is impossible
+// (different kinds, descriptors further apart than descriptor_gate, no prediction, Q not PD).
+
+/// FastSLAM 2.0, the paper: after each pair's own pose correction (lines 2-11),
+/// mu_x,jl = xhat + Sigma_x,jl H_x^T Q_jl^-1 (z_l - zbar_j), phi = N(z_l; h(mu_j, mu_x,jl), Q_jl).
+Eigen::MatrixXd scorePairsCorrected(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
+                                    const MotionPrediction& pred, double descriptor_gate);
+/// FastSLAM 2.0, deviation (association_predictive): N(z_l; zbar_j, H_x R_t H_x^T + Q_jl) at xhat_t.
+Eigen::MatrixXd scorePairsPredictive(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
+                                     const MotionPrediction& pred, double descriptor_gate);
+/// FastSLAM 1.0: N(z_l; h(mu_j, x_t), Q_l + H_m Sigma_j H_m^T) at the sampled pose x_t.
+Eigen::MatrixXd scorePairsAtPose(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
+                                 const Pose2& x_t, double descriptor_gate);
+/// FastSLAM 2.0 with its pair score (one of the two above).
+Eigen::MatrixXd scorePairs(const FastSlam2& variant, const std::vector<LandmarkMap::Ref>& visible,
+                           const std::vector<Measurement>& Z, const MotionPrediction& pred, double descriptor_gate);
+
+// --- Sec. III-C: the hierarchical association ------------------------------------------------------
+/// Level 1: measurements against the visible map landmarks.
+struct MapAssociation {
+  std::vector<int> landmark_of_measurement;  ///< per measurement: column of `visible`, -1 = none
+  double log_w_association = 0.0;  ///< sampled association: log of the sum over assignments; else 0
+};
+/// What level 1 needs besides its costs.
+struct MapLevelInput {
+  const Eigen::MatrixXd& cost;          ///< Alg. 2, N_z x N_vis
+  const std::vector<double>& cost_new;  ///< -log P_new,l per measurement
+  MapAssociationMethod method;
+  /// AssociationSampling only: per column log(p_in / (clutter_density (1 - p_in)^[in range of x_t])).
+  const std::vector<double>* sampled_log_prior = nullptr;
+};
+/// Level 2: the measurements level 1 left against the particle's candidates, at the sampled x_t.
+struct CandidateLevelInput {
+  const std::vector<std::shared_ptr<const Candidate>>& candidates;
+  const std::vector<Measurement>& Z;
+  const FastSlamOptions& options;
+  DeterministicAssociation method;   ///< candidateAssociationOf()
+  bool enabled = true;               ///< false (localisation only): no level 2
+  std::vector<double>* cost_buffer;  ///< scratch for the cost matrix, reused across calls
+};
+struct HierarchicalAssociation {
+  MapAssociation level1;
+  Pose2 x_t;                               ///< the pose the proposal sampled between the levels
+  std::vector<int> leftover;               ///< measurements level 1 left, in order (level-2 rows)
+  std::vector<int> candidate_of_leftover;  ///< level 2 per leftover: candidate index, -1 = new (empty if disabled)
+};
+/// The paper's hierarchical association, both levels: level 1 on the map; then `propose` samples
+/// x_t given level 1 (Alg. 3; FastSLAM 1.0 returns the pose it sampled before Alg. 2), because the
+/// candidates' likelihoods are evaluated at x_t; then level 2 on the candidates with the rest.
+HierarchicalAssociation associateHierarchically(const MapLevelInput& level1, Rng& rng,
+                                                const std::function<Pose2(const MapAssociation&)>& propose,
+                                                const CandidateLevelInput& level2);
+
+/// Level 1 on its own (Alg. 1 line 5): Hungarian or ML via associate(); sampled draws one joint
+/// assignment with probability proportional to its likelihood ratio (pairs beyond P_new left out).
+MapAssociation associateWithMap(const MapLevelInput& in, Rng& rng);
+/// The per-column prior of the sampled association (MapLevelInput::sampled_log_prior).
+std::vector<double> sampledAssociationLogPrior(const std::vector<LandmarkMap::Ref>& visible, const Pose2& x_t,
+                                               const Eigen::Vector3d& p_CinR_vis_m, const PerceptionOptions& per,
+                                               double clutter_density);
+/// Level 2 on its own: per leftover measurement, the candidate index or -1 (a new candidate).
+std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Pose2& x_t,
+                                         const std::vector<int>& leftover);
+
+// --- Alg. 3: the FastSLAM 2.0 proposal -------------------------------------------------------------
+/// x_t ~ N(mu_x, Sigma_x) folded in from the associated type I landmarks, ordered by trace(Sigma_j),
+/// then measured azimuth, then id (lines 4-14); N(xhat_t, R_t) when nothing is associated (line 2).
+Pose2 sampleFastSlam2Pose(const MotionPrediction& pred, const std::vector<LandmarkMap::Ref>& visible,
+                          const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
+                          Rng& rng);
+
+// --- Alg. 4: landmark updates and the weight ---------------------------------------------------------
+struct ParticleUpdate {
+  std::vector<LandmarkMap::Edit> edits;  ///< to apply to the particle's map
+  std::vector<const Landmark*> updated;  ///< the observed landmarks (sorted by accountMisses)
+  double log_w = 0.0;                    ///< log w^k so far
+  int num_associated = 0, num_deleted = 0;
+};
+/// Alg. 4 lines 3-17 for every associated pair, in measurement order: i_j + 1, descriptor blend,
+/// EKF (Joseph form), the type I weight; then updateLandmarksType() on the observed landmarks. Edits
+/// are kept only when update_map.
+void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t, const std::vector<LandmarkMap::Ref>& visible,
+                             const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
+                             const FastSlamOptions& o, const Weighting& weight, ParticleUpdate& out);
+/// Alg. 4 lines 18-25: w *= 1 - p_in and i_j - 1 for each unseen landmark inside the perceptual
+/// range of x_t; deleted when i_j < 0. WeightAssociationSum: every landmark in range counts 1 - p_in
+/// (its ratio divides it out again), the map edits as above. Only the weight when !update_map.
+void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector3d& p_CinR_vis_m,
+                   const FastSlamOptions& o, const Weighting& weight, std::vector<LandmarkMap::Ref>& near,
+                   ParticleUpdate& out);
+
+// --- Sec. III-F 1: updateCandidateLandmarks() --------------------------------------------------------
+struct CandidateUpdate {
+  std::vector<std::shared_ptr<const Candidate>> candidates;  ///< the particle's next candidates
+  std::vector<Landmark> inserts;                             ///< candidates initialised as landmarks
+  int num_to_candidates = 0, num_new_candidates = 0, num_initialised = 0;
+};
+/// From the level-2 association: associated candidates take the ray (and may be initialised: their
+/// landmark gets id next_landmark_id++), unassociated ones in range lose I_not (deleted at <= 0),
+/// leftover measurements of no candidate start new candidates.
+CandidateUpdate updateCandidates(const std::vector<std::shared_ptr<const Candidate>>& candidates, const Pose2& x_t,
+                                 const std::vector<Measurement>& Z, const HierarchicalAssociation& a,
+                                 const FastSlamOptions& o, std::uint64_t& next_landmark_id);
+
+// --- Small rules shared by the stages ---------------------------------------------------------------
+/// The appearance gate: false when both descriptors are valid and further apart than gate.
+bool descriptorsCompatible(const ColourDescriptor& a, const ColourDescriptor& b, double gate);
+/// Counter increment of a detection: 1 (the paper) when p_in >= 0.5, else ceil((1 - p_in) / p_in).
+int hitIncrement(double p_in);
+
+}  // namespace omnislam::slam::stages

@@ -1,0 +1,191 @@
+// Tests of the filter's stages on their own (filter_stages.h, landmark_type.h): the hierarchical
+// association's level 1 against brute force, the proposal without associations, the miss rule of
+// Alg. 4, and the type I/II rule.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <type_traits>
+
+#include "omnislam/core/slam/filter_stages.h"
+#include "omnislam/core/slam/landmark_type.h"
+
+namespace {
+
+using namespace omnislam;
+using namespace omnislam::slam;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The least total cost over every joint assignment (each measurement a landmark or "new", each
+// landmark at most once), by enumeration.
+double bruteForceMinimum(const Eigen::MatrixXd& cost, const std::vector<double>& cost_new) {
+  const int nz = static_cast<int>(cost.rows()), n = static_cast<int>(cost.cols());
+  double best = kInf;
+  std::vector<int> a(nz, -1);
+  while (true) {
+    bool ok = true;
+    double total = 0.0;
+    for (int l = 0; l < nz && ok; ++l) {
+      if (a[l] < 0) {
+        total += cost_new[l];
+        continue;
+      }
+      ok = std::isfinite(cost(l, a[l]));
+      for (int k = 0; k < l && ok; ++k) ok = a[k] != a[l];
+      total += ok ? cost(l, a[l]) : 0.0;
+    }
+    if (ok) best = std::min(best, total);
+    int l = 0;
+    while (l < nz && ++a[l] == n) a[l++] = -1;
+    if (l == nz) break;
+  }
+  return best;
+}
+
+// Level 1 of the hierarchical association is the minimum-cost assignment; the proposal runs once,
+// between the levels, on level 1's result; level 2's rows are exactly the measurements level 1 left.
+TEST(slam_Stages, HierarchicalAssociationLevel1IsTheBruteForceMinimumAndFeedsTheProposal) {
+  std::mt19937_64 gen(5);
+  std::uniform_real_distribution<double> u(0.0, 10.0);
+  const FastSlamOptions options;
+  const std::vector<std::shared_ptr<const Candidate>> no_candidates;
+  const std::vector<stages::Measurement> no_measurements;
+  Rng rng(1);
+  for (int trial = 0; trial < 100; ++trial) {
+    const int nz = 1 + trial % 4, n = trial % 5;
+    Eigen::MatrixXd cost(nz, n);
+    std::vector<double> cost_new(nz);
+    for (int l = 0; l < nz; ++l) {
+      cost_new[l] = u(gen);
+      for (int j = 0; j < n; ++j) cost(l, j) = u(gen) < 4.0 ? kInf : u(gen);
+    }
+    const stages::MapLevelInput level1{cost, cost_new, stages::HungarianAssociation{}};
+    const stages::CandidateLevelInput level2{no_candidates, no_measurements, options, stages::HungarianAssociation{},
+                                             false, nullptr};
+    int calls = 0;
+    const Pose2 proposed{1.0, 2.0, 0.5};
+    const auto propose = [&](const stages::MapAssociation& l1) {
+      ++calls;
+      EXPECT_EQ(l1.landmark_of_measurement.size(), static_cast<size_t>(nz));
+      return proposed;
+    };
+    const stages::HierarchicalAssociation a = stages::associateHierarchically(level1, rng, propose, level2);
+    EXPECT_EQ(calls, 1);
+    EXPECT_EQ(a.x_t.vec(), proposed.vec());
+    double total = 0.0;
+    std::vector<int> leftover;
+    for (int l = 0; l < nz; ++l) {
+      const int j = a.level1.landmark_of_measurement[l];
+      if (j < 0) leftover.push_back(l);
+      total += j < 0 ? cost_new[l] : cost(l, j);
+    }
+    EXPECT_NEAR(total, bruteForceMinimum(cost, cost_new), 1e-9) << "trial " << trial;
+    EXPECT_EQ(a.leftover, leftover);
+    EXPECT_TRUE(a.candidate_of_leftover.empty());  // level 2 disabled (localisation only)
+    EXPECT_EQ(a.level1.log_w_association, 0.0);
+  }
+}
+
+// Alg. 3 line 2: without associations the FastSLAM 2.0 proposal is the motion model (same draw).
+TEST(slam_Stages, ProposalWithoutAssociationsIsTheMotionModel) {
+  const stages::MotionPrediction pred = stages::predictMotion({1.0, 0.0, 0.2}, {0.5, 0.0, 0.1}, MotionNoiseOptions{});
+  Rng a(7), b(7);
+  const Pose2 x = stages::sampleFastSlam2Pose(pred, {}, {}, {-1, -1}, a);
+  const Pose2 y = stages::sampleMotionModel(pred, b);
+  EXPECT_EQ(x.vec(), y.vec());
+  EXPECT_NE(x.vec(), pred.x_hat.vec());
+}
+
+// Alg. 4 lines 18-25: an unseen landmark in range costs log(1 - p_in) and loses one count; at a
+// negative count it is deleted; one out of range is left alone.
+TEST(slam_Stages, MissesCountDownAndDelete) {
+  FastSlamOptions o;
+  o.perception.max_range_m = 10.0;
+  LandmarkMap map(o.map_cell_size_m);
+  Landmark seen_often, last_chance, far;
+  seen_often.id = 1, seen_often.p_LinW_m = Eigen::Vector3d(3.0, 0.0, 2.0), seen_often.counter = 4;
+  last_chance.id = 2, last_chance.p_LinW_m = Eigen::Vector3d(0.0, 3.0, 2.0), last_chance.counter = 0;
+  far.id = 3, far.p_LinW_m = Eigen::Vector3d(40.0, 0.0, 2.0);
+  map.apply({}, {seen_often, last_chance, far});
+  stages::ParticleUpdate up;
+  std::vector<LandmarkMap::Ref> near;
+  stages::accountMisses(map, Pose2{0.0, 0.0, 0.0}, Eigen::Vector3d::Zero(), o, stages::WeightAlg4{}, near, up);
+  EXPECT_DOUBLE_EQ(up.log_w, 2.0 * std::log(1.0 - o.perception.detection_probability));
+  ASSERT_EQ(up.edits.size(), 2u);
+  EXPECT_EQ(up.num_deleted, 1);
+  for (const auto& e : up.edits) {
+    EXPECT_NE(e.value.id, far.id);
+    EXPECT_EQ(e.erase, e.value.id == last_chance.id);
+    EXPECT_EQ(e.value.counter, (e.value.id == seen_often.id ? 3 : -1));
+  }
+}
+
+// Sec. III-F 2: type I when both poses of the cross-point are within D_min; a type II landmark is
+// promoted when observed from within D_min, and a type I never demoted.
+TEST(slam_Stages, TypeIAndIIRule) {
+  const Eigen::Vector3d p(5.0, 0.0, 2.5);
+  const double d_min = 8.0;
+  EXPECT_EQ(initialLandmarkType({0, 0, 0}, {1, 0, 0}, p, d_min), LandmarkType::kTypeI);
+  EXPECT_EQ(initialLandmarkType({0, 0, 0}, {-4, 0, 0}, p, d_min), LandmarkType::kTypeII);  // 9 m from one pose
+  Landmark l;
+  l.p_LinW_m = p;
+  l.type = LandmarkType::kTypeII;
+  EXPECT_EQ(promotedLandmarkType(l, {-3.5, 0, 0}, d_min), LandmarkType::kTypeII);
+  EXPECT_EQ(promotedLandmarkType(l, {-2.5, 0, 0}, d_min), LandmarkType::kTypeI);
+  l.type = LandmarkType::kTypeI;
+  EXPECT_EQ(promotedLandmarkType(l, {-30, 0, 0}, d_min), LandmarkType::kTypeI);
+  EXPECT_TRUE(correctsPoseAndWeighs(l));
+  l.type = LandmarkType::kTypeII;
+  EXPECT_FALSE(correctsPoseAndWeighs(l));
+}
+
+// The options map to one variant; a combination that makes no sense cannot be written as a type
+// (static_asserts) and is refused from the options with validate()'s message.
+static_assert(!std::is_constructible_v<stages::DeterministicAssociation, stages::AssociationSampling>,
+              "FastSLAM 2.0 and level 2 cannot sample their association");
+static_assert(!std::is_constructible_v<stages::FilterVariant, stages::AssociationSampling>);
+
+TEST(slam_Stages, OptionsMapToOneVariant) {
+  FastSlamOptions o;
+  const stages::FilterVariant paper = stages::filterVariantOf(o);
+  ASSERT_TRUE(std::holds_alternative<stages::FastSlam2>(paper));
+  EXPECT_TRUE(std::holds_alternative<stages::CorrectedPairScore>(std::get<stages::FastSlam2>(paper).pair_score));
+  EXPECT_TRUE(std::holds_alternative<stages::WeightAlg4>(stages::weightingOf(paper)));
+  EXPECT_TRUE(std::holds_alternative<stages::HungarianAssociation>(stages::mapAssociationOf(paper)));
+
+  o.proposal = ProposalKind::kFastSlam1;
+  o.association = AssociationMethod::kSampled;
+  o.clutter_density = 0.5;
+  const stages::FilterVariant sampled = stages::filterVariantOf(o);
+  ASSERT_TRUE(std::holds_alternative<stages::FastSlam1>(sampled));
+  const auto& s = std::get<stages::AssociationSampling>(std::get<stages::FastSlam1>(sampled).association);
+  EXPECT_EQ(s.clutter_density, 0.5);
+  EXPECT_TRUE(std::holds_alternative<stages::WeightAssociationSum>(stages::weightingOf(sampled)));
+  EXPECT_TRUE(std::holds_alternative<stages::HungarianAssociation>(stages::candidateAssociationOf(sampled)));
+
+  o.association = AssociationMethod::kMaximumLikelihood;
+  EXPECT_TRUE(std::holds_alternative<stages::WeightMarginal>(stages::weightingOf(stages::filterVariantOf(o))));
+  EXPECT_TRUE(std::holds_alternative<stages::MaximumLikelihoodAssociation>(
+      stages::candidateAssociationOf(stages::filterVariantOf(o))));
+
+  o.proposal = ProposalKind::kFastSlam2;
+  o.association = AssociationMethod::kSampled;
+  try {
+    (void)stages::filterVariantOf(o);
+    FAIL() << "FastSLAM 2.0 with sampled association was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("kSampled needs proposal kFastSlam1"), std::string::npos) << e.what();
+  }
+}
+
+// The detection counter: +1 at p_in >= 0.5, otherwise enough that the nominal rate does not drift down.
+TEST(slam_Stages, HitIncrement) {
+  EXPECT_EQ(stages::hitIncrement(0.9), 1);
+  EXPECT_EQ(stages::hitIncrement(0.5), 1);
+  EXPECT_EQ(stages::hitIncrement(0.25), 3);
+  EXPECT_EQ(stages::hitIncrement(0.4), 2);
+}
+
+}  // namespace

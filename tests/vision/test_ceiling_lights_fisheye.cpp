@@ -121,7 +121,9 @@ TEST(FisheyeTubes, AllThreeTubesFoundWithStableAzimuthAndFewFalseBlobs) {
       line << " " << which << " (" << p.x() << ", " << p.y() << ") off " << (p - lab.centre()).norm() << " px"
            << (lab.occluded ? " occluded" : "") << ";";
       // A truncated tube's centroid is biased towards its visible part.
-      if (!lab.truncated) EXPECT_LT((p - lab.centre()).norm(), 3.0) << name << " tube " << which;
+      if (!lab.truncated) {
+        EXPECT_LT((p - lab.centre()).norm(), 3.0) << name << " tube " << which;
+      }
     }
     for (const auto& [t, n] : found) EXPECT_EQ(n, 1) << name << " tube " << t << " found more than once";
     frames_all_three += found.size() == 3 ? 1 : 0;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -59,6 +60,19 @@ double medianPixelScale(const camera::CameraModel& camera) {
   return s[s.size() / 2];
 }
 
+// Covariance of the robot-frame (azimuth, elevation) of a tilted camera's pixel, first order:
+// J = d(az, el)/d(d_R) (2x3) * R_CtoR (3x3) * J_d_px (3x2), Sigma = sigma_px^2 J J^T. nullopt on
+// z_R, where the azimuth is undefined. (A level mounting only shifts the azimuth by the yaw, so its
+// covariance is the camera frame's: bearingCovarianceFromPixel.)
+std::optional<Eigen::Matrix2d> robotBearingCovariance(const camera::CameraMounting& mounting,
+                                                      const Eigen::Vector3d& d_R,
+                                                      const Eigen::Matrix<double, 3, 2>& J_d_px, double sigma_px) {
+  const auto J_ae_dR = camera::azimuthElevationJacobian(d_R);
+  if (!J_ae_dR) return std::nullopt;
+  const Eigen::Matrix2d J_ae_px = *J_ae_dR * camera::rotationCameraToRobot(mounting) * J_d_px;  // 2x3 * 3x3 * 3x2
+  return Eigen::Matrix2d(sigma_px * sigma_px * J_ae_px * J_ae_px.transpose());
+}
+
 }  // namespace
 
 CeilingLightDetector::CeilingLightDetector(const camera::CameraModel& camera, const camera::CameraMounting& mounting,
@@ -111,7 +125,9 @@ std::vector<CeilingLight> CeilingLightDetector::detect(const cv::Mat& grey, cons
     const Eigen::Vector2d ae = camera::azimuthElevation(d_R);
     L.azimuth_rad = ae.x();
     L.elevation_rad = ae.y();
-    if (auto cov = camera::bearingCovarianceFromPixel(camera_, px, L.sigma_px)) {
+    const auto cov = camera::isLevel(mounting_) ? camera::bearingCovarianceFromPixel(camera_, px, L.sigma_px)
+                                                : robotBearingCovariance(mounting_, d_R, J_d_px, L.sigma_px);
+    if (cov) {
       L.covariance = *cov;
     } else {
       // On the optical axis the azimuth is undefined: say so (variance pi^2), and the elevation

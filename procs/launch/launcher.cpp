@@ -166,13 +166,6 @@ struct Child {
   bool group_killed = false;  ///< processes it started outlived it and had to be killed
 };
 
-std::string resolveProgram(const std::string& prog, const std::string& bin_dir) {
-  if (prog.find('/') != std::string::npos) return prog;
-  const fs::path local = fs::path(bin_dir) / prog;
-  if (fs::exists(local)) return local.string();
-  return prog;  // execvp searches PATH
-}
-
 bool isExecutableFile(const fs::path& p) {
   std::error_code ec;
   return fs::is_regular_file(p, ec) && access(p.c_str(), X_OK) == 0;
@@ -186,6 +179,9 @@ std::vector<std::string> recorderArgv(const Plan& plan) {
 
 Child spawn(const std::string& name, const std::vector<std::string>& argv, const std::string& url,
             const std::string& bin_dir) {
+  // The program as checkPrograms() found it (bin_dir first, then PATH), resolved before the fork.
+  std::vector<std::string> args = argv;
+  args[0] = findProgram(args[0], bin_dir).value_or(args[0]);
   int fds[2];
   if (pipe(fds) != 0) throw std::runtime_error("pipe failed: " + std::string(std::strerror(errno)));
   // SIGINT and SIGTERM are blocked across the fork: a stop sent to a child before its exec would
@@ -222,8 +218,6 @@ Child spawn(const std::string& name, const std::vector<std::string>& argv, const
     close(fds[0]);
     close(fds[1]);
     setenv("LCM_DEFAULT_URL", url.c_str(), 1);
-    std::vector<std::string> args = argv;
-    args[0] = resolveProgram(args[0], bin_dir);
     std::vector<char*> cargs;
     for (auto& a : args) cargs.push_back(a.data());
     cargs.push_back(nullptr);

@@ -373,6 +373,7 @@ vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
                        "edge_threshold", "min_run_rows", "max_gap_rows", "merge_columns", "merge_gap_rows",
                        "min_length_rows", "max_drift_columns", "max_rms_columns", "colour_offset_columns",
                        "colour_width_columns", "pixel_sigma_px", "max_opposite_fraction", "bar_max_width_px",
+                       "cell_row_min_lines", "cell_max_aspect", "cell_max_spacing_ratio",
                        "contrast_exponent", "contrast_reference_grey", "contrast_offset_grey", "contrast_window_columns",
                        "clahe_clip_limit", "clahe_tile_columns"});
   vision::VerticalLineOptions o;
@@ -407,6 +408,9 @@ vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
   o.pixel_sigma_px = n.getDouble("pixel_sigma_px", 1e-3, 100.0, o.pixel_sigma_px);
   o.max_opposite_fraction = n.getDouble("max_opposite_fraction", 0.0, 1.0, o.max_opposite_fraction);
   o.bar_max_width_px = n.getDouble("bar_max_width_px", 0.0, 1000.0, o.bar_max_width_px);
+  o.cell_row_min_lines = static_cast<int>(n.getInt("cell_row_min_lines", 0, 100, o.cell_row_min_lines));
+  o.cell_max_aspect = n.getDouble("cell_max_aspect", 1.0, 10.0, o.cell_max_aspect);
+  o.cell_max_spacing_ratio = n.getDouble("cell_max_spacing_ratio", 1.0, 10.0, o.cell_max_spacing_ratio);
   o.contrast_exponent = n.getDouble("contrast_exponent", 0.0, 1.0, o.contrast_exponent);
   o.contrast_reference_grey = n.getDouble("contrast_reference_grey", 1.0, 255.0, o.contrast_reference_grey);
   o.contrast_offset_grey = n.getDouble("contrast_offset_grey", 0.0, 255.0, o.contrast_offset_grey);

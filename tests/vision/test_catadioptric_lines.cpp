@@ -248,6 +248,12 @@ TEST(CatadioptricLines, DISABLED_FullAcceptance) {
     for (double a : az)
       if (std::find(r.matched_deg.begin(), r.matched_deg.end(), a) == r.matched_deg.end())
         falses << " " << std::fixed << std::setprecision(2) << a;
+    // One row per line for research/lines_operating_points.py (which cuts on these attributes).
+    for (size_t i = 0; i < az.size(); ++i) {
+      const bool real_line = std::find(r.matched_deg.begin(), r.matched_deg.end(), az[i]) != r.matched_deg.end();
+      std::cout << "line " << k << " " << (real_line ? "real" : "false") << " " << std::fixed << std::setprecision(2)
+                << az[i] << " length_px " << r.lines[i].length_px << " strength " << r.lines[i].strength << "\n";
+    }
     std::cout << "image " << k << ": lines " << r.lines.size() << ", real " << real << ", false "
               << r.lines.size() - real << ", labels " << r.labels.size() << ", missed " << r.labels.size() - real
               << "\n  false at [deg]:" << falses.str() << "\n  missed labels [deg]:" << missed.str() << "\n";

@@ -195,6 +195,7 @@ TEST(VerticalLinesBars, ACheckerboardsJunctionChainsAreNotLines) {
   });
   vision::VerticalLineOptions o = options();
   o.max_opposite_fraction = 1.0;  // off
+  o.cell_row_min_lines = 0;       // and the rows of cells (the next test) too
   const vision::VerticalLineDetector off(o, 640, 480), on(options(), 640, 480);
   const auto all = off.detect(img), kept = on.detect(img);
   EXPECT_GT(all.size(), 100u);  // every side of every square
@@ -204,4 +205,35 @@ TEST(VerticalLinesBars, ACheckerboardsJunctionChainsAreNotLines) {
     EXPECT_TRUE(r1 < 72.0 || r0 > 188.0) << "a line over radii " << r0 << ".." << r1;
   }
   std::cout << "checkerboard: " << all.size() << " lines without the junction check, " << kept.size() << " with it\n";
+}
+
+TEST(VerticalLinesBars, ARowOfSquareCellsIsRefusedLongPanesAreKept) {
+  // One ring of a polar checkerboard (radii 180..220 px, 12 deg sectors: each cell 40 px long and
+  // 42 px wide at the ring's middle), the outer row of a board, whose edges are not junction chains
+  // (nothing beyond their ends); beside it, on the other half, long panes of the same width
+  // (radii 60..220 px: 160 px long, aspect 3.8) that must stay lines.
+  const cv::Mat img = polarImage([](double a, double r) {
+    const int i = static_cast<int>(std::floor((a + 180.0) / 12.0));
+    if (a < 0.0) return r >= 180.0 && r < 220.0 ? (i % 2 ? 200 : 50) : 120;
+    return r >= 60.0 && r < 220.0 ? (i % 2 ? 200 : 50) : 120;
+  });
+  vision::VerticalLineOptions o = options();
+  o.cell_row_min_lines = 0;  // off
+  const vision::VerticalLineDetector off(o, 640, 480), on(options(), 640, 480);
+  auto count = [](const std::vector<vision::VerticalLine>& lines, bool cells) {
+    return std::count_if(lines.begin(), lines.end(), [&](const vision::VerticalLine& L) {
+      const double a = rad2deg(L.azimuth_rad);
+      return cells ? (a < -1.0 && a > -179.0) : (a > 1.0 && a < 179.0);
+    });
+  };
+  const auto all = off.detect(img), kept = on.detect(img);
+  EXPECT_GE(count(all, true), 13);  // the 14 inner sector boundaries of the cell row
+  EXPECT_EQ(count(kept, true), 0);
+  EXPECT_EQ(count(kept, false), count(all, false));
+  EXPECT_GE(count(kept, false), 13);
+  // Three cells are not a row: with cell_row_min_lines 4 a board of 3 x 3 edges stays.
+  o.cell_row_min_lines = 3;
+  EXPECT_FALSE(vision::validate(o).has_value());
+  o.cell_row_min_lines = 2;
+  EXPECT_TRUE(vision::validate(o).has_value());
 }

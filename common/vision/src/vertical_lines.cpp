@@ -124,6 +124,11 @@ std::optional<std::string> validate(const VerticalLineOptions& o) {
   if (!(o.clahe_clip_limit >= 0.0 && o.clahe_clip_limit <= 100.0)) return "clahe_clip_limit must be in [0, 100]";
   if (o.clahe_tile_columns < 8 || o.clahe_tile_columns > 20000) return "clahe_tile_columns must be in [8, 20000]";
   if (!(o.max_opposite_fraction >= 0.0 && o.max_opposite_fraction <= 1.0)) return "max_opposite_fraction must be in [0, 1]";
+  if (o.cell_row_min_lines != 0 && (o.cell_row_min_lines < 3 || o.cell_row_min_lines > 100))
+    return "cell_row_min_lines must be 0 (off) or in [3, 100]";
+  if (!(o.cell_max_aspect >= 1.0 && o.cell_max_aspect <= 10.0)) return "cell_max_aspect must be in [1, 10]";
+  if (!(o.cell_max_spacing_ratio >= 1.0 && o.cell_max_spacing_ratio <= 10.0))
+    return "cell_max_spacing_ratio must be in [1, 10]";
   if (!(o.bar_max_width_px >= 0.0 && o.bar_max_width_px <= 1000.0)) return "bar_max_width_px must be in [0, 1000]";
   if (!(o.pixel_sigma_px > 0.0) || !std::isfinite(o.pixel_sigma_px)) return "pixel_sigma_px must be > 0";
   return std::nullopt;
@@ -324,6 +329,51 @@ std::optional<VerticalLineDetector::Fit> VerticalLineDetector::fitGroup(const cv
   return out;
 }
 
+std::vector<VerticalLineDetector::Fit> VerticalLineDetector::dropCellRows(std::vector<Fit> fits) const {
+  // Lines in column order; each one's link is the nearest line after it whose rows overlap its own
+  // by half the shorter, if that one has the opposite sign and, like itself, is as long as the
+  // spacing between them (image px across the lines at the mid radius of their common rows) within cell_max_aspect.
+  // Chains of links whose consecutive spacings agree within cell_max_spacing_ratio and that hold
+  // cell_row_min_lines lines are a row of cells: all their lines are refused.
+  if (opt_.cell_row_min_lines <= 0 || fits.size() < static_cast<size_t>(opt_.cell_row_min_lines)) return fits;
+  std::sort(fits.begin(), fits.end(), [](const Fit& a, const Fit& b) { return a.column_mid < b.column_mid; });
+  const double rad_per_column = 2.0 * kPi / pano_.options().columns, a_max = opt_.cell_max_aspect;
+  const size_t n = fits.size();
+  std::vector<long> next(n, -1);
+  std::vector<double> spacing(n, 0.0);
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j) {
+      const Fit &p = fits[i], &q = fits[j];
+      const int lo = std::max(p.r_lo, q.r_lo), hi = std::min(p.r_hi, q.r_hi);
+      if (2 * (hi - lo + 1) < std::min(p.r_hi - p.r_lo, q.r_hi - q.r_lo) + 1) continue;
+      if (p.sign == q.sign) break;  // the nearest overlapping line has the same sign: no cell
+      const double s_px = (q.column_mid - p.column_mid) * rad_per_column * pano_.radiusOfRow(0.5 * (lo + hi));
+      const double lp = (p.r_hi - p.r_lo) * pano_.radialStepPx(), lq = (q.r_hi - q.r_lo) * pano_.radialStepPx();
+      if (s_px > 0.0 && lp <= a_max * s_px && lp * a_max >= s_px && lq <= a_max * s_px && lq * a_max >= s_px) {
+        next[i] = static_cast<long>(j);
+        spacing[i] = s_px;
+      }
+      break;  // only the nearest overlapping line can be the next cell's edge
+    }
+  std::vector<char> drop(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    std::vector<size_t> chain{i};
+    for (size_t k = i; next[k] >= 0; k = static_cast<size_t>(next[k])) {
+      if (chain.size() >= 2) {
+        const double r = spacing[k] / spacing[chain[chain.size() - 2]];
+        if (r > opt_.cell_max_spacing_ratio || r * opt_.cell_max_spacing_ratio < 1.0) break;
+      }
+      chain.push_back(static_cast<size_t>(next[k]));
+    }
+    if (chain.size() >= static_cast<size_t>(opt_.cell_row_min_lines))
+      for (size_t k : chain) drop[k] = 1;
+  }
+  std::vector<Fit> out;
+  for (size_t i = 0; i < n; ++i)
+    if (!drop[i]) out.push_back(fits[i]);
+  return out;
+}
+
 std::vector<VerticalLineDetector::Fit> VerticalLineDetector::mergeBars(std::vector<Fit> fits) const {
   // The two sides of a thin bar: opposite signs, closer than bar_max_width_px across the line at the
   // mid radius of their common rows, rows overlapping by at least half the shorter line; closest
@@ -449,7 +499,7 @@ std::vector<VerticalLine> VerticalLineDetector::detect(const cv::Mat& image) con
   for (const Group& g : groupRuns(findRuns(gx)))
     if (const auto fit = fitGroup(gx, g)) fits.push_back(*fit);
   std::vector<VerticalLine> out;
-  for (const Fit& f : mergeBars(std::move(fits))) {
+  for (const Fit& f : mergeBars(dropCellRows(std::move(fits)))) {
     if (f.column_mid < pad - 0.5 || f.column_mid >= pad + columns - 0.5) continue;  // its twin is inside
     out.push_back(makeLine(f, image));
   }

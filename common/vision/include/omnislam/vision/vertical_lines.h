@@ -15,7 +15,8 @@
 // max(0.75, 3 x 1.4826 x MAD) columns dropped, the line spans the rest); lines drifting more than
 // max_drift_columns end to end are slanted edges, lines whose rows scatter about the fit by more
 // than max_rms_columns are not one radial edge, and lines whose column takes the opposite sign
-// beyond both ends are links of a junction chain (a checkerboard): all refused -> the two sides of
+// beyond both ends are links of a junction chain (a checkerboard): all refused -> rows of square
+// cells of alternating contrast (a checkerboard's outer row, tiles) refused together -> the two sides of
 // a thin bar (opposite signs closer than bar_max_width_px) merged into one line at its centre ->
 // azimuth (the fit at the mid row), length, strength, colour on each side.
 // Azimuth: with a camera model, the azimuth of camera.unproject(pixel of the line's mid point);
@@ -52,6 +53,14 @@ struct VerticalLineOptions {
   /// than this fraction of its length on each side, is a link of a chain of junctions (a
   /// checkerboard's squares), not an edge, and is refused; 1 = off. In [0, 1]
   double max_opposite_fraction = 0.25;
+  /// A row of square cells of alternating contrast (a checkerboard's squares, tiles): at least this
+  /// many lines side by side, each the next one's opposite sign, rows overlapping by half, each as
+  /// long as its spacing to the next within a factor cell_max_aspect, consecutive spacings within a
+  /// factor cell_max_spacing_ratio, are refused together. Such an edge is not a landmark: it is as
+  /// long as a cell, and its neighbours alias it. 0 = off; otherwise in [3, 100].
+  int cell_row_min_lines = 4;
+  double cell_max_aspect = 2.0;         ///< length / spacing in [1/a, a]; in [1, 10]
+  double cell_max_spacing_ratio = 1.5;  ///< in [1, 10]
   int colour_offset_columns = 3;  ///< colour strips start this far from the line; >= 1
   int colour_width_columns = 6;   ///< and are this wide; >= 1
   double pixel_sigma_px = 1.0;    ///< tangential pixel noise of a line for its azimuth variance; > 0
@@ -124,6 +133,7 @@ class VerticalLineDetector {
   std::vector<Run> findRuns(const cv::Mat& gx) const;
   std::vector<Group> groupRuns(std::vector<Run> runs) const;
   std::optional<Fit> fitGroup(const cv::Mat& gx, const Group& g) const;
+  std::vector<Fit> dropCellRows(std::vector<Fit> fits) const;
   std::vector<Fit> mergeBars(std::vector<Fit> fits) const;
   VerticalLine makeLine(const Fit& f, const cv::Mat& image) const;
   void sideColours(const cv::Mat& image, double extra_offset_columns, VerticalLine& L) const;

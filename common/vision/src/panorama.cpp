@@ -134,10 +134,10 @@ double parabolaOffset(double l, double m, double r) {
 
 }  // namespace
 
-std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref, const cv::Mat& pano,
-                                                         const PanoramaRotationOptions& o, const cv::Mat& valid_ref,
-                                                         const cv::Mat& valid) {
-  if (pano_ref.empty() || pano.empty() || pano_ref.size() != pano.size()) return std::nullopt;
+namespace {
+
+void checkRotationInputs(const cv::Mat& pano, const PanoramaRotationOptions& o, const cv::Mat& valid_ref,
+                         const cv::Mat& valid) {
   if (o.pad_columns < 0 || pano.cols - 2 * o.pad_columns < 16)
     throw std::invalid_argument("panorama rotation: pad_columns must be in [0, (cols - 16) / 2]");
   const int n = pano.cols - 2 * o.pad_columns;
@@ -147,112 +147,146 @@ std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref
   for (const cv::Mat* m : {&valid_ref, &valid})
     if (!m->empty() && (m->type() != CV_8UC1 || m->size() != pano.size()))
       throw std::invalid_argument("panorama rotation: a mask must be CV_8U of the panoramas' size");
+}
 
-  const cv::Mat a = rotationFeature(pano_ref, valid_ref, o.pad_columns);
-  const cv::Mat b = rotationFeature(pano, valid, o.pad_columns);
+// One sector of the reference panorama correlated with the whole other one.
+struct SectorCurve {
+  std::vector<double> ncc, row_peak_weight;  ///< normalised correlation per shift; per-row peak weight
+  double energy = 0.0, centre = 0.0, row = 0.0;
+};
+
+// The sector's gradient-energy-weighted mean row, and each row's weight in the sector's peak: the
+// curvature of its autocorrelation at zero lag, i.e. the energy of the feature's derivative along
+// the columns (inside the sector).
+void sectorRows(const cv::Mat& a, int x0, int x1, SectorCurve& cu) {
+  cv::Mat a2, er;
+  cv::multiply(a.colRange(x0, x1), a.colRange(x0, x1), a2);
+  cv::reduce(a2, er, 1, cv::REDUCE_SUM, CV_64F);
+  double sr = 0.0;
+  for (int r = 0; r < er.rows; ++r) sr += r * er.at<double>(r, 0);
+  cu.row = sr / cu.energy;
+  cv::Mat d, d2, ed;
+  cv::subtract(a.colRange(x0 + 1, x1), a.colRange(x0, x1 - 1), d);
+  cv::multiply(d, d, d2);
+  cv::reduce(d2, ed, 1, cv::REDUCE_SUM, CV_64F);
+  cu.row_peak_weight.resize(static_cast<size_t>(ed.rows));
+  for (int r = 0; r < ed.rows; ++r) cu.row_peak_weight[static_cast<size_t>(r)] = ed.at<double>(r, 0);
+}
+
+// Sector j of the reference feature `a` against the other panorama's spectrum B; cum: b's column
+// energy prefix-summed over two turns. Work buffers are the caller's (no reallocation per sector).
+SectorCurve sectorCurve(const cv::Mat& a, const cv::Mat& B, const std::vector<double>& cum, int j, int sectors,
+                        cv::Mat& aj, cv::Mat& A, cv::Mat& P, cv::Mat& S, cv::Mat& c) {
+  const int n = a.cols;
+  const int x0 = static_cast<int>(static_cast<long long>(j) * n / sectors);
+  const int x1 = static_cast<int>(static_cast<long long>(j + 1) * n / sectors);
+  aj.setTo(0.0f);
+  a.colRange(x0, x1).copyTo(aj.colRange(x0, x1));
+  SectorCurve cu;
+  cu.energy = cv::norm(aj, cv::NORM_L2SQR);
+  cu.centre = 0.5 * (x0 + x1);
+  if (cu.energy <= 0.0) return cu;
+  sectorRows(a, x0, x1, cu);
+  cv::dft(aj, A, cv::DFT_ROWS | cv::DFT_COMPLEX_OUTPUT);
+  cv::mulSpectrums(B, A, P, cv::DFT_ROWS, true);  // B conj(A): c(s) = sum_x a(x) b(x + s)
+  cv::reduce(P, S, 0, cv::REDUCE_SUM, CV_32F);
+  cv::idft(S, c, cv::DFT_REAL_OUTPUT | cv::DFT_SCALE);
+  cu.ncc.resize(static_cast<size_t>(n));
+  for (int s = 0; s < n; ++s) {
+    const double e1 = cum[static_cast<size_t>(x1 + s)] - cum[static_cast<size_t>(x0 + s)];
+    cu.ncc[static_cast<size_t>(s)] = e1 > 0.0 ? c.at<float>(0, s) / std::sqrt(cu.energy * e1) : 0.0;
+  }
+  return cu;
+}
+
+// Every sector's curve of the reference feature a against b (both rows x n).
+std::vector<SectorCurve> sectorCurves(const cv::Mat& a, const cv::Mat& b, int sectors) {
+  const int n = b.cols;
   cv::Mat B;
   cv::dft(b, B, cv::DFT_ROWS | cv::DFT_COMPLEX_OUTPUT);
   // Column energy of b, prefix-summed over two turns for circular window sums.
-  cv::Mat b2;
+  cv::Mat b2, eb;
   cv::multiply(b, b, b2);
-  cv::Mat eb;
   cv::reduce(b2, eb, 0, cv::REDUCE_SUM, CV_64F);
   std::vector<double> cum(2 * static_cast<size_t>(n) + 1, 0.0);
   for (int i = 0; i < 2 * n; ++i) cum[static_cast<size_t>(i) + 1] = cum[static_cast<size_t>(i)] + eb.at<double>(0, i % n);
+  std::vector<SectorCurve> curves;
+  cv::Mat aj(a.size(), CV_32F), A, P, S, c;
+  for (int j = 0; j < sectors; ++j) curves.push_back(sectorCurve(a, B, cum, j, sectors, aj, A, P, S, c));
+  return curves;
+}
 
-  struct Curve {
-    std::vector<double> ncc, row_peak_weight;
-    double energy = 0.0, centre = 0.0, row = 0.0;
-  };
-  std::vector<Curve> curves;
-  std::vector<double> energies;
-  cv::Mat aj(a.size(), CV_32F), A, P, S, c;  // reused across sectors (no reallocation)
-  for (int j = 0; j < o.sectors; ++j) {
-    const int x0 = static_cast<int>(static_cast<long long>(j) * n / o.sectors);
-    const int x1 = static_cast<int>(static_cast<long long>(j + 1) * n / o.sectors);
-    aj.setTo(0.0f);
-    a.colRange(x0, x1).copyTo(aj.colRange(x0, x1));
-    const double ea = cv::norm(aj, cv::NORM_L2SQR);
-    energies.push_back(ea);
-    Curve cu;
-    cu.energy = ea;
-    if (ea > 0.0) {  // gradient-energy-weighted mean row of the sector
-      cv::Mat a2, er;
-      cv::multiply(a.colRange(x0, x1), a.colRange(x0, x1), a2);
-      cv::reduce(a2, er, 1, cv::REDUCE_SUM, CV_64F);
-      double sr = 0.0;
-      for (int r = 0; r < er.rows; ++r) sr += r * er.at<double>(r, 0);
-      cu.row = sr / ea;
-      // Each row's weight in the sector's peak: the curvature of its autocorrelation at zero lag,
-      // i.e. the energy of the feature's derivative along the columns (inside the sector).
-      cv::Mat d, d2, ed;
-      cv::subtract(a.colRange(x0 + 1, x1), a.colRange(x0, x1 - 1), d);
-      cv::multiply(d, d, d2);
-      cv::reduce(d2, ed, 1, cv::REDUCE_SUM, CV_64F);
-      cu.row_peak_weight.resize(static_cast<size_t>(ed.rows));
-      for (int r = 0; r < ed.rows; ++r) cu.row_peak_weight[static_cast<size_t>(r)] = ed.at<double>(r, 0);
-    }
-    cu.centre = 0.5 * (x0 + x1);
-    if (ea <= 0.0) {
-      curves.push_back(cu);
-      continue;
-    }
-    cv::dft(aj, A, cv::DFT_ROWS | cv::DFT_COMPLEX_OUTPUT);
-    cv::mulSpectrums(B, A, P, cv::DFT_ROWS, true);  // B conj(A): c(s) = sum_x a(x) b(x + s)
-    cv::reduce(P, S, 0, cv::REDUCE_SUM, CV_32F);
-    cv::idft(S, c, cv::DFT_REAL_OUTPUT | cv::DFT_SCALE);
-    cu.ncc.resize(static_cast<size_t>(n));
-    for (int s = 0; s < n; ++s) {
-      const double e1 = cum[static_cast<size_t>(x1 + s)] - cum[static_cast<size_t>(x0 + s)];
-      cu.ncc[static_cast<size_t>(s)] = e1 > 0.0 ? c.at<float>(0, s) / std::sqrt(ea * e1) : 0.0;
-    }
-    curves.push_back(std::move(cu));
-  }
-  std::vector<double> sorted = energies;
+// Sectors with at least min_sector_energy_fraction of the median sector energy (and a curve).
+std::vector<const SectorCurve*> usedSectors(const std::vector<SectorCurve>& curves, double min_fraction) {
+  std::vector<double> sorted;
+  for (const SectorCurve& cu : curves) sorted.push_back(cu.energy);
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double min_energy = std::max(1e-12, o.min_sector_energy_fraction * sorted[sorted.size() / 2]);
-  std::vector<const Curve*> used;
-  for (const Curve& cu : curves)
+  const double min_energy = std::max(1e-12, min_fraction * sorted[sorted.size() / 2]);
+  std::vector<const SectorCurve*> used;
+  for (const SectorCurve& cu : curves)
     if (cu.energy >= min_energy && !cu.ncc.empty()) used.push_back(&cu);
-  if (used.size() < 2) return std::nullopt;
+  return used;
+}
 
-  auto at = [n](const std::vector<double>& v, int s) { return v[static_cast<size_t>(((s % n) + n) % n)]; };
-  auto wrapShift = [n](double s) {
-    s = std::fmod(s, static_cast<double>(n));
-    if (s > 0.5 * n) s -= n;
-    if (s <= -0.5 * n) s += n;
-    return s;
-  };
-  std::vector<double> sum(static_cast<size_t>(n), 0.0);
-  for (const Curve* cu : used)
-    for (int s = 0; s < n; ++s) sum[static_cast<size_t>(s)] += cu->ncc[static_cast<size_t>(s)];
-  const int peak = static_cast<int>(std::max_element(sum.begin(), sum.end()) - sum.begin());
-  const double gate_cols = o.inlier_gate_rad * n / (2.0 * kPiD);
+// Shift s (columns of a turn of n) wrapped to (-n/2, n/2].
+double wrapShift(double s, int n) {
+  s = std::fmod(s, static_cast<double>(n));
+  if (s > 0.5 * n) s -= n;
+  if (s <= -0.5 * n) s += n;
+  return s;
+}
 
-  PanoramaRotation res;
-  res.sectors_used = static_cast<int>(used.size());
+double atShift(const std::vector<double>& v, int s, int n) { return v[static_cast<size_t>(((s % n) + n) % n)]; }
+
+// Per-sector rotations and the inliers' summed curve (sectors whose own peak lies within the gate
+// of the combined peak); fills res's per-sector fields and inliers.
+std::vector<double> inlierCurve(const std::vector<const SectorCurve*>& used, int peak, double gate_cols, int n,
+                                PanoramaRotation& res) {
   std::vector<double> inlier_sum(static_cast<size_t>(n), 0.0);
-  for (const Curve* cu : used) {
+  for (const SectorCurve* cu : used) {
     const int pj = static_cast<int>(std::max_element(cu->ncc.begin(), cu->ncc.end()) - cu->ncc.begin());
-    const double sj = pj + parabolaOffset(at(cu->ncc, pj - 1), at(cu->ncc, pj), at(cu->ncc, pj + 1));
+    const double sj = pj + parabolaOffset(atShift(cu->ncc, pj - 1, n), atShift(cu->ncc, pj, n), atShift(cu->ncc, pj + 1, n));
     res.sector_centre_rad.push_back(wrapAngle(-kPiD + cu->centre * 2.0 * kPiD / n));
-    res.sector_rotation_rad.push_back(wrapShift(sj) * 2.0 * kPiD / n);
+    res.sector_rotation_rad.push_back(wrapShift(sj, n) * 2.0 * kPiD / n);
     res.sector_row.push_back(cu->row);
     res.sector_row_peak_weight.push_back(cu->row_peak_weight);
-    if (std::abs(wrapShift(sj - peak)) <= gate_cols) {
+    if (std::abs(wrapShift(sj - peak, n)) <= gate_cols) {
       ++res.inliers;
       for (int s = 0; s < n; ++s) inlier_sum[static_cast<size_t>(s)] += cu->ncc[static_cast<size_t>(s)];
     }
   }
+  return inlier_sum;
+}
+
+}  // namespace
+
+std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref, const cv::Mat& pano,
+                                                         const PanoramaRotationOptions& o, const cv::Mat& valid_ref,
+                                                         const cv::Mat& valid) {
+  if (pano_ref.empty() || pano.empty() || pano_ref.size() != pano.size()) return std::nullopt;
+  checkRotationInputs(pano, o, valid_ref, valid);
+  const int n = pano.cols - 2 * o.pad_columns;
+  const std::vector<SectorCurve> curves = sectorCurves(rotationFeature(pano_ref, valid_ref, o.pad_columns),
+                                                       rotationFeature(pano, valid, o.pad_columns), o.sectors);
+  const std::vector<const SectorCurve*> used = usedSectors(curves, o.min_sector_energy_fraction);
+  if (used.size() < 2) return std::nullopt;
+  std::vector<double> sum(static_cast<size_t>(n), 0.0);
+  for (const SectorCurve* cu : used)
+    for (int s = 0; s < n; ++s) sum[static_cast<size_t>(s)] += cu->ncc[static_cast<size_t>(s)];
+  const int peak = static_cast<int>(std::max_element(sum.begin(), sum.end()) - sum.begin());
+  const double gate_cols = o.inlier_gate_rad * n / (2.0 * kPiD);
+  PanoramaRotation res;
+  res.sectors_used = static_cast<int>(used.size());
+  const std::vector<double> inlier_sum = inlierCurve(used, peak, gate_cols, n, res);
   const std::vector<double>& fin = res.inliers > 0 ? inlier_sum : sum;
   // The inliers' peak near the combined one.
   const int g = std::max(1, static_cast<int>(std::ceil(gate_cols)));
   int best = peak;
   for (int s = peak - g; s <= peak + g; ++s)
-    if (at(fin, s) > at(fin, best)) best = s;
-  const double shift = best + parabolaOffset(at(fin, best - 1), at(fin, best), at(fin, best + 1));
-  res.rotation_rad = wrapAngle(wrapShift(shift) * 2.0 * kPiD / n);
-  res.score = at(fin, best) / std::max(1, res.inliers > 0 ? res.inliers : res.sectors_used);
+    if (atShift(fin, s, n) > atShift(fin, best, n)) best = s;
+  const double shift = best + parabolaOffset(atShift(fin, best - 1, n), atShift(fin, best, n), atShift(fin, best + 1, n));
+  res.rotation_rad = wrapAngle(wrapShift(shift, n) * 2.0 * kPiD / n);
+  res.score = atShift(fin, best, n) / std::max(1, res.inliers > 0 ? res.inliers : res.sectors_used);
   return res;
 }
 

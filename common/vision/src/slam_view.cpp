@@ -89,14 +89,11 @@ void arrow(cv::Mat& img, cv::Point2d at, double theta, double len_px, cv::Scalar
   cv::arrowedLine(img, ipt(at), ipt(tip), col, th, cv::LINE_AA, 0, 0.35);
 }
 
-void drawMap(cv::Mat& view, const SlamViewData& d, const SlamViewOptions& opt, const SlamViewLayout& L) {
-  cv::Mat panel = view(L.map_rect);
-  panel.setTo(kWhite);
+// Grid and tick labels (drawn on the whole view; lines limited to the plot area) and axis labels.
+void drawGrid(cv::Mat& view, const SlamViewLayout& L) {
   const cv::Rect pr = L.plot_rect;
   const MapTransform& T = L.map;
   const double s = T.scale_px_per_m;
-
-  // Grid and tick labels (drawn on the whole view; lines limited to the plot area).
   const double span_m = std::max(pr.width, pr.height) / s;
   const double step = niceStep(span_m, 10);
   const double x0 = T.cx_m - (T.centre_px.x - pr.x) / s, x1 = T.cx_m + (pr.br().x - T.centre_px.x) / s;
@@ -115,6 +112,13 @@ void drawMap(cv::Mat& view, const SlamViewData& d, const SlamViewOptions& opt, c
   text(view, "x [m]", {pr.x + pr.width / 2 - 15, pr.br().y + 33}, 0.45);
   text(view, "y [m]", {L.map_rect.x + 6, pr.y - 6}, 0.45);
 
+}
+
+// Tracks, landmarks with their ellipses, poses and particles, clipped to the plot area.
+void drawContent(cv::Mat& view, const SlamViewData& d, const SlamViewOptions& opt, const SlamViewLayout& L) {
+  const cv::Rect pr = L.plot_rect;
+  const MapTransform& T = L.map;
+  const double s = T.scale_px_per_m;
   // Content, clipped to the plot area: draw into the plot ROI with shifted coordinates.
   cv::Mat plot = view(pr);
   const cv::Point2d off(pr.x, pr.y);
@@ -156,23 +160,22 @@ void drawMap(cv::Mat& view, const SlamViewData& d, const SlamViewOptions& opt, c
     cv::circle(plot, ipt(P(p.pose.x_m, p.pose.y_m)), 2, vc::kParticle, cv::FILLED, cv::LINE_8);
   }
 
-  // Scale bar under the plot area, right-aligned, level with the axis label.
-  {
-    const double len_m = niceStep(pr.width / s, 6);
-    const int len_px = std::max(1, cvRound(len_m * s));
-    const cv::Point a(pr.br().x - len_px - 48, pr.br().y + 30);
-    cv::line(view, a, a + cv::Point(len_px, 0), kText, 2);
-    cv::line(view, a + cv::Point(0, -4), a + cv::Point(0, 4), kText, 2);
-    cv::line(view, a + cv::Point(len_px, -4), a + cv::Point(len_px, 4), kText, 2);
-    text(view, fmt(len_m, len_m < 1.0 ? "%.1f m" : "%.0f m"), a + cv::Point(len_px + 8, 5), 0.45);
-  }
-  cv::rectangle(view, pr, kFrame, 1);
+}
 
-  // Title and status lines.
-  text(view, d.title, {L.map_rect.x + 8, L.map_rect.y + 19}, 0.55, kText, 1);
-  for (size_t i = 0; i < d.info.size(); ++i)
-    text(view, d.info[i], {L.map_rect.x + 8, L.map_rect.y + kTitleH + 12 + static_cast<int>(i) * kInfoLineH}, 0.42);
+// Scale bar under the plot area, right-aligned, level with the axis label.
+void drawScaleBar(cv::Mat& view, const SlamViewLayout& L) {
+  const cv::Rect pr = L.plot_rect;
+  const double s = L.map.scale_px_per_m;
+  const double len_m = niceStep(pr.width / s, 6);
+  const int len_px = std::max(1, cvRound(len_m * s));
+  const cv::Point a(pr.br().x - len_px - 48, pr.br().y + 30);
+  cv::line(view, a, a + cv::Point(len_px, 0), kText, 2);
+  cv::line(view, a + cv::Point(0, -4), a + cv::Point(0, 4), kText, 2);
+  cv::line(view, a + cv::Point(len_px, -4), a + cv::Point(len_px, 4), kText, 2);
+  text(view, fmt(len_m, len_m < 1.0 ? "%.1f m" : "%.0f m"), a + cv::Point(len_px + 8, 5), 0.45);
+}
 
+void drawLegend(cv::Mat& view, const SlamViewLayout& L) {
   // Legend: two rows under the axis label.
   const int ly = L.map_rect.y + L.map_rect.height - 30;
   int lx = L.map_rect.x + 10;
@@ -206,6 +209,20 @@ void drawMap(cv::Mat& view, const SlamViewData& d, const SlamViewOptions& opt, c
     cv::drawMarker(view, p + cv::Point(10, 0), vc::kLandmarkType2, cv::MARKER_CROSS, 10, 2);
     cv::ellipse(view, p + cv::Point(10, 0), cv::Size(11, 6), 0, 0, 360, vc::kLandmarkType2, 1, cv::LINE_AA);
   });
+}
+
+void drawMap(cv::Mat& view, const SlamViewData& d, const SlamViewOptions& opt, const SlamViewLayout& L) {
+  cv::Mat panel = view(L.map_rect);
+  panel.setTo(kWhite);
+  drawGrid(view, L);
+  drawContent(view, d, opt, L);
+  drawScaleBar(view, L);
+  cv::rectangle(view, L.plot_rect, kFrame, 1);
+  // Title and status lines.
+  text(view, d.title, {L.map_rect.x + 8, L.map_rect.y + 19}, 0.55, kText, 1);
+  for (size_t i = 0; i < d.info.size(); ++i)
+    text(view, d.info[i], {L.map_rect.x + 8, L.map_rect.y + kTitleH + 12 + static_cast<int>(i) * kInfoLineH}, 0.42);
+  drawLegend(view, L);
 }
 
 void drawImage(cv::Mat& view, const SlamViewData& d, const SlamViewLayout& L) {

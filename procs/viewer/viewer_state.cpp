@@ -103,20 +103,20 @@ const ViewerState::Image* ViewerState::findImage(int64_t utime) const {
   return nullptr;
 }
 
-vision::SlamViewData ViewerState::viewData(const std::string& title) const {
-  vision::SlamViewData d;
-  d.title = title;
+double ViewerState::relativeS(int64_t utime) const {
   const double t0 = first_utime_ < 0 ? 0.0 : static_cast<double>(first_utime_);
-  auto rel_s = [&](int64_t utime) { return (static_cast<double>(utime) - t0) * 1e-6; };
+  return (static_cast<double>(utime) - t0) * 1e-6;
+}
 
-  // Trajectories, poses.
+// Trajectories and poses: the true pose at the estimate's time (the nearest held), so that both
+// arrows match.
+void ViewerState::addPoses(vision::SlamViewData& d) const {
   d.estimate_track = est_track_.points();
   d.truth_track = truth_track_.points();
   if (pose_) {
     d.pose = toPose2(*pose_);
     d.pose_cov_xy_m2 << pose_->covariance[0][0], pose_->covariance[0][1], pose_->covariance[1][0],
         pose_->covariance[1][1];
-    // The true pose at the estimate's time (the nearest held), so that both arrows match.
     const pose_t* best = nullptr;
     for (const auto& t : truth_recent_)
       if (!best || std::llabs(t.utime - pose_->utime) < std::llabs(best->utime - pose_->utime)) best = &t;
@@ -124,9 +124,10 @@ vision::SlamViewData ViewerState::viewData(const std::string& title) const {
   } else if (truth_now_) {
     d.true_pose = toPose2(*truth_now_);
   }
+}
 
-  // Maps and particles.
-  int type1 = 0, type2 = 0;
+// Maps and particles.
+void ViewerState::addMaps(vision::SlamViewData& d) const {
   if (map_) {
     for (const auto& l : map_->landmarks) {
       vision::ViewLandmark v;
@@ -135,8 +136,6 @@ vision::SlamViewData ViewerState::viewData(const std::string& title) const {
       v.cov_xy_m2 << l.covariance[0][0], l.covariance[0][1], l.covariance[1][0], l.covariance[1][1];
       v.type = l.type;
       v.kind = l.kind;
-      type1 += l.type == 1;
-      type2 += l.type == 2;
       d.landmarks.push_back(v);
     }
   }
@@ -148,10 +147,12 @@ vision::SlamViewData ViewerState::viewData(const std::string& title) const {
     for (size_t i = 0; i < n; ++i)
       d.particles.push_back({{particles_->x_m[i], particles_->y_m[i], particles_->theta_rad[i]}, particles_->weight[i]});
   }
+}
 
-  // Status lines.
+// Status lines: time, step, particles, the estimate and its error, landmark counts.
+void ViewerState::addStatusLines(vision::SlamViewData& d) const {
   if (pose_) {
-    std::string l1 = "t " + fmt("%.1f s", rel_s(pose_->utime)) + "   step " + std::to_string(steps_) + "   " +
+    std::string l1 = "t " + fmt("%.1f s", relativeS(pose_->utime)) + "   step " + std::to_string(steps_) + "   " +
                      std::to_string(pose_->num_particles) + " particles, ESS " + fmt("%.1f", pose_->effective_sample_size);
     d.info.push_back(l1);
     std::string l2 = "estimate x " + fmt("%.2f", pose_->x_m) + " m, y " + fmt("%.2f", pose_->y_m) + " m, heading " +
@@ -161,17 +162,24 @@ vision::SlamViewData ViewerState::viewData(const std::string& title) const {
             ", " + fmt("%.1f deg", std::abs(wrapAngle(pose_->theta_rad - d.true_pose->theta_rad)) * 180.0 / M_PI);
     d.info.push_back(l2);
   } else {
-    d.info.push_back(truth_now_ ? "t " + fmt("%.1f s", rel_s(truth_now_->utime)) + "   waiting for SLAM_POSE"
+    d.info.push_back(truth_now_ ? "t " + fmt("%.1f s", relativeS(truth_now_->utime)) + "   waiting for SLAM_POSE"
                                 : std::string("waiting for SLAM_POSE"));
+  }
+  int type1 = 0, type2 = 0;
+  for (const auto& l : d.landmarks) {
+    type1 += l.type == 1;
+    type2 += l.type == 2;
   }
   std::string l3 = "landmarks " + std::to_string(d.landmarks.size()) + " (type I " + std::to_string(type1) +
                    ", type II " + std::to_string(type2) + ")";
   if (map_) l3 += ", candidates " + std::to_string(map_->num_candidates);
   if (truth_map_) l3 += ", true " + std::to_string(d.true_landmarks.size());
   d.info.push_back(l3);
+}
 
-  // The frame to show: the one the latest SLAM step answered, else the latest features frame
-  // with its image, else the latest image.
+// The frame to show: the one the latest SLAM step answered, else the latest features frame with its
+// image, else the latest image; its features coloured by their associations.
+void ViewerState::addFrame(vision::SlamViewData& d) const {
   const Frame* frame = nullptr;
   const Image* image = nullptr;
   if (pose_)
@@ -182,7 +190,7 @@ vision::SlamViewData ViewerState::viewData(const std::string& title) const {
   if (!frame && !images_.empty()) image = &images_.back();
   if (image) {
     d.image = image->mat;
-    d.image_caption = "image seq " + std::to_string(image->seq) + ", t " + fmt("%.1f s", rel_s(image->utime));
+    d.image_caption = "image seq " + std::to_string(image->seq) + ", t " + fmt("%.1f s", relativeS(image->utime));
   }
   if (frame) {
     d.features = frame->features;
@@ -203,6 +211,15 @@ vision::SlamViewData ViewerState::viewData(const std::string& title) const {
     else
       d.image_caption += " (no associations for this frame)";
   }
+}
+
+vision::SlamViewData ViewerState::viewData(const std::string& title) const {
+  vision::SlamViewData d;
+  d.title = title;
+  addPoses(d);
+  addMaps(d);
+  addStatusLines(d);
+  addFrame(d);
   return d;
 }
 

@@ -65,6 +65,12 @@ class ViewerState {
   };
   const associations_t* findAssociations(const Frame& f) const;
   const Image* findImage(int64_t utime) const;
+  // Parts of viewData.
+  void addPoses(vision::SlamViewData& d) const;
+  void addMaps(vision::SlamViewData& d) const;
+  void addStatusLines(vision::SlamViewData& d) const;
+  void addFrame(vision::SlamViewData& d) const;
+  double relativeS(int64_t utime) const;  ///< seconds since the first message seen
 
   ViewerStateOptions opt_;
   int64_t first_utime_ = -1;

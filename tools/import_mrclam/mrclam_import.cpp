@@ -90,24 +90,11 @@ std::vector<PoseSample> integrateOdometry(const std::vector<OdometrySample>& s) 
   return out;
 }
 
-ImportedLog importRobot(const std::string& dir, const ImportOptions& o) {
-  if (const std::string e = o.validate(); !e.empty()) throw std::invalid_argument(e);
-  ImportedLog log;
-  ImportReport& r = log.report;
-  const std::string n = std::to_string(o.robot);
-  auto odo = readOdometry(file(dir, "Robot" + n + "_Odometry.dat"), o.duplicate_times, &r.odometry_file);
-  auto meas = readMeasurements(file(dir, "Robot" + n + "_Measurement.dat"), &r.measurement_file);
-  auto truth = readGroundtruth(file(dir, "Robot" + n + "_Groundtruth.dat"), o.duplicate_times, &r.groundtruth_file);
-  const auto landmarks = readLandmarks(file(dir, "Landmark_Groundtruth.dat"), &r.landmark_file);
-  const auto barcodes = readBarcodes(file(dir, "Barcodes.dat"), &r.barcode_file);
+namespace {
 
-  // Identity of each barcode.
-  std::map<int, int> subject_of_code;
-  for (const auto& b : barcodes) subject_of_code[b.barcode] = b.subject;
-  std::set<int> landmark_subjects;
-  for (const auto& l : landmarks) landmark_subjects.insert(l.subject);
-
-  // The stretch imported.
+// Leaves out the rows after max_duration_s from the first odometry sample (counted).
+void cutToStretch(const ImportOptions& o, std::vector<OdometrySample>& odo, std::vector<Measurement>& meas,
+                  std::vector<PoseSample>& truth, ImportReport& r) {
   r.t0_s = odo.front().t_s;
   if (o.max_duration_s > 0.0) {
     const double t1 = r.t0_s + o.max_duration_s;
@@ -121,20 +108,29 @@ ImportedLog importRobot(const std::string& dir, const ImportOptions& o) {
     cut(truth);
   }
   r.t_end_s = odo.back().t_s;
+}
 
-  // ODOMETRY.
+// The cumulative odometry poses: the wheels' integrated, or (diagnostic) the truth relative to its
+// pose at the first odometry sample.
+std::vector<PoseSample> odometryPoses(const ImportOptions& o, const std::vector<OdometrySample>& odo,
+                                      const std::vector<PoseSample>& truth) {
   auto poses = integrateOdometry(odo);
-  if (o.odometry_from_truth) {
-    const auto first = interpolatePose(truth, odo.front().t_s);
-    if (!first) throw std::invalid_argument("--odometry-from-truth: no truth at the first odometry sample");
-    const Pose2 T0{first->x_m, first->y_m, first->theta_rad};
-    for (size_t i = 0; i < odo.size(); ++i) {
-      const auto p = interpolatePose(truth, odo[i].t_s);
-      const Pose2 rel = p ? T0.between(Pose2{p->x_m, p->y_m, p->theta_rad}) : Pose2{};
-      if (p) poses[i] = {odo[i].t_s, rel.x_m, rel.y_m, rel.theta_rad};
-      else if (i > 0) poses[i] = {odo[i].t_s, poses[i - 1].x_m, poses[i - 1].y_m, poses[i - 1].theta_rad};
-    }
+  if (!o.odometry_from_truth) return poses;
+  const auto first = interpolatePose(truth, odo.front().t_s);
+  if (!first) throw std::invalid_argument("--odometry-from-truth: no truth at the first odometry sample");
+  const Pose2 T0{first->x_m, first->y_m, first->theta_rad};
+  for (size_t i = 0; i < odo.size(); ++i) {
+    const auto p = interpolatePose(truth, odo[i].t_s);
+    const Pose2 rel = p ? T0.between(Pose2{p->x_m, p->y_m, p->theta_rad}) : Pose2{};
+    if (p) poses[i] = {odo[i].t_s, rel.x_m, rel.y_m, rel.theta_rad};
+    else if (i > 0) poses[i] = {odo[i].t_s, poses[i - 1].x_m, poses[i - 1].y_m, poses[i - 1].theta_rad};
   }
+  return poses;
+}
+
+void addOdometry(const ImportOptions& o, const std::vector<OdometrySample>& odo, const std::vector<PoseSample>& poses,
+                 ImportedLog& log) {
+  ImportReport& r = log.report;
   for (size_t i = 0; i < odo.size(); ++i) {
     odometry_t m{};
     m.utime = toUtime(odo[i].t_s);
@@ -153,8 +149,9 @@ ImportedLog importRobot(const std::string& dir, const ImportOptions& o) {
     }
   }
   r.odometry_messages = static_cast<int64_t>(odo.size());
+}
 
-  // GROUND_TRUTH_POSE.
+void addTruthPoses(const std::vector<PoseSample>& truth, ImportedLog& log) {
   for (size_t i = 0; i < truth.size(); ++i) {
     pose_t m{};
     m.utime = toUtime(truth[i].t_s);
@@ -165,35 +162,108 @@ ImportedLog importRobot(const std::string& dir, const ImportOptions& o) {
     m.input_seq = -1;
     add(log, m.utime, kRankTruth, channels::kGroundTruthPose, m);
   }
-  r.truth_poses = static_cast<int64_t>(truth.size());
+  log.report.truth_poses = static_cast<int64_t>(truth.size());
+}
 
-  // GROUND_TRUTH_MAP, at the first event.
-  {
-    map_t m{};
-    int64_t first = toUtime(odo.front().t_s);
-    if (!truth.empty()) first = std::min(first, toUtime(truth.front().t_s));
-    if (!meas.empty()) first = std::min(first, toUtime(meas.front().t_s));
-    m.utime = first;
-    m.seq = 0;
-    m.input_seq = -1;
-    for (const auto& l : landmarks) {
-      landmark_t lt{};
-      lt.id = l.subject;
-      lt.position_m[0] = l.x_m;
-      lt.position_m[1] = l.y_m;
-      lt.position_m[2] = 0.0;
-      lt.kind = feature_t::KIND_VERTICAL_LINE;
-      m.landmarks.push_back(lt);
-    }
-    m.num_landmarks = static_cast<int32_t>(m.landmarks.size());
-    m.num_candidates = 0;
-    add(log, first, kRankMap, channels::kGroundTruthMap, m);
+// GROUND_TRUTH_MAP, at the first event.
+void addTruthMap(const std::vector<LandmarkTruth>& landmarks, int64_t first_utime, ImportedLog& log) {
+  map_t m{};
+  m.utime = first_utime;
+  m.seq = 0;
+  m.input_seq = -1;
+  for (const auto& l : landmarks) {
+    landmark_t lt{};
+    lt.id = l.subject;
+    lt.position_m[0] = l.x_m;
+    lt.position_m[1] = l.y_m;
+    lt.position_m[2] = 0.0;
+    lt.kind = feature_t::KIND_VERTICAL_LINE;
+    m.landmarks.push_back(lt);
   }
+  m.num_landmarks = static_cast<int32_t>(m.landmarks.size());
+  m.num_candidates = 0;
+  add(log, first_utime, kRankMap, channels::kGroundTruthMap, m);
+}
 
-  // OMNI_FEATURES + GROUND_TRUTH_FEATURE_LABELS: one frame per distinct time.
-  r.measurements = static_cast<int64_t>(meas.size()) + 0;
-  std::set<int> unknown;
-  const int own_subject = o.robot;
+// Who a sighting's barcode belongs to.
+struct Subjects {
+  std::map<int, int> subject_of_code;
+  std::set<int> landmark_subjects;
+  std::set<int> unknown_codes;  ///< codes seen that name no landmark, robot or known subject
+};
+
+// The label of one sighting (counted in r); nullopt when it is to be dropped (a robot sighting with
+// drop_robot_sightings). `subject`: the barcode's subject, 0 for an unknown code.
+std::optional<int64_t> labelSighting(const Measurement& z, const ImportOptions& o, Subjects& subj, int& subject,
+                                     ImportReport& r) {
+  const auto it = subj.subject_of_code.find(z.code);
+  subject = it == subj.subject_of_code.end() ? 0 : it->second;  // colour 0: no subject has this code
+  if (it == subj.subject_of_code.end()) {
+    ++r.unknown_code_sightings;
+    subj.unknown_codes.insert(z.code);
+  } else if (subj.landmark_subjects.count(subject)) {
+    ++r.landmark_sightings;
+    return subject;
+  } else if (subject == o.robot) {
+    ++r.own_code_sightings;
+  } else if (subject < kFirstLandmarkSubject) {
+    ++r.robot_sightings;
+    if (!o.drop_robot_sightings) return feature_labels_t::OTHER_ROBOT;
+    ++r.robot_sightings_dropped;
+    return std::nullopt;
+  } else {  // a subject >= 6 without a landmark truth line: unknown clutter
+    ++r.unknown_code_sightings;
+    subj.unknown_codes.insert(z.code);
+  }
+  return feature_labels_t::UNKNOWN;
+}
+
+// One frame of the sightings meas[i, j) (one time): features and their labels.
+void frameOf(const std::vector<Measurement>& meas, size_t i, size_t j, const ImportOptions& o, Subjects& subj,
+             features_t& f, feature_labels_t& lab, ImportReport& r) {
+  f.utime = lab.utime = toUtime(meas[i].t_s);
+  f.image_seq = -1;
+  f.detector = "mrclam_bearings";
+  for (int k = 0; k < 3; ++k) f.camera_position_m[k] = o.camera_position_m[static_cast<size_t>(k)];
+  for (size_t k = i; k < j; ++k) {
+    const Measurement& z = meas[k];
+    int subject = 0;
+    const std::optional<int64_t> label = labelSighting(z, o, subj, subject, r);
+    if (!label) continue;
+    feature_t ft{};
+    ft.kind = feature_t::KIND_VERTICAL_LINE;
+    ft.azimuth_rad = wrapAngle(z.bearing_rad);
+    ft.elevation_rad = 0.0;
+    ft.has_elevation = false;
+    ft.covariance[0][0] = o.bearing_sigma_rad * o.bearing_sigma_rad;
+    if (o.subject_as_colour) ft.colour_a[0] = static_cast<float>(subject);
+    r.max_abs_bearing_rad = std::max(r.max_abs_bearing_rad, std::abs(ft.azimuth_rad));
+    f.features.push_back(ft);
+    lab.landmark_id.push_back(*label);
+    lab.source_code.push_back(z.code);
+  }
+}
+
+// Diagnostic --skip-still-frames: true when the robot moved less than still_frame_m and
+// still_frame_rad since the last frame kept.
+bool stillFrame(const ImportOptions& o, const std::vector<PoseSample>& poses, int64_t utime,
+                std::optional<PoseSample>& last_kept) {
+  if (!(o.still_frame_m > 0.0 || o.still_frame_rad > 0.0)) return false;
+  const auto p = interpolatePose(poses, static_cast<double>(utime) * 1e-6);
+  if (p && last_kept) {
+    const bool still = std::hypot(p->x_m - last_kept->x_m, p->y_m - last_kept->y_m) < o.still_frame_m &&
+                       std::abs(wrapAngle(p->theta_rad - last_kept->theta_rad)) < o.still_frame_rad;
+    if (still) return true;
+  }
+  if (p) last_kept = p;
+  return false;
+}
+
+// OMNI_FEATURES + GROUND_TRUTH_FEATURE_LABELS: one frame per distinct time.
+void addFrames(const ImportOptions& o, const std::vector<Measurement>& meas, const std::vector<PoseSample>& poses,
+               int64_t first_odometry_utime, Subjects& subj, ImportedLog& log) {
+  ImportReport& r = log.report;
+  r.measurements = static_cast<int64_t>(meas.size());
   int64_t seq = 0;
   std::optional<PoseSample> last_kept;
   for (size_t i = 0; i < meas.size();) {
@@ -201,73 +271,28 @@ ImportedLog importRobot(const std::string& dir, const ImportOptions& o) {
     while (j < meas.size() && meas[j].t_s == meas[i].t_s) ++j;
     features_t f{};
     feature_labels_t lab{};
-    f.utime = lab.utime = toUtime(meas[i].t_s);
-    f.image_seq = -1;
-    f.detector = "mrclam_bearings";
-    for (int k = 0; k < 3; ++k) f.camera_position_m[k] = o.camera_position_m[static_cast<size_t>(k)];
-    for (size_t k = i; k < j; ++k) {
-      const Measurement& z = meas[k];
-      int64_t label = feature_labels_t::UNKNOWN;
-      const auto it = subject_of_code.find(z.code);
-      const int subject = it == subject_of_code.end() ? 0 : it->second;  // colour 0: no subject has this code
-      if (it == subject_of_code.end()) {
-        ++r.unknown_code_sightings;
-        unknown.insert(z.code);
-      } else if (landmark_subjects.count(subject)) {
-        label = subject;
-        ++r.landmark_sightings;
-      } else if (subject == own_subject) {
-        ++r.own_code_sightings;
-      } else if (subject < kFirstLandmarkSubject) {
-        ++r.robot_sightings;
-        label = feature_labels_t::OTHER_ROBOT;
-        if (o.drop_robot_sightings) {
-          ++r.robot_sightings_dropped;
-          continue;
-        }
-      } else {  // a subject >= 6 without a landmark truth line: unknown clutter
-        ++r.unknown_code_sightings;
-        unknown.insert(z.code);
-      }
-      feature_t ft{};
-      ft.kind = feature_t::KIND_VERTICAL_LINE;
-      ft.azimuth_rad = wrapAngle(z.bearing_rad);
-      ft.elevation_rad = 0.0;
-      ft.has_elevation = false;
-      ft.covariance[0][0] = o.bearing_sigma_rad * o.bearing_sigma_rad;
-      if (o.subject_as_colour) ft.colour_a[0] = static_cast<float>(subject);
-      r.max_abs_bearing_rad = std::max(r.max_abs_bearing_rad, std::abs(ft.azimuth_rad));
-      f.features.push_back(ft);
-      lab.landmark_id.push_back(label);
-      lab.source_code.push_back(z.code);
-    }
+    frameOf(meas, i, j, o, subj, f, lab, r);
     i = j;
     if (f.features.empty()) continue;  // only dropped robot sightings (counted above)
-    if (o.still_frame_m > 0.0 || o.still_frame_rad > 0.0) {
-      const auto p = interpolatePose(poses, static_cast<double>(f.utime) * 1e-6);
-      if (p && last_kept) {
-        const bool still = std::hypot(p->x_m - last_kept->x_m, p->y_m - last_kept->y_m) < o.still_frame_m &&
-                           std::abs(wrapAngle(p->theta_rad - last_kept->theta_rad)) < o.still_frame_rad;
-        if (still) {
-          ++r.frames_still_skipped;
-          continue;
-        }
-      }
-      if (p) last_kept = p;
+    if (stillFrame(o, poses, f.utime, last_kept)) {
+      ++r.frames_still_skipped;
+      continue;
     }
     f.seq = lab.features_seq = lab.seq = seq++;
     f.num_features = lab.num_features = static_cast<int32_t>(f.features.size());
     r.features += f.num_features;
     r.max_features_per_frame = std::max<int64_t>(r.max_features_per_frame, f.num_features);
-    if (f.utime < toUtime(odo.front().t_s)) ++r.frames_before_odometry;
+    if (f.utime < first_odometry_utime) ++r.frames_before_odometry;
     add(log, f.utime, kRankFeatures, channels::kOmniFeatures, f);
     add(log, lab.utime, kRankLabels, channels::kGroundTruthFeatureLabels, lab);
   }
   r.frames = seq;
-  r.unknown_codes.assign(unknown.begin(), unknown.end());
+}
 
-  // The start pose: the truth at the first frame the SLAM process will process (odometry samples
-  // around it at most max_odometry_gap_s apart: docs/slam-process.md, pairing rule 5).
+// The start pose: the truth at the first frame the SLAM process will process (odometry samples
+// around it at most max_odometry_gap_s apart: docs/slam-process.md, pairing rule 5).
+void findStartPose(const ImportOptions& o, const std::vector<OdometrySample>& odo, const std::vector<PoseSample>& truth,
+                   ImportedLog& log) {
   for (const auto& e : log.events) {
     if (e.channel != channels::kOmniFeatures) continue;
     const double t = static_cast<double>(e.utime) * 1e-6;
@@ -275,10 +300,39 @@ ImportedLog importRobot(const std::string& dir, const ImportOptions& o) {
         std::lower_bound(odo.begin(), odo.end(), e.utime, [](const OdometrySample& s, int64_t u) { return toUtime(s.t_s) < u; });
     if (it == odo.end()) break;
     if (toUtime(it->t_s) != e.utime && (it == odo.begin() || it->t_s - (it - 1)->t_s > o.max_odometry_gap_s)) continue;
-    r.start_pose = interpolatePose(truth, t);
-    r.start_frame_utime = e.utime;
+    log.report.start_pose = interpolatePose(truth, t);
+    log.report.start_frame_utime = e.utime;
     break;
   }
+}
+
+}  // namespace
+
+ImportedLog importRobot(const std::string& dir, const ImportOptions& o) {
+  if (const std::string e = o.validate(); !e.empty()) throw std::invalid_argument(e);
+  ImportedLog log;
+  ImportReport& r = log.report;
+  const std::string n = std::to_string(o.robot);
+  auto odo = readOdometry(file(dir, "Robot" + n + "_Odometry.dat"), o.duplicate_times, &r.odometry_file);
+  auto meas = readMeasurements(file(dir, "Robot" + n + "_Measurement.dat"), &r.measurement_file);
+  auto truth = readGroundtruth(file(dir, "Robot" + n + "_Groundtruth.dat"), o.duplicate_times, &r.groundtruth_file);
+  const auto landmarks = readLandmarks(file(dir, "Landmark_Groundtruth.dat"), &r.landmark_file);
+  const auto barcodes = readBarcodes(file(dir, "Barcodes.dat"), &r.barcode_file);
+  Subjects subj;
+  for (const auto& b : barcodes) subj.subject_of_code[b.barcode] = b.subject;
+  for (const auto& l : landmarks) subj.landmark_subjects.insert(l.subject);
+
+  cutToStretch(o, odo, meas, truth, r);
+  const std::vector<PoseSample> poses = odometryPoses(o, odo, truth);
+  addOdometry(o, odo, poses, log);
+  addTruthPoses(truth, log);
+  int64_t first = toUtime(odo.front().t_s);
+  if (!truth.empty()) first = std::min(first, toUtime(truth.front().t_s));
+  if (!meas.empty()) first = std::min(first, toUtime(meas.front().t_s));
+  addTruthMap(landmarks, first, log);
+  addFrames(o, meas, poses, toUtime(odo.front().t_s), subj, log);
+  r.unknown_codes.assign(subj.unknown_codes.begin(), subj.unknown_codes.end());
+  findStartPose(o, odo, truth, log);
 
   std::stable_sort(log.events.begin(), log.events.end(), [](const LogEventOut& a, const LogEventOut& b) {
     return a.utime != b.utime ? a.utime < b.utime : a.rank < b.rank;

@@ -208,49 +208,52 @@ std::optional<Eigen::Vector2d> intersectRays2D(const std::vector<Eigen::Vector2d
   return A.ldlt().solve(b);
 }
 
-SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOptions& opt) {
-  SmootherResult res;
-  if (std::string why = opt.validate(); !why.empty()) {
-    res.failure = "options: " + why;
-    return res;
-  }
-  if (std::string why = pb.validate(); !why.empty()) {
-    res.failure = "problem: " + why;
-    return res;
-  }
-  const Layout lay{static_cast<int>(pb.poses.size())};
-  const int n = lay.landmark(static_cast<int>(pb.landmarks_m.size()));
-  const double c = opt.cauchy_scale;
-  const Eigen::Matrix3d prior_info =
-      Eigen::Vector3d(1.0 / (opt.prior_sigma_xy_m * opt.prior_sigma_xy_m), 1.0 / (opt.prior_sigma_xy_m * opt.prior_sigma_xy_m),
-                      1.0 / (opt.prior_sigma_theta_rad * opt.prior_sigma_theta_rad))
-          .asDiagonal();
+namespace {
+
+// The weighted least-squares problem of smoothBearingOnly with its fixed weights, and the solver's
+// work space (the sparse pattern is analysed anew at every solve).
+struct Solver {
+  const SmootherProblem& pb;
+  const SmootherOptions& opt;
+  Layout lay;
+  int n;     ///< unknowns
+  double c;  ///< Cauchy scale
+  Eigen::Matrix3d prior_info;
   std::vector<Eigen::Matrix3d> odo_info;
-  odo_info.reserve(pb.odometry.size());
-  for (const auto& f : pb.odometry) odo_info.push_back(f.covariance.inverse());
-
-  State s{pb.poses, pb.landmarks_m};
-  double cost = totalCost(pb, s, prior_info, odo_info, c);
-  res.initial_cost = cost;
-  // A cost that is not finite (a pose at 1e300 m) accepts no step, which read as "at a minimum": the
-  // problem is refused instead, and nothing is solved.
-  if (!std::isfinite(cost)) {
-    res.failure = "the initial cost is not finite (a pose, landmark or factor too large to solve)";
-    return res;
-  }
-  double lambda = opt.initial_lambda;
-
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
   Eigen::SparseMatrix<double> H;
   Eigen::VectorXd g;
-  for (int it = 0; it < opt.max_iterations; ++it) {
-    res.iterations = it + 1;
+
+  Solver(const SmootherProblem& p, const SmootherOptions& o)
+      : pb(p), opt(o), lay{static_cast<int>(p.poses.size())}, n(lay.landmark(static_cast<int>(p.landmarks_m.size()))),
+        c(o.cauchy_scale) {
+    prior_info = Eigen::Vector3d(1.0 / (opt.prior_sigma_xy_m * opt.prior_sigma_xy_m),
+                                 1.0 / (opt.prior_sigma_xy_m * opt.prior_sigma_xy_m),
+                                 1.0 / (opt.prior_sigma_theta_rad * opt.prior_sigma_theta_rad))
+                     .asDiagonal();
+    odo_info.reserve(pb.odometry.size());
+    for (const auto& f : pb.odometry) odo_info.push_back(f.covariance.inverse());
+  }
+  double cost(const State& s) const { return totalCost(pb, s, prior_info, odo_info, c); }
+
+  // s moved by the step dx (headings wrapped).
+  State moved(const State& s, const Eigen::VectorXd& dx) const {
+    State t = s;
+    for (size_t i = 0; i < t.poses.size(); ++i) {
+      const int ip = lay.pose(static_cast<int>(i));
+      t.poses[i] = Pose2{t.poses[i].x_m + dx(ip), t.poses[i].y_m + dx(ip + 1), wrapAngle(t.poses[i].theta_rad + dx(ip + 2))};
+    }
+    for (size_t j = 0; j < t.landmarks.size(); ++j) t.landmarks[j] += dx.segment<2>(lay.landmark(static_cast<int>(j)));
+    return t;
+  }
+
+  // One Levenberg-Marquardt iteration: lambda is raised until a step lowers the cost. False when no
+  // step does (at a minimum to working precision); `converged` when the accepted step's relative
+  // drop is below the tolerance.
+  bool iterate(State& s, double& cost_now, double& lambda, bool& converged) {
     normalEquations(pb, s, lay, n, prior_info, odo_info, c, H, g);
     const Eigen::VectorXd diag = H.diagonal();
-
-    // Marquardt: raise lambda until a step lowers the cost (or give up).
-    bool accepted = false;
-    while (!accepted && lambda < SmootherOptions::kMaxLambda) {
+    while (lambda < SmootherOptions::kMaxLambda) {
       Eigen::SparseMatrix<double> Hd = H;
       // A landmark seen only at rejected (undefined) bearings has a zero diagonal: keep it solvable.
       for (int k = 0; k < n; ++k) Hd.coeffRef(k, k) += lambda * diag(k) + 1e-12;
@@ -260,33 +263,23 @@ SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOption
         lambda *= 10.0;
         continue;
       }
-      const Eigen::VectorXd dx = ldlt.solve(-g);
-      State t = s;
-      for (size_t i = 0; i < t.poses.size(); ++i) {
-        const int ip = lay.pose(static_cast<int>(i));
-        t.poses[i] = Pose2{t.poses[i].x_m + dx(ip), t.poses[i].y_m + dx(ip + 1), wrapAngle(t.poses[i].theta_rad + dx(ip + 2))};
-      }
-      for (size_t j = 0; j < t.landmarks.size(); ++j) t.landmarks[j] += dx.segment<2>(lay.landmark(static_cast<int>(j)));
-      const double new_cost = totalCost(pb, t, prior_info, odo_info, c);
-      if (std::isfinite(new_cost) && new_cost < cost) {
-        const double drop = (cost - new_cost) / std::max(cost, 1e-300);
+      State t = moved(s, ldlt.solve(-g));
+      const double new_cost = cost(t);
+      if (std::isfinite(new_cost) && new_cost < cost_now) {
+        const double drop = (cost_now - new_cost) / std::max(cost_now, 1e-300);
         s = std::move(t);
-        cost = new_cost;
+        cost_now = new_cost;
         lambda = std::max(lambda / 3.0, 1e-12);
-        accepted = true;
-        if (drop < opt.relative_tolerance) res.converged = true;
-      } else {
-        lambda *= 5.0;
+        if (drop < opt.relative_tolerance) converged = true;
+        return true;
       }
+      lambda *= 5.0;
     }
-    if (!accepted) {  // no step lowers the cost: at a minimum to working precision
-      res.converged = true;
-      break;
-    }
-    if (res.converged) break;
+    return false;
   }
-  res.final_cost = cost;
-  if (opt.compute_covariance) {
+
+  // The marginal covariance of the last pose and the landmarks at s, or the reason there is none.
+  void covariance(const State& s, SmootherResult& res) {
     normalEquations(pb, s, lay, n, prior_info, odo_info, c, H, g);
     for (int k = 0; k < n; ++k) H.coeffRef(k, k) += 1e-12;  // as in the steps: unobserved landmarks stay solvable
     ldlt.compute(H);
@@ -296,9 +289,8 @@ SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOption
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9)) {
       res.covariance_failure = "the information matrix is singular at the solution (a landmark or pose that the "
                                "factors do not constrain, e.g. seen along a single ray): no covariance";
+      return;
     }
-  }
-  if (opt.compute_covariance && res.covariance_failure.empty()) {
     const int nl = static_cast<int>(pb.landmarks_m.size());
     std::vector<int> idx;
     for (int a = 0; a < 3; ++a) idx.push_back(lay.pose(lay.num_poses - 1) + a);
@@ -312,10 +304,41 @@ SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOption
     for (int a = 0; a < m; ++a)
       for (int b = 0; b < m; ++b) res.covariance(a, b) = 0.5 * (cols(idx[a], b) + cols(idx[b], a));
   }
+};
+
+}  // namespace
+
+SmootherResult smoothBearingOnly(const SmootherProblem& pb, const SmootherOptions& opt) {
+  SmootherResult res;
+  if (std::string why = opt.validate(); !why.empty()) {
+    res.failure = "options: " + why;
+    return res;
+  }
+  if (std::string why = pb.validate(); !why.empty()) {
+    res.failure = "problem: " + why;
+    return res;
+  }
+  Solver solver(pb, opt);
+  State s{pb.poses, pb.landmarks_m};
+  double cost = solver.cost(s);
+  res.initial_cost = cost;
+  // A cost that is not finite (a pose at 1e300 m) accepts no step, which read as "at a minimum": the
+  // problem is refused instead, and nothing is solved.
+  if (!std::isfinite(cost)) {
+    res.failure = "the initial cost is not finite (a pose, landmark or factor too large to solve)";
+    return res;
+  }
+  double lambda = opt.initial_lambda;
+  for (int it = 0; it < opt.max_iterations && !res.converged; ++it) {
+    res.iterations = it + 1;
+    if (!solver.iterate(s, cost, lambda, res.converged)) res.converged = true;  // no step lowers the cost
+  }
+  res.final_cost = cost;
+  if (opt.compute_covariance) solver.covariance(s, res);
   res.bearing_weights.reserve(pb.bearings.size());
   for (const auto& f : pb.bearings) {
     const auto e = bearingError(s.poses[f.pose], s.landmarks[f.landmark], f, nullptr, nullptr);
-    res.bearing_weights.push_back(e ? robustWeight(*e, c) : 0.0);
+    res.bearing_weights.push_back(e ? robustWeight(*e, opt.cauchy_scale) : 0.0);
   }
   res.poses = std::move(s.poses);
   res.landmarks_m = std::move(s.landmarks);

@@ -247,8 +247,11 @@ class Run {
   void checkRestartedRecorder() {
     if (logger().ready) {
       recordingInto(logPartFile(plan_.log_file, log_part_));
-      say("recording again into " + log_files_.back() + " after " + seconds(nowS() - recorder_down_s_) +
-          " s unrecorded (omnislam-logstat on every part shows what was lost)");
+      std::ostringstream o;
+      o << "recording again into " << log_files_.back() << ", " << std::fixed << std::setprecision(2)
+        << nowS() - recorder_down_s_ << " s after the recorder's end was seen (what it had not yet written is lost "
+        << "too: omnislam-logstat on every part shows exactly what)";
+      say(o.str());
     } else if (nowS() - recorder_down_s_ > kRecorderStartS) {
       say(plan_.log_tool + " has not said it is recording " + seconds(kRecorderStartS) +
           " s after its restart: stopping the run now, without the drain");

@@ -178,7 +178,8 @@ class Run {
     ro.window_s = plan_.recorder_restart_window_s;
     lg.restart = std::make_shared<RestartPolicy>(ro);
     sup_.children.push_back(lg);
-    sup_.print("launch", "recording every channel into " + plan_.log_file + " (" + plan_.log_tool + ")");
+    sup_.print("launch", "recording every channel into " + plan_.log_file + " (" + plan_.log_tool + "), pid " +
+                             std::to_string(lg.pid));
     waitUntilRecording(Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kRecorderStartS)));
     // A recorder that has ended records nothing (it could not write the file): the run stops
     // before it starts. Its error line used to pass for the start, and the run went on unrecorded.
@@ -296,9 +297,10 @@ class Run {
       return;
     }
     if (d.kind == RestartDecision::Kind::kExhausted) {
+      // After a normal exit (restart: always) it is left ended, as a normal exit without restarts is.
       say(how + "; restarts exhausted (" + std::to_string(d.limit) + " within " + seconds(c.restart->options().window_s) +
-          " s)" + (c.required ? ": stopping the run" : ": not required, left dead"));
-      if (c.required) {
+          " s)" + (!bad ? ": left ended" : c.required ? ": stopping the run" : ": not required, left dead"));
+      if (bad && c.required) {
         rc_ = 1;
         reason_ = c.name + " died, its restarts exhausted";
       }
@@ -324,7 +326,10 @@ class Run {
       c.argv = recorderArgv(plan_, logPartFile(plan_.log_file, log_part_));
       say(died + "restarting it into " + logPartFile(plan_.log_file, log_part_) + " (restart " +
           std::to_string(d.number) + " of " + std::to_string(d.limit) + ")");
-      if (respawn(c)) return;
+      if (respawn(c)) {
+        sup_.print("launch", "restarted " + plan_.log_tool + " (pid " + std::to_string(c.pid) + ")");
+        return;
+      }
     } else {
       say(died + (d.kind == RestartDecision::Kind::kExhausted
                       ? "its restarts are exhausted (" + std::to_string(d.limit) + " within " +

@@ -30,7 +30,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr double kRecorderStartS = 20.0;  ///< longest wait for a recorder to say it records
-constexpr double kLoggerGraceS = 5.0;  ///< the logger's least SIGINT-to-SIGKILL grace (runPlan)
+constexpr double kLoggerGraceS = 5.0;  ///< the logger's least SIGINT-to-SIGKILL grace (Run::finish)
 constexpr int kMessagesPerBatch = 1000;  ///< bus messages handled between two passes over the children
 
 /// What the drain counts: messages but PROCESS_STATUS (published once a second by every process,
@@ -76,7 +76,7 @@ std::unique_ptr<lcm::LCM> launcherBus(Supervisor& sup, const Plan& plan, bool& l
 /// (the wait is for them; a busy bus held the failure unseen until drain_s), and marked reported,
 /// so that the end of the run does not report them again. Nothing is restarted during the drain.
 /// Returns false when the drain ended that way.
-bool drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus) {
+bool drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus, LaunchStatus& status) {
   using Clock = std::chrono::steady_clock;
   Activity activity;
   if (bus)
@@ -88,6 +88,7 @@ bool drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus) {
   bool busy = false;  // the last batch found the bus still busy: do not wait on the children
   while (Clock::now() < until && !lcmio::stopRequested()) {
     sup.pump(busy ? 0 : bus ? 20 : 50);
+    status.tick();
     for (Child& c : sup.children) {
       if (!c.exited || c.reported) continue;
       if (!c.is_logger && (!failed(c.status) || !c.required)) continue;  // reported at the end, as before
@@ -393,7 +394,7 @@ class Run {
     // The drain lets the processes finish what they queued, for the recording: without a recorder
     // it would only let the run go on unrecorded (up to drain_s).
     if (!lcmio::stopRequested() && !logger_died_ && plan_.drain_s > 0 &&
-        !drainUntilQuiet(sup_, plan_, listening_ ? bus_.get() : nullptr))
+        !drainUntilQuiet(sup_, plan_, listening_ ? bus_.get() : nullptr, *status_))
       rc_ = 1;
     sup_.stop(false, plan_.stop_grace_s);
     // The logger goes last, after a moment for the final messages (status, last frame) to land.

@@ -1,6 +1,6 @@
-// The launcher's model: a launch file (docs/launch-file.md) parsed into a plan, and the
-// supervisor that runs the plan's processes on one LCM URL, prefixes their output, records the
-// bus with lcm-logger, and stops everything in order.
+// The launcher's model: a launch file (docs/launch-file.md) parsed into a plan, and the run of the
+// plan (run.cpp): its processes on one LCM URL, their output prefixed, restarted as the plan says,
+// the bus recorded, everything stopped in order.
 #pragma once
 
 #include <map>
@@ -8,13 +8,22 @@
 #include <string>
 #include <vector>
 
+#include "restart_policy.h"
+
 namespace omnislam::launch {
 
 struct ProcessSpec {
   std::string name;
   std::vector<std::string> argv;  ///< after variable substitution
   bool ends_run = false;          ///< its normal exit ends the scenario
-  bool required = true;           ///< its failure stops the run
+  bool required = true;           ///< its failure stops the run (once its restarts are exhausted)
+  RestartOptions restart;         ///< restart: never (default) | on_failure | always, backoff, limit
+};
+
+/// What the launcher does when the recorder dies while the run goes on (logger.on_failure).
+enum class RecorderFailure {
+  kStop,     ///< stop the run at once, without the drain (the default: nothing runs unrecorded)
+  kRestart,  ///< start a new recorder at once into the next part file (NAME.part2.lcm, ...)
 };
 
 struct Plan {
@@ -22,7 +31,12 @@ struct Plan {
   std::string lcm_url;
   bool log_enabled = true;
   std::string log_tool = "omnislam-record";  ///< omnislam-record | lcm-logger
-  std::string log_file;  ///< full path of the lcm-logger output
+  std::string log_file;  ///< full path of the recording (its first part)
+  RecorderFailure on_recorder_failure = RecorderFailure::kStop;
+  /// kRestart: restarts at once (no delay), at most this many within recorder_restart_window_s;
+  /// one more failure then stops the run as kStop does.
+  int recorder_restart_limit = 3;
+  double recorder_restart_window_s = 60.0;
   std::vector<ProcessSpec> processes;
   double stop_grace_s = 5.0;   ///< SIGINT, then SIGKILL after this
   /// After the scenario ends, the processes work through what they have queued before they are
@@ -44,11 +58,18 @@ std::string substitute(const std::string& s, const std::map<std::string, std::st
 /// bin_dir/prog when that exists, else the first executable `prog` on PATH; nullopt when none is.
 std::optional<std::string> findProgram(const std::string& prog, const std::string& bin_dir);
 
+/// The recorder's command line (plan.log_tool) recording into `file`.
+std::vector<std::string> recorderArgv(const Plan& plan, const std::string& file);
+
 /// Throws std::invalid_argument naming the first process (or the recorder) whose program cannot
 /// be found or is not executable, so that a bad launch file starts nothing.
 void checkPrograms(const Plan& plan, const std::string& bin_dir);
 
-/// Runs the plan; returns the launcher's exit code (0 when every process ended normally).
+/// The file of the recording's part `part` (1, 2, ...): log_file itself for part 1, else
+/// NAME.partK.lcm for NAME.lcm (or log_file + ".partK" when it does not end in .lcm).
+std::string logPartFile(const std::string& log_file, int part);
+
+/// Runs the plan (run.cpp); returns the launcher's exit code (0 when every process ended normally).
 int runPlan(const Plan& plan, const std::string& bin_dir);
 
 }  // namespace omnislam::launch

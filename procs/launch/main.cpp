@@ -1,7 +1,7 @@
 // omnislam-launch: starts the processes of a launch file on one LCM URL, prefixes their output
 // with their names, records the bus (omnislam-record by default, or lcm-logger) into logger.dir
-// (logs/), stops everything cleanly on Ctrl-C or when the scenario ends, and reports any process
-// that dies.
+// (logs/), stops everything cleanly on Ctrl-C or when the scenario ends, reports any process that
+// dies and restarts it when the launch file says so.
 #include <CLI/CLI.hpp>
 
 #include <unistd.h>

@@ -165,3 +165,49 @@ TEST(Logstat, SpansAreNeverNegativeAndOddChannelNamesKeepTheirRows) {
 }
 
 }  // namespace
+
+namespace {
+
+// Two parts of one recording (a recorder restarted into NAME.part2.lcm): read in order, each
+// channel's sequence is followed across the files, so exactly what the gap lost is counted, per
+// channel and per process, and said per gap; a publisher that restarted in the gap is named.
+TEST(Logstat, SeveralPartsAreOneRecordingAndTheGapBetweenThemIsCounted) {
+  t::TempDir dir;
+  const std::string part1 = dir.file("run.lcm"), part2 = dir.file("run.part2.lcm");
+  const auto odometry = [](int64_t seq) {
+    odometry_t o{};
+    o.utime = 1'000'000 + seq * 20'000;
+    o.seq = seq;
+    return o;
+  };
+  {
+    lcmio::LogWriter log(part1);
+    for (int64_t seq = 0; seq < 10; ++seq) log.write(5'000'000 + seq * 20'000, channels::kOdometry, odometry(seq));
+    log.write(5'200'000, channels::kProcessStatus, status("odometry", 0, process_status_t::STATE_RUNNING, 1, 0, "", ""));
+    log.write(5'200'000, channels::kProcessStatus, status("features", 4, process_status_t::STATE_RUNNING, 1, 0, "", ""));
+  }
+  {
+    lcmio::LogWriter log(part2);  // seqs 10..16 lost; odometry's status 1 and 2 lost; features restarted
+    log.write(5'540'000, channels::kProcessStatus, status("features", 0, process_status_t::STATE_RUNNING, 1, 0, "", ""));
+    for (int64_t seq = 17; seq < 20; ++seq) log.write(5'000'000 + seq * 20'000, channels::kOdometry, odometry(seq));
+    log.write(6'000'000, channels::kProcessStatus, status("odometry", 3, process_status_t::STATE_RUNNING, 1, 0, "", ""));
+  }
+  const auto r = t::run({t::binPath("omnislam-logstat"), part1, part2}, 10);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // channel type messages gaps ...: 13 of 20 odometry messages, the 7 missing ones as gaps.
+  const auto row = t::wordsOfLine(r.output, "ODOMETRY");
+  ASSERT_GE(row.size(), 4u) << r.output;
+  EXPECT_EQ(row[2], "13") << r.output;
+  EXPECT_EQ(row[3], "7") << r.output;
+  EXPECT_NE(r.output.find("gap between " + part1 + " and " + part2 +
+                          ": 0.340 s unrecorded by the recorders' clocks; 9 messages lost by seq: ODOMETRY 7 PROCESS_STATUS 2; "
+                          "seq restarted across it (a publisher restarted, its losses there are not counted): PROCESS_STATUS"),
+            std::string::npos)
+      << r.output;
+  // One file alone: no gap line, and the same table as before.
+  const auto one = t::run({t::binPath("omnislam-logstat"), part1}, 10);
+  EXPECT_EQ(one.output.find("gap between"), std::string::npos) << one.output;
+  EXPECT_EQ(t::wordsOfLine(one.output, "ODOMETRY")[3], "0") << one.output;
+}
+
+}  // namespace

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <set>
 #include <sstream>
 
 #include "omnislam/features_t.hpp"
@@ -77,44 +78,135 @@ std::string displayName(const std::string& name) {
   return out;
 }
 
-LogSummary logStats(const std::string& path) {
-  LogSummary summary;
-  std::map<std::string, ChannelStats>& out = summary.channels;
-  std::map<std::string, SeqTrack> tracks;
-  const lcmio::LogReadResult got = lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
-    ChannelStats& s = out[ev.channel];
+namespace {
+
+/// The statistics of one recording read file after file.
+class Accumulator {
+ public:
+  void startPart(const std::string& path) {
+    if (!path_.empty()) {
+      PartGap g;
+      g.before = path_;
+      g.after = path;
+      g.last_log_utime = last_log_utime_;
+      summary.gaps.push_back(g);
+      seen_in_part_.clear();
+    }
+    path_ = path;
+    last_log_utime_ = -1;
+  }
+
+  void event(const lcmio::LogEvent& ev) {
+    if (!summary.gaps.empty() && summary.gaps.back().first_log_utime < 0 && seen_in_part_.empty() &&
+        last_log_utime_ < 0)
+      summary.gaps.back().first_log_utime = ev.log_utime;
+    last_log_utime_ = ev.log_utime;
+    ChannelStats& s = summary.channels[ev.channel];
     ++s.events;
     s.bytes += static_cast<int64_t>(ev.data.size());
-    namespace ch = channels;
-    const std::string& c = ev.channel;
+    std::string track = ev.channel;
     bool ok = true;
-    if (c == ch::kOmniImage) ok = account<image_t>(ev, s, tracks[c]);
-    else if (c == ch::kOmniFeatures) ok = account<features_t>(ev, s, tracks[c]);
-    else if (c == ch::kOdometry) ok = account<odometry_t>(ev, s, tracks[c]);
-    else if (c == ch::kSlamPose || c == ch::kGroundTruthPose) ok = account<pose_t>(ev, s, tracks[c]);
-    else if (c == ch::kSlamMap || c == ch::kGroundTruthMap) ok = account<map_t>(ev, s, tracks[c]);
-    else if (c == ch::kSlamParticles) ok = account<particles_t>(ev, s, tracks[c]);
-    else if (c == ch::kSlamAssociations) ok = account<associations_t>(ev, s, tracks[c]);
-    else if (c == ch::kGroundTruthFeatureLabels) ok = account<feature_labels_t>(ev, s, tracks[c]);
-    else if (c == ch::kProcessStatus) {
+    if (ev.channel == channels::kProcessStatus) {
       // Several processes publish status, each with its own sequence: track per name.
       const auto m = lcmio::decodeAs<process_status_t>(ev);
-      ok = m.has_value();
-      if (!ok) s.type = process_status_t::getTypeName();
-      if (ok) ok = account<process_status_t>(ev, s, tracks[c + "/" + m->name]);
+      if (!m) {
+        s.type = process_status_t::getTypeName();
+        ++s.undecodable;
+        return;
+      }
+      track += "/" + m->name;
+      ok = accountTracked<process_status_t>(ev, s, track);
       if (ok) {
         ProcessSummary& p = summary.processes[m->name];
         p.last = *m;
         ++p.statuses;
       }
-    } else {
+    } else if (!accountByChannel(ev, s, track, ok)) {
       s.type = "?";
       return;
     }
     if (!ok) ++s.undecodable;
-  });
-  summary.unreadable = got.problem(path).value_or("");
-  return summary;
+  }
+
+  LogSummary summary;
+
+ private:
+  /// Accounts an event of a contract channel; false for a channel not in the contract.
+  bool accountByChannel(const lcmio::LogEvent& ev, ChannelStats& s, const std::string& track, bool& ok) {
+    namespace ch = channels;
+    const std::string& c = ev.channel;
+    if (c == ch::kOmniImage) ok = accountTracked<image_t>(ev, s, track);
+    else if (c == ch::kOmniFeatures) ok = accountTracked<features_t>(ev, s, track);
+    else if (c == ch::kOdometry) ok = accountTracked<odometry_t>(ev, s, track);
+    else if (c == ch::kSlamPose || c == ch::kGroundTruthPose) ok = accountTracked<pose_t>(ev, s, track);
+    else if (c == ch::kSlamMap || c == ch::kGroundTruthMap) ok = accountTracked<map_t>(ev, s, track);
+    else if (c == ch::kSlamParticles) ok = accountTracked<particles_t>(ev, s, track);
+    else if (c == ch::kSlamAssociations) ok = accountTracked<associations_t>(ev, s, track);
+    else if (c == ch::kGroundTruthFeatureLabels) ok = accountTracked<feature_labels_t>(ev, s, track);
+    else return false;
+    return true;
+  }
+
+  /// account(), and what it counted across the gap at a publisher's first message of a new part.
+  template <class Msg>
+  bool accountTracked(const lcmio::LogEvent& ev, ChannelStats& s, const std::string& track) {
+    SeqTrack& t = tracks_[track];
+    const bool across = !summary.gaps.empty() && t.have && !seen_in_part_.count(track);
+    const int64_t gaps_before = s.seq_gaps, restarts_before = s.seq_restarts;
+    const bool ok = account<Msg>(ev, s, t);
+    if (!ok) return false;
+    seen_in_part_.insert(track);
+    if (across) {
+      PartGap& g = summary.gaps.back();
+      if (s.seq_gaps > gaps_before) g.lost[ev.channel] += s.seq_gaps - gaps_before;
+      if (s.seq_restarts > restarts_before) ++g.restarted[ev.channel];
+    }
+    return true;
+  }
+
+  std::map<std::string, SeqTrack> tracks_;
+  std::set<std::string> seen_in_part_;  ///< tracks with a message in the current part
+  std::string path_;
+  int64_t last_log_utime_ = -1;
+};
+
+}  // namespace
+
+LogSummary logStats(const std::string& path) { return logStats(std::vector<std::string>{path}); }
+
+LogSummary logStats(const std::vector<std::string>& paths) {
+  Accumulator acc;
+  for (const auto& path : paths) {
+    acc.startPart(path);
+    const lcmio::LogReadResult got = lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) { acc.event(ev); });
+    if (const auto problem = got.problem(path))
+      acc.summary.unreadable += (acc.summary.unreadable.empty() ? "" : "\nwarning: ") + *problem;
+  }
+  return acc.summary;
+}
+
+std::string formatPartGaps(const std::vector<PartGap>& gaps) {
+  std::ostringstream os;
+  for (const PartGap& g : gaps) {
+    os << "gap between " << g.before << " and " << g.after << ": ";
+    if (g.last_log_utime >= 0 && g.first_log_utime >= 0) {
+      char span[64];
+      std::snprintf(span, sizeof span, "%.3f", (static_cast<double>(g.first_log_utime) - g.last_log_utime) * 1e-6);
+      os << span << " s unrecorded by the recorders' clocks";
+    } else {
+      os << "one of the parts is empty";
+    }
+    int64_t total = 0;
+    for (const auto& [c, n] : g.lost) total += n;
+    os << "; " << total << " messages lost by seq" << (g.lost.empty() ? "" : ":");
+    for (const auto& [c, n] : g.lost) os << " " << displayName(c) << " " << n;
+    if (!g.restarted.empty()) {
+      os << "; seq restarted across it (a publisher restarted, its losses there are not counted):";
+      for (const auto& [c, n] : g.restarted) os << " " << displayName(c);
+    }
+    os << "\n";
+  }
+  return os.str();
 }
 
 std::string formatStats(const std::map<std::string, ChannelStats>& stats) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "omnislam/process_status_t.hpp"
 
@@ -32,14 +33,36 @@ struct ProcessSummary {
   int64_t statuses = 0;  ///< PROCESS_STATUS messages of this name in the log
 };
 
+/// What was lost between two parts of one recording (a recorder restarted into NAME.part2.lcm).
+struct PartGap {
+  std::string before, after;  ///< the two files
+  int64_t last_log_utime = -1;   ///< the recorder's clock at the last event of `before` (-1: none)
+  int64_t first_log_utime = -1;  ///< the recorder's clock at the first event of `after` (-1: none)
+  /// Per channel, the messages missing by seq across the gap: counted at each publisher's first
+  /// message after it (per process name for PROCESS_STATUS). Channels with none are left out.
+  std::map<std::string, int64_t> lost;
+  /// Channels whose seq restarted across the gap (a publisher restarted meanwhile): what it lost
+  /// there cannot be counted.
+  std::map<std::string, int64_t> restarted;
+};
+
 struct LogSummary {
   std::map<std::string, ChannelStats> channels;
   std::map<std::string, ProcessSummary> processes;
-  std::string unreadable;  ///< "" or why the log's tail could not be read (lcmio::LogReadResult::problem)
+  std::string unreadable;  ///< "" or why a log's tail could not be read (lcmio::LogReadResult::problem), per file
+  std::vector<PartGap> gaps;  ///< between consecutive files, when several are read
 };
 
 /// Reads the whole log once. Throws std::runtime_error if it cannot be opened.
 LogSummary logStats(const std::string& path);
+
+/// Reads several files in order as one recording: each channel's sequence is followed across the
+/// files, so the table's gaps include what was lost between them, and `gaps` says it per gap.
+LogSummary logStats(const std::vector<std::string>& paths);
+
+/// One paragraph per gap between parts: how long (by the recorders' clocks) and, per channel, how
+/// many messages are missing by seq; "" when there are no gaps.
+std::string formatPartGaps(const std::vector<PartGap>& gaps);
 
 /// A channel or process name as printed: bytes other than printable ASCII (a NUL, a control, UTF-8)
 /// and the backslash escaped as \xNN, and a name over 60 characters cut to its first 40 and its

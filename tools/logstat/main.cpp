@@ -1,6 +1,7 @@
 // omnislam-logstat: prints what an LCM log holds, channel by channel (counts, sequence gaps,
 // undecodable or invalid events, span and rate in the messages' own time), then each process's last
 // PROCESS_STATUS (received, published, undecodable, refused, missed; its detail and last error).
+// Several files are read in order as one recording, with what was lost between them.
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -18,14 +19,21 @@
 
 int main(int argc, char** argv) {
   CLI::App cli{"omnislam-logstat: per-channel statistics of an omnislam LCM log"};
-  std::string path;
-  cli.add_option("log", path, "LCM log file")->required()->check(CLI::ExistingFile);
+  std::vector<std::string> paths;
+  cli.add_option("log", paths,
+                 "LCM log file; several are read in order as one recording (the parts of a restarted recorder: "
+                 "NAME.lcm NAME.part2.lcm ...), and what was lost between them is shown")
+      ->required()
+      ->check(CLI::ExistingFile);
   std::string export_dir;
   cli.add_option("--export-images", export_dir, "also write every OMNI_IMAGE frame as PNG into this folder");
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return omnislam::app::runMain("omnislam-logstat", [&]() -> int {
-    const auto summary = omnislam::tools::logStats(path);
-    std::cout << path << "\n" << omnislam::tools::formatStats(summary.channels);
+    const auto summary = omnislam::tools::logStats(paths);
+    for (size_t i = 0; i < paths.size(); ++i) std::cout << (i ? " " : "") << paths[i];
+    std::cout << "\n" << omnislam::tools::formatStats(summary.channels);
+    const std::string gaps = omnislam::tools::formatPartGaps(summary.gaps);
+    if (!gaps.empty()) std::cout << "\n" << gaps;
     const std::string processes = omnislam::tools::formatProcesses(summary.processes);
     if (!processes.empty()) std::cout << "\n" << processes;
     if (!summary.unreadable.empty()) std::cout << "\nwarning: " << summary.unreadable << "\n";
@@ -33,7 +41,7 @@ int main(int argc, char** argv) {
       std::filesystem::create_directories(export_dir);
       int n = 0, failed = 0;
       std::set<std::string> names;
-      omnislam::lcmio::forEachEvent(path, [&](const omnislam::lcmio::LogEvent& ev) {
+      for (const auto& path : paths) omnislam::lcmio::forEachEvent(path, [&](const omnislam::lcmio::LogEvent& ev) {
         if (ev.channel != omnislam::channels::kOmniImage) return;
         // Only what a process would accept: decodeImage trusts the sizes that validate checks.
         const auto msg = omnislam::lcmio::decodeValid<omnislam::image_t>(ev);

@@ -72,7 +72,12 @@ std::string coverageText(const eval::Coverage& v) {
   if (v.frames > 0) o << v.frames_answered << " of " << v.frames << " frames answered (" << percent(v.answered_share) << "); ";
   o << "poses cover " << percent(v.span_share) << " of the " << (v.reference_is_frames ? "frames'" : "truth's") << " span of "
     << seconds(v.reference_span_s);
-  if (v.truth_span_s > 0) o << "; the truth ends " << seconds(v.truth_end_gap_s) << " after the last pose";
+  if (v.truth_span_s > 0) {
+    if (v.truth_end_gap_s >= 0)
+      o << "; the truth ends " << seconds(v.truth_end_gap_s) << " after the last pose";
+    else
+      o << "; the last pose is " << seconds(-v.truth_end_gap_s) << " after the truth's end";
+  }
   o << (v.complete() ? "" : "  INCOMPLETE") << "\n";
   return o.str();
 }

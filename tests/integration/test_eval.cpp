@@ -1,6 +1,6 @@
 // omnislam-eval on logs with known answers: a SLAM trajectory offset from the truth by a fixed
 // translation, a map with one displaced landmark, a duplicate and a ghost; raw, --align, --truth
-// from a second log, the TUM files, and bad input.
+// from a second log, the TUM files, bad input, and runs the SLAM output covers only in part.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -19,6 +19,7 @@
 #include "omnislam/map_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "eval_json.h"
+#include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/log_writer.h"
 #include "proc_util.h"
 #include "slam_log.h"
@@ -114,6 +115,70 @@ TEST(Eval, AlignedFiguresAreExactAndRawOnesShowTheOffset) {
     cv::imwrite(std::string(keep) + "/eval.map.png", map_png);
     cv::imwrite(std::string(keep) + "/eval.errors.png", err_png);
   }
+}
+
+// A copy of the log at `in` without the SLAM output (SLAM_* channels) logged after `cut_utime`:
+// the recording of a SLAM process killed at that time while the rest of the system ran on.
+void cutSlamOutput(const std::string& in, const std::string& out, int64_t cut_utime) {
+  lcmio::LogWriter w(out);
+  lcmio::forEachEvent(in, [&](const lcmio::LogEvent& ev) {
+    if (ev.channel.rfind("SLAM_", 0) == 0 && ev.log_utime > cut_utime) return;
+    w.write(ev.log_utime, ev.channel, ev.data.data(), static_cast<int32_t>(ev.data.size()));
+  });
+}
+
+// Every frame answered over the whole run: complete, exit 0, the coverage figures in the JSON.
+// The same run with the SLAM output cut after 5 of its 10 s (6 of 11 frames answered): one line
+// saying so with the figures, exit 3; --allow-incomplete or lower minimums let it pass.
+TEST(Eval, ARunCutInTheMiddleOfTheSlamOutputIsIncomplete) {
+  t::TempDir dir;
+  makeLogs(dir.file("run.lcm"), dir.file("unused.lcm"), true);
+  const auto whole = t::run({t::binPath("omnislam-eval"), dir.file("run.lcm"), "--json", "--no-tum"}, 30);
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  EXPECT_NE(whole.output.find("\"complete\": true"), std::string::npos) << whole.output;
+  EXPECT_EQ(jsonNumber(whole.output, "frames_answered"), 11) << whole.output;
+  EXPECT_EQ(jsonNumber(whole.output, "answered_share"), 1.0) << whole.output;
+  EXPECT_EQ(jsonNumber(whole.output, "span_share"), 1.0) << whole.output;
+  EXPECT_EQ(jsonNumber(whole.output, "reference_span_s"), 10.0) << whole.output;
+  EXPECT_EQ(whole.output.find("INCOMPLETE"), std::string::npos) << whole.output;
+
+  cutSlamOutput(dir.file("run.lcm"), dir.file("cut.lcm"), 6'000'000);
+  const auto cut = t::run({t::binPath("omnislam-eval"), dir.file("cut.lcm"), "--json", "--no-tum"}, 30);
+  EXPECT_EQ(cut.exit_code, 3) << cut.output;
+  EXPECT_NE(cut.output.find("omnislam-eval: INCOMPLETE RUN: the SLAM answered 6 of 11 frames (54.5 % < --min-answered "
+                            "90.0 %); its poses cover 50.0 % of the frames' span of 10.00 s (< --min-span 90.0 %): they "
+                            "start 0.00 s after it and end 5.00 s before it"),
+            std::string::npos)
+      << cut.output;
+  EXPECT_NE(cut.output.find("\"complete\": false"), std::string::npos) << cut.output;
+  EXPECT_EQ(jsonNumber(cut.output, "frames"), 11) << cut.output;
+  EXPECT_EQ(jsonNumber(cut.output, "frames_answered"), 6) << cut.output;
+  EXPECT_NEAR(jsonNumber(cut.output, "answered_share"), 6.0 / 11.0, 1e-6) << cut.output;
+  EXPECT_NEAR(jsonNumber(cut.output, "span_share"), 0.5, 1e-9) << cut.output;
+  EXPECT_NEAR(jsonNumber(cut.output, "pose_end_gap_s"), 5.0, 1e-9) << cut.output;
+  EXPECT_NEAR(jsonNumber(cut.output, "truth_end_gap_s"), 5.0, 1e-9) << cut.output;
+  EXPECT_EQ(jsonNumber(cut.output, "poses_compared"), 6) << "the figures are still printed" << cut.output;
+  // The table says it too.
+  const auto table = t::run({t::binPath("omnislam-eval"), dir.file("cut.lcm"), "--no-tum"}, 30);
+  EXPECT_EQ(table.exit_code, 3) << table.output;
+  EXPECT_NE(table.output.find("coverage: 6 of 11 frames answered (54.5 %)"), std::string::npos) << table.output;
+  // Accepted on request: exit 0, still said.
+  const auto allowed =
+      t::run({t::binPath("omnislam-eval"), dir.file("cut.lcm"), "--json", "--no-tum", "--allow-incomplete"}, 30);
+  EXPECT_EQ(allowed.exit_code, 0) << allowed.output;
+  EXPECT_NE(allowed.output.find("omnislam-eval: warning: INCOMPLETE RUN"), std::string::npos) << allowed.output;
+  // The minimums are the user's: each one alone fails the run, both lowered pass it.
+  const auto lower = [&](const std::string& answered, const std::string& span) {
+    return t::run({t::binPath("omnislam-eval"), dir.file("cut.lcm"), "--json", "--no-tum", "--min-answered", answered,
+                   "--min-span", span},
+                  30);
+  };
+  EXPECT_EQ(lower("0.5", "0.5").exit_code, 0);
+  EXPECT_EQ(lower("0.6", "0.5").exit_code, 3);
+  EXPECT_EQ(lower("0.5", "0.6").exit_code, 3);
+  const auto bad = lower("1.5", "0.5");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--min-answered"), std::string::npos) << bad.output;
 }
 
 TEST(Eval, TruthFromASecondLog) {
@@ -336,6 +401,25 @@ TEST(Eval, LandmarkMatchingSolvesGroupsAndRefusesOneTooLarge) {
                               "(--gate 2 m)"),
             std::string::npos)
       << crowd.output;
+}
+
+// Without OMNI_FEATURES the truth's span is the reference: poses over its first half are incomplete;
+// a run whose truth ends with the poses (e.g. a shorter --duration) is complete.
+TEST(Eval, WithoutFramesThePosesAreCheckedAgainstTheTruthsSpan) {
+  t::TempDir dir;
+  writeLine(dir.file("half.lcm"), [](lcmio::LogWriter& log) {
+    for (int k = 11; k <= 20; ++k) log.write(0, channels::kGroundTruthPose, t::makePose(1'000'000 + k * 100'000, k, 0, 0));
+  });
+  const auto r = t::run({t::binPath("omnislam-eval"), dir.file("half.lcm"), "--json", "--no-tum"}, 30);
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("its poses cover 50.0 % of the truth's span of 2.00 s (< --min-span 90.0 %)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("\"coverage_reference\": \"truth\""), std::string::npos) << r.output;
+  writeLine(dir.file("line.lcm"), [](lcmio::LogWriter&) {});
+  const auto whole = t::run({t::binPath("omnislam-eval"), dir.file("line.lcm"), "--json", "--no-tum"}, 30);
+  EXPECT_EQ(whole.exit_code, 0) << whole.output;
+  EXPECT_EQ(jsonNumber(whole.output, "span_share"), 1.0) << whole.output;
 }
 
 }  // namespace

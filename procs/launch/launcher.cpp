@@ -68,18 +68,12 @@ std::string logPartFile(const std::string& log_file, int part) {
   return log_file + suffix;
 }
 
-Plan loadPlan(const std::string& path, const std::map<std::string, std::string>& overrides, const std::string& url,
-              const std::string& log_dir, const std::string& log_file, bool no_log) {
-  const config::Node root = config::Node::loadFile(path);
-  root.rejectUnknownKeys(
-      {"name", "lcm_url", "variables", "logger", "processes", "stop_grace_s", "drain_s", "drain_quiet_s"});
-  Plan plan;
-  plan.name = root.getString("name", "run");
-  plan.lcm_url = url.empty() ? root.getString("lcm_url", "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304") : url;
-  plan.stop_grace_s = root.getDouble("stop_grace_s", 0.1, 120.0, 5.0);
-  plan.drain_s = root.getDouble("drain_s", 0.0, 600.0, 1.0);
-  plan.drain_quiet_s = root.getDouble("drain_quiet_s", 0.0, 60.0, 1.0);
+namespace {
 
+// The launch file's variables with ${config_dir}, the --set overrides applied and every reference
+// substituted.
+std::map<std::string, std::string> planVariables(const config::Node& root, const std::string& path,
+                                                 const std::map<std::string, std::string>& overrides) {
   std::map<std::string, std::string> vars{{"config_dir", fs::absolute(root.sourceDir()).lexically_normal().string()}};
   if (auto v = root.optChild("variables")) {
     for (const auto& k : v->keys()) vars[k] = v->getString(k);
@@ -89,16 +83,15 @@ Plan loadPlan(const std::string& path, const std::map<std::string, std::string>&
     vars[k] = val;
   }
   // Variables may refer to ${config_dir} and to each other, at any depth: substituted until nothing
-  // changes (one pass per variable at most); what still holds a ${...} then is a cycle. One pass in
-  // map order left "${config_dir}" in a variable that named one defined after it.
+  // changes (one pass per variable at most); what still holds a ${...} then is a cycle.
   for (size_t pass = 0; pass <= vars.size(); ++pass) {
     bool changed = false;
     for (auto& [k, val] : vars) {
       if (val.find("${") == std::string::npos) continue;
       try {
         std::string next = substitute(val, vars);
-        // Each variable may hold another twice: 26 such lines made a 512 MB value, 40 ran out of
-        // memory (a helper's fuzzing). No command line needs more than this.
+        // Each variable may hold another twice: a few dozen lines would make a value of gigabytes.
+        // No command line needs more than this.
         if (next.size() > kMaxVariableBytes)
           throw config::ConfigError(root.where("variables." + k) + ": its value grows past " +
                                     std::to_string(kMaxVariableBytes) + " bytes when the variables are substituted");
@@ -114,7 +107,13 @@ Plan loadPlan(const std::string& path, const std::map<std::string, std::string>&
     if (val.find("${") != std::string::npos)
       throw config::ConfigError(root.where("variables." + k) + ": variables refer to each other in a cycle ('" + val +
                                 "')");
+  return vars;
+}
 
+// The logger section and the flags that override it: the recorder, its policy and the log file
+// (NAME-YYYYmmdd-HHMMSS.lcm in the logger's dir unless --log-file names one).
+void loadLogger(const config::Node& root, const std::map<std::string, std::string>& vars, const std::string& log_dir,
+                const std::string& log_file, bool no_log, Plan& plan) {
   bool log_enabled = true;
   std::string dir = "logs";
   if (auto lg = root.optChild("logger")) {
@@ -133,39 +132,58 @@ Plan loadPlan(const std::string& path, const std::map<std::string, std::string>&
   if (!log_file.empty()) {
     plan.log_file = log_file;
     plan.log_enabled = !no_log;
-  } else {
-    const std::time_t now = std::time(nullptr);
-    std::tm tm{};
-    localtime_r(&now, &tm);
-    std::ostringstream f;
-    f << plan.name << "-" << std::put_time(&tm, "%Y%m%d-%H%M%S") << ".lcm";
-    plan.log_file = (fs::path(dir) / f.str()).string();
+    return;
   }
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&now, &tm);
+  std::ostringstream f;
+  f << plan.name << "-" << std::put_time(&tm, "%Y%m%d-%H%M%S") << ".lcm";
+  plan.log_file = (fs::path(dir) / f.str()).string();
+}
 
-  for (const config::Node& p : root.items("processes")) {
-    p.rejectUnknownKeys({"name", "cmd", "ends_run", "required", "restart", "restart_delay_s", "restart_delay_max_s",
-                         "restart_limit", "restart_window_s"});
-    ProcessSpec spec;
-    spec.name = p.getString("name");
-    spec.ends_run = p.getBool("ends_run", false);
-    spec.required = p.getBool("required", true);
-    spec.restart = restartOptions(p);
-    for (const auto& a : p.getStrings("cmd")) {
-      try {
-        spec.argv.push_back(substitute(a, vars));
-      } catch (const std::invalid_argument& e) {
-        throw config::ConfigError(p.where("cmd") + ": " + e.what());
-      }
+// One entry of `processes`, its cmd substituted; names must be unique and not the launcher's own.
+ProcessSpec loadProcess(const config::Node& p, const std::map<std::string, std::string>& vars, const Plan& plan) {
+  p.rejectUnknownKeys({"name", "cmd", "ends_run", "required", "restart", "restart_delay_s", "restart_delay_max_s",
+                       "restart_limit", "restart_window_s"});
+  ProcessSpec spec;
+  spec.name = p.getString("name");
+  spec.ends_run = p.getBool("ends_run", false);
+  spec.required = p.getBool("required", true);
+  spec.restart = restartOptions(p);
+  for (const auto& a : p.getStrings("cmd")) {
+    try {
+      spec.argv.push_back(substitute(a, vars));
+    } catch (const std::invalid_argument& e) {
+      throw config::ConfigError(p.where("cmd") + ": " + e.what());
     }
-    // The launcher's own lines and the recorder's carry these names: a process of either name
-    // could print lines that pass for theirs.
-    if (spec.name == "launch" || spec.name == "logger")
-      throw config::ConfigError(p.where("name") + " '" + spec.name + "' is reserved (the launcher's own lines and the "
-                                "recorder's are prefixed with 'launch' and 'logger')");
-    for (const auto& other : plan.processes)
-      if (other.name == spec.name) throw config::ConfigError(p.where("name") + " '" + spec.name + "' is used twice");
-    plan.processes.push_back(std::move(spec));
   }
+  // The launcher's own lines and the recorder's carry these names: a process of either name could
+  // print lines that pass for theirs.
+  if (spec.name == "launch" || spec.name == "logger")
+    throw config::ConfigError(p.where("name") + " '" + spec.name + "' is reserved (the launcher's own lines and the "
+                              "recorder's are prefixed with 'launch' and 'logger')");
+  for (const auto& other : plan.processes)
+    if (other.name == spec.name) throw config::ConfigError(p.where("name") + " '" + spec.name + "' is used twice");
+  return spec;
+}
+
+}  // namespace
+
+Plan loadPlan(const std::string& path, const std::map<std::string, std::string>& overrides, const std::string& url,
+              const std::string& log_dir, const std::string& log_file, bool no_log) {
+  const config::Node root = config::Node::loadFile(path);
+  root.rejectUnknownKeys(
+      {"name", "lcm_url", "variables", "logger", "processes", "stop_grace_s", "drain_s", "drain_quiet_s"});
+  Plan plan;
+  plan.name = root.getString("name", "run");
+  plan.lcm_url = url.empty() ? root.getString("lcm_url", "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304") : url;
+  plan.stop_grace_s = root.getDouble("stop_grace_s", 0.1, 120.0, 5.0);
+  plan.drain_s = root.getDouble("drain_s", 0.0, 600.0, 1.0);
+  plan.drain_quiet_s = root.getDouble("drain_quiet_s", 0.0, 60.0, 1.0);
+  const std::map<std::string, std::string> vars = planVariables(root, path, overrides);
+  loadLogger(root, vars, log_dir, log_file, no_log, plan);
+  for (const config::Node& p : root.items("processes")) plan.processes.push_back(loadProcess(p, vars, plan));
   if (plan.processes.empty()) throw config::ConfigError(root.where("processes") + " must list at least one process");
   return plan;
 }

@@ -80,6 +80,76 @@ class FreeSpaceWatch {
   double warn_below_ = kLowBytes;
 };
 
+// Records until a stop signal, a failed LCM receive (returns true) or the first write failure
+// (said at once: a full disk used to show only at the stop; ending lets a launcher see the recorder
+// die and apply its policy instead of running on unrecorded).
+bool recordUntilStopped(lcm::LCM& bus, omnislam::lcmio::LogWriter& log, Recorder& rec, double flush_interval_s,
+                        FreeSpaceWatch& space) {
+  // Wall time, not the messages' utime: this bounds what a crash of this process loses.
+  const auto flush_every = std::chrono::duration<double>(flush_interval_s);
+  auto last_flush = std::chrono::steady_clock::now();
+  while (!omnislam::lcmio::stopRequested()) {
+    if (bus.handleTimeout(100) < 0 && !omnislam::lcmio::stopRequested())
+      return true;  // LCM cannot receive any more: stop rather than record nothing
+    if (flush_interval_s > 0 && std::chrono::steady_clock::now() - last_flush >= flush_every) {
+      last_flush = std::chrono::steady_clock::now();
+      try {
+        log.flushBuffered();
+      } catch (const std::exception& e) {
+        if (rec.failures++ == 0) rec.first_failure = e.what();
+      }
+    }
+    space.check(log.bytes(), false);
+    if (rec.failures > 0) {  // a failed write leaves the file torn there: nothing after it could be read
+      std::cerr << "[record] WRITE FAILED, recording stopped: " << rec.first_failure << "; " << log.events()
+                << " events (" << log.bytes() / 1e6 << " MB) are in the file" << std::endl;
+      return false;
+    }
+  }
+  return false;
+}
+
+struct Drain {
+  int64_t messages = 0;
+  bool cut = false;  ///< the bus was still busy when the drain ended
+};
+
+// What has already arrived, taken before the file is closed. Bounded: on a bus that stays busy it
+// never ran dry, so the recorder ignored SIGINT and SIGTERM until the traffic stopped and the
+// launcher's SIGKILL then lost the buffer and the report. It ends after kDrainS, or at once on a
+// second SIGINT / SIGTERM.
+Drain drainBus(lcm::LCM& bus) {
+  constexpr double kDrainS = 0.5;
+  const auto drain_end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kDrainS);
+  const int signals_at_stop = omnislam::lcmio::stopSignalCount();
+  Drain d;
+  while (bus.handleTimeout(0) > 0) {
+    ++d.messages;
+    if (std::chrono::steady_clock::now() >= drain_end ||
+        (signals_at_stop > 0 && omnislam::lcmio::stopSignalCount() > signals_at_stop)) {
+      d.cut = true;
+      break;
+    }
+  }
+  return d;
+}
+
+// The last line: events and bytes in the file; after a failure, the events lost with the write
+// buffer and the failures (the messages refused after it are write failures).
+void reportEnd(const omnislam::lcmio::LogWriter& log, const Recorder& rec, bool bus_failed, const Drain& drain) {
+  std::cerr << "[record] " << log.events() << " events" << (rec.failures ? " in the file" : "") << ", "
+            << log.bytes() / 1e6 << " MB"
+            << (rec.failures ? ", " + std::to_string(log.lost()) + " events lost with the write buffer, " +
+                                   std::to_string(rec.failures) + " WRITE FAILURES (the first: " +
+                                   rec.first_failure + ")"
+                             : "")
+            << (bus_failed ? "; stopped: LCM failed to receive" : "")
+            << (drain.cut ? "; the bus was still busy at the stop: the drain ended after " +
+                                std::to_string(drain.messages) + " messages, the rest is not recorded"
+                          : "")
+            << std::endl;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -117,71 +187,18 @@ int main(int argc, char** argv) {
     omnislam::lcmio::installStopHandlers();
     rec.log = &log;
     std::cerr << "[record] recording '" << channels << "' into " << path << std::endl;
-    bool bus_failed = false;
-    // Wall time, not the messages' utime: this bounds what a crash of this process loses.
-    const auto flush_every = std::chrono::duration<double>(flush_interval_s);
-    auto last_flush = std::chrono::steady_clock::now();
     FreeSpaceWatch space(path);
     space.check(log.bytes(), true);
-    while (!omnislam::lcmio::stopRequested()) {
-      if (bus.handleTimeout(100) < 0 && !omnislam::lcmio::stopRequested()) {
-        bus_failed = true;  // LCM cannot receive any more: stop rather than record nothing
-        break;
-      }
-      if (flush_interval_s > 0 && std::chrono::steady_clock::now() - last_flush >= flush_every) {
-        last_flush = std::chrono::steady_clock::now();
-        try {
-          log.flushBuffered();
-        } catch (const std::exception& e) {
-          if (rec.failures++ == 0) rec.first_failure = e.what();
-        }
-      }
-      space.check(log.bytes(), false);
-      // A failed write leaves the file torn there: nothing after it could be read. Say so at once
-      // (a full disk used to show only at the stop) and end, so that a launcher sees the recorder
-      // die and applies its policy instead of running on unrecorded.
-      if (rec.failures > 0) {
-        std::cerr << "[record] WRITE FAILED, recording stopped: " << rec.first_failure << "; " << log.events()
-                  << " events (" << log.bytes() / 1e6 << " MB) are in the file" << std::endl;
-        break;
-      }
-    }
-    // Drain what has already arrived, then flush, sync and close the file: the writer writes its
-    // last buffer only now, so a full disk shows here or not at all. The drain is bounded: on a bus
-    // that stays busy it never ran dry, so the recorder ignored SIGINT and SIGTERM until the
-    // traffic stopped (17 s in a flood), and the launcher's SIGKILL then lost the buffer and the
-    // report. It ends after kDrainS, or at once on a second SIGINT / SIGTERM.
-    constexpr double kDrainS = 0.5;
-    const auto drain_end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kDrainS);
-    const int signals_at_stop = omnislam::lcmio::stopSignalCount();
-    int64_t drained = 0;
-    bool drain_cut = false;
-    while (bus.handleTimeout(0) > 0) {
-      ++drained;
-      if (std::chrono::steady_clock::now() >= drain_end ||
-          (signals_at_stop > 0 && omnislam::lcmio::stopSignalCount() > signals_at_stop)) {
-        drain_cut = true;
-        break;
-      }
-    }
+    const bool bus_failed = recordUntilStopped(bus, log, rec, flush_interval_s, space);
+    const Drain drain = drainBus(bus);
+    // Flush, sync and close the file: the writer writes its last buffer only now, so a full disk
+    // shows here or not at all.
     try {
       log.commit();
     } catch (const std::exception& e) {
       if (rec.failures++ == 0) rec.first_failure = e.what();
     }
-    // After a failure, the events in the file (complete, as readers see them) and the events taken
-    // before it but lost with the write buffer; the messages refused after it are write failures.
-    std::cerr << "[record] " << log.events() << " events" << (rec.failures ? " in the file" : "") << ", "
-              << log.bytes() / 1e6 << " MB"
-              << (rec.failures ? ", " + std::to_string(log.lost()) + " events lost with the write buffer, " +
-                                     std::to_string(rec.failures) + " WRITE FAILURES (the first: " +
-                                     rec.first_failure + ")"
-                               : "")
-              << (bus_failed ? "; stopped: LCM failed to receive" : "")
-              << (drain_cut ? "; the bus was still busy at the stop: the drain ended after " +
-                                  std::to_string(drained) + " messages, the rest is not recorded"
-                            : "")
-              << std::endl;
+    reportEnd(log, rec, bus_failed, drain);
     return rec.failures || bus_failed ? omnislam::app::kFailure : omnislam::app::kOk;
   });
 }

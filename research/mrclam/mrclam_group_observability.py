@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """mrclam_group_observability.py — what MRCLAM's landmark groups offer an estimator that must find them.
 
-Usage: scripts/mrclam_group_observability.py [DATASET_DIR] [--group-link-m 0.5] [--visit-gap-s 10]
+Usage: research/mrclam/mrclam_group_observability.py [DATASET_DIR] [--group-link-m 0.5] [--visit-gap-s 10]
            [--bearing-sigma-deg 1] [--group-extent-m 0.10] [--gate-sigma 3]
 
 MRCLAM's landmarks stand in tight groups. Without barcodes an estimator sees a group, not a
@@ -29,7 +29,7 @@ truth as oracles, this prints the figures that limit that recognition:
     the group's extent (variance sigma^2 + (extent / range)^2): the share of landmark sightings
     whose best-fitting group in the gate is their own, of those with no group in the gate, and of the
     other robots' sightings that fall inside some group's gate.
-Standard library only; read-only on the dataset. Figures quoted in docs/mrclam-diagnosis.md.
+Standard library only; read-only on the dataset. Figures quoted in research/mrclam-diagnosis.md.
 """
 import argparse
 import bisect

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """mrclam_odometry_heading.py — how much of MRCLAM's odometry heading error is systematic.
 
-Usage: scripts/mrclam_odometry_heading.py [DATASET_DIR] [--window-s 5] [--block-s 150]
+Usage: research/mrclam/mrclam_odometry_heading.py [DATASET_DIR] [--window-s 5] [--block-s 150]
 
 For each robot of an MRCLAM dataset (default, as scripts/run-mrclam.sh:
 $OMNISLAM_DATASETS/mrclam/MRCLAM_Dataset6, $OMNISLAM_DATASETS defaulting to ../shared/datasets), cuts the

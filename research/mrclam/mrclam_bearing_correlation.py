@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """mrclam_bearing_correlation.py — are MRCLAM's bearing errors independent from frame to frame?
 
-Usage: scripts/mrclam_bearing_correlation.py [DATASET_DIR] [--max-lag-s 48] [--fit-max-lag-s 32]
+Usage: research/mrclam/mrclam_bearing_correlation.py [DATASET_DIR] [--max-lag-s 48] [--fit-max-lag-s 32]
 
 For every landmark sighting of robots 1-5 of an MRCLAM dataset (default as scripts/run-mrclam.sh:
 $OMNISLAM_DATASETS/mrclam/MRCLAM_Dataset6), the bearing residual e = measured bearing - bearing
@@ -16,7 +16,7 @@ camera's yaw offset) is removed. Prints:
     rho0 * RMS^2 of the correlated part.
 A filter that takes the sightings as independent counts the same information several times when
 the correlation is high. Standard library only; read-only on the dataset. Figures quoted in
-docs/mrclam-diagnosis.md.
+research/mrclam-diagnosis.md.
 """
 import argparse
 import bisect

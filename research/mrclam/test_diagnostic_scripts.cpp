@@ -1,5 +1,5 @@
-// The four MRCLAM diagnostic scripts whose figures docs/mrclam.md and mrclam-diagnosis.md quote
-// (scripts/mrclam_odometry_heading.py, mrclam_bearing_correlation.py, mrclam_visual_rotation.py,
+// The four MRCLAM diagnostic scripts whose figures docs/mrclam.md and research/mrclam-diagnosis.md quote
+// (research/mrclam/mrclam_odometry_heading.py, mrclam_bearing_correlation.py, mrclam_visual_rotation.py,
 // mrclam_group_observability.py), each on a small MRCLAM-format dataset the test writes with a known
 // answer: a turn-scale error the fit must recover, residuals whose correlation is -1 and +1 by
 // construction, a spin in place whose rotation the landmarks' bearings give exactly, and a group
@@ -70,7 +70,7 @@ void writeLandmarks(const t::TempDir& d, const std::vector<std::pair<double, dou
 }
 
 t::RunResult script(const std::string& name, const std::vector<std::string>& args) {
-  std::vector<std::string> argv = {"python3", t::sourcePath("scripts/" + name)};
+  std::vector<std::string> argv = {"python3", t::sourcePath("research/mrclam/" + name)};
   argv.insert(argv.end(), args.begin(), args.end());
   return t::run(argv, 60.0);
 }

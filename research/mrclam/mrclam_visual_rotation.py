@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """mrclam_visual_rotation.py — how much heading could a visual rotation measurement recover on MRCLAM?
 
-Usage: scripts/mrclam_visual_rotation.py [DATASET_DIR] [--max-gap-s 0.6] [--bearing-sigma-rad 0.0175]
+Usage: research/mrclam/mrclam_visual_rotation.py [DATASET_DIR] [--max-gap-s 0.6] [--bearing-sigma-rad 0.0175]
 
 A landmark seen in two consecutive frames measures the rotation between them without a map: its
 bearing changes by minus the turn, plus a parallax term that is small over one frame gap. For each
@@ -19,7 +19,7 @@ what such a measurement can give. Prints, per robot:
     rotations. Commanded variance: 0.12^2 rad^2/rad * |turn| + 0.10^2 rad^2/m * distance (the
     motion model of config/slam/mrclam.yaml); visual variance: 2 * bearing sigma^2 (the importer's
     bearing sigma of 1 deg by default).
-Standard library only; read-only on the dataset. Figures quoted in docs/mrclam-diagnosis.md.
+Standard library only; read-only on the dataset. Figures quoted in research/mrclam-diagnosis.md.
 """
 import argparse
 import bisect

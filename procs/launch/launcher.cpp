@@ -122,6 +122,9 @@ Plan loadPlan(const std::string& path, const std::map<std::string, std::string>&
     f << plan.name << "-" << std::put_time(&tm, "%Y%m%d-%H%M%S") << ".lcm";
     plan.log_file = (fs::path(dir) / f.str()).string();
   }
+  // ${log_file} in a process's cmd: this run's recording path (also when not recording), so a
+  // per-run file beside it (a SLAM checkpoint) is never one of an earlier run.
+  vars.emplace("log_file", plan.log_file);
 
   for (const config::Node& p : root.items("processes")) {
     p.rejectUnknownKeys({"name", "cmd", "ends_run", "required"});

@@ -138,6 +138,11 @@ class CheckpointKeeper {
   int64_t written_ = 0, failed_ = 0;
 };
 
+/// "; already_processed N" after a resume that refused N messages, else nothing.
+std::string alreadyProcessedNote(const slamproc::InputClock& clock) {
+  return clock.alreadyProcessed() ? "; already_processed " + std::to_string(clock.alreadyProcessed()) : "";
+}
+
 /// Progress of a long offline run on stderr, at most every 2 s of wall time (a display only: the
 /// results never depend on it).
 class Progress {
@@ -214,10 +219,7 @@ int runLive(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark>
   node.subscribe<features_t>(channels::kOmniFeatures, [&](const features_t& m) {
     feed(channels::kOmniFeatures, true, m.utime, [&] { return driver.onFeatures(m); });
   }, feat_opt);
-  const auto detail = [&] {
-    return driver.summary() + ckpt.summary() +
-           (clock.alreadyProcessed() ? "; already_processed " + std::to_string(clock.alreadyProcessed()) : "");
-  };
+  const auto detail = [&] { return driver.summary() + ckpt.summary() + alreadyProcessedNote(clock); };
   node.setDetail(detail());
   node.publishStatus();
   node.spin({}, [&] { node.setDetail(detail()); });
@@ -272,22 +274,44 @@ std::optional<Msg> decodeChecked(const lcmio::LogEvent& ev, ReplayReport& rep) {
   return m;
 }
 
+/// OUT.lcm.partial until the end (interrupted too: outputs so far are kept), so a full disk or a
+/// crash never leaves a short OUT.lcm that reads as complete. A device or pipe (/dev/null,
+/// /dev/full) is written in place: it cannot be replaced by a rename.
+lcmio::LogWriter::Mode outputMode(const std::string& out_path) {
+  std::error_code ec;
+  const bool special = std::filesystem::exists(out_path, ec) && !std::filesystem::is_regular_file(out_path, ec);
+  return special ? lcmio::LogWriter::Mode::kDirect : lcmio::LogWriter::Mode::kAtomic;
+}
+
+bool isSlamOutput(const std::string& channel) {
+  return channel == channels::kSlamPose || channel == channels::kSlamMap || channel == channels::kSlamParticles ||
+         channel == channels::kSlamAssociations;
+}
+
+/// Whether the replay's event number pos.events was read before the checkpoint it resumed from (its
+/// state holds it: the event is copied to the output, not fed). Throws std::invalid_argument (exit 2)
+/// when the checkpoint's last event is not this log's event of that number: another log.
+bool processedBeforeResume(const slamproc::ReplayPosition& pos, const slamproc::ReplayPosition& resumed,
+                           const std::string& checkpoint_path) {
+  if (pos.events > resumed.events) return false;
+  if (pos.events == resumed.events && (pos.channel != resumed.channel || pos.log_utime != resumed.log_utime))
+    throw std::invalid_argument("checkpoint " + checkpoint_path + ": written after event " +
+                                std::to_string(resumed.events) + " of another log (" + resumed.channel + " at " +
+                                std::to_string(resumed.log_utime) + ", this log has " + pos.channel + " at " +
+                                std::to_string(pos.log_utime) + ")");
+  return true;
+}
+
 int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark> prior, const std::string& in_path,
               const std::string& out_path, bool show_progress) {
   lcmio::requireDistinctFiles(in_path, out_path, "--out");
   lcmio::LogReader in(in_path);  // every length checked: a corrupt log is named, never a crash
-  // OUT.lcm.partial until the end (interrupted too: outputs so far are kept), so a full disk or a
-  // crash never leaves a short OUT.lcm that reads as complete. A device or pipe (/dev/null,
-  // /dev/full) is written in place: it cannot be replaced by a rename.
-  std::error_code ec;
-  const bool special = std::filesystem::exists(out_path, ec) && !std::filesystem::is_regular_file(out_path, ec);
-  lcmio::LogWriter out(out_path, special ? lcmio::LogWriter::Mode::kDirect : lcmio::LogWriter::Mode::kAtomic);
+  lcmio::LogWriter out(out_path, outputMode(out_path));
   SlamDriver driver(opt, std::move(prior));
   slamproc::InputClock clock(opt.pairing.restart_jump_us);
   CheckpointKeeper ckpt(opt, "[slam] ");
-  // A checkpoint of this replay holds the number of events it had read: those are copied to the
-  // output but not fed again (the driver's state has them). One written live has no position: the
-  // clock's rule (checkpoint.h) refuses what it had processed.
+  // The events a checkpoint of this replay had read are copied, not fed (processedBeforeResume);
+  // one written live has no position: the clock's rule (checkpoint.h) refuses what it processed.
   const slamproc::ReplayPosition resumed = ckpt.resume(driver, clock);
   if (resumed.events >= 0) clock.disarm();
   Progress progress(show_progress);
@@ -306,7 +330,7 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
       ++outputs;
     }
   };
-  slamproc::ReplayPosition pos;
+  slamproc::ReplayPosition pos{0, "", 0};  // the events read so far, the last one
   const auto feed = [&](const lcmio::LogEvent& e, bool is_frame, int64_t utime, auto&& step) {
     if (const std::string why = clock.admit(is_frame, utime); !why.empty()) {
       rep.reject(e.channel, why);
@@ -317,7 +341,6 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
   };
   bool interrupted = false;
   lcmio::LogEvent ev;
-  pos.events = 0;
   while (in.next(ev)) {
     if (lcmio::stopRequested()) {
       interrupted = true;
@@ -326,41 +349,28 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
     ++pos.events;
     pos.channel = ev.channel;
     pos.log_utime = ev.log_utime;
-    if (pos.events <= resumed.events) {  // processed before the checkpoint: copied, not fed
-      if (pos.events == resumed.events && (ev.channel != resumed.channel || ev.log_utime != resumed.log_utime))
-        throw std::invalid_argument("checkpoint " + opt.checkpoint_path + ": written after event " +
-                                    std::to_string(resumed.events) + " of another log (" + resumed.channel + " at " +
-                                    std::to_string(resumed.log_utime) + ", this log has " + ev.channel + " at " +
-                                    std::to_string(ev.log_utime) + ")");
-      last_timestamp = ev.log_utime;
-      if (ev.channel != channels::kSlamPose && ev.channel != channels::kSlamMap &&
-          ev.channel != channels::kSlamParticles && ev.channel != channels::kSlamAssociations)
-        out.write(ev.log_utime, ev.channel, ev.data.data(), static_cast<int>(ev.data.size()));
-      continue;
-    }
-    progress.update(in.result().shareRead(), driver.stats().frames_processed);
     last_timestamp = ev.log_utime;
     // Outputs of an earlier run in the input are replaced by this run's.
-    if (ev.channel == channels::kSlamPose || ev.channel == channels::kSlamMap ||
-        ev.channel == channels::kSlamParticles || ev.channel == channels::kSlamAssociations)
-      continue;
+    if (isSlamOutput(ev.channel)) continue;
     out.write(ev.log_utime, ev.channel, ev.data.data(), static_cast<int>(ev.data.size()));
+    if (processedBeforeResume(pos, resumed, opt.checkpoint_path)) continue;  // copied, not fed
+    progress.update(in.result().shareRead(), driver.stats().frames_processed);
     if (ev.channel == channels::kOdometry) {
       if (auto m = decodeChecked<odometry_t>(ev, rep)) feed(ev, false, m->utime, [&] { return driver.onOdometry(*m); });
     } else if (ev.channel == channels::kOmniFeatures) {
       if (auto m = decodeChecked<features_t>(ev, rep)) feed(ev, true, m->utime, [&] { return driver.onFeatures(*m); });
     }
   }
-  if (resumed.events > pos.events)
+  if (resumed.events > pos.events && !interrupted)
     throw std::invalid_argument("checkpoint " + opt.checkpoint_path + ": written after event " +
                                 std::to_string(resumed.events) + ", the log has " + std::to_string(pos.events));
   if (!interrupted) {
     if (const auto problem = in.result().problem(in_path))
       std::cerr << "[slam] warning: --replay " << *problem << std::endl;
   }
-  // Interrupted: the state before the end-of-input decisions is what a resume continues from.
-  bool checkpoint_ok = true;
-  if (interrupted) checkpoint_ok = ckpt.writeNow(driver, clock, pos);
+  // Interrupted: the state before the end-of-input decisions is what a resume continues from (not
+  // while still copying the events a resumed checkpoint holds: that checkpoint stays as it is).
+  const bool checkpoint_ok = !interrupted || pos.events < resumed.events || ckpt.writeNow(driver, clock, pos);
   handle(driver.finish(), last_timestamp);
   progress.update(1.0, driver.stats().frames_processed, true);
   if (interrupted) std::cerr << "[slam] replay interrupted by signal " << lcmio::stopSignal() << ": outputs so far kept" << std::endl;
@@ -370,9 +380,7 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
   std::cerr << "[slam] replay done: " << outputs << " frames answered, " << out.events() << " events written to "
             << out_path << "; decode_errors " << rep.decode_errors << " rejected " << rep.rejected
             << " sequence_gaps " << rep.sequence_gaps << " sequence_restarts " << rep.sequence_restarts << "; "
-            << driver.summary() << ckpt.summary()
-            << (clock.alreadyProcessed() ? "; already_processed " + std::to_string(clock.alreadyProcessed()) : "")
-            << std::endl;
+            << driver.summary() << ckpt.summary() << alreadyProcessedNote(clock) << std::endl;
   return checkpoint_ok ? app::kOk : app::kFailure;
 }
 

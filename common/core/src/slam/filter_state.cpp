@@ -174,39 +174,17 @@ void checkSame(bool same, const char* key, const std::string& saved, const std::
     throw StateFormatError(std::string("written with filter.") + key + " = " + saved + ", the options now say " + now);
 }
 
-}  // namespace
-
-void FastSlam::saveState(ByteWriter& w) const {
-  w.u32(kSectionTag);
-  w.u32(kSectionVersion);
-  // Options the layout depends on.
-  w.i32(options_.num_particles);
-  w.f64(options_.map_cell_size_m);
-  w.u8(static_cast<std::uint8_t>(options_.proposal));
-  w.u8(static_cast<std::uint8_t>(options_.association));
-  w.boolean(options_.update_map);
-  w.boolean(options_.odometry_scale_correction);
-  // Scalars.
-  w.str(rng_.state());
-  w.f64(ess_);
-  w.i32(best_index_);
-  w.u64(next_landmark_id_);
-  w.u64(num_steps_);
-  putMatrix(w, last_p_CinR_m_);
-  putMatrix(w, scale_anchor_xy_);
-  w.boolean(scale_anchored_);
-  putDoubles(w, weights_);
-  w.u64(poses_before_resampling_.size());
-  for (const Pose2& p : poses_before_resampling_) putPose(w, p);
-  putDoubles(w, weights_before_resampling_);
-
+/// The particles with their shared storage: tables of cells, maps and candidates (in first-use
+/// order, so deterministic), each written once, then per particle its pose, weight, map, scale sums
+/// and candidates by index.
+void writeParticles(ByteWriter& w, const std::vector<Particle>& particles) {
   // Tables of shared storage, in first-use order (deterministic: particles in order).
   std::map<const void*, std::uint64_t> map_index, cell_index, cand_index;
   std::vector<const void*> maps, cells, cands;
   std::vector<const LandmarkMap*> map_of;  // per map table entry
   std::vector<const LandmarkMap::Cell*> cell_of;
   std::vector<const Candidate*> cand_of;
-  for (const Particle& p : particles_) {
+  for (const Particle& p : particles) {
     const void* root = p.map.rootNode() ? static_cast<const void*>(p.map.rootNode()) : static_cast<const void*>(&p.map);
     if (indexOf(map_index, maps, root) == map_of.size()) map_of.push_back(&p.map);
     for (const auto& c : p.candidates)
@@ -236,8 +214,8 @@ void FastSlam::saveState(ByteWriter& w) const {
   w.u64(cand_of.size());
   for (const Candidate* c : cand_of) putCandidate(w, *c);
 
-  w.u64(particles_.size());
-  for (const Particle& p : particles_) {
+  w.u64(particles.size());
+  for (const Particle& p : particles) {
     putPose(w, p.pose);
     w.f64(p.log_weight);
     const void* root = p.map.rootNode() ? static_cast<const void*>(p.map.rootNode()) : static_cast<const void*>(&p.map);
@@ -247,6 +225,76 @@ void FastSlam::saveState(ByteWriter& w) const {
     w.u64(p.candidates.size());
     for (const auto& c : p.candidates) w.u64(cand_index.at(c.get()));
   }
+}
+
+/// What writeParticles wrote, for M particles and maps of this cell size.
+std::vector<Particle> readParticles(ByteReader& r, double cell, std::size_t M) {
+  std::vector<std::shared_ptr<const LandmarkMap::Cell>> cells(r.count("cells", kMaxItems, 8));
+  for (auto& c : cells) {
+    auto cell = std::make_shared<LandmarkMap::Cell>();
+    cell->landmarks.resize(r.count("landmarks of a cell", kMaxItems, 135));
+    for (Landmark& l : cell->landmarks) l = getLandmark(r);
+    c = std::move(cell);
+  }
+  std::vector<LandmarkMap> maps;
+  const std::size_t num_maps = r.count("maps", kMaxItems, 8);
+  maps.reserve(num_maps);
+  for (std::size_t i = 0; i < num_maps; ++i) {
+    std::vector<std::pair<std::uint64_t, std::shared_ptr<const LandmarkMap::Cell>>> mc(r.count("cells of a map", kMaxItems, 16));
+    for (auto& [key, c] : mc) {
+      key = r.u64("cell key");
+      c = cells[getIndex(r, cells.size(), "cell")];
+    }
+    try {
+      maps.push_back(LandmarkMap::fromCells(cell, mc));
+    } catch (const std::invalid_argument& e) {
+      throw StateFormatError(e.what());
+    }
+  }
+  std::vector<std::shared_ptr<const Candidate>> cands(r.count("candidates", kMaxItems, 16));
+  for (auto& c : cands) c = getCandidate(r);
+
+  std::vector<Particle> particles(r.count("particles", kMaxItems, 56));
+  if (particles.size() != M) throw StateFormatError("particles: " + std::to_string(particles.size()) + " for M = " + std::to_string(M));
+  for (Particle& p : particles) {
+    p.pose = getPose(r);
+    p.log_weight = r.f64("log_weight");
+    p.map = maps[getIndex(r, maps.size(), "map")];
+    p.scale_path_m = r.f64("scale_path_m");
+    p.scale_odometry_m = r.f64("scale_odometry_m");
+    p.candidates.resize(r.count("candidates of a particle", kMaxItems, 8));
+    for (auto& c : p.candidates) c = cands[getIndex(r, cands.size(), "candidate")];
+  }
+  return particles;
+}
+
+}  // namespace
+
+void FastSlam::saveState(ByteWriter& w) const {
+  w.u32(kSectionTag);
+  w.u32(kSectionVersion);
+  // Options the layout depends on.
+  w.i32(options_.num_particles);
+  w.f64(options_.map_cell_size_m);
+  w.u8(static_cast<std::uint8_t>(options_.proposal));
+  w.u8(static_cast<std::uint8_t>(options_.association));
+  w.boolean(options_.update_map);
+  w.boolean(options_.odometry_scale_correction);
+  // Scalars.
+  w.str(rng_.state());
+  w.f64(ess_);
+  w.i32(best_index_);
+  w.u64(next_landmark_id_);
+  w.u64(num_steps_);
+  putMatrix(w, last_p_CinR_m_);
+  putMatrix(w, scale_anchor_xy_);
+  w.boolean(scale_anchored_);
+  putDoubles(w, weights_);
+  w.u64(poses_before_resampling_.size());
+  for (const Pose2& p : poses_before_resampling_) putPose(w, p);
+  putDoubles(w, weights_before_resampling_);
+
+  writeParticles(w, particles_);
 }
 
 FastSlam FastSlam::loadState(const FastSlamOptions& options, ByteReader& r) {
@@ -291,42 +339,7 @@ FastSlam FastSlam::loadState(const FastSlamOptions& options, ByteReader& r) {
   for (Pose2& p : f.poses_before_resampling_) p = getPose(r);
   f.weights_before_resampling_ = getDoubles(r, M, "weights before resampling");
 
-  std::vector<std::shared_ptr<const LandmarkMap::Cell>> cells(r.count("cells", kMaxItems, 8));
-  for (auto& c : cells) {
-    auto cell = std::make_shared<LandmarkMap::Cell>();
-    cell->landmarks.resize(r.count("landmarks of a cell", kMaxItems, 135));
-    for (Landmark& l : cell->landmarks) l = getLandmark(r);
-    c = std::move(cell);
-  }
-  std::vector<LandmarkMap> maps;
-  const std::size_t num_maps = r.count("maps", kMaxItems, 8);
-  maps.reserve(num_maps);
-  for (std::size_t i = 0; i < num_maps; ++i) {
-    std::vector<std::pair<std::uint64_t, std::shared_ptr<const LandmarkMap::Cell>>> mc(r.count("cells of a map", kMaxItems, 16));
-    for (auto& [key, c] : mc) {
-      key = r.u64("cell key");
-      c = cells[getIndex(r, cells.size(), "cell")];
-    }
-    try {
-      maps.push_back(LandmarkMap::fromCells(cell, mc));
-    } catch (const std::invalid_argument& e) {
-      throw StateFormatError(e.what());
-    }
-  }
-  std::vector<std::shared_ptr<const Candidate>> cands(r.count("candidates", kMaxItems, 16));
-  for (auto& c : cands) c = getCandidate(r);
-
-  f.particles_.resize(r.count("particles", kMaxItems, 56));
-  if (f.particles_.size() != M) throw StateFormatError("particles: " + std::to_string(f.particles_.size()) + " for M = " + std::to_string(M));
-  for (Particle& p : f.particles_) {
-    p.pose = getPose(r);
-    p.log_weight = r.f64("log_weight");
-    p.map = maps[getIndex(r, maps.size(), "map")];
-    p.scale_path_m = r.f64("scale_path_m");
-    p.scale_odometry_m = r.f64("scale_odometry_m");
-    p.candidates.resize(r.count("candidates of a particle", kMaxItems, 8));
-    for (auto& c : p.candidates) c = cands[getIndex(r, cands.size(), "candidate")];
-  }
+  f.particles_ = readParticles(r, cell, M);
   return f;
 }
 

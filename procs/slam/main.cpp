@@ -85,6 +85,7 @@ class CheckpointKeeper {
                                   " (remove it to start afresh)");
     }
     std::cerr << tag_ << "resumed from checkpoint " << path << ": " << slamproc::summarise(driver).line() << std::endl;
+    schedule_.due(driver.lastStepUtime());  // the next one an interval after the state resumed
     return pos;
   }
 

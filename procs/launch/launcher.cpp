@@ -181,8 +181,11 @@ Plan loadPlan(const std::string& path, const std::map<std::string, std::string>&
   plan.stop_grace_s = root.getDouble("stop_grace_s", 0.1, 120.0, 5.0);
   plan.drain_s = root.getDouble("drain_s", 0.0, 600.0, 1.0);
   plan.drain_quiet_s = root.getDouble("drain_quiet_s", 0.0, 60.0, 1.0);
-  const std::map<std::string, std::string> vars = planVariables(root, path, overrides);
+  std::map<std::string, std::string> vars = planVariables(root, path, overrides);
   loadLogger(root, vars, log_dir, log_file, no_log, plan);
+  // ${log_file} in a process's cmd: this run's recording path (also when not recording), so a
+  // per-run file beside it (a SLAM checkpoint) is never one of an earlier run.
+  vars.emplace("log_file", plan.log_file);
   for (const config::Node& p : root.items("processes")) plan.processes.push_back(loadProcess(p, vars, plan));
   if (plan.processes.empty()) throw config::ConfigError(root.where("processes") + " must list at least one process");
   return plan;

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -25,6 +26,7 @@
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
 #include "omnislam/lcmio/validate.h"
+#include "checkpoint.h"
 #include "map_file.h"
 #include "slam_config.h"
 #include "slam_driver.h"
@@ -54,6 +56,92 @@ void saveMap(const slamproc::SlamProcessOptions& opt, const SlamDriver& driver, 
     std::cerr << tag << "error: " << e.what() << std::endl;
     throw;
   }
+}
+
+/// Checkpoints of this process (checkpoint.h): the resume at start, the periodic writes, the write
+/// at a stop. A write that fails is reported on one line and counted; the run goes on.
+class CheckpointKeeper {
+ public:
+  CheckpointKeeper(const slamproc::SlamProcessOptions& opt, std::string tag)
+      : opt_(opt), tag_(std::move(tag)), schedule_(opt.checkpoint_interval_us) {}
+  bool enabled() const { return !opt_.checkpoint_path.empty(); }
+
+  /// Resumes `driver` and `clock` from the file when there is one (one line either way). A file that
+  /// cannot be used is refused: std::invalid_argument, exit code 2, with the reason.
+  slamproc::ReplayPosition resume(SlamDriver& driver, slamproc::InputClock& clock) {
+    slamproc::ReplayPosition pos;
+    if (!enabled()) return pos;
+    const std::string& path = opt_.checkpoint_path;
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) {
+      std::cerr << tag_ << "checkpoint " << path << ": none yet, starting afresh; one every "
+                << opt_.checkpoint_interval_us * 1e-6 << " s of data" << std::endl;
+      return pos;
+    }
+    try {
+      pos = slamproc::decodeCheckpoint(slamproc::readWholeFile(path), opt_, driver, clock);
+    } catch (const std::exception& e) {
+      throw std::invalid_argument("checkpoint " + path + " cannot be resumed: " + e.what() +
+                                  " (remove it to start afresh)");
+    }
+    std::cerr << tag_ << "resumed from checkpoint " << path << ": " << slamproc::summarise(driver).line() << std::endl;
+    schedule_.due(driver.lastStepUtime());  // the next one an interval after the state resumed
+    return pos;
+  }
+
+  /// After each input: writes when the filter has stepped checkpoint_interval_us past the last one.
+  void afterInput(const SlamDriver& driver, const slamproc::InputClock& clock, const slamproc::ReplayPosition& pos) {
+    if (enabled() && schedule_.due(driver.lastStepUtime())) write(driver, clock, pos);
+  }
+
+  /// At a stop (SIGINT, SIGTERM): the state now. False when the write failed.
+  bool writeNow(const SlamDriver& driver, const slamproc::InputClock& clock, const slamproc::ReplayPosition& pos) {
+    if (!enabled()) return true;
+    if (driver.filterToSave(nullptr) == nullptr) {
+      std::cerr << tag_ << "checkpoint not written: no frame was processed" << std::endl;
+      return true;
+    }
+    const bool ok = write(driver, clock, pos);
+    if (ok)
+      std::cerr << tag_ << "checkpoint written to " << opt_.checkpoint_path << ": "
+                << slamproc::summarise(driver).line() << std::endl;
+    return ok;
+  }
+
+  /// A replay that read its whole log has nothing left to resume: its checkpoint is removed, so that
+  /// the same command run again starts from the beginning.
+  void removeFinished() {
+    if (!enabled()) return;
+    std::error_code ec;
+    if (std::filesystem::remove(opt_.checkpoint_path, ec))
+      std::cerr << tag_ << "checkpoint " << opt_.checkpoint_path << " removed: the replay is complete" << std::endl;
+  }
+
+  std::string summary() const {
+    return enabled() ? "; checkpoints " + std::to_string(written_) + " failed " + std::to_string(failed_) : "";
+  }
+
+ private:
+  bool write(const SlamDriver& driver, const slamproc::InputClock& clock, const slamproc::ReplayPosition& pos) {
+    try {
+      slamproc::writeFileAtomically(opt_.checkpoint_path, slamproc::encodeCheckpoint(opt_, driver, clock, pos));
+      ++written_;
+      return true;
+    } catch (const std::exception& e) {
+      ++failed_;
+      std::cerr << tag_ << "checkpoint error: " << e.what() << std::endl;
+      return false;
+    }
+  }
+  const slamproc::SlamProcessOptions& opt_;
+  std::string tag_;
+  slamproc::CheckpointSchedule schedule_;
+  int64_t written_ = 0, failed_ = 0;
+};
+
+/// "; already_processed N" after a resume that refused N messages, else nothing.
+std::string alreadyProcessedNote(const slamproc::InputClock& clock) {
+  return clock.alreadyProcessed() ? "; already_processed " + std::to_string(clock.alreadyProcessed()) : "";
 }
 
 /// Progress of a long offline run on stderr, at most every 2 s of wall time (a display only: the
@@ -104,6 +192,20 @@ int runLive(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark>
             const std::string& name) {
   lcmio::Node node(name, url);
   SlamDriver driver(opt, std::move(prior));
+  slamproc::InputClock clock(opt.pairing.restart_jump_us);
+  CheckpointKeeper ckpt(opt, node.tag());
+  ckpt.resume(driver, clock);
+  const slamproc::ReplayPosition live;  // events -1: written live
+  // Messages at or before the checkpoint were processed before it (refused, counted); the others go
+  // to the driver, and a checkpoint follows when due.
+  const auto feed = [&](const char* channel, bool is_frame, int64_t utime, auto&& step) {
+    if (const std::string why = clock.admit(is_frame, utime); !why.empty()) {
+      node.reject(channel, why);
+      return;
+    }
+    publishAll(node, step());
+    ckpt.afterInput(driver, clock, live);
+  };
   // The driver checks time order itself (duplicates and small steps back are refused, a large step
   // back restarts), so the node's own utime check is off; decoding, validation and seq stay.
   lcmio::InputOptions odo_opt;
@@ -113,20 +215,22 @@ int runLive(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark>
   feat_opt.require_increasing_utime = false;
   feat_opt.queue_capacity = 200;
   node.subscribe<odometry_t>(channels::kOdometry, [&](const odometry_t& m) {
-    publishAll(node, driver.onOdometry(m));
+    feed(channels::kOdometry, false, m.utime, [&] { return driver.onOdometry(m); });
   }, odo_opt);
   node.subscribe<features_t>(channels::kOmniFeatures, [&](const features_t& m) {
-    publishAll(node, driver.onFeatures(m));
+    feed(channels::kOmniFeatures, true, m.utime, [&] { return driver.onFeatures(m); });
   }, feat_opt);
-  node.setDetail(driver.summary());
+  const auto detail = [&] { return driver.summary() + ckpt.summary() + alreadyProcessedNote(clock); };
+  node.setDetail(detail());
   node.publishStatus();
-  node.spin({}, [&] { node.setDetail(driver.summary()); });
+  node.spin({}, [&] { node.setDetail(detail()); });
   node.setState(process_status_t::STATE_STOPPING);
-  node.setDetail(driver.summary());
+  const bool saved = ckpt.writeNow(driver, clock, live);
+  node.setDetail(detail());
   node.publishStatus();
-  std::cerr << node.tag() << "stopped: " << driver.summary() << std::endl;
+  std::cerr << node.tag() << "stopped: " << detail() << std::endl;
   saveMap(opt, driver, node.tag());
-  return app::kOk;
+  return saved ? app::kOk : app::kFailure;
 }
 
 // ---- replay ---------------------------------------------------------------------------------
@@ -171,17 +275,46 @@ std::optional<Msg> decodeChecked(const lcmio::LogEvent& ev, ReplayReport& rep) {
   return m;
 }
 
+/// OUT.lcm.partial until the end (interrupted too: outputs so far are kept), so a full disk or a
+/// crash never leaves a short OUT.lcm that reads as complete. A device or pipe (/dev/null,
+/// /dev/full) is written in place: it cannot be replaced by a rename.
+lcmio::LogWriter::Mode outputMode(const std::string& out_path) {
+  std::error_code ec;
+  const bool special = std::filesystem::exists(out_path, ec) && !std::filesystem::is_regular_file(out_path, ec);
+  return special ? lcmio::LogWriter::Mode::kDirect : lcmio::LogWriter::Mode::kAtomic;
+}
+
+bool isSlamOutput(const std::string& channel) {
+  return channel == channels::kSlamPose || channel == channels::kSlamMap || channel == channels::kSlamParticles ||
+         channel == channels::kSlamAssociations;
+}
+
+/// Whether the replay's event number pos.events was read before the checkpoint it resumed from (its
+/// state holds it: the event is copied to the output, not fed). Throws std::invalid_argument (exit 2)
+/// when the checkpoint's last event is not this log's event of that number: another log.
+bool processedBeforeResume(const slamproc::ReplayPosition& pos, const slamproc::ReplayPosition& resumed,
+                           const std::string& checkpoint_path) {
+  if (pos.events > resumed.events) return false;
+  if (pos.events == resumed.events && (pos.channel != resumed.channel || pos.log_utime != resumed.log_utime))
+    throw std::invalid_argument("checkpoint " + checkpoint_path + ": written after event " +
+                                std::to_string(resumed.events) + " of another log (" + resumed.channel + " at " +
+                                std::to_string(resumed.log_utime) + ", this log has " + pos.channel + " at " +
+                                std::to_string(pos.log_utime) + ")");
+  return true;
+}
+
 int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark> prior, const std::string& in_path,
               const std::string& out_path, bool show_progress) {
   lcmio::requireDistinctFiles(in_path, out_path, "--out");
   lcmio::LogReader in(in_path);  // every length checked: a corrupt log is named, never a crash
-  // OUT.lcm.partial until the end (interrupted too: outputs so far are kept), so a full disk or a
-  // crash never leaves a short OUT.lcm that reads as complete. A device or pipe (/dev/null,
-  // /dev/full) is written in place: it cannot be replaced by a rename.
-  std::error_code ec;
-  const bool special = std::filesystem::exists(out_path, ec) && !std::filesystem::is_regular_file(out_path, ec);
-  lcmio::LogWriter out(out_path, special ? lcmio::LogWriter::Mode::kDirect : lcmio::LogWriter::Mode::kAtomic);
+  lcmio::LogWriter out(out_path, outputMode(out_path));
   SlamDriver driver(opt, std::move(prior));
+  slamproc::InputClock clock(opt.pairing.restart_jump_us);
+  CheckpointKeeper ckpt(opt, "[slam] ");
+  // The events a checkpoint of this replay had read are copied, not fed (processedBeforeResume);
+  // one written live has no position: the clock's rule (checkpoint.h) refuses what it processed.
+  const slamproc::ReplayPosition resumed = ckpt.resume(driver, clock);
+  if (resumed.events >= 0) clock.disarm();
   Progress progress(show_progress);
   lcmio::installStopHandlers();  // SIGINT / SIGTERM: stop reading, write what was computed
   ReplayReport rep;
@@ -198,6 +331,15 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
       ++outputs;
     }
   };
+  slamproc::ReplayPosition pos{0, "", 0};  // the events read so far, the last one
+  const auto feed = [&](const lcmio::LogEvent& e, bool is_frame, int64_t utime, auto&& step) {
+    if (const std::string why = clock.admit(is_frame, utime); !why.empty()) {
+      rep.reject(e.channel, why);
+      return;
+    }
+    handle(step(), e.log_utime);
+    ckpt.afterInput(driver, clock, pos);
+  };
   bool interrupted = false;
   lcmio::LogEvent ev;
   while (in.next(ev)) {
@@ -205,33 +347,42 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
       interrupted = true;
       break;
     }
-    progress.update(in.result().shareRead(), driver.stats().frames_processed);
+    ++pos.events;
+    pos.channel = ev.channel;
+    pos.log_utime = ev.log_utime;
     last_timestamp = ev.log_utime;
     // Outputs of an earlier run in the input are replaced by this run's.
-    if (ev.channel == channels::kSlamPose || ev.channel == channels::kSlamMap ||
-        ev.channel == channels::kSlamParticles || ev.channel == channels::kSlamAssociations)
-      continue;
+    if (isSlamOutput(ev.channel)) continue;
     out.write(ev.log_utime, ev.channel, ev.data.data(), static_cast<int>(ev.data.size()));
+    if (processedBeforeResume(pos, resumed, opt.checkpoint_path)) continue;  // copied, not fed
+    progress.update(in.result().shareRead(), driver.stats().frames_processed);
     if (ev.channel == channels::kOdometry) {
-      if (auto m = decodeChecked<odometry_t>(ev, rep)) handle(driver.onOdometry(*m), ev.log_utime);
+      if (auto m = decodeChecked<odometry_t>(ev, rep)) feed(ev, false, m->utime, [&] { return driver.onOdometry(*m); });
     } else if (ev.channel == channels::kOmniFeatures) {
-      if (auto m = decodeChecked<features_t>(ev, rep)) handle(driver.onFeatures(*m), ev.log_utime);
+      if (auto m = decodeChecked<features_t>(ev, rep)) feed(ev, true, m->utime, [&] { return driver.onFeatures(*m); });
     }
   }
+  if (resumed.events > pos.events && !interrupted)
+    throw std::invalid_argument("checkpoint " + opt.checkpoint_path + ": written after event " +
+                                std::to_string(resumed.events) + ", the log has " + std::to_string(pos.events));
   if (!interrupted) {
     if (const auto problem = in.result().problem(in_path))
       std::cerr << "[slam] warning: --replay " << *problem << std::endl;
   }
+  // Interrupted: the state before the end-of-input decisions is what a resume continues from (not
+  // while still copying the events a resumed checkpoint holds: that checkpoint stays as it is).
+  const bool checkpoint_ok = !interrupted || pos.events < resumed.events || ckpt.writeNow(driver, clock, pos);
   handle(driver.finish(), last_timestamp);
   progress.update(1.0, driver.stats().frames_processed, true);
   if (interrupted) std::cerr << "[slam] replay interrupted by signal " << lcmio::stopSignal() << ": outputs so far kept" << std::endl;
+  else ckpt.removeFinished();
   saveMap(opt, driver, "[slam] ");
   out.commit();  // a failed last write (a full disk) is an error, not "N events written"
   std::cerr << "[slam] replay done: " << outputs << " frames answered, " << out.events() << " events written to "
             << out_path << "; decode_errors " << rep.decode_errors << " rejected " << rep.rejected
             << " sequence_gaps " << rep.sequence_gaps << " sequence_restarts " << rep.sequence_restarts << "; "
-            << driver.summary() << std::endl;
-  return app::kOk;
+            << driver.summary() << ckpt.summary() << alreadyProcessedNote(clock) << std::endl;
+  return checkpoint_ok ? app::kOk : app::kFailure;
 }
 
 }  // namespace
@@ -250,6 +401,12 @@ int main(int argc, char** argv) {
   cli.add_option("--set", sets, "override a config key: --set filter.resample_ess_fraction=1.0 (repeatable; needs --config)");
   cli.add_option("--save-map", save_map, "write the best particle's map here on exit (atomic; overrides map.save_path)");
   cli.add_option("--load-map", load_map, "start from this saved map (overrides map.load_path)");
+  std::string checkpoint;
+  double checkpoint_interval_s = 0.0;
+  cli.add_option("--checkpoint", checkpoint, "checkpoint file: resume from it when it exists, write it every "
+                 "--checkpoint-interval s of data and at SIGINT/SIGTERM (overrides checkpoint.path)");
+  cli.add_option("--checkpoint-interval", checkpoint_interval_s, "seconds of data between checkpoints (overrides "
+                 "checkpoint.interval_s)")->check(CLI::Range(0.001, 1e6));
   cli.add_flag("--localise", localise, "localisation only: keep the loaded map fixed (needs a map to load)");
   cli.add_option("--association", association, "override filter.association")->check(CLI::IsMember(slamproc::associationNames()));
   cli.add_option("--particles", particles, "override filter.particles")->check(CLI::Range(1, 100000));
@@ -270,10 +427,18 @@ int main(int argc, char** argv) {
     if (!association.empty())
       opt.filter.association = slamproc::associationFromName(association);
     if (particles > 0) opt.filter.num_particles = particles;
+    if (!checkpoint.empty()) opt.checkpoint_path = checkpoint;
+    if (checkpoint_interval_s > 0.0) opt.checkpoint_interval_us = static_cast<int64_t>(std::llround(checkpoint_interval_s * 1e6));
     if (const std::string err = opt.validate(); !err.empty()) throw std::invalid_argument(err);
     // Outputs are checked before any work whose result would be lost at the end.
     if (!opt.save_map_path.empty()) lcmio::requireWritableFile(opt.save_map_path, "--save-map (map.save_path)");
     if (!out.empty()) lcmio::requireWritableFile(out, "--out");
+    if (!opt.checkpoint_path.empty()) {  // its folder is made (a run's log folder may not exist yet)
+      const std::filesystem::path dir = std::filesystem::path(opt.checkpoint_path).parent_path();
+      std::error_code ec;
+      if (!dir.empty()) std::filesystem::create_directories(dir, ec);
+      lcmio::requireWritableFile(opt.checkpoint_path, "--checkpoint (checkpoint.path)");
+    }
     std::vector<slam::Landmark> prior;
     if (!opt.load_map_path.empty()) {
       prior = slamproc::loadMap(opt.load_map_path).landmarks;

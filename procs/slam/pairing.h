@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "omnislam/core/byte_codec.h"
 #include "omnislam/core/pose2.h"
 #include "omnislam/core/slam/types.h"
 
@@ -73,6 +74,8 @@ class OdometryBuffer {
   std::size_t size() const { return samples_.size(); }
   int64_t oldestUtime() const { return samples_.front().first; }
   int64_t newestUtime() const { return samples_.back().first; }
+  /// The samples, oldest first (checkpoints: add()ing them again in order rebuilds this buffer).
+  const std::deque<std::pair<int64_t, Pose2>>& samples() const { return samples_; }
 
  private:
   int64_t keep_us_;
@@ -159,6 +162,11 @@ class Pairer {
 
   const PairingStats& stats() const { return stats_; }
   std::size_t pendingFrames() const { return pending_.size(); }
+  /// Checkpoints (checkpoint.cpp): every member below but the options, so that a resumed process
+  /// pairs exactly as the one saved would have. A member added below must be added there too.
+  void saveState(ByteWriter& w) const;
+  /// Replaces the state by one saveState() wrote. Throws StateFormatError.
+  void loadState(ByteReader& r);
   const OdometryBuffer& odometry() const { return odom_; }
 
  private:

@@ -169,11 +169,13 @@ std::string SlamProcessOptions::validate() const {
   if (odometry_only_period_us <= 0) return "output.odometry_only_period_s must be > 0";
   if (localisation_only && load_map_path.empty()) return "map.localisation_only needs map.load_path (a map to localise in)";
   if (!use_ceiling_lights && !use_vertical_lines) return "at least one feature kind must be used";
+  if (checkpoint_interval_us < 1000 || checkpoint_interval_us > 1'000'000'000'000)
+    return "checkpoint.interval_s must be in [0.001, 1e6]";
   return "";
 }
 
 SlamProcessOptions parseSlamOptions(const Node& root) {
-  root.rejectUnknownKeys({"seed", "start_pose", "features", "output", "pairing", "filter", "map"});
+  root.rejectUnknownKeys({"seed", "start_pose", "features", "output", "pairing", "filter", "map", "checkpoint"});
   SlamProcessOptions o;
   o.seed = static_cast<std::uint64_t>(root.getInt("seed", 0, INT64_MAX, 1));
   if (auto s = root.optChild("start_pose")) {
@@ -207,6 +209,11 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
     o.localisation_only = m->getBool("localisation_only", false);
     if (o.localisation_only && o.load_map_path.empty())
       throw ConfigError(m->where("localisation_only") + " needs map.load_path (a map to localise in)");
+  }
+  if (auto c = root.optChild("checkpoint")) {
+    c->rejectUnknownKeys({"path", "interval_s"});
+    if (c->has("path")) o.checkpoint_path = c->getPath("path");
+    o.checkpoint_interval_us = seconds_us(*c, "interval_s", 0.001, 1e6, o.checkpoint_interval_us);
   }
   if (auto p = root.optChild("pairing")) parsePairing(*p, o.pairing);
   if (auto f = root.optChild("filter")) parseFilter(*f, o.filter);

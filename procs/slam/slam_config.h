@@ -44,6 +44,11 @@ struct SlamProcessOptions {
   std::string save_map_path;
   std::string load_map_path;
   bool localisation_only = false;
+  /// Checkpoints (checkpoint.h): the whole state written atomically here every
+  /// checkpoint_interval_us of data time (filter step utimes, never the wall clock) and at SIGINT /
+  /// SIGTERM; a process started with an existing valid file resumes from it ("" = off).
+  std::string checkpoint_path;
+  int64_t checkpoint_interval_us = 10'000'000;
 
   /// Empty when valid, otherwise a message naming the first bad field.
   std::string validate() const;

@@ -103,6 +103,14 @@ class SlamDriver {
   /// processed at all. With its last step's utime in *utime.
   const slam::FastSlam* filterToSave(int64_t* utime) const;
 
+  /// Checkpoints (checkpoint.cpp): the whole state (pairing, filters, counters, sequence numbers)
+  /// so that a driver given it goes on as the saved one would have. A member added below must be
+  /// added there too.
+  void saveState(ByteWriter& w) const;
+  /// Replaces the state by one saveState() wrote with the same options; the state must end the
+  /// reader's buffer. Throws StateFormatError, and then leaves this driver unchanged.
+  void loadState(ByteReader& r);
+
  private:
   void apply(std::vector<PairEvent>& events, DriverResult& r);
   static void note(const InputResult& in, const char* channel, DriverResult& r);

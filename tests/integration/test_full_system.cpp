@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
@@ -35,6 +36,10 @@ TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
   const size_t num_frames = t::expectEveryFrameAnswered(run.log);
   if (HasFailure()) std::cout << "the run's output:\n" << run.result.output;
   ASSERT_EQ(num_frames, 321u);
+  // The launch file's checkpoint beside the recording (${log_file}), written at the stop.
+  EXPECT_TRUE(std::filesystem::exists(run.log + ".slam-checkpoint")) << run.result.output;
+  EXPECT_NE(run.result.output.find("checkpoint written to " + run.log + ".slam-checkpoint"), std::string::npos)
+      << run.result.output;
   const auto ev = t::run({t::binPath("omnislam-eval"), run.log, "--json", "--no-tum"}, 60);
   ASSERT_EQ(ev.exit_code, 0) << ev.output;
   std::cout << ev.output;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -75,6 +76,23 @@ TEST(SlamConfig, MlAssociationFixedStartAndSeed) {
   EXPECT_EQ(o.filter.num_particles, 50);
   EXPECT_EQ(o.start_source, SlamProcessOptions::StartSource::kFixed);
   EXPECT_NEAR(o.start_pose_W.theta_rad, kPi / 2, 1e-12);
+}
+
+TEST(SlamConfig, CheckpointKeys) {
+  const SlamProcessOptions off = parseSlamOptions(config::Node::loadString("{}", "x"));
+  EXPECT_EQ(off.checkpoint_path, "");
+  EXPECT_EQ(off.checkpoint_interval_us, 10'000'000);
+  const std::string dir = ::testing::TempDir() + "slam_cfg_ckpt";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/s.yaml") << "checkpoint: {path: run/state.ckpt, interval_s: 2.5}\n";
+  const SlamProcessOptions o = loadSlamOptions(dir + "/s.yaml");
+  EXPECT_EQ(o.checkpoint_path, (std::filesystem::path(dir) / "run/state.ckpt").lexically_normal().string())
+      << "relative to the config file";
+  EXPECT_EQ(o.checkpoint_interval_us, 2'500'000);
+  EXPECT_NE(errorOf("checkpoint: {interval_s: 0}").find("checkpoint.interval_s"), std::string::npos)
+      << errorOf("checkpoint: {interval_s: 0}");
+  EXPECT_NE(errorOf("checkpoint: {every_s: 5}").find("every_s"), std::string::npos);
+  std::filesystem::remove_all(dir);
 }
 
 // One name table serves the config key, --association and the start-up echo.

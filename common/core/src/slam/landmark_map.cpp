@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace omnislam::slam {
@@ -284,6 +286,33 @@ void LandmarkMap::accumulateStorage(std::unordered_set<const void*>& seen, std::
     self(self, t->right.get());
   };
   walk(walk, root_.get());
+}
+
+std::vector<std::pair<std::uint64_t, std::shared_ptr<const Cell>>> LandmarkMap::cells() const {
+  std::vector<std::pair<std::uint64_t, std::shared_ptr<const Cell>>> out;
+  out.reserve(num_cells_);
+  inorder(root_.get(), [&](const Node& n) { out.emplace_back(n.key, n.cell); });
+  return out;
+}
+
+LandmarkMap LandmarkMap::fromCells(double cell_size_m,
+                                   const std::vector<std::pair<std::uint64_t, std::shared_ptr<const Cell>>>& cells) {
+  LandmarkMap m(cell_size_m);
+  if (m.cell_size_m_ != cell_size_m) throw std::invalid_argument("landmark map: cell size must be > 0");
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const auto& [key, cell] = cells[i];
+    if (!cell) throw std::invalid_argument("landmark map: cell " + std::to_string(i) + " is empty storage");
+    if (i > 0 && key <= cells[i - 1].first)
+      throw std::invalid_argument("landmark map: cell keys not strictly increasing at cell " + std::to_string(i));
+    for (const Landmark& l : cell->landmarks)
+      if (m.cellKeyOf(l.p_LinW_m.x(), l.p_LinW_m.y()) != key)
+        throw std::invalid_argument("landmark map: landmark " + std::to_string(l.id) + " lies outside its cell");
+    // The shape depends only on the key set (priority = hash(key)): the same tree as the one saved.
+    m.root_ = insertNew(m.root_, key, splitmix64(key), cell);
+    m.size_ += cell->landmarks.size();
+    ++m.num_cells_;
+  }
+  return m;
 }
 
 }  // namespace omnislam::slam

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "omnislam/core/byte_codec.h"
 #include "omnislam/core/pose2.h"
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/candidate.h"
@@ -176,6 +177,19 @@ class FastSlam {
   StorageStats storageStats() const;
   const FastSlamOptions& options() const { return options_; }
   std::uint64_t numSteps() const { return num_steps_; }
+
+  // --- Checkpoints (filter_state.cpp; format in docs/slam-process.md, "Checkpoints") -----------
+  /// Appends the complete state to `w`: every particle (pose, weight, landmark map, candidates with
+  /// their rays and counters, scale sums), the weights and poses before resampling, the generator's
+  /// state, the landmark id counter and the other counters. Storage shared between particles (maps,
+  /// cells, candidates) is written once and shared again when loaded. Of the options, only those the
+  /// layout depends on are written (to refuse a state loaded with other ones).
+  void saveState(ByteWriter& w) const;
+  /// The filter with `options` in the state saveState() wrote: its results and next steps are bit
+  /// for bit those of the filter saved. Throws StateFormatError with a one-line reason when the state
+  /// is malformed or was written with other options (particle count, map cell size, proposal,
+  /// association, update_map, odometry_scale_correction).
+  static FastSlam loadState(const FastSlamOptions& options, ByteReader& r);
 
  private:
   struct ParticleStepInfo;  // what one particle did in a step

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 #include "omnislam/core/slam/types.h"
@@ -64,6 +65,14 @@ class LandmarkMap {
   /// only the cells touched and the path to them.
   void apply(const std::vector<Edit>& edits, const std::vector<Landmark>& inserts);
   void insert(const Landmark& landmark) { apply({}, {landmark}); }
+
+  /// Every cell in key order with its (shared) storage, for checkpoints.
+  std::vector<std::pair<std::uint64_t, std::shared_ptr<const Cell>>> cells() const;
+  /// The map holding these cells (as cells() gave them; the storage is shared, not copied), so that a
+  /// restored map iterates in the same order as the one saved. Throws std::invalid_argument when the
+  /// keys are not strictly increasing, a cell is null, or a landmark lies outside its cell.
+  static LandmarkMap fromCells(double cell_size_m,
+                               const std::vector<std::pair<std::uint64_t, std::shared_ptr<const Cell>>>& cells);
 
   /// A map with freshly allocated nodes and cells (nothing shared): the deep-copy baseline.
   LandmarkMap deepCopy() const;

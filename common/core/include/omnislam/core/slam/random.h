@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <sstream>
+#include <string>
 
 #include "omnislam/core/angles.h"
 
@@ -16,6 +18,25 @@ namespace omnislam::slam {
 class Rng {
  public:
   explicit Rng(std::uint64_t seed) : engine_(seed) {}
+
+  /// The generator's complete state as text (the standard's textual form of std::mt19937_64, the
+  /// same on every library), for checkpoints: setState(state()) continues the same sequence.
+  std::string state() const {
+    std::ostringstream o;
+    o << engine_;
+    return o.str();
+  }
+  /// Restores a state(); false (generator unchanged) when the text is not one.
+  bool setState(const std::string& text) {
+    std::istringstream i(text);
+    std::mt19937_64 e;
+    i >> e;
+    if (i.fail()) return false;
+    i >> std::ws;
+    if (!i.eof()) return false;
+    engine_ = e;
+    return true;
+  }
 
   /// Uniform in [0, 1) with 53 random bits.
   double uniform01() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }

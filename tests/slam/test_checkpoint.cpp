@@ -1,0 +1,253 @@
+// Checkpoints of the SLAM process (procs/slam/checkpoint.h): a driver resumed from a checkpoint
+// taken after any message (a frame waiting for odometry, messages held for a jump, after an input
+// restart) publishes exactly what the driver that never stopped publishes, byte for byte, with the
+// same counts; the options and the file are checked; the already-processed rule and the schedule.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <variant>
+
+#include "checkpoint.h"
+#include "omnislam/core/angles.h"
+
+using namespace omnislam;
+using namespace omnislam::slamproc;
+
+namespace {
+
+constexpr int64_t kT0 = 1'700'000'000'000'000;
+const Eigen::Vector3d kCam_m(0.0, 0.0, 1.8);
+
+Pose2 truthAt(int64_t utime) {  // a slow circle under a grid of lights
+  const double t = static_cast<double>(utime - kT0) * 1e-6;
+  return Pose2{10.0 + 6.0 * std::sin(0.03 * t), 6.0 * (1.0 - std::cos(0.03 * t)), wrapAngle(0.03 * t)};
+}
+
+odometry_t odo(int64_t utime, int64_t seq) {
+  odometry_t m{};
+  m.utime = utime;
+  m.seq = seq;
+  const Pose2 p = truthAt(utime);
+  m.x_m = p.x_m * 1.01;  // a scale error, so the filter has work to do
+  m.y_m = p.y_m * 1.01;
+  m.theta_rad = p.theta_rad;
+  return m;
+}
+
+features_t feats(int64_t utime, int64_t seq, std::mt19937_64& rng) {
+  features_t m{};
+  m.utime = utime;
+  m.seq = seq;
+  m.detector = "test";
+  m.camera_position_m[2] = kCam_m.z();
+  const Pose2 x = truthAt(utime);
+  std::normal_distribution<double> n(0.0, 0.005);
+  for (double lx : {4.0, 10.0, 16.0})
+    for (double ly : {-2.0, 4.0, 10.0}) {
+      const double dx = lx - x.x_m, dy = ly - x.y_m;
+      feature_t f{};
+      f.kind = feature_t::KIND_CEILING_LIGHT;
+      f.azimuth_rad = wrapAngle(std::atan2(dy, dx) - x.theta_rad + n(rng));
+      f.elevation_rad = std::atan2(6.5 - 1.8, std::hypot(dx, dy)) + n(rng);
+      f.has_elevation = true;
+      f.covariance[0][0] = f.covariance[1][1] = 2.7e-5;
+      m.features.push_back(f);
+    }
+  m.num_features = static_cast<int32_t>(m.features.size());
+  return m;
+}
+
+using Message = std::variant<odometry_t, features_t>;
+
+/// 60 s of 50 Hz odometry and 1 Hz frames arriving 100 ms before the odometry reaches them (each
+/// waits for five odometry messages), then the input restarting (a log
+/// looping) for 20 s; a stray frame stamped 1000 s ahead at 30 s and a duplicate frame at 40 s.
+std::vector<Message> stream() {
+  std::vector<Message> v;
+  std::mt19937_64 rng(3);
+  int64_t oseq = 0, fseq = 0;
+  const auto epoch = [&](int64_t t0, int seconds) {
+    for (int64_t t = t0; t <= t0 + seconds * 1'000'000LL; t += 20'000) {
+      v.emplace_back(odo(t, oseq++));
+      const int64_t tf = t + 100'000;
+      if (tf <= t0 + seconds * 1'000'000LL && (tf - t0) % 1'000'000 == 0) {
+        v.emplace_back(feats(tf, fseq++, rng));
+        if (tf - t0 == 30'000'000) v.emplace_back(feats(tf + 1'000'000'000, fseq++, rng));
+        if (tf - t0 == 40'000'000) v.emplace_back(feats(tf, fseq - 1, rng));
+      }
+    }
+  };
+  epoch(kT0, 60);
+  epoch(kT0, 20);
+  return v;
+}
+
+template <class Msg>
+std::vector<uint8_t> bytes(const Msg& m) {
+  std::vector<uint8_t> b(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  return b;
+}
+
+/// Every output of a driver result, encoded, in publishing order.
+void append(const DriverResult& r, std::vector<std::vector<uint8_t>>& out) {
+  for (const FrameOutput& o : r.outputs) {
+    out.push_back(bytes(o.pose));
+    if (o.map) out.push_back(bytes(*o.map));
+    out.push_back(bytes(o.particles));
+    if (o.associations) out.push_back(bytes(*o.associations));
+  }
+}
+
+DriverResult feed(SlamDriver& d, const Message& m) {
+  if (const auto* o = std::get_if<odometry_t>(&m)) return d.onOdometry(*o);
+  return d.onFeatures(std::get<features_t>(m));
+}
+
+SlamProcessOptions options() {
+  SlamProcessOptions o;
+  o.filter.num_particles = 8;
+  o.min_sigma_rad = deg2rad(0.3);
+  o.start_source = SlamProcessOptions::StartSource::kFixed;
+  o.start_pose_W = truthAt(kT0);
+  return o;
+}
+
+TEST(Checkpoint, ResumedDriverPublishesExactlyWhatTheUninterruptedOneDoes) {
+  const auto msgs = stream();
+  const SlamProcessOptions opt = options();
+  SlamDriver ref(opt);
+  std::vector<std::vector<uint8_t>> ref_out;
+  std::vector<std::size_t> outputs_before(msgs.size() + 1, 0);
+  for (std::size_t i = 0; i < msgs.size(); ++i) {
+    outputs_before[i] = ref_out.size();
+    append(feed(ref, msgs[i]), ref_out);
+  }
+  outputs_before[msgs.size()] = ref_out.size();
+  append(ref.finish(), ref_out);
+  ASSERT_GT(ref.stats().frames_processed, 70);
+  ASSERT_EQ(ref.stats().pairing.restarts, 1) << ref.summary();
+  ASSERT_EQ(ref.stats().pairing.stray_ahead, 1) << ref.summary();
+
+  // Cut after: the first messages, a frame waiting for odometry, mid-epoch, the stray frame held, the duplicate, the
+  // first message of the restart (held), just after the restart, the last message.
+  std::vector<std::size_t> cuts{1, 20, 1000};
+  int64_t prev_frame_utime = -1;
+  for (std::size_t i = 0; i < msgs.size(); ++i) {
+    const auto* f = std::get_if<features_t>(&msgs[i]);
+    if (f && f->utime > kT0 + 900'000'000) cuts.push_back(i + 1);
+    if (f && f->utime == prev_frame_utime) cuts.push_back(i + 1);
+    if (f && f->seq == 10) cuts.push_back(i + 1);  // the frame waits for odometry
+    if (f) prev_frame_utime = f->utime;
+    if (i > 0 && std::holds_alternative<odometry_t>(msgs[i]) && std::holds_alternative<odometry_t>(msgs[i - 1]) &&
+        std::get<odometry_t>(msgs[i]).utime < std::get<odometry_t>(msgs[i - 1]).utime) {
+      cuts.push_back(i + 1);
+      cuts.push_back(i + 3);
+    }
+  }
+  cuts.push_back(msgs.size());
+  ASSERT_EQ(cuts.size(), 9u);
+  for (std::size_t cut : cuts) {
+    SCOPED_TRACE("checkpoint after message " + std::to_string(cut));
+    SlamDriver before(opt);
+    InputClock clock(opt.pairing.restart_jump_us);
+    for (std::size_t i = 0; i < cut; ++i) {
+      ASSERT_EQ(clock.admit(std::holds_alternative<features_t>(msgs[i]),
+                            std::visit([](const auto& m) { return m.utime; }, msgs[i])),
+                "");
+      feed(before, msgs[i]);
+    }
+    const auto file = encodeCheckpoint(opt, before, clock, ReplayPosition{});
+    SlamDriver after(opt);
+    InputClock clock2(opt.pairing.restart_jump_us);
+    decodeCheckpoint(file, opt, after, clock2);
+    EXPECT_EQ(after.summary(), before.summary());
+    std::vector<std::vector<uint8_t>> out;
+    for (std::size_t i = cut; i < msgs.size(); ++i) append(feed(after, msgs[i]), out);
+    append(after.finish(), out);
+    const std::vector<std::vector<uint8_t>> tail(ref_out.begin() + static_cast<long>(outputs_before[cut]), ref_out.end());
+    ASSERT_EQ(out.size(), tail.size());
+    EXPECT_TRUE(out == tail) << "outputs after the resume differ from the uninterrupted run's";
+    EXPECT_EQ(after.summary(), ref.summary());
+    // The checkpoint of the resumed driver is the one it was loaded from.
+    SlamDriver again(opt);
+    InputClock clock3(opt.pairing.restart_jump_us);
+    decodeCheckpoint(file, opt, again, clock3);
+    EXPECT_EQ(encodeCheckpoint(opt, again, clock, ReplayPosition{}), file);
+  }
+}
+
+TEST(Checkpoint, OtherOptionsOrDamageAreRefusedWithTheReasonAndLeaveTheDriverAlone) {
+  const auto msgs = stream();
+  const SlamProcessOptions opt = options();
+  SlamDriver d(opt);
+  InputClock clock(opt.pairing.restart_jump_us);
+  for (std::size_t i = 0; i < 800; ++i) feed(d, msgs[i]);
+  const auto file = encodeCheckpoint(opt, d, clock, ReplayPosition{});
+  const auto reason = [&](const std::vector<uint8_t>& bytes, const SlamProcessOptions& o) -> std::string {
+    SlamDriver fresh(o);
+    InputClock c(o.pairing.restart_jump_us);
+    try {
+      decodeCheckpoint(bytes, o, fresh, c);
+    } catch (const StateFormatError& e) {
+      EXPECT_EQ(fresh.filter(), nullptr) << "a refused checkpoint changed the driver";
+      EXPECT_EQ(fresh.stats().pairing.odometry_in, 0);
+      return e.what();
+    }
+    return "";
+  };
+  SlamProcessOptions more = opt;
+  more.filter.num_particles = 20;
+  EXPECT_NE(reason(file, more).find("written with other options: 'filter: 8 particles"), std::string::npos)
+      << reason(file, more);
+  SlamProcessOptions seed = opt;
+  seed.seed = 9;
+  EXPECT_NE(reason(file, seed).find("seed 1"), std::string::npos) << reason(file, seed);
+  auto flipped = file;
+  flipped[flipped.size() / 2] ^= 1;
+  EXPECT_NE(reason(flipped, opt).find("checksum mismatch"), std::string::npos);
+  const std::vector<uint8_t> truncated(file.begin(), file.end() - 100);
+  EXPECT_NE(reason(truncated, opt).find("truncated"), std::string::npos) << reason(truncated, opt);
+  EXPECT_EQ(reason(file, opt), "");
+}
+
+TEST(Checkpoint, MessagesAtOrBeforeTheCheckpointAreAlreadyProcessed) {
+  InputClock c(5'000'000);
+  c.resumeAfter(kT0 + 10'000'000, kT0 + 9'700'000);
+  EXPECT_NE(c.admit(false, kT0 + 10'000'000).find("already processed"), std::string::npos);
+  EXPECT_NE(c.admit(true, kT0 + 9'000'000).find("already processed"), std::string::npos);
+  EXPECT_EQ(c.admit(true, kT0 + 1'000'000), "") << "5 s or more back: the pairing decides (a restart?)";
+  EXPECT_EQ(c.admit(false, kT0 + 10'020'000), "");
+  EXPECT_EQ(c.admit(false, kT0 + 9'990'000), "") << "once past the checkpoint, the usual rules";
+  EXPECT_EQ(c.alreadyProcessed(), 2);
+  EXPECT_EQ(c.newest(false), kT0 + 10'020'000);
+}
+
+TEST(Checkpoint, ScheduleFollowsDataTime) {
+  CheckpointSchedule s(10'000'000);
+  EXPECT_FALSE(s.due(0));
+  EXPECT_FALSE(s.due(kT0));
+  EXPECT_FALSE(s.due(kT0 + 9'999'999));
+  EXPECT_TRUE(s.due(kT0 + 10'000'000));
+  EXPECT_FALSE(s.due(kT0 + 15'000'000));
+  EXPECT_TRUE(s.due(kT0 + 21'000'000));
+  EXPECT_FALSE(s.due(kT0 + 1'000'000)) << "a restart stepped back: a new base";
+  EXPECT_TRUE(s.due(kT0 + 11'000'000));
+}
+
+TEST(Checkpoint, FileIsReplacedAtomically) {
+  const std::string dir = ::testing::TempDir() + "ckpt_atomic_" + std::to_string(::getpid());
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/state.ckpt";
+  writeFileAtomically(path, {1, 2, 3});
+  writeFileAtomically(path, {4, 5});
+  EXPECT_EQ(readWholeFile(path), (std::vector<uint8_t>{4, 5}));
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  EXPECT_THROW(writeFileAtomically(dir + "/no/such/folder/x", {1}), std::runtime_error);
+  EXPECT_THROW(readWholeFile(dir + "/missing"), std::runtime_error);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace

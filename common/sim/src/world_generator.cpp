@@ -74,15 +74,26 @@ bool tryAppend(const HallBounds& h, double margin, Path& path, Pose2& pose, cons
 
 double minArcRadius(const TrajectoryOptions& o) { return std::max(0.6, o.speed_mps / kMaxYawRate_radps); }
 
-/// A closed rounded rectangle from the current pose (sides a, b; left or right), back to it.
+/// The turn on the spot that faces the hall's centre (none when already facing it).
+std::vector<Segment> faceCentre(const HallBounds& h, const Pose2& pose) {
+  const double cx = 0.5 * (h.x_min_m + h.x_max_m), cy = 0.5 * (h.y_min_m + h.y_max_m);
+  const double to_centre_deg = rad2deg(wrapAngle(std::atan2(cy - pose.y_m, cx - pose.x_m) - pose.theta_rad));
+  if (std::abs(to_centre_deg) < 0.1) return {};
+  return {turn(to_centre_deg)};
+}
+
+/// A closed rounded rectangle from the current pose (sides a, b; left or right), back to it; after
+/// 10 failed draws, first turned towards the hall's centre, and smaller with every draw.
 bool tryLoop(const HallBounds& h, Path& path, Pose2& pose, Draw& d) {
   const double span = std::min(h.x_max_m - h.x_min_m, h.y_max_m - h.y_min_m) - 2.0 * kWallMargin_m;
-  for (int attempt = 0; attempt < 20; ++attempt) {
+  constexpr int kAttempts = 30;
+  for (int attempt = 0; attempt < kAttempts; ++attempt) {
     const double r = d.uniform(minArcRadius(path.opt), 1.5);
-    const double a = d.uniform(3.0, std::max(3.5, span * (1.0 - attempt / 20.0)));
-    const double b = d.uniform(3.0, std::max(3.5, span * (1.0 - attempt / 20.0)));
+    const double shrink = 1.0 - static_cast<double>(attempt) / kAttempts;
+    const double a = d.uniform(3.0, std::max(3.5, span * shrink));
+    const double b = d.uniform(3.0, std::max(3.5, span * shrink));
     const double sign = d.chance(0.5) ? 1.0 : -1.0;
-    std::vector<Segment> loop;
+    std::vector<Segment> loop = attempt >= 10 ? faceCentre(h, pose) : std::vector<Segment>{};
     for (int side = 0; side < 4; ++side) {
       loop.push_back(straight(side % 2 == 0 ? a : b));
       loop.push_back(arc(sign * 90.0, r));
@@ -112,9 +123,7 @@ void explore(const HallBounds& h, Path& path, Pose2& pose, Draw& d) {
     }
     if (!moved) {  // cornered: face the hall's centre and go half way there (always inside)
       const double cx = 0.5 * (h.x_min_m + h.x_max_m), cy = 0.5 * (h.y_min_m + h.y_max_m);
-      const double to_centre = wrapAngle(std::atan2(cy - pose.y_m, cx - pose.x_m) - pose.theta_rad);
-      std::vector<Segment> segs;
-      if (std::abs(rad2deg(to_centre)) >= 0.1) segs.push_back(turn(rad2deg(to_centre)));
+      std::vector<Segment> segs = faceCentre(h, pose);
       const double dist = 0.5 * std::hypot(cx - pose.x_m, cy - pose.y_m);
       if (dist > 0.01) segs.push_back(straight(dist));
       if (!segs.empty() && !tryAppend(h, kWallMargin_m, path, pose, segs)) return;

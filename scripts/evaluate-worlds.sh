@@ -59,7 +59,9 @@ export SETS_STR="${SETS[*]+${SETS[*]}}"
 # One world: generate, replay with each method, score. Failures are recorded in OUT/fail-*.txt
 # (the table counts them as failed runs) rather than stopping the sweep.
 one_world() {
-  local s="$1" w="$OUT/world-$1" m
+  local s="$1" w="$OUT/world-$1" m todo=0
+  for m in $METHODS; do [ -s "$OUT/eval-$m-$s.json" ] || todo=1; done
+  [ "$todo" = 1 ] || return 0  # scored by an earlier run into this --out
   if [ ! -s "$w.info.json" ] || [ ! -s "$w.lcm" ]; then
     "$BIN/omnislam-gen-world" --family "$FAMILY" --seed "$s" --rate-hz "$RATE" --out-world "$w.yaml" \
       --out-log "$w.lcm" --out-info "$w.info.json" 2> "$w.gen.txt" || { cp "$w.gen.txt" "$OUT/fail-gen-$s.txt"; return 0; }
@@ -89,9 +91,13 @@ export -f one_world
 
 LAST=$((FIRST + WORLDS - 1))
 echo "evaluate-worlds: $WORLDS $FAMILY worlds (seeds $FIRST..$LAST) at $RATE Hz, $METHODS, $JOBS jobs, in $OUT" >&2
+FRESH=0  # worlds with a method still to run: the ones the wall time is spent on
+for s in $(seq "$FIRST" "$LAST"); do
+  for m in $METHODS; do [ -s "$OUT/eval-$m-$s.json" ] || { FRESH=$((FRESH + 1)); break; }; done
+done
 T0=$(date +%s)
 seq "$FIRST" "$LAST" | xargs -P "$JOBS" -I{} bash -c 'one_world "$@"' _ {}
 T1=$(date +%s)
 python3 "$ROOT/scripts/worlds_table.py" "$OUT" --family "$FAMILY" --seeds "$FIRST" "$LAST" --rate-hz "$RATE" \
-  --methods $METHODS --wall-s $((T1 - T0)) --jobs "$JOBS"
+  --methods $METHODS --wall-s $((T1 - T0)) --worlds-run "$FRESH" --jobs "$JOBS"
 echo "evaluate-worlds: files in $OUT (summary.json, table.md)" >&2

@@ -91,7 +91,22 @@ TEST(GenWorld, BadFlagsStopWithExitCode2) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   r = t::run({t::binPath("omnislam-gen-world"), "--family", "halls", "--rate-hz", "0"}, 30.0);
   EXPECT_EQ(r.exit_code, 2) << r.output;
+  // --rate-hz and --out-world belong to a drawn world; nothing to write is a mistake too.
+  r = t::run({t::binPath("omnislam-gen-world"), "--world", t::sourcePath("config/worlds/sports_hall.yaml"), "--rate-hz",
+              "5", "--out-log", d.file("l.lcm")},
+             30.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  r = t::run({t::binPath("omnislam-gen-world"), "--family", "halls"}, 30.0);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("at least one of --out-world, --out-log, --out-info"), std::string::npos) << r.output;
+  // A room world has no lights for this simulation: refused, not an empty log.
+  r = t::run({t::binPath("omnislam-gen-world"), "--world", t::sourcePath("config/worlds/room.yaml"), "--out-log",
+              d.file("l.lcm")},
+             30.0);
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("needs a world of ceiling lights"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(d.file("w.yaml")));
+  EXPECT_FALSE(std::filesystem::exists(d.file("l.lcm")));
 }
 
 TEST(EvaluateWorldsScript, TwoCorridorsEndToEndWithBothMethods) {

@@ -122,6 +122,22 @@ void writeLog(const std::string& path, const sim::World& w, const sim::SimRun& r
   out.commit();
 }
 
+/// A JSON string literal (names come from world files: quotes, backslashes and controls escaped).
+std::string quoted(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      out += b;
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
 std::string num(double v) {
   char b[40];
   std::snprintf(b, sizeof b, "%.10g", v);
@@ -143,7 +159,7 @@ std::string infoJson(const sim::World& w, const std::optional<sim::GeneratedPara
                      const sim::FeatureSimOptions& fo) {
   std::ostringstream j;
   const auto& o = w.trajectory_options;
-  j << "{\n  \"world\": \"" << w.name << "\",\n  \"lamps\": " << w.lights.size()
+  j << "{\n  \"world\": " << quoted(w.name) << ",\n  \"lamps\": " << w.lights.size()
     << ",\n  \"start_x_m\": " << num(o.start.x_m) << ",\n  \"start_y_m\": " << num(o.start.y_m)
     << ",\n  \"start_theta_deg\": " << num(rad2deg(o.start.theta_rad))
     << ",\n  \"min_elevation_deg\": " << num(90.0 - rad2deg(w.camera.intrinsics.max_zenith_rad))
@@ -194,12 +210,13 @@ int main(int argc, char** argv) {
   double rate_hz = 1.0;
   sim::FeatureSimOptions fo;
   cli.add_option("--family", family, "halls | irregular | corridors: draw a world of this family");
-  cli.add_option("--world", world_in, "or: an existing lights world file (config/worlds/*.yaml)");
+  auto* world_opt = cli.add_option("--world", world_in, "or: an existing lights world file (config/worlds/*.yaml)");
   cli.add_option("--seed", seed, "world seed (also the sensors' seeds unless given)")->check(app::SeedRange());
   cli.add_option("--odometry-seed", odometry_seed, "odometry noise seed (0 = --seed)")->check(app::SeedRange());
   cli.add_option("--detector-seed", detector_seed, "detector noise seed (0 = derived from --seed)")->check(app::SeedRange());
-  cli.add_option("--rate-hz", rate_hz, "feature frame rate of a drawn world, Hz")->check(app::FiniteRange(0.01, 100.0));
-  cli.add_option("--out-world", out_world, "write the drawn world file here");
+  cli.add_option("--rate-hz", rate_hz, "feature frame rate of a drawn world, Hz")
+      ->check(app::FiniteRange(0.01, 100.0))->excludes(world_opt);
+  cli.add_option("--out-world", out_world, "write the drawn world file here")->excludes(world_opt);
   cli.add_option("--out-log", out_log, "write the feature log here");
   cli.add_option("--out-info", out_info, "write the start pose, perception range, lamps seen (JSON) here");
   cli.add_option("--pixel-sigma-px", fo.pixel_sigma_px, "centroid noise, px")->check(app::FiniteRange(1e-6, 100.0));
@@ -207,8 +224,9 @@ int main(int argc, char** argv) {
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
 
   return app::runMain("omnislam-gen-world", [&]() -> int {
-    if (family.empty() == world_in.empty()) {
-      std::cerr << "omnislam-gen-world: give exactly one of --family and --world" << std::endl;
+    if (family.empty() == world_in.empty() || (out_world.empty() && out_log.empty() && out_info.empty())) {
+      std::cerr << "omnislam-gen-world: give exactly one of --family and --world, and at least one of --out-world, "
+                   "--out-log, --out-info" << std::endl;
       return app::kBadConfig;
     }
     for (const auto& [path, flag] : {std::pair{out_world, "--out-world"}, {out_log, "--out-log"}, {out_info, "--out-info"}})

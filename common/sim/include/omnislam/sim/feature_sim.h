@@ -14,6 +14,8 @@
 //     uniformly random pixels of the field of view, with the same noise model.
 // Frames: robot R, camera C, world W; the features' angles are in R, from the optical centre
 // (features_t.camera_position_m = the mounting's offset). Times in seconds from the world's t = 0.
+// Seeded: the same world and seeds give the same run with the same build (std:: distributions, as
+// OdometrySimulator).
 #pragma once
 
 #include <Eigen/Core>

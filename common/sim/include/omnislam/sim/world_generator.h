@@ -5,7 +5,9 @@
 // the floor at z = 0; lamps are horizontal discs at p_LinW_m (z = height above the floor). Angles in
 // radians unless the name says _deg. Every random draw comes from one std::mt19937_64 seeded with
 // the seed and turned into numbers by this file's own arithmetic (no std:: distributions, whose
-// output differs between standard libraries), so a seed names the same world everywhere.
+// output differs between standard libraries), so the draws do not depend on the library; whether a
+// drawn path stays inside the walls is decided with libm's sin / cos, so a seed gives the same
+// bytes on the same platform (tested), and almost surely on others.
 #pragma once
 
 #include <cstdint>

@@ -145,6 +145,11 @@ TEST(EvaluateWorldsScript, BadFlagsStopAtOnce) {
     EXPECT_NE(r.output.find("evaluate-worlds: " + message), std::string::npos) << r.output;
   }
   EXPECT_FALSE(std::filesystem::exists(d.file("o")));
+  // --help: the header comment, markers stripped.
+  const auto h = t::run({"bash", sh, "--help"}, 30.0);
+  EXPECT_EQ(h.exit_code, 0) << h.output;
+  EXPECT_EQ(h.output.rfind("Evaluates the SLAM on a family of generated worlds", 0), 0u) << h.output;
+  EXPECT_NE(h.output.find("[--association hungarian|ml|both] [--jobs 2]"), std::string::npos) << h.output;
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The table of scripts/evaluate-worlds.sh from the files it writes in DIR: per association method,
 the pass rate on issue 45's criteria and the median / p90 of every figure; writes DIR/summary.json
-(every world's figures and the aggregates) and DIR/table.md, and prints the table.
+(every world's figures and the aggregates; a figure that is not finite, e.g. the landmark error of a
+world with no landmark matched, is null there) and DIR/table.md, and prints the table.
 
 Criteria (a world passes when all hold; a run that failed or produced no JSON fails):
   landmark mean error <= 0.30 m, landmark max error <= 0.8 m,
@@ -39,13 +40,16 @@ FIGURES = [  # key, label, format
 
 
 def quantile(vals, q):
-    """Linear interpolation between order statistics (numpy's default)."""
-    v = sorted(x for x in vals if x is not None and math.isfinite(x))
+    """Linear interpolation between order statistics (numpy's default). A world with no landmark
+    matched has an infinite landmark error: it stays in (it sorts last), it is not dropped."""
+    v = sorted(x for x in vals if x is not None and not math.isnan(x))
     if not v:
         return None
     pos = q * (len(v) - 1)
     lo = int(math.floor(pos))
     hi = min(lo + 1, len(v) - 1)
+    if v[lo] == math.inf or (v[hi] == math.inf and pos > lo):
+        return math.inf
     return v[lo] + (v[hi] - v[lo]) * (pos - lo)
 
 
@@ -84,6 +88,17 @@ def aggregate(rows):
     out["figures"] = {k: {"median": quantile([r.get(k) for r in rows], 0.5), "p90": quantile([r.get(k) for r in rows], 0.9)}
                       for k, _, _ in FIGURES}
     return out
+
+
+def strict(x):
+    """JSON has no infinity: a non-finite figure (no landmark matched) is written as null."""
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    if isinstance(x, dict):
+        return {k: strict(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [strict(v) for v in x]
+    return x
 
 
 def fmt(v, f):
@@ -133,7 +148,7 @@ def main():
     summary = {"family": a.family, "seeds": a.seeds, "rate_hz": a.rate_hz, "wall_s": a.wall_s, "worlds_run": run, "jobs": a.jobs,
                "criteria": [c for c, _ in CRITERIA], "aggregate": agg, "worlds": rows}
     with open(os.path.join(a.dir, "summary.json"), "w") as f:
-        json.dump(summary, f, indent=1, default=lambda x: None)
+        json.dump(strict(summary), f, indent=1, allow_nan=False)
     return 0
 
 

@@ -10,7 +10,8 @@
 #                              [--rate-hz 1] [--association hungarian|ml|both] [--jobs 2]
 #                              [--out DIR] [--keep-logs] [--set KEY=VALUE ...]
 # --set is passed to omnislam-slam after the per-world settings (for experiments; the baseline
-# uses none). Worlds already scored in --out are not run again. Needs omnislam-gen-world,
+# uses none; the table's header names them). Worlds already scored in --out are not run again,
+# whatever settings scored them: use a fresh --out for each setting. Needs omnislam-gen-world,
 # omnislam-slam and omnislam-eval (scripts/build.sh, or OMNISLAM_BUILD_DIR).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -99,5 +100,6 @@ T0=$(date +%s)
 seq "$FIRST" "$LAST" | xargs -P "$JOBS" -I{} bash -c 'one_world "$@"' _ {}
 T1=$(date +%s)
 python3 "$ROOT/scripts/worlds_table.py" "$OUT" --family "$FAMILY" --seeds "$FIRST" "$LAST" --rate-hz "$RATE" \
-  --methods $METHODS --wall-s $((T1 - T0)) --worlds-run "$FRESH" --jobs "$JOBS"
+  --methods $METHODS --wall-s $((T1 - T0)) --worlds-run "$FRESH" --jobs "$JOBS" \
+  --extra-sets "$SETS_STR"
 echo "evaluate-worlds: files in $OUT (summary.json, table.md)" >&2

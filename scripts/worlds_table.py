@@ -11,7 +11,7 @@ Criteria (a world passes when all hold; a run that failed or produced no JSON fa
   position RMSE <= half of dead reckoning's (both unaligned, from the known start pose).
 
 usage: worlds_table.py DIR --family F --seeds FIRST LAST --rate-hz R --methods M [M ...]
-                       [--wall-s S] [--worlds-run N] [--jobs J]"""
+                       [--wall-s S] [--worlds-run N] [--jobs J] [--extra-sets "--set K=V ..."]"""
 import argparse
 import json
 import math
@@ -131,13 +131,14 @@ def main():
     ap.add_argument("--methods", nargs="+", required=True, choices=["hungarian", "ml"])
     ap.add_argument("--wall-s", type=float, default=None)
     ap.add_argument("--jobs", type=int, default=None)
+    ap.add_argument("--extra-sets", default="", help="the --set options given beyond the per-world ones (named in the header)")
     ap.add_argument("--worlds-run", type=int, default=None, help="worlds run in --wall-s (the others were scored before)")
     a = ap.parse_args()
     seeds = list(range(a.seeds[0], a.seeds[1] + 1))
     rows = {m: [world_row(a.dir, m, s) for s in seeds] for m in a.methods}
     agg = {m: aggregate(rows[m]) for m in a.methods}
     header = (f"{a.family}, {len(seeds)} worlds (seeds {a.seeds[0]}..{a.seeds[1]}), frames at {a.rate_hz} Hz, "
-              f"config/slam/sports_hall.yaml")
+              f"config/slam/sports_hall.yaml" + (f" with {a.extra_sets}" if a.extra_sets.strip() else ""))
     run = len(seeds) if a.worlds_run is None else a.worlds_run
     if a.wall_s and run:
         header += f"; {run} worlds run in {a.wall_s:.0f} s wall with {a.jobs} jobs ({60 * run / a.wall_s:.1f} worlds per minute)"
@@ -146,6 +147,7 @@ def main():
     with open(os.path.join(a.dir, "table.md"), "w") as f:
         f.write(text + "\n")
     summary = {"family": a.family, "seeds": a.seeds, "rate_hz": a.rate_hz, "wall_s": a.wall_s, "worlds_run": run, "jobs": a.jobs,
+               "extra_sets": a.extra_sets,
                "criteria": [c for c, _ in CRITERIA], "aggregate": agg, "worlds": rows}
     with open(os.path.join(a.dir, "summary.json"), "w") as f:
         json.dump(strict(summary), f, indent=1, allow_nan=False)

@@ -272,6 +272,18 @@ void parseTrajectory(const Node& n, sim::World& w) {
   if (auto err = sim::Trajectory::validate(o, w.segments)) throw ConfigError(n.where("segments") + ": " + *err);
 }
 
+sim::HallBounds parseHall(const Node& n) {
+  n.rejectUnknownKeys({"x_min_m", "x_max_m", "y_min_m", "y_max_m"});
+  sim::HallBounds h;
+  h.x_min_m = n.getDouble("x_min_m", -1e4, 1e4);
+  h.x_max_m = n.getDouble("x_max_m", -1e4, 1e4);
+  h.y_min_m = n.getDouble("y_min_m", -1e4, 1e4);
+  h.y_max_m = n.getDouble("y_max_m", -1e4, 1e4);
+  if (!(h.x_max_m > h.x_min_m)) throw ConfigError(n.where("x_max_m") + " must be > x_min_m");
+  if (!(h.y_max_m > h.y_min_m)) throw ConfigError(n.where("y_max_m") + " must be > y_min_m");
+  return h;
+}
+
 void parseImage(const Node& n, sim::ImageNuisance& z) {
   n.rejectUnknownKeys({"noise_sigma_grey", "blur_sigma_px", "background_grey", "light_peak_grey", "samples_per_light",
                        "supersample", "shading", "window_wall", "false_blobs"});
@@ -301,7 +313,7 @@ void parseImage(const Node& n, sim::ImageNuisance& z) {
 
 sim::World parseWorld(const Node& root) {
   root.rejectUnknownKeys({"name", "start_utime", "truth_rate_hz", "image_rate_hz", "lights", "room", "camera",
-                          "trajectory", "odometry_noise", "image"});
+                          "trajectory", "odometry_noise", "image", "hall"});
   sim::World w;
   w.name = root.getString("name", "world");
   w.start_utime = root.getInt("start_utime", 1, 4'000'000'000'000'000, w.start_utime);
@@ -311,6 +323,7 @@ sim::World parseWorld(const Node& root) {
     throw ConfigError(root.where("lights") + " or 'room': a world needs exactly one of them (ceiling lights or a room)");
   if (root.has("lights")) w.lights = parseLights(root.child("lights"));
   if (root.has("room")) w.room = parseRoom(root.child("room"));
+  if (auto h = root.optChild("hall")) w.hall = parseHall(*h);
   w.camera = parseCamera(root.child("camera"));
   parseTrajectory(root.child("trajectory"), w);
   if (auto o = root.optChild("odometry_noise")) {

@@ -67,6 +67,17 @@ std::unique_ptr<camera::CameraModel> makeCamera(const CameraSetup& setup);
 /// The image centre of a setup's model (the mirror / optical axis), pixels (u = column, v = row).
 Eigen::Vector2d cameraCentrePx(const CameraSetup& setup);
 
+/// The walls of a ceiling-light hall: an axis-aligned rectangle of the world frame, metres. Optional
+/// and descriptive (world file key `hall`): generated worlds keep their lamps and trajectory inside
+/// it; nothing is rendered from it.
+struct HallBounds {
+  double x_min_m = 0.0, x_max_m = 0.0, y_min_m = 0.0, y_max_m = 0.0;
+  bool contains(double x_m, double y_m, double margin_m = 0.0) const {
+    return x_m >= x_min_m + margin_m && x_m <= x_max_m - margin_m && y_m >= y_min_m + margin_m &&
+           y_m <= y_max_m - margin_m;
+  }
+};
+
 struct World {
   std::string name = "world";
   int64_t start_utime = 1'700'000'000'000'000;  ///< simulated time of t = 0, microseconds
@@ -74,6 +85,7 @@ struct World {
   double image_rate_hz = 1.0;                   ///< OMNI_IMAGE rate
   std::vector<Light> lights;   ///< ceiling lights (paper 000); empty in a room world
   std::optional<Room> room;    ///< paper 002's room with vertical lines; exclusive with lights
+  std::optional<HallBounds> hall;  ///< the walls around the lights, when the file gives them
   CameraSetup camera;
   TrajectoryOptions trajectory_options;
   std::vector<Segment> segments;

@@ -101,23 +101,30 @@ TEST(WorldGenerator, EveryWorldIsValidAndWithinItsFamilysRanges) {
         EXPECT_GE(L.radius_m, 0.15 - 1e-9) << what;
         EXPECT_LE(L.radius_m, 0.30 + 1e-9) << what;
       }
-      if (f != WorldFamily::kIrregular)  // flat ceilings
+      if (f != WorldFamily::kIrregular) {  // flat ceilings
         EXPECT_EQ(g.params.ceiling_min_m, g.params.ceiling_max_m) << what;
+      }
       expectTrajectoryInside(w, r.wall_margin_m, what);
       EXPECT_GE(g.params.loops, 1) << what;
-      if (f != WorldFamily::kCorridors) EXPECT_GE(g.params.path_m, 80.0) << what;
+      if (f != WorldFamily::kCorridors) {
+        EXPECT_GE(g.params.path_m, 80.0) << what;
+      }
       pairs += g.params.close_pairs;
       missing += g.params.lamps_missing;
       extra += g.params.lamps_extra;
       loops += g.params.loops;
     }
     // The family's features occur across the seeds.
-    if (f == WorldFamily::kIrregular) EXPECT_GT(pairs, kSeeds) << "close pairs";
+    if (f == WorldFamily::kIrregular) {
+      EXPECT_GT(pairs, kSeeds) << "close pairs";
+    }
     if (f == WorldFamily::kHalls) {
       EXPECT_GT(missing, 0);
       EXPECT_GT(extra, 0);
     }
-    if (f == WorldFamily::kCorridors) EXPECT_GT(missing, 0);
+    if (f == WorldFamily::kCorridors) {
+      EXPECT_GT(missing, 0);
+    }
     EXPECT_GT(loops, kSeeds) << worldFamilyName(f);
   }
 }

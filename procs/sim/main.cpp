@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <iostream>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -65,6 +66,81 @@ std::set<std::string> splitNames(const std::string& csv) {
   return out;
 }
 
+// Waits until the named consumers have announced themselves on PROCESS_STATUS, so that nothing is
+// published into the void; after wait_timeout_s it says which are missing and starts anyway.
+void waitForConsumers(lcmio::Node& node, const std::string& wait_for, double wait_timeout_s) {
+  const std::set<std::string> wanted = splitNames(wait_for);
+  if (wanted.empty()) return;
+  lcmio::InputOptions status_opt;
+  status_opt.require_increasing_utime = false;  // several publishers share the channel
+  status_opt.track_sequence = false;
+  // Shared with the handler: the node keeps the subscription after this function returns.
+  auto seen_ptr = std::make_shared<std::set<std::string>>();
+  node.subscribe<process_status_t>(channels::kProcessStatus,
+                                   [seen_ptr](const process_status_t& st) { seen_ptr->insert(st.name); }, status_opt);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_timeout_s);
+  auto all_seen = [&] {
+    for (const auto& n : wanted)
+      if (!seen_ptr->count(n)) return false;
+    return true;
+  };
+  node.setDetail("waiting for " + wait_for);
+  node.spin([&] { return all_seen() || std::chrono::steady_clock::now() > deadline; });
+  if (all_seen()) return;
+  std::string missing;
+  for (const auto& n : wanted)
+    if (!seen_ptr->count(n)) missing += (missing.empty() ? "" : ",") + n;
+  std::cerr << node.tag() << "gave up waiting for: " << missing << " (starting anyway)" << std::endl;
+}
+
+// Sleeps (handling the bus) until simulated time t is due at the speed-up; at once when speedup is 0.
+void waitUntilDue(lcmio::Node& node, std::chrono::steady_clock::time_point wall0, double t, double speedup) {
+  if (speedup <= 0) {
+    node.handleFor(0.0);
+    return;
+  }
+  const auto due = lcmio::pacedTime(wall0, t, speedup);
+  while (!lcmio::stopRequested()) {
+    const double left = std::chrono::duration<double>(due - std::chrono::steady_clock::now()).count();
+    if (left <= 0) break;
+    node.handleFor(std::min(left, 0.05));
+  }
+}
+
+pose_t truthPose(const sim::TrajectorySample& s, int64_t utime, int64_t seq) {
+  pose_t p{};
+  p.utime = utime;
+  p.seq = seq;
+  p.x_m = s.pose.x_m;
+  p.y_m = s.pose.y_m;
+  p.theta_rad = s.pose.theta_rad;
+  p.num_particles = 0;
+  p.effective_sample_size = 0;
+  p.input_seq = -1;
+  return p;
+}
+
+// The truth stream from t = 0 to end_s at the world's truth rate, the map once per simulated second.
+void publishTruth(lcmio::Node& node, const sim::World& world, const sim::Trajectory& traj,
+                  const std::vector<sim::RoomLine>& room_lines, double end_s, double speedup) {
+  const double dt = 1.0 / world.truth_rate_hz;
+  const int64_t n_steps = static_cast<int64_t>(std::floor(end_s / dt + 1e-9));
+  const auto wall0 = std::chrono::steady_clock::now();
+  int64_t map_seq = 0;
+  const int64_t map_every = std::max<int64_t>(1, std::llround(world.truth_rate_hz));
+  for (int64_t k = 0; k <= n_steps && !lcmio::stopRequested(); ++k) {
+    const double t = k * dt;
+    waitUntilDue(node, wall0, t, speedup);
+    const int64_t utime = world.start_utime + static_cast<int64_t>(std::llround(t * 1e6));
+    node.publish(channels::kGroundTruthPose, truthPose(traj.at(t), utime, k));
+    if (k % map_every != 0) continue;
+    node.publish(channels::kGroundTruthMap, truthMap(world, room_lines, utime, map_seq++));
+    std::ostringstream d;
+    d << "t=" << t << " s of " << end_s;
+    node.setDetail(d.str());
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -93,69 +169,10 @@ int main(int argc, char** argv) {
               << traj.length_m() << " m in " << traj.duration_s() << " s (running " << end_s << " s at "
               << speedup << "x), truth at " << world.truth_rate_hz << " Hz" << std::endl;
 
-    // Wait until the named consumers have announced themselves, so nothing is published into the void.
-    const std::set<std::string> wanted = splitNames(wait_for);
-    std::set<std::string> seen;  // outlives the subscription's handler
-    if (!wanted.empty()) {
-      lcmio::InputOptions status_opt;
-      status_opt.require_increasing_utime = false;  // several publishers share the channel
-      status_opt.track_sequence = false;
-      node.subscribe<process_status_t>(channels::kProcessStatus,
-                                       [&seen](const process_status_t& st) { seen.insert(st.name); }, status_opt);
-      const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_timeout_s);
-      auto all_seen = [&] {
-        for (const auto& n : wanted)
-          if (!seen.count(n)) return false;
-        return true;
-      };
-      node.setDetail("waiting for " + wait_for);
-      node.spin([&] { return all_seen() || std::chrono::steady_clock::now() > deadline; });
-      if (!all_seen()) {
-        std::string missing;
-        for (const auto& n : wanted)
-          if (!seen.count(n)) missing += (missing.empty() ? "" : ",") + n;
-        std::cerr << node.tag() << "gave up waiting for: " << missing << " (starting anyway)" << std::endl;
-      }
-    }
+    waitForConsumers(node, wait_for, wait_timeout_s);
     if (lcmio::stopRequested()) return app::kOk;
-
     node.setState(process_status_t::STATE_RUNNING);
-    const double dt = 1.0 / world.truth_rate_hz;
-    const int64_t n_steps = static_cast<int64_t>(std::floor(end_s / dt + 1e-9));
-    const auto wall0 = std::chrono::steady_clock::now();
-    int64_t map_seq = 0;
-    const int64_t map_every = std::max<int64_t>(1, std::llround(world.truth_rate_hz));
-    for (int64_t k = 0; k <= n_steps && !lcmio::stopRequested(); ++k) {
-      const double t = k * dt;
-      if (speedup > 0) {
-        const auto due = lcmio::pacedTime(wall0, t, speedup);
-        while (!lcmio::stopRequested()) {
-          const double left = std::chrono::duration<double>(due - std::chrono::steady_clock::now()).count();
-          if (left <= 0) break;
-          node.handleFor(std::min(left, 0.05));
-        }
-      } else {
-        node.handleFor(0.0);
-      }
-      const int64_t utime = world.start_utime + static_cast<int64_t>(std::llround(t * 1e6));
-      const sim::TrajectorySample s = traj.at(t);
-      pose_t p{};
-      p.utime = utime;
-      p.seq = k;
-      p.x_m = s.pose.x_m;
-      p.y_m = s.pose.y_m;
-      p.theta_rad = s.pose.theta_rad;
-      p.num_particles = 0;
-      p.effective_sample_size = 0;
-      p.input_seq = -1;
-      node.publish(channels::kGroundTruthPose, p);
-      if (k % map_every == 0) node.publish(channels::kGroundTruthMap, truthMap(world, room_lines, utime, map_seq++));
-      if (k % map_every == 0) {
-        std::ostringstream d;
-        d << "t=" << t << " s of " << end_s;
-        node.setDetail(d.str());
-      }
-    }
+    publishTruth(node, world, traj, room_lines, end_s, speedup);
     const bool interrupted = lcmio::stopRequested();
     node.setState(interrupted ? process_status_t::STATE_STOPPING : process_status_t::STATE_FINISHED);
     node.setDetail(interrupted ? "interrupted" : "scenario finished");

@@ -256,6 +256,10 @@ struct ReplayReport {
     }
     last_seq[channel] = s;
   }
+  std::string counts() const {
+    return "decode_errors " + std::to_string(decode_errors) + " rejected " + std::to_string(rejected) +
+           " sequence_gaps " + std::to_string(sequence_gaps) + " sequence_restarts " + std::to_string(sequence_restarts);
+  }
 };
 
 template <class Msg>
@@ -303,6 +307,21 @@ bool processedBeforeResume(const slamproc::ReplayPosition& pos, const slamproc::
   return true;
 }
 
+/// A driver result of the replay into its output log (at log time ts) and its report; returns the
+/// frames answered.
+int64_t writeReplayResult(const DriverResult& r, int64_t ts, lcmio::LogWriter& out, ReplayReport& rep) {
+  for (const auto& x : r.refused) rep.reject(x.channel, x.reason);
+  for (const auto& d : r.dropped) rep.reject(channels::kOmniFeatures, d);
+  for (const auto& n : r.notes) rep.line(n);
+  for (const auto& o : r.outputs) {
+    out.write(ts, channels::kSlamPose, o.pose);
+    if (o.map) out.write(ts, channels::kSlamMap, *o.map);
+    out.write(ts, channels::kSlamParticles, o.particles);
+    if (o.associations) out.write(ts, channels::kSlamAssociations, *o.associations);
+  }
+  return static_cast<int64_t>(r.outputs.size());
+}
+
 int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark> prior, const std::string& in_path,
               const std::string& out_path, bool show_progress) {
   lcmio::requireDistinctFiles(in_path, out_path, "--out");
@@ -319,18 +338,7 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
   lcmio::installStopHandlers();  // SIGINT / SIGTERM: stop reading, write what was computed
   ReplayReport rep;
   int64_t last_timestamp = 0, outputs = 0;
-  auto handle = [&](const DriverResult& r, int64_t ts) {
-    for (const auto& x : r.refused) rep.reject(x.channel, x.reason);
-    for (const auto& d : r.dropped) rep.reject(channels::kOmniFeatures, d);
-    for (const auto& n : r.notes) rep.line(n);
-    for (const auto& o : r.outputs) {
-      out.write(ts, channels::kSlamPose, o.pose);
-      if (o.map) out.write(ts, channels::kSlamMap, *o.map);
-      out.write(ts, channels::kSlamParticles, o.particles);
-      if (o.associations) out.write(ts, channels::kSlamAssociations, *o.associations);
-      ++outputs;
-    }
-  };
+  auto handle = [&](const DriverResult& r, int64_t ts) { outputs += writeReplayResult(r, ts, out, rep); };
   slamproc::ReplayPosition pos{0, "", 0};  // the events read so far, the last one
   const auto feed = [&](const lcmio::LogEvent& e, bool is_frame, int64_t utime, auto&& step) {
     if (const std::string why = clock.admit(is_frame, utime); !why.empty()) {
@@ -379,9 +387,8 @@ int runReplay(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmar
   saveMap(opt, driver, "[slam] ");
   out.commit();  // a failed last write (a full disk) is an error, not "N events written"
   std::cerr << "[slam] replay done: " << outputs << " frames answered, " << out.events() << " events written to "
-            << out_path << "; decode_errors " << rep.decode_errors << " rejected " << rep.rejected
-            << " sequence_gaps " << rep.sequence_gaps << " sequence_restarts " << rep.sequence_restarts << "; "
-            << driver.summary() << ckpt.summary() << alreadyProcessedNote(clock) << std::endl;
+            << out_path << "; " << rep.counts() << "; " << driver.summary() << ckpt.summary()
+            << alreadyProcessedNote(clock) << std::endl;
   return checkpoint_ok ? app::kOk : app::kFailure;
 }
 

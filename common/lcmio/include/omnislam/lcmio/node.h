@@ -171,7 +171,6 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
         report(channel + ": " + cs.time.lastRestart());
       }
     }
-    if (opt.track_sequence) noteSequence(cs, channel, msg.seq, opt.max_sequence_gap);
     // An exception must not unwind through LCM's C dispatch: LCM would stay "inside a handler" and
     // abort on its next handle() (assert !lcm->in_handle). The message counts as refused, with
     // the exception's text as the reason, and the process goes on.
@@ -181,13 +180,19 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
       cs = std::move(before);
       ++counters_.implausible;
       reject(channel, e.what());
+      return;
     } catch (const std::exception& e) {
       cs = std::move(before);
       reject(channel, std::string("handling it failed: ") + e.what());
+      return;
     } catch (...) {
       cs = std::move(before);
       reject(channel, "handling it failed: an unknown exception");
+      return;
     }
+    // The seq of a message taken only: a refused copy of a real message (the same seq) is no
+    // "sequence restart".
+    if (opt.track_sequence) noteSequence(cs, channel, msg.seq, opt.max_sequence_gap);
   };
   lcm::Subscription* s = lcm_.subscribeFunction(channel, &Node::dispatch, sub.get());
   if (s == nullptr) throw std::runtime_error("cannot subscribe to " + channel);

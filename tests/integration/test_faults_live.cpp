@@ -7,6 +7,8 @@
 // (same seeds). CTest labels integration, faults, realtime.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <regex>
@@ -125,6 +127,23 @@ TEST(FaultsLive, StrayStampsAndImplausibleTruthAreRefusedCountedAndChangeNothing
   EXPECT_EQ(countAfter(sd, "out_of_order") + countAfter(sd, "stray"), 6) << "3 ODOMETRY, 3 OMNI_FEATURES: " << sd;
   EXPECT_EQ(countAfter(sd, "processed"), 321) << sd;
   if (HasFailure()) std::cout << lr.output;
+}
+
+// A features config whose world file is missing stops the process at start: exit 2, one line that
+// names the key (it named only the path).
+TEST(FaultsConfig, AFeaturesConfigWithAMissingWorldFileNamesTheKey) {
+  t::TempDir dir;
+  const std::string cfg = dir.file("features.yaml");
+  std::string text = t::readFile(t::sourcePath("config/features/ceiling_lights.yaml"));
+  const auto at = text.find("world:");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, text.find('\n', at) - at, "world: /nonexistent/sports_hall.yaml");
+  std::ofstream(cfg) << text;
+  const auto r = t::run({t::binPath("omnislam-features"), "--config", cfg, "--url", t::privateUdpUrl(49)}, 20);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("key 'camera.world' '/nonexistent/sports_hall.yaml' does not exist"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
 }
 
 }  // namespace

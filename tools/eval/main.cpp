@@ -26,6 +26,7 @@
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
+#include "omnislam/lcmio/utime_order.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
@@ -97,8 +98,21 @@ std::vector<eval::TimedPose> posesOf(const std::map<int64_t, Pose2>& m) {
   return out;
 }
 
+/// The truth's time is judged as the processes judge it (docs/lcm.md "Time faults"): a stray stamp
+/// (a copy 30 s back would replace the truth of another time) is left out and counted in c.skipped,
+/// never scored against. The threshold is the fixed 60 s of a recording (a gap in it is data). No
+/// bounds on the values: the tool scores any dataset (a car's UTM coordinates are 1e5 m and more).
+bool admitTruth(const pose_t& m, lcmio::UtimeOrder& order, const std::string& path, LogContent& c) {
+  lcmio::UtimeOrderOptions opt;
+  opt.min_forward_jump_us = opt.max_forward_jump_us;
+  if (!order.admit(m.utime, opt)) return true;
+  ++c.skipped[path + ": " + channels::kGroundTruthPose + ": utime out of order or a stray jump (lcmio::UtimeOrder)"];
+  return false;
+}
+
 void read(const std::string& path, bool want_slam, bool want_truth, LogContent& c) {
   std::map<int64_t, Pose2> slam, truth, odom;
+  lcmio::UtimeOrder truth_order;
   const lcmio::LogReadResult got = lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
     if (ev.channel == channels::kOdometry) {
       if (auto m = decodeValid<odometry_t>(path, ev, c))
@@ -116,7 +130,9 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
     if (want_slam && ev.channel == channels::kSlamPose) {
       if (auto m = decodeValid<pose_t>(path, ev, c)) keepByUtime(slam, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, path, ev.channel, c);
     } else if (want_truth && ev.channel == channels::kGroundTruthPose) {
-      if (auto m = decodeValid<pose_t>(path, ev, c)) keepByUtime(truth, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, path, ev.channel, c);
+      auto m = decodeValid<pose_t>(path, ev, c);
+      if (m && admitTruth(*m, truth_order, path, c))
+        keepByUtime(truth, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, path, ev.channel, c);
     } else if (want_slam && ev.channel == channels::kSlamMap) {
       auto m = decodeValid<map_t>(path, ev, c);
       if (m && newestMap(c.slam_map_utime, m->utime, path, ev.channel, c)) {

@@ -226,7 +226,15 @@ InputResult Pairer::holdAhead(Input in, std::vector<PairEvent>& out) {
     int64_t newest = held_.front().utime;
     for (const Input& h : held_) {
       newest = std::max(newest, h.utime);
-      if (h.is_frame == in.is_frame && in.utime <= h.utime) continues = false;
+      if (h.is_frame == in.is_frame && in.utime <= h.utime) {
+        // A duplicate or a late message among the held ones (two features processes in a swap's
+        // overlap): refused as on a stream that was not held; it refutes nothing.
+        InputResult r;
+        r.verdict = in.utime == h.utime ? Verdict::kDuplicate : Verdict::kOutOfOrder;
+        r.reason = "utime " + us(in.utime) + (in.utime == h.utime ? " repeated (duplicate)" : " before a held message (out of order)");
+        ++(in.utime == h.utime ? stats_.duplicates : stats_.out_of_order);
+        return r;
+      }
     }
     if (in.utime - newest > opt_.max_forward_jump_us || newest - in.utime > opt_.max_forward_jump_us) continues = false;
   }

@@ -237,4 +237,32 @@ TEST(SlamRestart, StartPoseOnRequest) {
   EXPECT_EQ(first.map->num_landmarks, 0);
 }
 
+// Frames ahead of a lagging odometry by more than max_forward_jump_s are held; a duplicate of one
+// of them (two features processes in a swap's overlap) is refused alone and refutes none, and the
+// held frames are taken once the odometry catches up: every frame answered.
+TEST(SlamTimeFaults, HeldFramesSurviveADuplicateAndAreTakenWhenTheOdometryCatchesUp) {
+  Pairer p(PairingOptions{});
+  std::vector<PairEvent> ev;
+  int64_t t = kT0;
+  for (; t <= kT0 + 1'000'000; t += 20'000) p.addOdometry(t, truthAt(t), ev);
+  const int64_t f1 = kT0 + 8'000'000, f2 = kT0 + 9'000'000;  // the odometry lags 7 s behind
+  Frame a;
+  a.utime = f1, a.seq = 1;
+  Frame b = a;
+  b.utime = f2, b.seq = 2;
+  EXPECT_EQ(p.addFrame(a, ev).verdict, Verdict::kDeferred);
+  EXPECT_EQ(p.addFrame(b, ev).verdict, Verdict::kDeferred);
+  const auto dup = p.addFrame(a, ev);
+  EXPECT_EQ(dup.verdict, Verdict::kDuplicate) << dup.reason;
+  EXPECT_TRUE(dup.refused_held.empty());
+  size_t refused = 0;
+  for (; t <= kT0 + 10'000'000; t += 20'000) refused += p.addOdometry(t, truthAt(t), ev).refused_held.size();
+  EXPECT_EQ(refused, 0u);
+  int paired = 0;
+  for (const auto& e : ev) paired += e.kind == PairEvent::Kind::kPaired;
+  EXPECT_EQ(paired, 2) << "both held frames answered";
+  EXPECT_EQ(p.stats().restarts, 0);
+  EXPECT_EQ(p.stats().stray_ahead, 0);
+}
+
 }  // namespace

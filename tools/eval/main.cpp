@@ -26,6 +26,7 @@
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
+#include "omnislam/lcmio/plausibility.h"
 #include "omnislam/lcmio/utime_order.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/map_t.hpp"
@@ -98,21 +99,40 @@ std::vector<eval::TimedPose> posesOf(const std::map<int64_t, Pose2>& m) {
   return out;
 }
 
-/// The truth's time is judged as the processes judge it (docs/lcm.md "Time faults"): a stray stamp
-/// (a copy 30 s back would replace the truth of another time) is left out and counted in c.skipped,
-/// never scored against. The threshold is the fixed 60 s of a recording (a gap in it is data). No
-/// bounds on the values: the tool scores any dataset (a car's UTM coordinates are 1e5 m and more).
-bool admitTruth(const pose_t& m, lcmio::UtimeOrder& order, const std::string& path, LogContent& c) {
-  lcmio::UtimeOrderOptions opt;
-  opt.min_forward_jump_us = opt.max_forward_jump_us;
-  if (!order.admit(m.utime, opt)) return true;
-  ++c.skipped[path + ": " + channels::kGroundTruthPose + ": utime out of order or a stray jump (lcmio::UtimeOrder)"];
-  return false;
+/// The truth is judged as the processes judge it (docs/lcm.md "Time faults", docs/messages.md
+/// "Plausibility"), with bounds for any dataset: a stray stamp (a copy 30 s back would replace the
+/// truth of another time) or a pose that jumps faster than 1000 m/s or 100 rad/s (x = 1e300) is
+/// left out and counted in c.skipped, never scored against; a refused pose leaves the time order as
+/// it was. The time threshold is the fixed 60 s of a recording (a gap in it is data); the
+/// coordinates are not bounded (a car's UTM coordinates are 1e5 m and more).
+bool admitTruth(const pose_t& m, lcmio::UtimeOrder& order, lcmio::PoseStreamCheck& check, const std::string& path,
+                LogContent& c) {
+  lcmio::UtimeOrderOptions topt;
+  topt.min_forward_jump_us = topt.max_forward_jump_us;
+  lcmio::PosePlausibility popt;
+  popt.max_coordinate_m = 1e300;
+  popt.max_speed_mps = 1000.0;
+  popt.max_yaw_rate_radps = 100.0;
+  lcmio::UtimeOrder o = order;
+  if (o.admit(m.utime, topt)) {
+    order = o;  // the stray's row is remembered, as in a process
+    ++c.skipped[path + ": " + channels::kGroundTruthPose + ": utime out of order or a stray jump (lcmio::UtimeOrder)"];
+    return false;
+  }
+  lcmio::PoseStreamCheck k = o.restarts() != order.restarts() ? lcmio::PoseStreamCheck{} : check;
+  if (k.admit(m.utime, m.x_m, m.y_m, m.theta_rad, popt)) {
+    ++c.skipped[path + ": " + channels::kGroundTruthPose + ": implausible jump of the pose (lcmio::PoseStreamCheck)"];
+    return false;
+  }
+  order = o;
+  check = k;
+  return true;
 }
 
 void read(const std::string& path, bool want_slam, bool want_truth, LogContent& c) {
   std::map<int64_t, Pose2> slam, truth, odom;
   lcmio::UtimeOrder truth_order;
+  lcmio::PoseStreamCheck truth_check;
   const lcmio::LogReadResult got = lcmio::forEachEvent(path, [&](const lcmio::LogEvent& ev) {
     if (ev.channel == channels::kOdometry) {
       if (auto m = decodeValid<odometry_t>(path, ev, c))
@@ -131,7 +151,7 @@ void read(const std::string& path, bool want_slam, bool want_truth, LogContent& 
       if (auto m = decodeValid<pose_t>(path, ev, c)) keepByUtime(slam, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, path, ev.channel, c);
     } else if (want_truth && ev.channel == channels::kGroundTruthPose) {
       auto m = decodeValid<pose_t>(path, ev, c);
-      if (m && admitTruth(*m, truth_order, path, c))
+      if (m && admitTruth(*m, truth_order, truth_check, path, c))
         keepByUtime(truth, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, path, ev.channel, c);
     } else if (want_slam && ev.channel == channels::kSlamMap) {
       auto m = decodeValid<map_t>(path, ev, c);

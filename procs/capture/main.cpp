@@ -29,6 +29,7 @@
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/pacing.h"
+#include "omnislam/lcmio/plausibility_flags.h"
 #include "omnislam/lcmio/signals.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/sim/image_clock.h"
@@ -71,7 +72,7 @@ int64_t wallUtime() {
 }
 
 int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uint64_t seed, bool format_given,
-           bool name_given) {
+           bool name_given, const lcmio::PosePlausibility& plausible) {
   const sim::World world = config::loadWorld(world_path);
   if (!name_given) pub.camera_name = world.camera.name;
   const std::unique_ptr<camera::CameraModel> cam = sim::makeCamera(world.camera);
@@ -88,10 +89,20 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
   int64_t frames = 0;
   bool have_truth = false;
   int64_t last_truth_utime = 0;
+  lcmio::PoseStreamCheck truth_check;
   lcmio::InputOptions truth_opt;
   truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
   node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
-    if (have_truth && p.utime <= last_truth_utime) {
+    const bool new_timeline = have_truth && p.utime <= last_truth_utime;
+    // Checked before anything changes: a refused pose (thrown) is never rendered and leaves the
+    // image clock and the channel's time order as they were (messages.md, "Plausibility").
+    lcmio::PoseStreamCheck check = new_timeline ? lcmio::PoseStreamCheck{} : truth_check;
+    if (auto why = check.admit(p.utime, p.x_m, p.y_m, p.theta_rad, plausible))
+      throw lcmio::Refused("seq " + std::to_string(p.seq) + " utime " + std::to_string(p.utime) + ": " + *why);
+    if (check.jumpsTaken() != truth_check.jumpsTaken() && !new_timeline)
+      std::cerr << node.tag() << "GROUND_TRUTH_POSE: " << check.lastJump() << std::endl;
+    truth_check = check;
+    if (new_timeline) {
       // The node took a new timeline (the simulation run again, a truth log replayed again): a new
       // run. Its image times start again, and so does seq, as a new capture process would; the
       // clock would otherwise wait for the old run's next image time and publish nothing.
@@ -223,7 +234,8 @@ int main(int argc, char** argv) {
   CLI::App cli{"omnislam-capture: publishes OMNI_IMAGE from a simulation, an image directory or a camera"};
   std::string source, world_path, dir, url, name = "capture", format_name, camera_name;
   uint64_t seed = 1;
-  double rate_hz = 1.0, speedup = 1.0;
+  double rate_hz = 1.0, speedup = 1.0, yaw_rate_degps = 0.0;
+  lcmio::PosePlausibility plausible;
   int64_t start_utime = -1;
   int device = 0;
   cli.add_option("--source", source, "sim | dir | device")->required()->check(CLI::IsMember({"sim", "dir", "device"}));
@@ -240,9 +252,11 @@ int main(int argc, char** argv) {
                  "published pixel format: gray | bgr | rgb | png | jpeg (default: gray; bgr for a room world)")
       ->check(CLI::IsMember({"gray", "grey", "bgr", "rgb", "png", "jpeg", "jpg"}));
   cli.add_option("--camera-name", camera_name, "camera name in the messages (default: the world's or 'camera')");
+  lcmio::addPlausibilityFlags(cli, plausible, yaw_rate_degps, "source sim: GROUND_TRUTH_POSE poses");
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", name, "process name in PROCESS_STATUS");
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
+  lcmio::finishPlausibilityFlags(plausible, yaw_rate_degps);
 
   return app::runMain("omnislam-capture", [&]() -> int {
     if (source == "sim" && world_path.empty()) throw std::invalid_argument("--source sim needs --world FILE");
@@ -251,7 +265,7 @@ int main(int argc, char** argv) {
     const bool format_given = !format_name.empty();
     Publisher pub{node, camera_name.empty() ? (source == "sim" ? "fisheye" : "camera") : camera_name,
                   *lcmio::parsePixelFormat(format_given ? format_name : "gray")};
-    if (source == "sim") return runSim(node, pub, world_path, seed, format_given, !camera_name.empty());
+    if (source == "sim") return runSim(node, pub, world_path, seed, format_given, !camera_name.empty(), plausible);
     if (source == "dir") return runDir(node, pub, dir, rate_hz, start_utime, speedup);
     return runDevice(node, pub, device, rate_hz);
   });

@@ -90,7 +90,7 @@ std::pair<int, int> calibrationSize(const Node& c, const vision::CameraCalibrati
 
 /// A camera from a calibration file: model auto (detect by content) or one named format.
 void fileSetup(const Node& c, const std::string& model, CameraSetup* s) {
-  const std::string path = c.getPath("file");
+  const std::string path = c.getExistingFile("file");
   vision::CalibrationReadOptions opt;
   const std::vector<std::pair<std::string, vision::CalibrationFormat>> formats = {
       {"opencv_omnidir", vision::CalibrationFormat::kOpencvOmnidir},
@@ -137,7 +137,7 @@ void fileSetup(const Node& c, const std::string& model, CameraSetup* s) {
 cv::Mat parseMask(const Node& c, int width_px, int height_px) {
   cv::Mat mask;
   if (c.has("mask")) {
-    vision::MaskFile f = vision::readMask(c.getPath("mask"), width_px, height_px);
+    vision::MaskFile f = vision::readMask(c.getExistingFile("mask"), width_px, height_px);
     if (!f.error.empty()) throw ConfigError(c.where("mask") + " " + f.error);
     mask = f.mask;
   }
@@ -164,7 +164,7 @@ CameraSetup parseCamera(const Node& c) {
   const std::string model = c.getEnum(
       "model", {"world", "auto", "opencv_omnidir", "opencv_fisheye", "kalibr", "ocamcalib", "centre_only"});
   if (model == "world") {
-    const sim::World w = config::loadWorld(c.getPath("world"));
+    const sim::World w = config::loadWorld(c.getExistingFile("world"));
     s.model = sim::makeCamera(w.camera);  // the world's model: Pajdla-Bakstein or Scaramuzza
     s.mounting = c.has("mounting") ? parseMounting(c.child("mounting")) : w.camera.mounting;
     s.centre_px = sim::cameraCentrePx(w.camera);

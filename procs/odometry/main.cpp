@@ -17,6 +17,7 @@
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/pacing.h"
+#include "omnislam/lcmio/plausibility_flags.h"
 #include "omnislam/lcmio/signals.h"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/sim/odometry_sim.h"
@@ -37,15 +38,25 @@ odometry_t makeMsg(int64_t utime, int64_t seq, const Pose2& p, double v, double 
   return m;
 }
 
-int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed) {
+int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed, const lcmio::PosePlausibility& plausible) {
   const sim::World world = config::loadWorld(world_path);
   sim::OdometrySimulator odo(world.odometry_noise, seed);
   int64_t seq = 0, last_utime = 0, published = 0;
   Pose2 last;
+  lcmio::PoseStreamCheck truth_check;
   lcmio::InputOptions truth_opt;
   truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
   node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
-    if (seq > 0 && p.utime <= last_utime) {
+    const bool new_timeline = seq > 0 && p.utime <= last_utime;
+    // Checked before anything changes: a refused pose (thrown) leaves the integration, the check
+    // and the channel's time order as they were (messages.md, "Plausibility").
+    lcmio::PoseStreamCheck check = new_timeline ? lcmio::PoseStreamCheck{} : truth_check;
+    if (auto why = check.admit(p.utime, p.x_m, p.y_m, p.theta_rad, plausible))
+      throw lcmio::Refused("seq " + std::to_string(p.seq) + " utime " + std::to_string(p.utime) + ": " + *why);
+    if (check.jumpsTaken() != truth_check.jumpsTaken() && !new_timeline)
+      std::cerr << node.tag() << "GROUND_TRUTH_POSE: " << check.lastJump() << std::endl;
+    truth_check = check;
+    if (new_timeline) {
       // The node took a new timeline (the simulation run again, a truth log replayed again): a new
       // run, as a new odometry process would see it. Integrating the jump back to the start as one
       // step would "drive" metres in negative time, with a velocity from a negative dt.
@@ -136,20 +147,23 @@ int main(int argc, char** argv) {
   CLI::App cli{"omnislam-odometry: publishes cumulative ODOMETRY from a simulation or a wheel-data CSV"};
   std::string source, world_path, csv, url, name = "odometry";
   uint64_t seed = 1;
-  double speedup = 1.0;
+  double speedup = 1.0, yaw_rate_degps = 0.0;
+  lcmio::PosePlausibility plausible;
   cli.add_option("--source", source, "sim | csv")->required()->check(CLI::IsMember({"sim", "csv"}));
   cli.add_option("--world", world_path, "world file (source sim)");
   cli.add_option("--seed", seed, "seed of the odometry noise (source sim)")->check(app::SeedRange());
   cli.add_option("--csv", csv, "wheel data CSV: utime,v_mps,omega_radps (source csv)");
   cli.add_option("--speedup", speedup, "source csv: replay speed-up, 0 = as fast as possible")
       ->check(omnislam::app::FiniteRange(0.0, 1000.0));
+  lcmio::addPlausibilityFlags(cli, plausible, yaw_rate_degps, "source sim: GROUND_TRUTH_POSE poses");
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", name, "process name in PROCESS_STATUS");
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
+  lcmio::finishPlausibilityFlags(plausible, yaw_rate_degps);
   return app::runMain("omnislam-odometry", [&]() -> int {
     if (source == "sim" && world_path.empty()) throw std::invalid_argument("--source sim needs --world FILE");
     if (source == "csv" && csv.empty()) throw std::invalid_argument("--source csv needs --csv FILE");
     lcmio::Node node(name, app::lcmUrl(url));
-    return source == "sim" ? runSim(node, world_path, seed) : runCsv(node, csv, speedup);
+    return source == "sim" ? runSim(node, world_path, seed, plausible) : runCsv(node, csv, speedup);
   });
 }

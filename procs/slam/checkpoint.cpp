@@ -105,7 +105,7 @@ auto driverCounters(S& s) {  // S = DriverStats or const DriverStats; the pairin
   return std::vector<decltype(&s.frames_processed)>{
       &s.frames_processed,   &s.features_in,         &s.features_skipped_kind,     &s.measurements_rejected,
       &s.filter_resets,      &s.degenerate_weights,  &s.odometry_only_steps,       &s.dropped_behind_prediction,
-      &s.frames_too_large,   &s.implausible};
+      &s.frames_too_large,   &s.implausible,         &s.reinit_last_estimate};
 }
 
 /// describe() without the lines of the map files (paths may differ between two starts of one run).
@@ -246,6 +246,14 @@ void SlamDriver::loadState(ByteReader& r) {
   particles_seq_ = v[6];
   associations_seq_ = v[7];
   stats_ = stats;
+  // Derived, not stored: the estimate a restart of the inputs re-initialises from is the ended
+  // filter's while no filter of the new epoch has started (apply(), kReset); the odometry
+  // plausibility check takes its reference from the pairing at every message (checkOdometry), only
+  // a jump waiting for confirmation at the checkpoint starts its count again.
+  restart_from_.reset();
+  if (!filter_ && ended_filter_)
+    restart_from_ = Estimate{ended_filter_->meanPose(), ended_filter_->poseCovariance(), ended_filter_->bestMap()};
+  odometry_check_.reset();
 }
 
 // ---- the file -------------------------------------------------------------------------------

@@ -187,11 +187,32 @@ InputResult Pairer::add(Input in, std::vector<PairEvent>& out) {
     return r;
   }
   InputResult pre;
-  // The stream of the held messages went on as before: they were strays.
-  if (!held_.empty() && held_.front().is_frame == in.is_frame) refuseHeld(pre);
+  if (held_ahead_ && heldAheadCaughtUp(&in)) {
+    // The stream went on after the held messages (the other stream had lagged behind): they were
+    // no strays but a gap, and are taken before this one.
+    ++stats_.forward_jumps;
+    applyHeld(pre, out);
+  } else if (!held_.empty() && held_.front().is_frame == in.is_frame) {
+    refuseHeld(pre);  // the stream of the held messages went on as before: they were strays
+  }
   InputResult r = apply(std::move(in), out);
   r.refused_held = std::move(pre.refused_held);
+  if (held_ahead_ && heldAheadCaughtUp(nullptr)) {
+    ++stats_.forward_jumps;  // the other stream caught up with them
+    applyHeld(r, out);
+  }
   return r;
+}
+
+bool Pairer::heldAheadCaughtUp(const Input* in) const {
+  if (held_.empty()) return false;
+  int64_t newest_same = -1, newest = held_.front().utime;
+  for (const Input& h : held_) {
+    newest = std::max(newest, h.utime);
+    if (in && h.is_frame == in->is_frame) newest_same = std::max(newest_same, h.utime);
+  }
+  if (in) return newest_same >= 0 && in->utime > newest_same;
+  return newest - epoch_newest_utime_ <= opt_.max_forward_jump_us;
 }
 
 InputResult Pairer::holdAhead(Input in, std::vector<PairEvent>& out) {
@@ -205,7 +226,15 @@ InputResult Pairer::holdAhead(Input in, std::vector<PairEvent>& out) {
     int64_t newest = held_.front().utime;
     for (const Input& h : held_) {
       newest = std::max(newest, h.utime);
-      if (h.is_frame == in.is_frame && in.utime <= h.utime) continues = false;
+      if (h.is_frame == in.is_frame && in.utime <= h.utime) {
+        // A duplicate or a late message among the held ones (two features processes in a swap's
+        // overlap): refused as on a stream that was not held; it refutes nothing.
+        InputResult r;
+        r.verdict = in.utime == h.utime ? Verdict::kDuplicate : Verdict::kOutOfOrder;
+        r.reason = "utime " + us(in.utime) + (in.utime == h.utime ? " repeated (duplicate)" : " before a held message (out of order)");
+        ++(in.utime == h.utime ? stats_.duplicates : stats_.out_of_order);
+        return r;
+      }
     }
     if (in.utime - newest > opt_.max_forward_jump_us || newest - in.utime > opt_.max_forward_jump_us) continues = false;
   }

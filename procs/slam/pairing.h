@@ -36,12 +36,15 @@ struct PairingOptions {
   int64_t restart_jump_us = 5'000'000;
   int restart_confirm_messages = 2;
   /// A message more than this ahead of the newest utime of either stream is a jump ahead: held
-  /// like a step back. If the stream it came on goes on as before, it was a stray stamp and is
-  /// refused (one far-future utime would otherwise become the stream's time, and the good messages
-  /// after it a "restart"); once restart_confirm_messages such messages came in a row, each
-  /// within this of the one before, they are taken, without a restart (a paused recording: the
-  /// odometry is cumulative, the filter goes on).
-  int64_t max_forward_jump_us = 600'000'000;
+  /// like a step back. If the stream it came on goes on as before (a message before it), it was a
+  /// stray stamp and is refused (one future utime would otherwise become the stream's time, and
+  /// the good messages after it a "restart"); once restart_confirm_messages such messages came in
+  /// a row, each within this of the one before, or the streams caught up with it, they are taken,
+  /// without a restart (a paused recording: the odometry is cumulative, the filter goes on).
+  /// 5 s, as restart_jump_us: a stream's own next message is never that far ahead of both streams
+  /// (it was 600 s, and one ODOMETRY message stamped 100 s ahead was taken and reset the filter).
+  /// The rule in every process: docs/lcm.md, "Time faults".
+  int64_t max_forward_jump_us = 5'000'000;
   /// Odometry implying a faster motion than these between consecutive samples is a discontinuity
   /// (e.g. the odometry process restarted with its cumulative pose reset): the stream is re-based
   /// so that no motion is assumed across that one interval.
@@ -168,6 +171,14 @@ class Pairer {
   /// Replaces the state by one saveState() wrote. Throws StateFormatError.
   void loadState(ByteReader& r);
   const OdometryBuffer& odometry() const { return odom_; }
+  /// The last odometry pose accepted, as received (before re-basing), and its utime; false when
+  /// none since construction or the last restart.
+  bool lastOdometry(int64_t* utime, Pose2* pose_in) const {
+    if (!have_last_odom_) return false;
+    *utime = last_odom_utime_;
+    *pose_in = last_odom_in_;
+    return true;
+  }
 
  private:
   struct StreamState {
@@ -186,6 +197,10 @@ class Pairer {
   InputResult holdAhead(Input in, std::vector<PairEvent>& out);
   /// The held messages (a step back, or a jump ahead) are confirmed: see PairingOptions::restart_jump_us.
   bool heldConfirmed() const;
+  /// Held messages of a jump ahead that the streams have caught up with: this stream has gone on
+  /// after them (`in`, on the held messages' stream), or no held message is beyond
+  /// max_forward_jump_us of the newest input any more.
+  bool heldAheadCaughtUp(const Input* in) const;
   /// Applies the held messages in their order (and empties held_); each refused one is added to
   /// r.refused_held.
   void applyHeld(InputResult& r, std::vector<PairEvent>& out);

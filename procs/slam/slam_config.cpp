@@ -156,6 +156,22 @@ void parsePairing(const Node& n, PairingOptions& p) {
   if (!err.empty()) throw validationError(n, err);
 }
 
+void parsePlausibility(const Node& n, PlausibilityOptions& p) {
+  n.rejectUnknownKeys({"max_odometry_coordinate_m", "max_odometry_angle_rad", "max_camera_offset_m", "jump_confirm_messages"});
+  p.max_odometry_coordinate_m = n.getDouble("max_odometry_coordinate_m", 1.0, 1e9, p.max_odometry_coordinate_m);
+  p.max_odometry_angle_rad = n.getDouble("max_odometry_angle_rad", 4.0, 1e9, p.max_odometry_angle_rad);
+  p.max_camera_offset_m = n.getDouble("max_camera_offset_m", 0.01, 1e3, p.max_camera_offset_m);
+  p.jump_confirm_messages = static_cast<int>(n.getInt("jump_confirm_messages", 1, 1000, p.jump_confirm_messages));
+}
+
+void parseRestart(const Node& n, RestartOptions& r) {
+  n.rejectUnknownKeys({"reinit_from", "position_sigma_m", "heading_sigma_deg"});
+  const std::string from = n.getEnum("reinit_from", {"last_estimate", "start_pose"}, "last_estimate");
+  r.reinit_from = from == "start_pose" ? RestartOptions::ReinitFrom::kStartPose : RestartOptions::ReinitFrom::kLastEstimate;
+  r.position_sigma_m = n.getDouble("position_sigma_m", 0.0, 1e3, r.position_sigma_m);
+  r.heading_sigma_rad = deg2rad(n.getDouble("heading_sigma_deg", 0.0, 180.0, rad2deg(r.heading_sigma_rad)));
+}
+
 }  // namespace
 
 std::string SlamProcessOptions::validate() const {
@@ -171,11 +187,17 @@ std::string SlamProcessOptions::validate() const {
   if (!use_ceiling_lights && !use_vertical_lines) return "at least one feature kind must be used";
   if (checkpoint_interval_us < 1000 || checkpoint_interval_us > 1'000'000'000'000)
     return "checkpoint.interval_s must be in [0.001, 1e6]";
+  if (!(plausibility.max_odometry_coordinate_m > 0) || !(plausibility.max_odometry_angle_rad > 0) ||
+      !(plausibility.max_camera_offset_m > 0) || plausibility.jump_confirm_messages < 1)
+    return "plausibility: bounds must be > 0 and jump_confirm_messages >= 1";
+  if (!(restart.position_sigma_m >= 0) || !(restart.heading_sigma_rad >= 0))
+    return "restart: position_sigma_m and heading_sigma_deg must be >= 0";
   return "";
 }
 
 SlamProcessOptions parseSlamOptions(const Node& root) {
-  root.rejectUnknownKeys({"seed", "start_pose", "features", "output", "pairing", "filter", "map", "checkpoint"});
+  root.rejectUnknownKeys(
+      {"seed", "start_pose", "features", "output", "pairing", "filter", "map", "checkpoint", "plausibility", "restart"});
   SlamProcessOptions o;
   o.seed = static_cast<std::uint64_t>(root.getInt("seed", 0, INT64_MAX, 1));
   if (auto s = root.optChild("start_pose")) {
@@ -216,6 +238,8 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
     o.checkpoint_interval_us = seconds_us(*c, "interval_s", 0.001, 1e6, o.checkpoint_interval_us);
   }
   if (auto p = root.optChild("pairing")) parsePairing(*p, o.pairing);
+  if (auto p = root.optChild("plausibility")) parsePlausibility(*p, o.plausibility);
+  if (auto r = root.optChild("restart")) parseRestart(*r, o.restart);
   if (auto f = root.optChild("filter")) parseFilter(*f, o.filter);
   return o;
 }
@@ -253,7 +277,12 @@ std::string describe(const SlamProcessOptions& o) {
   s << "pairing: max_wait " << o.pairing.max_wait_us * 1e-6 << " s, max odometry gap "
     << o.pairing.max_odometry_gap_us * 1e-6 << " s, buffer " << o.pairing.odometry_buffer_us * 1e-6
     << " s, max pending " << o.pairing.max_pending_frames << ", restart jump " << o.pairing.restart_jump_us * 1e-6
-    << " s, max jump ahead " << o.pairing.max_forward_jump_us * 1e-6 << " s\n";
+    << " s, max jump ahead " << o.pairing.max_forward_jump_us * 1e-6 << " s; a restart re-initialises from "
+    << (o.restart.reinit_from == RestartOptions::ReinitFrom::kLastEstimate
+            ? "the last estimate (+" + std::to_string(o.restart.position_sigma_m) + " m, +" +
+                  std::to_string(rad2deg(o.restart.heading_sigma_rad)) + " deg)"
+            : std::string("the start pose"))
+    << "\n";
   s << "start: " << (o.start_source == SlamProcessOptions::StartSource::kOdometry ? "odometry frame" : "fixed (")
     << (o.start_source == SlamProcessOptions::StartSource::kFixed
             ? std::to_string(o.start_pose_W.x_m) + ", " + std::to_string(o.start_pose_W.y_m) + ", " +

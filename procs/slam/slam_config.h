@@ -14,10 +14,43 @@
 
 namespace omnislam::slamproc {
 
+/// Plausibility bounds on valid inputs (lcmio::validate checks only that they are finite); a
+/// message beyond them is refused, counted (`implausible`) and reported, and changes nothing
+/// (docs/slam-process.md, "Plausibility"). Keys `plausibility.*`.
+struct PlausibilityOptions {
+  /// |x|, |y| of an ODOMETRY pose [m]: the workspace, as GROUND_TRUTH_POSE's max_coordinate_m in
+  /// the odometry process (10 km). A pose beyond it, re-based by the pairing, left rounding junk of
+  /// 1e282 m that turned every later pose into NaN (x = 1e300).
+  double max_odometry_coordinate_m = 10'000.0;
+  /// |theta| of an ODOMETRY pose [rad], wrapped or not: beyond it each step quantised to nothing.
+  double max_odometry_angle_rad = 1e6;
+  /// |camera_position_m| of OMNI_FEATURES [m]: the contract's producers keep it within 10 m.
+  double max_camera_offset_m = 10.0;
+  /// An odometry pose faster than pairing.max_odometry_speed_mps / _yaw_rate from the last one taken
+  /// is refused unless this many in a row agree with each other at the new place; then the
+  /// pairing re-bases the stream (an odometry process restarted with its pose reset).
+  int jump_confirm_messages = 3;
+};
+
+/// What a confirmed restart of the inputs (pairing rule 2) starts the new filter from: its last
+/// estimate (mean pose, map of the best particle) with the pose covariance widened by the motion
+/// the restart may have hidden, or the configured start pose with an empty map (a replayed log
+/// started again). Keys `restart.*`.
+struct RestartOptions {
+  enum class ReinitFrom { kLastEstimate, kStartPose };
+  ReinitFrom reinit_from = ReinitFrom::kLastEstimate;
+  /// Added standard deviations: the motion unobserved while an input restarts, 1 s at the top
+  /// speed and turn rate of paper 000's robot (0.30 m/s, 0.52 rad/s).
+  double position_sigma_m = 0.3;
+  double heading_sigma_rad = 0.52;
+};
+
 struct SlamProcessOptions {
   slam::FastSlamOptions filter;
   std::uint64_t seed = 1;
   PairingOptions pairing;
+  PlausibilityOptions plausibility;
+  RestartOptions restart;
   /// Where the map frame W is: kOdometry = the odometry frame O (the robot's pose at the first
   /// frame is its odometry pose); kFixed = `start_pose_W` is the robot's pose at the first frame.
   enum class StartSource { kOdometry, kFixed };

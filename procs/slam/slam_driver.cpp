@@ -94,14 +94,32 @@ std::string num(double v) {
 }
 }  // namespace
 
+std::optional<std::string> SlamDriver::checkOdometry(const odometry_t& msg) {
+  const PlausibilityOptions& b = opt_.plausibility;
+  const std::string at = "seq " + std::to_string(msg.seq) + " ";
+  if (!(std::abs(msg.theta_rad) <= b.max_odometry_angle_rad))
+    return at + "theta " + num(msg.theta_rad) + " rad beyond plausibility.max_odometry_angle_rad " +
+           num(b.max_odometry_angle_rad) + " (a corrupted field?)";
+  // Judged from the last odometry the pairing took (the reference a refused one never becomes);
+  // a jump confirmed by jump_confirm_messages in a row passes, and the pairing re-bases it.
+  int64_t ref_utime = 0;
+  Pose2 ref;
+  if (pairer_.lastOdometry(&ref_utime, &ref)) odometry_check_.setReference(ref_utime, ref.x_m, ref.y_m, ref.theta_rad);
+  else odometry_check_.reset();
+  lcmio::PosePlausibility p;
+  p.max_coordinate_m = b.max_odometry_coordinate_m;
+  p.max_speed_mps = opt_.pairing.max_odometry_speed_mps;
+  p.max_yaw_rate_radps = opt_.pairing.max_odometry_yaw_rate_radps;
+  p.confirm_messages = b.jump_confirm_messages;
+  if (auto why = odometry_check_.admit(msg.utime, msg.x_m, msg.y_m, msg.theta_rad, p)) return at + *why;
+  return std::nullopt;
+}
+
 DriverResult SlamDriver::onOdometry(const odometry_t& msg) {
   DriverResult r;
-  if (std::abs(msg.x_m) > kMaxOdometryCoordinateM || std::abs(msg.y_m) > kMaxOdometryCoordinateM ||
-      std::abs(msg.theta_rad) > kMaxOdometryAngleRad) {
+  if (auto why = checkOdometry(msg)) {
     ++stats_.implausible;
-    r.refused.push_back({"ODOMETRY", "seq " + std::to_string(msg.seq) + " pose (" + num(msg.x_m) + " m, " +
-                                         num(msg.y_m) + " m, " + num(msg.theta_rad) +
-                                         " rad) beyond the plausible 1e6 m and 1e6 rad (a corrupted field?)"});
+    r.refused.push_back({"ODOMETRY", *why});
     return r;
   }
   std::vector<PairEvent> events;
@@ -114,10 +132,11 @@ DriverResult SlamDriver::onOdometry(const odometry_t& msg) {
 DriverResult SlamDriver::onFeatures(const features_t& msg) {
   DriverResult r;
   const double cam_m = std::hypot(msg.camera_position_m[0], msg.camera_position_m[1], msg.camera_position_m[2]);
-  if (!(cam_m <= kMaxCameraOffsetM)) {
+  if (!(cam_m <= opt_.plausibility.max_camera_offset_m)) {
     ++stats_.implausible;
     r.refused.push_back({"OMNI_FEATURES", "frame seq " + std::to_string(msg.seq) + ": camera_position_m " +
-                                              num(cam_m) + " m from the robot's origin, more than the contract's 10 m"});
+                                              num(cam_m) + " m from the robot's origin, more than plausibility.max_camera_offset_m " +
+                                              num(opt_.plausibility.max_camera_offset_m)});
     return r;
   }
   stats_.features_in += msg.num_features;
@@ -155,6 +174,7 @@ void SlamDriver::apply(std::vector<PairEvent>& events, DriverResult& r) {
       case PairEvent::Kind::kReset:
         if (filter_) {  // the next frame initialises a new filter (new epoch); this one is kept to save
           ++stats_.filter_resets;
+          restart_from_ = Estimate{filter_->meanPose(), filter_->poseCovariance(), filter_->bestMap()};
           ended_filter_ = std::move(filter_);
           ended_step_utime_ = last_step_utime_;
         }
@@ -180,13 +200,28 @@ const slam::FastSlam* SlamDriver::filterToSave(int64_t* utime) const {
   return ended_filter_.get();
 }
 
-void SlamDriver::ensureFilter(const Pose2& odom_O) {
+void SlamDriver::ensureFilter(const Pose2& odom_O, DriverResult& r) {
   if (filter_) return;
-  // First step of an epoch: the start pose is known (paper 000), all particles at it.
   // Built aside and kept only once initialised: a filter that failed to start must not stay.
   auto filter = std::make_unique<slam::FastSlam>(opt_.filter, opt_.seed + static_cast<std::uint64_t>(epoch_));
-  const Pose2 start_W = opt_.start_source == SlamProcessOptions::StartSource::kFixed ? opt_.start_pose_W : odom_O;
-  filter->initialise(start_W, prior_map_);
+  const RestartOptions& ro = opt_.restart;
+  if (restart_from_ && ro.reinit_from == RestartOptions::ReinitFrom::kLastEstimate) {
+    // After a restart of the inputs: the robot is where the filter last had it, less sure by the
+    // motion the restart may have hidden; its map goes on (shared by all particles, ids kept).
+    Eigen::Matrix3d cov = restart_from_->cov;
+    cov.diagonal() += Eigen::Vector3d(ro.position_sigma_m * ro.position_sigma_m, ro.position_sigma_m * ro.position_sigma_m,
+                                      ro.heading_sigma_rad * ro.heading_sigma_rad);
+    filter->initialise(restart_from_->pose_W, restart_from_->map, cov);
+    ++stats_.reinit_last_estimate;
+    r.notes.push_back("filter re-initialised from its last estimate (" + num(restart_from_->pose_W.x_m) + " m, " +
+                      num(restart_from_->pose_W.y_m) + " m, " + num(restart_from_->pose_W.theta_rad) + " rad; " +
+                      std::to_string(restart_from_->map.size()) + " landmarks), widened by " + num(ro.position_sigma_m) +
+                      " m, " + num(ro.heading_sigma_rad) + " rad");
+  } else {
+    // First step of an epoch: the start pose is known (paper 000), all particles at it.
+    const Pose2 start_W = opt_.start_source == SlamProcessOptions::StartSource::kFixed ? opt_.start_pose_W : odom_O;
+    filter->initialise(start_W, prior_map_);
+  }
   filter_ = std::move(filter);
   odom_prev_O_ = odom_O;
 }
@@ -220,7 +255,7 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
                         "): dropped");
     return std::nullopt;
   }
-  ensureFilter(odom_O);
+  ensureFilter(odom_O, r);
   const slam::StepResult sr = filter_->step(odom_prev_O_, odom_O, frame.z);
   odom_prev_O_ = odom_O;
   last_step_utime_ = last_frame_utime_ = frame.utime;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "omnislam/core/slam/fastslam.h"
+#include "omnislam/lcmio/plausibility.h"
 #include "omnislam/associations_t.hpp"
 #include "omnislam/features_t.hpp"
 #include "omnislam/map_t.hpp"
@@ -58,17 +59,9 @@ struct DriverStats {
   int64_t odometry_only_steps = 0;       ///< predictions published while no frame came
   int64_t dropped_behind_prediction = 0; ///< frames older than the last odometry-only step
   int64_t frames_too_large = 0;          ///< refused: more usable features than max_features_per_frame
-  int64_t implausible = 0;               ///< refused: valid but beyond the plausibility bounds below
+  int64_t implausible = 0;               ///< refused: valid but beyond options.plausibility
+  int64_t reinit_last_estimate = 0;      ///< filter_resets that started from the last estimate
 };
-
-/// Plausibility bounds on valid inputs (lcmio::validate checks only that they are finite). An
-/// odometry pose beyond them, re-based by the pairing, left rounding junk of 1e282 m that turned every
-/// later pose into NaN (x = 1e300), or quantised each step to nothing (theta = 1e15 rad); a camera
-/// far from the robot moved every point landmark's height through the scale correction. The
-/// contract's producers keep the camera within 10 m (docs/messages.md, "Producer guarantees").
-inline constexpr double kMaxOdometryCoordinateM = 1e6;   ///< |x|, |y| of an ODOMETRY pose
-inline constexpr double kMaxOdometryAngleRad = 1e6;      ///< |theta| of an ODOMETRY pose (wrapped or not)
-inline constexpr double kMaxCameraOffsetM = 10.0;        ///< |camera_position_m| of OMNI_FEATURES
 
 /// Converts one feature to a filter measurement; nothing for a kind that is off in `options` or a
 /// ceiling light without elevation.
@@ -116,13 +109,23 @@ class SlamDriver {
   static void note(const InputResult& in, const char* channel, DriverResult& r);
   std::optional<FrameOutput> process(const Frame& frame, const Pose2& odom_O, DriverResult& r);
   void maybePredict(DriverResult& r);
-  void ensureFilter(const Pose2& odom_O);
+  void ensureFilter(const Pose2& odom_O, DriverResult& r);
+  /// The odometry plausibility check (options.plausibility); nothing when plausible.
+  std::optional<std::string> checkOdometry(const odometry_t& msg);
   FrameOutput makeOutput(int64_t utime, int64_t input_seq, double ess);
 
   SlamProcessOptions opt_;
   Pairer pairer_;
   std::unique_ptr<slam::FastSlam> filter_;  ///< created at the first frame of each epoch
   std::unique_ptr<slam::FastSlam> ended_filter_;  ///< the filter the last restart ended
+  /// The estimate the last restart ended with (restart.reinit_from: last_estimate).
+  struct Estimate {
+    Pose2 pose_W;
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    std::vector<slam::Landmark> map;
+  };
+  std::optional<Estimate> restart_from_;
+  lcmio::PoseStreamCheck odometry_check_;
   int64_t ended_step_utime_ = 0;                  ///< its last step's utime
   Pose2 odom_prev_O_;
   std::vector<slam::Landmark> prior_map_;

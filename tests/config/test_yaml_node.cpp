@@ -213,4 +213,20 @@ TEST(WorldConfig, TheSportsHallParsesToThePapersExperiment) {
   EXPECT_NEAR(w.camera.intrinsics.max_zenith_rad * 2, 190.0 * M_PI / 180.0, 1e-12) << ">= 185 deg field of view";
 }
 
+// Issue 47: a config naming a file that is missing (a features config's world file) stops at start
+// with the key, not only the path.
+TEST(YamlNode, AMissingFileIsNamedByItsKey) {
+  const std::string dir = ::testing::TempDir();
+  const std::string present = dir + "/present_" + std::to_string(getpid()) + ".yaml";
+  std::ofstream(present) << "x: 1\n";
+  const Node root = Node::loadString("camera:\n  world: " + present + "\n  missing: /nonexistent/w.yaml\n  dir: " + dir + "\n",
+                                     "features.yaml");
+  const Node cam = root.child("camera");
+  EXPECT_EQ(cam.getExistingFile("world"), present);
+  EXPECT_EQ(errorOf([&] { cam.getExistingFile("missing"); }),
+            "features.yaml: key 'camera.missing' '/nonexistent/w.yaml' does not exist");
+  EXPECT_NE(errorOf([&] { cam.getExistingFile("dir"); }).find("key 'camera.dir'"), std::string::npos);
+  std::remove(present.c_str());
+}
+
 }  // namespace

@@ -191,12 +191,13 @@ TEST(LcmioNode, AStrayFutureStampDoesNotLockAChannelAndARestartIsTaken) {
   EXPECT_EQ(seen, (std::vector<int64_t>{0, 1, 3, 4, 2, 3}));
   EXPECT_EQ(node.counters().rejected_inputs, 3);
   EXPECT_EQ(node.counters().utime_restarts, 1);
+  EXPECT_EQ(node.counters().utime_strays, 1) << "the far-future stamp; the restart's first two are no strays";
   node.setDetail("d");
   node.publishStatus();
   while (node.lcm().handleTimeout(0) > 0) {
   }
   ASSERT_FALSE(status.empty());
-  EXPECT_EQ(status.back().detail, "d [inputs restarted: 1 seq, 1 utime]");
+  EXPECT_EQ(status.back().detail, "d [inputs restarted: 1 seq, 1 utime] [refused: 1 stray utimes, 0 implausible]");
 }
 
 TEST(LcmioNode, PublishesStatusWithItsCounters) {

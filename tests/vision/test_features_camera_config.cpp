@@ -97,7 +97,9 @@ TEST(FeaturesCameraConfig, RefusalsNameTheKey) {
       {head + "  optics: dioptric\n  width_px: 1280\n  height_px: 960\n  kalibr_camera: cam1\n" + mount,
        "key 'camera.kalibr_camera' is for Kalibr files"},
       {kLights + "camera:\n  model: auto\n  file: absent.yaml\n  optics: dioptric\n" + mount,
-       "absent.yaml': cannot be read"},
+       "key 'camera.file' "},  // the key, then the path: "'/dir/absent.yaml' does not exist"
+      {kLights + "camera:\n  model: auto\n  file: absent.yaml\n  optics: dioptric\n" + mount,
+       "absent.yaml' does not exist"},
       {head + "  optics: dioptric\n  width_px: 1280\n  height_px: 960\n  mounting: {z_m: 1.0, pitch_deg: 91}\n",
        "key 'camera.mounting.pitch_deg'"},
       {head + "  optics: dioptric\n  width_px: 1280\n  height_px: 960\n  mounting: {z_m: 1.0, roll_deg: -181}\n",

@@ -8,6 +8,8 @@
 #include "omnislam/features_t.hpp"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
+#include "omnislam/lcmio/plausibility.h"
+#include "omnislam/lcmio/utime_order.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
@@ -80,7 +82,38 @@ void readMap(const std::string& path, const lcmio::LogEvent& ev, bool slam, LogC
 /// Poses, odometry and features of a log being read, before they go into LogContent.
 struct PoseMaps {
   std::map<int64_t, Pose2> slam, truth, odom;
+  lcmio::UtimeOrder truth_order;      ///< the truth's time order (admitTruth)
+  lcmio::PoseStreamCheck truth_check;  ///< and its plausibility
 };
+
+/// The truth is judged as the processes judge it (docs/lcm.md "Time faults", docs/messages.md
+/// "Plausibility"), with bounds for any dataset: a stray stamp (a copy 30 s back would replace the
+/// truth of another time) or a pose that jumps faster than 1000 m/s or 100 rad/s (x = 1e300) is
+/// left out and counted in c.skipped, never scored against; a refused pose leaves the time order as
+/// it was. The time threshold is the fixed 60 s of a recording (a gap in it is data); the
+/// coordinates are not bounded (a car's UTM coordinates are 1e5 m and more).
+bool admitTruth(const pose_t& m, PoseMaps& p, const std::string& path, LogContent& c) {
+  lcmio::UtimeOrderOptions topt;
+  topt.min_forward_jump_us = topt.max_forward_jump_us;
+  lcmio::PosePlausibility popt;
+  popt.max_coordinate_m = 1e300;
+  popt.max_speed_mps = 1000.0;
+  popt.max_yaw_rate_radps = 100.0;
+  lcmio::UtimeOrder o = p.truth_order;
+  if (o.admit(m.utime, topt)) {
+    p.truth_order = o;  // the stray's row is remembered, as in a process
+    ++c.skipped[path + ": " + channels::kGroundTruthPose + ": utime out of order or a stray jump (lcmio::UtimeOrder)"];
+    return false;
+  }
+  lcmio::PoseStreamCheck k = o.restarts() != p.truth_order.restarts() ? lcmio::PoseStreamCheck{} : p.truth_check;
+  if (k.admit(m.utime, m.x_m, m.y_m, m.theta_rad, popt)) {
+    ++c.skipped[path + ": " + channels::kGroundTruthPose + ": implausible jump of the pose (lcmio::PoseStreamCheck)"];
+    return false;
+  }
+  p.truth_order = o;
+  p.truth_check = k;
+  return true;
+}
 
 /// One event of the SLAM side (want_slam): SLAM_POSE, SLAM_MAP, SLAM_ASSOCIATIONS, OMNI_FEATURES.
 void readSlamEvent(const std::string& path, const lcmio::LogEvent& ev, PoseMaps& p, LogContent& c) {
@@ -101,7 +134,8 @@ void readSlamEvent(const std::string& path, const lcmio::LogEvent& ev, PoseMaps&
 /// One event of the truth side (want_truth): GROUND_TRUTH_POSE, _MAP, _FEATURE_LABELS.
 void readTruthEvent(const std::string& path, const lcmio::LogEvent& ev, PoseMaps& p, LogContent& c) {
   if (ev.channel == channels::kGroundTruthPose) {
-    if (auto m = decodeValid<pose_t>(path, ev, c))
+    auto m = decodeValid<pose_t>(path, ev, c);
+    if (m && admitTruth(*m, p, path, c))
       keepByUtime(p.truth, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, path, ev.channel, c);
   } else if (ev.channel == channels::kGroundTruthFeatureLabels) {
     if (auto m = decodeValid<feature_labels_t>(path, ev, c))

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -344,6 +345,18 @@ std::string Node::getPath(const std::string& key) const {
   const std::filesystem::path p(getString(key));
   if (p.is_absolute()) return p.string();
   return (std::filesystem::path(sourceDir()) / p).lexically_normal().string();
+}
+
+std::string Node::getExistingFile(const std::string& key) const {
+  const std::string path = getPath(key);
+  std::error_code ec;
+  const auto st = std::filesystem::status(path, ec);
+  std::string why;
+  if (!std::filesystem::exists(st)) why = "does not exist";
+  else if (std::filesystem::is_directory(st)) why = "is a directory, not a file";
+  else if (!std::ifstream(path).good()) why = "cannot be read";
+  if (!why.empty()) throw ConfigError(where(key) + " '" + path + "' " + why);
+  return path;
 }
 
 void Node::rejectUnknownKeys(std::initializer_list<const char*> known) const {

@@ -86,6 +86,11 @@ void Node::publishStatus() {
   if (counters_.sequence_restarts > 0 || counters_.utime_restarts > 0)
     st.detail += " [inputs restarted: " + std::to_string(counters_.sequence_restarts) + " seq, " +
                  std::to_string(counters_.utime_restarts) + " utime]";
+  // Time jumps refused (strays, docs/lcm.md "Time faults") and implausible values, both also in
+  // rejected_inputs: named here so that a reader of the status can tell them from other refusals.
+  if (counters_.utime_strays > 0 || counters_.implausible > 0)
+    st.detail += " [refused: " + std::to_string(counters_.utime_strays) + " stray utimes, " +
+                 std::to_string(counters_.implausible) + " implausible]";
   if (lcm_.publish(channels::kProcessStatus, &st) != 0) error("publish on " + std::string(channels::kProcessStatus) + " failed");
   next_status_ = std::chrono::steady_clock::now() + std::chrono::seconds(1);
 }

@@ -74,6 +74,9 @@ class Node {
   std::vector<std::string> keys() const;
   /// A path; relative paths are resolved against the source file's directory.
   std::string getPath(const std::string& key) const;
+  /// getPath() of a file that must exist and be readable now; otherwise ConfigError naming the key
+  /// and the resolved path ("file.yaml: camera.world: '/x/w.yaml' does not exist"), checked at start.
+  std::string getExistingFile(const std::string& key) const;
 
   /// Throws if the map has a key not in `known` (catches typos such as "sigm_px").
   void rejectUnknownKeys(std::initializer_list<const char*> known) const;

@@ -22,6 +22,14 @@
 
 namespace omnislam::lcmio {
 
+/// Thrown by a subscription's handler to refuse its message (e.g. an implausible value): it is
+/// counted in rejected_inputs and Counters::implausible and reported with `what()` as the reason,
+/// and the channel's time order and sequence stay as they were (a refused message never changes
+/// state). The handler must not have changed its own state before throwing.
+struct Refused : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 struct InputOptions {
   /// Refuse a message whose utime is not after the previous accepted one on the channel
   /// (duplicates and time going backwards) or jumps far ahead of it; a new timeline is accepted
@@ -47,6 +55,8 @@ struct Counters {
   int64_t sequence_gaps = 0;
   int64_t sequence_restarts = 0;
   int64_t utime_restarts = 0;  ///< new timelines accepted on the inputs (UtimeOrder)
+  int64_t utime_strays = 0;  ///< inputs refused as a time jump that the next messages did not continue
+  int64_t implausible = 0;          ///< inputs a handler refused by throwing Refused (plausibility)
   std::string last_error;
 };
 
@@ -149,8 +159,10 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
     // message sent again is not "a duplicate" of one that never took effect.
     ChannelState before = cs;
     if (opt.require_increasing_utime) {
-      const int64_t restarts = cs.time.restarts();
-      if (auto why = cs.time.admit(msg.utime, opt.time_order)) {
+      const int64_t restarts = cs.time.restarts(), strays = cs.time.strays();
+      const auto why = cs.time.admit(msg.utime, opt.time_order);
+      counters_.utime_strays += cs.time.strays() - strays;
+      if (why) {
         reject(channel, *why);
         return;
       }
@@ -159,19 +171,28 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
         report(channel + ": " + cs.time.lastRestart());
       }
     }
-    if (opt.track_sequence) noteSequence(cs, channel, msg.seq, opt.max_sequence_gap);
     // An exception must not unwind through LCM's C dispatch: LCM would stay "inside a handler" and
     // abort on its next handle() (assert !lcm->in_handle). The message counts as refused, with
     // the exception's text as the reason, and the process goes on.
     try {
       handler(msg);
+    } catch (const Refused& e) {
+      cs = std::move(before);
+      ++counters_.implausible;
+      reject(channel, e.what());
+      return;
     } catch (const std::exception& e) {
       cs = std::move(before);
       reject(channel, std::string("handling it failed: ") + e.what());
+      return;
     } catch (...) {
       cs = std::move(before);
       reject(channel, "handling it failed: an unknown exception");
+      return;
     }
+    // The seq of a message taken only: a refused copy of a real message (the same seq) is no
+    // "sequence restart".
+    if (opt.track_sequence) noteSequence(cs, channel, msg.seq, opt.max_sequence_gap);
   };
   lcm::Subscription* s = lcm_.subscribeFunction(channel, &Node::dispatch, sub.get());
   if (s == nullptr) throw std::runtime_error("cannot subscribe to " + channel);

@@ -84,7 +84,26 @@ struct PoseMaps {
   std::map<int64_t, Pose2> slam, truth, odom;
   lcmio::UtimeOrder truth_order;      ///< the truth's time order (admitTruth)
   lcmio::PoseStreamCheck truth_check;  ///< and its plausibility
+  lcmio::UtimeOrder frame_order;       ///< the feature frames' time order (admitFrame)
 };
+
+/// Options of the time rule for a recording: a fixed 60 s jump threshold (a gap in a recording is
+/// data), the rest as the processes' (docs/lcm.md "Time faults").
+lcmio::UtimeOrderOptions recordingTimeRule() {
+  lcmio::UtimeOrderOptions topt;
+  topt.min_forward_jump_us = topt.max_forward_jump_us;
+  return topt;
+}
+
+/// A feature frame whose utime is a stray (far ahead of or behind its stream, and not continued) is
+/// no frame of the run: it is left out of the coverage figures and counted in c.skipped, as the
+/// SLAM process refuses it (one frame stamped 1e6 s ahead would otherwise make the run's span
+/// 1e6 s and every run "incomplete").
+bool admitFrame(int64_t utime, PoseMaps& p, const std::string& path, LogContent& c) {
+  if (!p.frame_order.admit(utime, recordingTimeRule())) return true;
+  ++c.skipped[path + ": " + channels::kOmniFeatures + ": utime out of order or a stray jump (lcmio::UtimeOrder)"];
+  return false;
+}
 
 /// The truth is judged as the processes judge it (docs/lcm.md "Time faults", docs/messages.md
 /// "Plausibility"), with bounds for any dataset: a stray stamp (a copy 30 s back would replace the
@@ -93,8 +112,7 @@ struct PoseMaps {
 /// it was. The time threshold is the fixed 60 s of a recording (a gap in it is data); the
 /// coordinates are not bounded (a car's UTM coordinates are 1e5 m and more).
 bool admitTruth(const pose_t& m, PoseMaps& p, const std::string& path, LogContent& c) {
-  lcmio::UtimeOrderOptions topt;
-  topt.min_forward_jump_us = topt.max_forward_jump_us;
+  const lcmio::UtimeOrderOptions topt = recordingTimeRule();
   lcmio::PosePlausibility popt;
   popt.max_coordinate_m = 1e300;
   popt.max_speed_mps = 1000.0;
@@ -127,7 +145,10 @@ void readSlamEvent(const std::string& path, const lcmio::LogEvent& ev, PoseMaps&
     readMap(path, ev, true, c);
   } else if (ev.channel == channels::kOmniFeatures) {
     ++c.feature_frames;
-    if (auto m = decodeValid<features_t>(path, ev, c)) c.frame_utimes.push_back(m->utime);
+    if (auto m = decodeValid<features_t>(path, ev, c)) {
+      if (admitFrame(m->utime, p, path, c)) c.frame_utimes.push_back(m->utime);
+      else --c.feature_frames;
+    }
   }
 }
 

@@ -218,12 +218,15 @@ TEST(Supervise, AKilledRecorderUnderRestartGoesOnInASecondPartAndLogstatShowsThe
     // no later seq to show it, so only the bound holds for it.
     EXPECT_LE(recorded + lost, rounds) << stat.output;
   }
-  EXPECT_GT(lost, 0) << "a SIGKILLed recorder loses at least the gap: " << stat.output;
+  // The gap line counts what every channel lost between the parts. A short gap may fall between two
+  // images (measured: 0.020 s, 9 messages of other channels lost, no image), so the loss is asserted
+  // over all channels, and the images lost there are bounded by the images lost in all.
   ASSERT_TRUE(std::regex_search(stat.output, m, std::regex("gap between " + run.log + " and " + part2 +
-                                                           ": [0-9.]+ s unrecorded[^\\n]* OMNI_IMAGE ([0-9]+)")))
+                                                           ": [0-9.]+ s unrecorded[^;\\n]*; ([0-9]+) messages lost by seq")))
       << stat.output;
-  EXPECT_GT(std::stol(m[1]), 0) << stat.output;
-  EXPECT_LE(std::stol(m[1]), lost) << stat.output;
+  EXPECT_GT(std::stol(m[1]), 0) << "a SIGKILLed recorder loses at least the gap: " << stat.output;
+  if (std::regex_search(stat.output, m, std::regex("gap between [^\\n]* OMNI_IMAGE ([0-9]+)")))
+    EXPECT_LE(std::stol(m[1]), lost) << stat.output;
   }
 }
 

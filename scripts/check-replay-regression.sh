@@ -27,8 +27,8 @@ room_pairing="--set pairing.max_wait_s=12 --set pairing.odometry_buffer_s=12 --s
 cases=(
   "hall-fs2-hungarian|sports_hall.lcm|config/slam/sports_hall.yaml|--association hungarian"
   "hall-fs2-ml|sports_hall.lcm|config/slam/sports_hall.yaml|--association ml"
-  "hall-fs1-hungarian|sports_hall.lcm|config/slam/sports_hall.yaml|--association hungarian --set filter.proposal=fastslam1 --set filter.association_predictive=false"
-  "hall-fs1-ml|sports_hall.lcm|config/slam/sports_hall.yaml|--association ml --set filter.proposal=fastslam1 --set filter.association_predictive=false"
+  "hall-fs1-hungarian|sports_hall.lcm|config/slam/sports_hall.yaml|--association hungarian --set filter.proposal=fastslam1 --set filter.association_predictive=false --set filter.weight_at_predicted_pose=false"
+  "hall-fs1-ml|sports_hall.lcm|config/slam/sports_hall.yaml|--association ml --set filter.proposal=fastslam1 --set filter.association_predictive=false --set filter.weight_at_predicted_pose=false"
   "room-fs1-ml|room.lcm|config/slam/room.yaml|--association ml"
   "room-fs1-hungarian|room.lcm|config/slam/room.yaml|--association hungarian"
   "room-fs2-ml|room.lcm|config/slam/room.yaml|--association ml --set filter.proposal=fastslam2"
@@ -38,10 +38,11 @@ cases=(
   "mrclam-fs2-hungarian|mrclam_robot1.lcm|config/slam/mrclam.yaml|--association hungarian --set filter.proposal=fastslam2"
   "mrclam-fs2-ml|mrclam_robot1.lcm|config/slam/mrclam.yaml|--association ml --set filter.proposal=fastslam2"
   # The options the combinations above leave at their defaults: sampled association (FastSLAM 1.0
-  # only), the weight at the predicted pose, P_new for unassociated measurements, predictive pairing.
+  # only), the paper's weight (Alg. 4 at x_t, the density), P_new for unassociated measurements,
+  # predictive pairing.
   "room-fs1-sampled|room.lcm|config/slam/room.yaml|--association sampled"
   "mrclam-fs1-sampled|mrclam_robot1.lcm|config/slam/mrclam.yaml|--association sampled"
-  "hall-fs2-hungarian-weight-predicted|sports_hall.lcm|config/slam/sports_hall.yaml|--association hungarian --set filter.weight_at_predicted_pose=true"
+  "hall-fs2-hungarian-weight-paper|sports_hall.lcm|config/slam/sports_hall.yaml|--association hungarian --set filter.weight_at_predicted_pose=false --set filter.weight_term=density"
   "hall-fs2-ml-pnew-unassociated|sports_hall.lcm|config/slam/sports_hall.yaml|--association ml --set filter.weight_unassociated_with_p_new=true"
   "mrclam-fs2-hungarian-predictive|mrclam_robot1.lcm|config/slam/mrclam.yaml|--association hungarian --set filter.proposal=fastslam2 --set filter.association_predictive=true"
   "room-fs1-hungarian-pnew-unassociated|room.lcm|config/slam/room.yaml|--association hungarian --set filter.weight_unassociated_with_p_new=true"

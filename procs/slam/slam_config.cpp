@@ -104,7 +104,7 @@ ConfigError validationError(const Node& n, const std::string& err) {
 
 void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   n.rejectUnknownKeys({"particles", "association", "proposal", "descriptor_gate", "descriptor_update_rate", "p_new_mahalanobis_sq", "resample_ess_fraction",
-                       "inflate_azimuth_near_zenith", "weight_at_predicted_pose", "association_predictive", "weight_unassociated_with_p_new",
+                       "inflate_azimuth_near_zenith", "weight_at_predicted_pose", "weight_term", "association_predictive", "weight_unassociated_with_p_new",
                        "clutter_density", "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
                        "perception", "candidates"});
   f.num_particles = static_cast<int>(n.getInt("particles", 1, 100000, f.num_particles));
@@ -117,6 +117,9 @@ void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   f.resample_ess_fraction = n.getDouble("resample_ess_fraction", 0.0, 1.0, f.resample_ess_fraction);
   f.inflate_azimuth_near_zenith = n.getBool("inflate_azimuth_near_zenith", f.inflate_azimuth_near_zenith);
   f.weight_at_predicted_pose = n.getBool("weight_at_predicted_pose", f.weight_at_predicted_pose);
+  const std::string term = n.getEnum("weight_term", {"density", "consistency"},
+                                      f.weight_term == slam::WeightTerm::kConsistency ? "consistency" : "density");
+  f.weight_term = term == "consistency" ? slam::WeightTerm::kConsistency : slam::WeightTerm::kDensity;
   f.association_predictive = n.getBool("association_predictive", f.association_predictive);
   f.weight_unassociated_with_p_new = n.getBool("weight_unassociated_with_p_new", f.weight_unassociated_with_p_new);
   f.clutter_density = n.getDouble("clutter_density", 1e-6, 1e6, f.clutter_density);

@@ -189,3 +189,80 @@ TEST(slam_Stages, HitIncrement) {
 }
 
 }  // namespace
+
+namespace {
+
+// One type I landmark at p (covariance cov) observed exactly from the true pose: updateObservedLandmarks'
+// weight term under the given weighting and form.
+double exactObservationWeight(const Eigen::Matrix3d& cov, WeightTerm form, const stages::Weighting& weighting) {
+  FastSlamOptions o;
+  o.weight_term = form;
+  LandmarkMap map(o.map_cell_size_m);
+  Landmark L;
+  L.id = 1, L.p_LinW_m = Eigen::Vector3d(3.0, 1.0, 4.0), L.cov_LinW_m2 = cov, L.type = LandmarkType::kTypeI;
+  map.apply({}, {L});
+  std::vector<LandmarkMap::Ref> all;
+  map.collectAll(all);
+  const Pose2 x{0.5, -0.2, 0.3};
+  const Eigen::Vector3d cam(0.0, 0.0, 1.0);
+  BearingMeasurement b;
+  const MeasVec z = *predictMeasurement(LandmarkKind::kPoint3D, L.p_LinW_m, x, cam);
+  b.azimuth_rad = z(0), b.elevation_rad = z(1), b.p_CinR_m = cam;
+  b.cov_rad2 = Eigen::Matrix2d::Identity() * 1e-5;
+  const std::vector<stages::Measurement> Z{*stages::prepareMeasurement(b, 0, true, o.p_new_mahalanobis_sq)};
+  MotionNoiseOptions motion;
+  const stages::MotionPrediction pred = stages::predictMotion(x, Pose2{0.0, 0.0, 0.0}, motion);
+  stages::ParticleUpdate up;
+  stages::updateObservedLandmarks(pred, x, all, Z, {0}, o, weighting, up);
+  return up.log_w;
+}
+
+}  // namespace
+
+// Alg. 4 line 14's density rewards a particle for the confidence of its own landmark (at equal,
+// zero residuals the one with the smaller covariance weighs more); the consistency term gives both
+// exactly +dim/2 (residual 0: -1/2 (0 - 2)), whatever their covariances, under every FastSLAM weighting.
+TEST(slam_Stages, ConsistencyWeightTermDoesNotRewardAConfidentMap) {
+  const Eigen::Matrix3d sure = Eigen::Matrix3d::Identity() * 1e-4, unsure = Eigen::Matrix3d::Identity() * 1e-2;
+  for (const stages::Weighting& w : {stages::Weighting{stages::WeightAlg4{}}, stages::Weighting{stages::WeightAtPredictedPose{}},
+                                     stages::Weighting{stages::WeightMarginal{}}}) {
+    EXPECT_GT(exactObservationWeight(sure, WeightTerm::kDensity, w), exactObservationWeight(unsure, WeightTerm::kDensity, w) + 1.0);
+    EXPECT_NEAR(exactObservationWeight(sure, WeightTerm::kConsistency, w), 1.0, 1e-9);
+    EXPECT_NEAR(exactObservationWeight(unsure, WeightTerm::kConsistency, w), 1.0, 1e-9);
+  }
+}
+
+// The consistency term is the density less its normaliser and the Mahalanobis expectation, checked
+// in closed form on a residual: -1/2 (nu^T L^-1 nu - dim) = log N(nu; 0, L) + 1/2 log|2 pi L| + dim/2.
+TEST(slam_Stages, ConsistencyWeightTermIsTheDensityWithoutItsNormaliser) {
+  FastSlamOptions o;
+  LandmarkMap map(o.map_cell_size_m);
+  Landmark L;
+  L.id = 1, L.p_LinW_m = Eigen::Vector3d(2.0, -1.0, 3.0), L.cov_LinW_m2 = Eigen::Matrix3d::Identity() * 4e-3;
+  L.type = LandmarkType::kTypeI;
+  map.apply({}, {L});
+  std::vector<LandmarkMap::Ref> all;
+  map.collectAll(all);
+  const Pose2 x{0.0, 0.0, 0.1};
+  BearingMeasurement b;
+  const MeasVec z = *predictMeasurement(LandmarkKind::kPoint3D, L.p_LinW_m, x, Eigen::Vector3d::Zero());
+  b.azimuth_rad = z(0) + 0.01, b.elevation_rad = z(1) - 0.02;
+  b.cov_rad2 << 2e-4, 3e-5, 3e-5, 1e-4;
+  const stages::Measurement m = *stages::prepareMeasurement(b, 0, false, o.p_new_mahalanobis_sq);
+  const stages::MotionPrediction pred = stages::predictMotion(x, Pose2{0.0, 0.0, 0.0}, o.motion);
+  double log_w[2];
+  for (const WeightTerm form : {WeightTerm::kDensity, WeightTerm::kConsistency}) {
+    o.weight_term = form;
+    stages::ParticleUpdate up;
+    stages::updateObservedLandmarks(pred, x, all, {m}, {0}, o, stages::WeightMarginal{}, up);
+    log_w[static_cast<int>(form)] = up.log_w;
+  }
+  // WeightMarginal's L is Q~ = Q + H_m Sigma H_m^T at x (the EKF's innovation covariance).
+  MeasJac Hx, Hm;
+  const MeasVec zhat = *predictMeasurement(LandmarkKind::kPoint3D, L.p_LinW_m, x, Eigen::Vector3d::Zero(), &Hx, &Hm);
+  const MeasMat S = m.Q + Hm * L.cov_LinW_m2 * Hm.transpose();
+  const MeasVec nu = innovation(m.z, zhat);
+  const double m2 = nu.dot(S.inverse() * nu);
+  EXPECT_NEAR(log_w[1], -0.5 * (m2 - 2.0), 1e-9);
+  EXPECT_NEAR(log_w[0], -0.5 * (m2 + std::log((2.0 * kPi * S).determinant())), 1e-9);
+}

@@ -463,24 +463,33 @@ std::optional<Innovation> updateLandmarkEkf(const Landmark& L, const Measurement
   return Innovation{nu, Qt, Hx};
 }
 
+// Line 14's term for innovation nu with covariance S, in the options' form (fastslam.h, WeightTerm);
+// -infinity when S is not positive definite.
+double weightTerm(WeightTerm form, const MeasVec& nu, const MeasMat& S) {
+  double m2 = 0.0;
+  const double log_density = logGaussian(nu, S, &m2);
+  if (form == WeightTerm::kDensity || !std::isfinite(log_density)) return log_density;
+  return -0.5 * (m2 - static_cast<double>(nu.size()));
+}
+
 // Lines 11-14: log w^_j of a type I landmark, or nothing (no term: WeightAssociationSum, or no
 // prediction at xhat_t).
-std::optional<double> typeIWeight(const Weighting& weighting, const Landmark& L, const Measurement& m,
-                                  const Innovation& in, const MotionPrediction& pred) {
+std::optional<double> typeIWeight(const Weighting& weighting, WeightTerm form, const Landmark& L,
+                                  const Measurement& m, const Innovation& in, const MotionPrediction& pred) {
   return std::visit(
       Overloaded{
           [](WeightAssociationSum) -> std::optional<double> { return std::nullopt; },  // MapAssociation's sum
-          [&](WeightMarginal) -> std::optional<double> { return logGaussian(in.nu, in.Qt); },  // N(z; h(L, x_t), Qt)
+          [&](WeightMarginal) -> std::optional<double> { return weightTerm(form, in.nu, in.Qt); },  // N(z; h(L, x_t), Qt)
           [&](WeightAtPredictedPose) -> std::optional<double> {
             MeasJac Hxp, Hmp;
             const auto zp = predictMeasurement(L.kind, L.p_LinW_m, pred.x_hat, m.p_CinR_m, &Hxp, &Hmp);
             if (!zp) return std::nullopt;
             const MeasMat Lp = Hxp * pred.R * Hxp.transpose() + m.Q + Hmp * L.cov_LinW_m2 * Hmp.transpose();
-            return logGaussian(innovation(m.z, *zp), Lp);
+            return weightTerm(form, innovation(m.z, *zp), Lp);
           },
           [&](WeightAlg4) -> std::optional<double> {
             const MeasMat Lw = in.Hx * pred.R * in.Hx.transpose() + in.Qt;  // line 13
-            return logGaussian(in.nu, Lw);
+            return weightTerm(form, in.nu, Lw);
           }},
       weighting);
 }
@@ -504,7 +513,7 @@ void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t, con
     e.value.counter += hitIncrement(o.perception.detection_probability);  // i_j + 1 (p_in >= 0.5)
     const std::optional<Innovation> in = updateLandmarkEkf(L, m, x_t, e.value);
     if (in && correctsPoseAndWeighs(L)) {  // lines 11-14
-      if (const std::optional<double> log_w_j = typeIWeight(weight, L, m, *in, pred)) out.log_w += *log_w_j;
+      if (const std::optional<double> log_w_j = typeIWeight(weight, o.weight_term, L, m, *in, pred)) out.log_w += *log_w_j;
     }
     e.value.type = promotedLandmarkType(e.value, x_t, o.candidates.d_min_m);  // updateLandmarksType()
     if (o.update_map) out.edits.push_back(e);

@@ -1,12 +1,12 @@
 // Milliseconds per frame of each detector, beside the plain OpenCV operations they are built on, on
-// the same frame in the same run (docs/detectors.md, docs/benchmarks.md):
+// the same frame in the same run (docs/design/detectors.md, docs/results/benchmarks.md):
 //   BM_CeilingLightDetector   vs  BM_PlainThresholdConnectedComponents (cv::threshold +
 //                                 cv::connectedComponentsWithStats)        target ratio <= 1.5
 //   BM_VerticalLineDetector   vs  BM_PlainRemapSobel (cv::remap + cv::Sobel) target ratio <= 2
 //   BM_RoomRenderer           vs  BM_PlainRemapBgr (one cv::remap lookup per pixel of a BGR frame):
 //                                 the room scenario's simulated catadioptric camera
 //                                 (config/worlds/room.yaml, 2 x 2 rays per pixel, blur and noise);
-//                                 the capture process renders one per frame (docs/room-scenario.md)
+//                                 the capture process renders one per frame (docs/results/room-scenario.md)
 // 640 x 480 frames: the sports hall's fish-eye (default camera, 16 lights, the world's noise and
 // blur) rendered at a pose that sees all lights; a synthetic omnidirectional image of 24 grey sectors
 // (radial edges) with noise for the lines.

@@ -1,11 +1,10 @@
 #!/usr/bin/env python3
 # Operating points of the vertical-line detector on the labelled real catadioptric images: reads the
-# "line IMAGE real|false AZ length_px L strength S" rows that the test CatadioptricLines.DISABLED_FullAcceptance
-# prints, and reports (a) the "oracle" recall, i.e. real lines per image if every unlabelled line were
+# "line IMAGE real|false AZ length_px L strength S" rows that research_lines_acceptance
+# (research/lines_acceptance.cpp) prints, and reports (a) the "oracle" recall, i.e. real lines per image if every unlabelled line were
 # removed, and (b) the cut on length and strength that keeps >= 90 % real lines with the most real
-# lines in the worst image. Not a product tool: evidence for docs/detectors.md (issue 46).
-#   build/bin/vision_test_catadioptric_lines --gtest_also_run_disabled_tests --gtest_filter='*Full*' \
-#     | python3 research/lines_operating_points.py
+# lines in the worst image. Not a product tool: evidence for docs/design/detectors.md (issue 46).
+#   build-r/bin/research_lines_acceptance | python3 research/lines_operating_points.py
 import collections
 import sys
 
@@ -15,7 +14,7 @@ for text in sys.stdin:
     if len(f) == 8 and f[0] == "line":
         rows.append((int(f[1]), f[2] == "real", float(f[5]), float(f[7])))
 if not rows:
-    sys.exit("no 'line' rows on stdin (run the test with --gtest_also_run_disabled_tests)")
+    sys.exit("no 'line' rows on stdin (pipe research_lines_acceptance into it)")
 images = sorted({r[0] for r in rows})
 real = collections.Counter(r[0] for r in rows if r[1])
 n_real = sum(real.values())

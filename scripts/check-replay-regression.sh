@@ -5,7 +5,7 @@
 # log with tests/data/regression/digests.txt. Any change of any output bit fails it.
 #   bash scripts/check-replay-regression.sh [BUILD_DIR]            check (CTest runs this)
 #   bash scripts/check-replay-regression.sh [BUILD_DIR] --update   rewrite digests.txt: only for a
-#       change of behaviour that is intended, and said so in its commit message and docs/decisions.md
+#       change of behaviour that is intended, and said so in its commit message and docs/design/decisions.md
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$root/build}"

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Evaluates the SLAM on a family of generated worlds (docs/world-families.md): for each seed,
+# Evaluates the SLAM on a family of generated worlds (docs/results/world-families.md): for each seed,
 # omnislam-gen-world draws a world and writes its feature log (no rendering), omnislam-slam replays
 # it with config/slam/sports_hall.yaml (start pose and perception range set from the world, filter
 # seed = world seed), omnislam-eval scores it (JSON); then scripts/worlds_table.py prints the pass

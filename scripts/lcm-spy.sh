@@ -14,6 +14,6 @@ if [ ${#url_args[@]} -eq 0 ]; then
   url_args=("--lcm-url=${LCM_DEFAULT_URL:-udpm://239.255.76.67:7667?ttl=0}")
 fi
 # Debian's lcm-spy script passes -Xincgc, which Java 17 rejects: call the class directly.
-# lcm-spy never sets SO_RCVBUF: raise net.core.rmem_default (docs/lcm.md) to see every image.
+# lcm-spy never sets SO_RCVBUF: raise net.core.rmem_default (docs/user/lcm.md) to see every image.
 export CLASSPATH="$jar:/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar"
 exec java -Djava.net.preferIPv4Stack=true -Xmx256m -ea -cp "$CLASSPATH" lcm.spy.Spy "${url_args[@]}"

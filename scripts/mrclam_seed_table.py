@@ -9,7 +9,7 @@ the seeds of the aligned ATE RMSE, the aligned landmark mean error and the spuri
 dead-reckoning aligned ATE (the same for every seed), and how many runs meet all three bars of
 issue 7 (aligned ATE <= 0.4 m, landmark mean <= 0.35 m, at most 5 spurious landmarks; a run without a
 matched landmark has no landmark mean and does not meet that bar). A last row pools every run.
-Standard library only. Figures quoted in docs/mrclam.md.
+Standard library only. Figures quoted in docs/results/mrclam.md.
 """
 import argparse
 import json

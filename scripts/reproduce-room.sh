@@ -4,7 +4,7 @@
 # (config/launch/room.yaml); the recording is replayed through omnislam-slam with the paper's method
 # (FastSLAM 1.0 + per-measurement ML, config/slam/room.yaml) and with ours (FastSLAM 2.0 +
 # hierarchical Hungarian: the same file with two --set), and scored in 2D with omnislam-eval
-# --planar. Prints a Markdown table (docs/room-scenario.md).
+# --planar. Prints a Markdown table (docs/results/room-scenario.md).
 #
 #   scripts/reproduce-room.sh [--seeds "1 ... 10"] [--speedup 5] [--out DIR] [--keep-recordings] [--set KEY=VALUE ...]
 set -euo pipefail

@@ -3,7 +3,7 @@
 # features process's output: for each seed, the simulator, capture, odometry and ceiling-light
 # features processes run live and are recorded; the recording is then replayed through
 # omnislam-slam twice (Hungarian and Maximum-Likelihood association, same filter seed, 10 particles
-# as in the paper) and scored with omnislam-eval. Prints a Markdown table (docs/slam-results.md).
+# as in the paper) and scored with omnislam-eval. Prints a Markdown table (docs/results/slam-results.md).
 #
 #   scripts/reproduce-table1.sh [--seeds "1 2 ... 10"] [--speedup 10] [--out DIR] [--particles 10]
 #                               [--keep-recordings] [--set KEY=VALUE ...]

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds and runs the benchmarks under bench/ (not part of the test suite; docs/benchmarks.md). Each
+# Builds and runs the benchmarks under bench/ (not part of the test suite; docs/results/benchmarks.md). Each
 # program prints its figures beside the baseline it is compared with in the same run; JSON copies go
 # to build/bench/.
 #   bench_fastslam, bench_detectors  Google Benchmark programs

@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Bearing-only SLAM on the five robots of UTIAS MRCLAM dataset 6 (docs/mrclam.md): for each robot,
+# Bearing-only SLAM on the five robots of UTIAS MRCLAM dataset 6 (docs/results/mrclam.md): for each robot,
 # import (sightings of the other robots kept as clutter, no barcode given to the filter), run
 # omnislam-slam --replay with config/slam/mrclam.yaml (+ the known start pose written by the importer),
 # evaluate raw and --align, and print one table.
 #
 #   scripts/run-mrclam.sh [--build DIR] [--data DIR] [--out DIR] [--seed N | --seeds "1 2 ... N"]
 #                         [--robots "1 2 3 4 5"] [--config FILE] [--import-args "ARGS"] [--slam-args "ARGS"]
-#                         [--localise-in-truth] [--smooth slam|labels] [--smooth-args "ARGS"]
+#                         [--localise-in-truth]
 #
 # --seeds runs the filter once per seed on each robot's (one) import and prints, instead of the
 # per-run table, each robot's median, min and max over the seeds and how many runs meet the issue's
@@ -14,12 +14,9 @@
 # robotN.seedS.* in the output folder. The filter samples its paths, so one seed is one draw.
 #
 # Diagnosis only (the figures of the issue are without): --import-args passes more options to the
-# importer (e.g. "--drop-robot-sightings", "--odometry-from-truth", "--subject-as-colour"),
-# --slam-args to omnislam-slam (e.g. "--set filter.particles=300"), and --localise-in-truth localises
-# in the true map (importer --truth-map-out, omnislam-slam --load-map --localise) instead of mapping,
-# and --smooth scores omnislam-smooth's batch smoothing of each run instead of the filter (with the
-# filter's associations, or with the barcodes: how good could the same data be; docs/smoothing.md),
-# --smooth-args passing it more options (e.g. "--initial-from-odometry" or "--incremental").
+# importer (e.g. "--drop-robot-sightings", "--odometry-from-truth"), --slam-args to omnislam-slam
+# (e.g. "--set filter.particles=300"), and --localise-in-truth localises in the true map (importer
+# --truth-map-out, omnislam-slam --load-map --localise) instead of mapping.
 # Defaults: build dir $OMNISLAM_BUILD_DIR or build; data ../shared/datasets/mrclam/MRCLAM_Dataset6;
 # out /tmp/omnislam-mrclam; seed 1. Needs no network; a few seconds per robot and seed on one core.
 # A bad option stops the script before anything runs, naming it (exit 2); a failing step stops it with
@@ -36,8 +33,6 @@ ROBOTS="1 2 3 4 5"
 IMPORT_ARGS=""
 SLAM_ARGS=""
 LOCALISE=0
-SMOOTH=""
-SMOOTH_ARGS=""
 CONFIG="$ROOT/config/slam/mrclam.yaml"
 source "$ROOT/scripts/lib/options.sh"
 while [ $# -gt 0 ]; do
@@ -52,8 +47,6 @@ while [ $# -gt 0 ]; do
     --import-args) opt_need run-mrclam.sh "$@"; IMPORT_ARGS="$2"; shift 2 ;;
     --slam-args) opt_need run-mrclam.sh "$@"; SLAM_ARGS="$2"; shift 2 ;;
     --localise-in-truth) LOCALISE=1; shift ;;
-    --smooth) opt_need run-mrclam.sh "$@"; SMOOTH="$2"; shift 2 ;;
-    --smooth-args) opt_need run-mrclam.sh "$@"; SMOOTH_ARGS="$2"; shift 2 ;;
     -h|--help) opt_usage "$0"; exit 0 ;;
     *) echo "run-mrclam.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
@@ -74,8 +67,7 @@ for r in $ROBOTS; do
   [[ "$r" =~ ^[1-9][0-9]*$ ]] || { echo "run-mrclam.sh: --robots takes robot numbers (1-5 in dataset 6), got '$r'" >&2; exit 2; }
 done
 [ -f "$CONFIG" ] || { echo "run-mrclam.sh: --config: no such file '$CONFIG'" >&2; exit 2; }
-case "$SMOOTH" in ""|slam|labels) ;; *) echo "run-mrclam.sh: --smooth takes slam or labels, got '$SMOOTH'" >&2; exit 2 ;; esac
-for exe in omnislam-import-mrclam omnislam-slam omnislam-eval ${SMOOTH:+omnislam-smooth}; do
+for exe in omnislam-import-mrclam omnislam-slam omnislam-eval; do
   [ -x "$BIN/$exe" ] || { echo "run-mrclam.sh: $BIN/$exe not built" >&2; exit 1; }
 done
 [ -d "$DATA" ] || { echo "run-mrclam.sh: dataset not found at $DATA" >&2; exit 1; }
@@ -84,7 +76,7 @@ mkdir -p "$OUT"
 # One JSON key of a one-line JSON object.
 key() { sed -n "s/.*\"$2\": \([^,}]*\).*/\1/p" <<< "$1"; }
 fmt() { printf "%.${2:-2}f" "$1"; }
-# An association figure, or n/a when the scored log has no SLAM_ASSOCIATIONS (smoothed with labels).
+# An association figure, or n/a when the scored log has no SLAM_ASSOCIATIONS.
 assoc_cell() { if [ "$(key "$1" assoc_available)" = true ]; then fmt "$(key "$1" "$2")"; else echo n/a; fi; }
 
 rows=()
@@ -103,11 +95,6 @@ for r in $ROBOTS; do
     res="$run.slam.lcm"
     run_step run-mrclam.sh "omnislam-slam, robot $r, seed $seed" "$run.slam.txt" \
       "$BIN/omnislam-slam" --replay "$log" --out "$res" --config "$cfg" --seed "$seed" "${loc_slam[@]}" $SLAM_ARGS
-    if [ -n "$SMOOTH" ]; then
-      run_step run-mrclam.sh "omnislam-smooth, robot $r, seed $seed" "$run.smooth.txt" \
-        "$BIN/omnislam-smooth" "$res" --out "$run.smooth.lcm" --config "$cfg" --associations "$SMOOTH" $SMOOTH_ARGS
-      res="$run.smooth.lcm"
-    fi
     raw=$("$BIN/omnislam-eval" "$res" --planar --json --no-tum) \
       || { echo "run-mrclam.sh: omnislam-eval failed on $res" >&2; exit 1; }
     ali=$("$BIN/omnislam-eval" "$res" --planar --json --no-tum --align --plot "$run.aligned") \
@@ -126,7 +113,7 @@ done
 # The dataset's name in the headings: "dataset N" for MRCLAM_DatasetN, else the folder's name.
 DATASET="$(basename "$DATA")"
 [[ "$DATASET" =~ ^MRCLAM_Dataset([0-9]+)$ ]] && DATASET="dataset ${BASH_REMATCH[1]}"
-OPTS="${IMPORT_ARGS:+, importer $IMPORT_ARGS}${SLAM_ARGS:+, slam $SLAM_ARGS}$( [ "$LOCALISE" = 1 ] && echo ", localised in the true map" || true)${SMOOTH:+, smoothed with the $SMOOTH associations}${SMOOTH_ARGS:+ $SMOOTH_ARGS}"
+OPTS="${IMPORT_ARGS:+, importer $IMPORT_ARGS}${SLAM_ARGS:+, slam $SLAM_ARGS}$( [ "$LOCALISE" = 1 ] && echo ", localised in the true map" || true)"
 if [ "$MULTI" = 1 ]; then
   echo "MRCLAM $DATASET, config $(basename "$CONFIG"), seeds $SEEDS$OPTS (after --align; median [min, max] over the seeds)"
   python3 "$ROOT/scripts/mrclam_seed_table.py" "$OUT" --robots "$ROBOTS" --seeds "$SEEDS"

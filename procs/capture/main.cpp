@@ -95,7 +95,7 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
   node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
     const bool new_timeline = have_truth && p.utime <= last_truth_utime;
     // Checked before anything changes: a refused pose (thrown) is never rendered and leaves the
-    // image clock and the channel's time order as they were (messages.md, "Plausibility").
+    // image clock and the channel's time order as they were (docs/user/messages.md, "Plausibility").
     lcmio::PoseStreamCheck check = new_timeline ? lcmio::PoseStreamCheck{} : truth_check;
     if (auto why = check.admit(p.utime, p.x_m, p.y_m, p.theta_rad, plausible))
       throw lcmio::Refused("seq " + std::to_string(p.seq) + " utime " + std::to_string(p.utime) + ": " + *why);

@@ -37,7 +37,7 @@ struct CameraSetup {
 /// that the vertical-line detector accepts [deg]: it looks for vertical lines as radial lines about
 /// the image centre. A tilt tau slants a line spanning elevations e1..e2 by about
 /// tau (tan e2 - tan e1) of image angle: 0.5 deg x 2.23 (-5..65 deg, the room's band) = 1.1 deg,
-/// inside the default max_drift_columns (6 of 1440 columns = 1.5 deg). docs/detectors.md.
+/// inside the default max_drift_columns (6 of 1440 columns = 1.5 deg). docs/design/detectors.md.
 constexpr double kMaxLinesTiltDeg = 0.5;
 
 camera::CameraMounting parseMounting(const Node& m) {

@@ -1,5 +1,5 @@
 // The detectors of omnislam-features behind one interface, built from the config file
-// (docs/detectors.md). The config is validated when it is loaded: errors name the key.
+// (docs/design/detectors.md). The config is validated when it is loaded: errors name the key.
 #pragma once
 
 #include <opencv2/core.hpp>

@@ -1,5 +1,5 @@
 // omnislam-features: turns OMNI_IMAGE frames into OMNI_FEATURES bearings with the detector chosen
-// by the config file (config/features/*.yaml, docs/detectors.md):
+// by the config file (config/features/*.yaml, docs/design/detectors.md):
 //   ceiling_lights  bright blobs of the IR fish-eye image (paper 000)
 //   vertical_lines  radial edges of a catadioptric image via a panorama (paper 002)
 // Each OMNI_FEATURES message carries the frame's own utime, image_seq = the image's seq, and this

@@ -39,7 +39,7 @@ std::string substitute(const std::string& s, const std::map<std::string, std::st
 
 namespace {
 
-/// A process's restart keys (docs/launch-file.md, "Restarts"); the delays in seconds.
+/// A process's restart keys (docs/user/launch-file.md, "Restarts"); the delays in seconds.
 RestartOptions restartOptions(const config::Node& p) {
   RestartOptions o;
   const std::string mode = p.getEnum("restart", {"never", "on_failure", "always"}, "never");

@@ -1,4 +1,4 @@
-// The launcher's model: a launch file (docs/launch-file.md) parsed into a plan, and the run of the
+// The launcher's model: a launch file (docs/user/launch-file.md) parsed into a plan, and the run of the
 // plan (run.cpp): its processes on one LCM URL, their output prefixed, restarted as the plan says,
 // the bus recorded, everything stopped in order.
 #pragma once

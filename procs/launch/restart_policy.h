@@ -1,4 +1,4 @@
-// The launcher's restart rule for one process (docs/launch-file.md, "Restarts"): whether an exit is
+// The launcher's restart rule for one process (docs/user/launch-file.md, "Restarts"): whether an exit is
 // restarted, after which delay, and when the restarts are exhausted. Pure: no clock, no process;
 // the caller gives the time of each exit in seconds on any monotonic clock.
 //

@@ -441,7 +441,7 @@ class Run {
   const Clock::time_point t0_ = Clock::now();
   int rc_ = 0;
   std::string reason_;
-  bool logger_died_ = false;  ///< the run stops without the drain (docs/launch-file.md)
+  bool logger_died_ = false;  ///< the run stops without the drain (docs/user/launch-file.md)
   bool recording_ = false;    ///< the recorder said it records and has not ended since
   int log_part_ = 1;
   std::vector<std::string> log_files_;  ///< the parts the recorder said it records into

@@ -1,6 +1,6 @@
 // The launcher's own PROCESS_STATUS (name "launch"): published once a second and at once on every
 // supervision event (a restart, restarts exhausted, the recorder restarted), so that a listener on
-// the bus (lcm-spy, omnislam-logstat on the recording) sees restarts. docs/launch-file.md says which
+// the bus (lcm-spy, omnislam-logstat on the recording) sees restarts. docs/user/launch-file.md says which
 // fields carry what.
 #pragma once
 
@@ -25,7 +25,7 @@ class LaunchStatus {
   void setDetail(const std::string& detail) { detail_ = detail; }
   /// A supervision event, one line: it becomes last_error and the status is published at once.
   /// The counters stay 0 (the launcher receives and publishes no data); the restarts so far are
-  /// in the detail (docs/launch-file.md).
+  /// in the detail (docs/user/launch-file.md).
   void event(const std::string& line);
   /// Publishes when a second has passed since the last status.
   void tick();

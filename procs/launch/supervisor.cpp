@@ -90,7 +90,7 @@ Child spawn(const std::string& name, const std::vector<std::string>& argv, const
   if (pid == 0) {
     // Child: own process group (so a terminal's Ctrl-C reaches only the launcher, which stops
     // the children in order, and a stop reaches what the child starts), SIGTERM when the launcher
-    // dies (SIGTERM rather than SIGKILL: the recorder still closes its log; docs/launch-file.md),
+    // dies (SIGTERM rather than SIGKILL: the recorder still closes its log; docs/user/launch-file.md),
     // output into the pipe.
     std::signal(SIGINT, SIG_DFL);
     std::signal(SIGTERM, SIG_DFL);

@@ -49,7 +49,7 @@ int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed, cons
   node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
     const bool new_timeline = seq > 0 && p.utime <= last_utime;
     // Checked before anything changes: a refused pose (thrown) leaves the integration, the check
-    // and the channel's time order as they were (messages.md, "Plausibility").
+    // and the channel's time order as they were (docs/user/messages.md, "Plausibility").
     lcmio::PoseStreamCheck check = new_timeline ? lcmio::PoseStreamCheck{} : truth_check;
     if (auto why = check.admit(p.utime, p.x_m, p.y_m, p.theta_rad, plausible))
       throw lcmio::Refused("seq " + std::to_string(p.seq) + " utime " + std::to_string(p.utime) + ": " + *why);

@@ -1,7 +1,7 @@
 // Checkpoints of the SLAM process: its whole state (filter, pairing, counters, sequence numbers)
 // written atomically every `interval` of data time and on SIGINT / SIGTERM, so that a process
 // started again with the same arguments resumes where the last checkpoint left it (a kill -9 loses
-// at most one interval). The format, the resume rules and what is kept: docs/slam-process.md,
+// at most one interval). The format, the resume rules and what is kept: docs/user/slam-process.md,
 // "Checkpoints". The state's encoding is pure (bytes in, bytes out); only writeFileAtomically and
 // readWholeFile touch files.
 #pragma once
@@ -32,7 +32,7 @@ struct ReplayPosition {
 /// messages at or before the checkpoint's newest utime on their stream were processed before it and
 /// are refused (counted as already_processed). The rule holds on a stream until its first message
 /// after that utime; a message restart_jump_us or more before it is handed on (the pairing decides
-/// whether the input restarted, docs/slam-process.md rule 2).
+/// whether the input restarted, docs/user/slam-process.md rule 2).
 class InputClock {
  public:
   explicit InputClock(int64_t restart_jump_us) : restart_jump_us_(restart_jump_us) {}

@@ -2,7 +2,7 @@
 // line, full double precision) and read back as a prior map. Writing is atomic: a temporary file
 // in the same folder is written, flushed to disk and renamed over the target, so a reader (or a
 // crash, SIGINT or SIGTERM during the write) never sees a half-written map.
-// Frame: the map frame W of the run that saved it (docs/conventions.md); metres, m^2.
+// Frame: the map frame W of the run that saved it (docs/user/conventions.md); metres, m^2.
 // Format (version 1):
 //   format: omnislam-map
 //   version: 1

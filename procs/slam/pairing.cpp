@@ -1,4 +1,4 @@
-// Frame <-> odometry pairing rules: see pairing.h and docs/slam-process.md.
+// Frame <-> odometry pairing rules: see pairing.h and docs/user/slam-process.md.
 #include "pairing.h"
 
 #include <algorithm>

@@ -2,7 +2,7 @@
 // cumulative odometry poses interpolated at a frame's utime, and the rules that decide, from the
 // utimes of the two streams only (never the receive clock), when a frame is processed, waits or is
 // dropped, and what duplicates, out-of-order messages and restarts (a replayed log starting again)
-// do. Rules and defaults: docs/slam-process.md.
+// do. Rules and defaults: docs/user/slam-process.md.
 #pragma once
 
 #include <cstdint>
@@ -43,7 +43,7 @@ struct PairingOptions {
   /// without a restart (a paused recording: the odometry is cumulative, the filter goes on).
   /// 5 s, as restart_jump_us: a stream's own next message is never that far ahead of both streams
   /// (it was 600 s, and one ODOMETRY message stamped 100 s ahead was taken and reset the filter).
-  /// The rule in every process: docs/lcm.md, "Time faults".
+  /// The rule in every process: docs/user/lcm.md, "Time faults".
   int64_t max_forward_jump_us = 5'000'000;
   /// Odometry implying a faster motion than these between consecutive samples is a discontinuity
   /// (e.g. the odometry process restarted with its cumulative pose reset): the stream is re-based

@@ -1,4 +1,4 @@
-// SLAM process config parsing: see slam_config.h and docs/slam-process.md.
+// SLAM process config parsing: see slam_config.h and docs/user/slam-process.md.
 #include "slam_config.h"
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 // Options of the SLAM process (filter, pairing, start pose, outputs) and their YAML form
-// (config/slam/*.yaml, keys in docs/slam-process.md). Parsed with config::Node: every error names
+// (config/slam/*.yaml, keys in docs/user/slam-process.md). Parsed with config::Node: every error names
 // the file and the key.
 #pragma once
 
@@ -16,7 +16,7 @@ namespace omnislam::slamproc {
 
 /// Plausibility bounds on valid inputs (lcmio::validate checks only that they are finite); a
 /// message beyond them is refused, counted (`implausible`) and reported, and changes nothing
-/// (docs/slam-process.md, "Plausibility"). Keys `plausibility.*`.
+/// (docs/user/slam-process.md, "Plausibility"). Keys `plausibility.*`.
 struct PlausibilityOptions {
   /// |x|, |y| of an ODOMETRY pose [m]: the workspace, as GROUND_TRUTH_POSE's max_coordinate_m in
   /// the odometry process (10 km). A pose beyond it, re-based by the pairing, left rounding junk of

@@ -1,4 +1,4 @@
-// The SLAM process's shared code path: see slam_driver.h and docs/slam-process.md.
+// The SLAM process's shared code path: see slam_driver.h and docs/user/slam-process.md.
 #include "slam_driver.h"
 
 #include <algorithm>
@@ -145,7 +145,7 @@ DriverResult SlamDriver::onFeatures(const features_t& msg) {
   int64_t skipped = 0;
   Frame frame = toFrame(msg, opt_, &skipped);
   if (static_cast<int>(frame.z.size()) > opt_.max_features_per_frame) {
-    // The association's time grows with about the cube of the count (docs/slam-process.md).
+    // The association's time grows with about the cube of the count (docs/user/slam-process.md).
     ++stats_.frames_too_large;
     r.refused.push_back({"OMNI_FEATURES", "frame seq " + std::to_string(msg.seq) + " has " +
                                               std::to_string(frame.z.size()) +

@@ -1,4 +1,4 @@
-// omnislam-viewer: shows what the SLAM process is doing (docs/viewer.md). Subscribes SLAM_POSE,
+// omnislam-viewer: shows what the SLAM process is doing (docs/user/viewer.md). Subscribes SLAM_POSE,
 // SLAM_MAP, SLAM_PARTICLES, SLAM_ASSOCIATIONS, GROUND_TRUTH_POSE, GROUND_TRUTH_MAP, OMNI_IMAGE and
 // OMNI_FEATURES (each optional) and draws vision::renderSlamView:
 //   live window  (default) an OpenCV window redrawn a few times a second; q or Esc quits;

@@ -15,7 +15,7 @@ Prints, per robot:
   - the same fit over consecutive blocks of --block-s seconds, to see whether a and b are stable;
   - the RMS of e split by what the robot did in the window (straight: summed |omega| dt < 0.05 rad;
     spinning in place: distance < 0.05 m; turning: the rest; windows standing still left out).
-Standard library only; read-only on the dataset. Figures quoted in docs/mrclam.md.
+Standard library only; read-only on the dataset. Figures quoted in docs/results/mrclam.md.
 """
 import argparse
 import bisect

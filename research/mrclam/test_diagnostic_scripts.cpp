@@ -1,4 +1,4 @@
-// The four MRCLAM diagnostic scripts whose figures docs/mrclam.md and research/mrclam-diagnosis.md quote
+// The four MRCLAM diagnostic scripts whose figures docs/results/mrclam.md and research/mrclam-diagnosis.md quote
 // (research/mrclam/mrclam_odometry_heading.py, mrclam_bearing_correlation.py, mrclam_visual_rotation.py,
 // mrclam_group_observability.py), each on a small MRCLAM-format dataset the test writes with a known
 // answer: a turn-scale error the fit must recover, residuals whose correlation is -1 and +1 by

@@ -63,7 +63,7 @@ TEST(YamlNode, InvalidYamlAndMissingFilesAreConfigErrors) {
 }
 
 // A key given twice in one map: yaml-cpp keeps both and lookups return the first, so an override
-// appended at the end of a file was silently ignored.
+// appended at the end of a file would be silently ignored.
 TEST(YamlNode, AKeyGivenTwiceIsRefusedWithBothLines) {
   EXPECT_NE(errorOf([] { Node::loadString("rate: 50\nname: x\nrate: 1000\n", "w.yaml"); })
                 .find("w.yaml: key 'rate' is given twice (lines 1 and 3)"),
@@ -102,9 +102,9 @@ TEST(YamlNode, AliasesOfListsAndMapsAndFoldersAreRefused) {
   std::remove(path.c_str());
 }
 
-// A key written with no value counted as absent, so "particles:" or "--set seed=" took the default
-// without a word; and yaml-cpp's Load reads only the first document, so everything after a '---'
-// line was ignored. Both are refused now, naming the key or the line.
+// A key written with no value is not absent ("particles:" or "--set seed=" must not take the
+// default without a word); and yaml-cpp's Load reads only the first document, so everything after a
+// '---' line would be ignored. Both are refused, naming the key or the line.
 TEST(YamlNode, AKeyWithNoValueAndASecondDocumentAreRefused) {
   const Node root = Node::loadString("particles:\nmotion:\nlist:\nxs:\nnames:\nok: 3\n", "e.yaml");
   const std::string with_default = errorOf([&] { root.getInt("particles", 1, 100, 50); });
@@ -148,7 +148,7 @@ TEST(YamlNode, AKeyWithNoValueAndASecondDocumentAreRefused) {
   std::remove(path.c_str());
 }
 
-// Whole numbers are decimal: YAML 1.1's octal and hexadecimal readings surprised ("0100" was 64).
+// Whole numbers are decimal: YAML 1.1's octal and hexadecimal readings surprise ("0100" would be 64).
 TEST(YamlNode, WholeNumbersAreDecimal) {
   const Node root = Node::loadString("a: 0100\nb: 0x10\nc: +7\nd: 12abc\ne: -3\n", "i.yaml");
   EXPECT_EQ(root.getInt("a", 0, 1000), 100);
@@ -180,8 +180,8 @@ TEST(WorldConfig, ALightIdUsedTwiceIsRefused) {
   EXPECT_EQ(omnislam::config::parseWorld(Node::loadString(next, "w.yaml")).lights.back().id, 17);
 }
 
-// A grid is the product of its two lists: 3000 values each way were accepted as 9 million lights,
-// 10 000 asked for 3 GB. The lights go into GROUND_TRUTH_MAP, which holds at most 100 000.
+// A grid is the product of its two lists: 3000 values each way would be 9 million lights, 10 000
+// would ask for 3 GB. The lights go into GROUND_TRUTH_MAP, which holds at most 100 000.
 TEST(WorldConfig, MoreLightsThanAMapCarriesAreRefusedBeforeTheGridIsBuilt) {
   auto values = [](int n) {
     std::string v = "[";

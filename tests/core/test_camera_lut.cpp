@@ -1,5 +1,5 @@
 // Tests of the paper's look-up-table inverse (paper 000, sec. III-A) on the default camera: accuracy
-// against the exact inverse (figures printed for docs/camera-models.md), coverage, byte image.
+// against the exact inverse (figures printed for docs/design/camera-models.md), coverage, byte image.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>

@@ -386,7 +386,7 @@ TEST(camera_Scaramuzza, BadParametersAreRejectedNamingTheField) {
   p.max_radius_px = 250.0;  // ... but is usable up to 250 px
   EXPECT_FALSE(ScaramuzzaCamera::validate(p).has_value()) << *ScaramuzzaCamera::validate(p);
   // A near-singular affine part stretches the usable radius to ~1e10 px: the monotonicity check's
-  // sample count overflowed int, only 3 samples were taken, and this falling polynomial passed.
+  // sample count must not overflow int (3 samples would let this falling polynomial pass).
   p = syntheticParams();
   p.pol = {-30.0, 0.0, 0.02, -2e-4, 1e-7};
   p.c = 1e-8, p.d = 0.0, p.e = 0.0;

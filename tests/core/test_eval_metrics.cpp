@@ -191,7 +191,7 @@ TEST(EvalMetrics, RootMeanSquareIsFiniteForAnyFiniteValues) {
 }
 
 // The degeneracy test is relative to the trajectories' spread: an estimate standing still with 1 um
-// of jitter passed the old absolute test and got a rotation of -1.589 rad.
+// of jitter passes an absolute threshold and would get an arbitrary rotation (-1.589 rad here).
 TEST(EvalMetrics, ARigidFitToAnEstimateThatDoesNotMoveIsRefused) {
   std::vector<Eigen::Vector2d> still, moving;
   for (int i = 0; i < 50; ++i) {

@@ -211,8 +211,8 @@ TEST(slam_BearingModel, LogGaussian) {
 
 bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
-// The general form of logGaussian (Eigen's LLT and triangular solve), as it was before the
-// one-dimensional case was written out.
+// The general form of logGaussian (Eigen's LLT and triangular solve), the reference for its
+// one-dimensional case written out.
 double logGaussianByLlt(const MeasVec& r, const MeasMat& S, double* m2_out) {
   const Eigen::LLT<MeasMat> llt(S);
   if (llt.info() != Eigen::Success) {

@@ -666,7 +666,7 @@ TEST(slam_FastSlam, FastSlam1WeightIsTheMeasurementLikelihoodAtTheSampledPose) {
 // the correction leaves 5-6 sigma, inside the P_new gate (8 sigma), so Alg. 2 takes the feature for
 // the light and turns the pose towards it; the predictive density puts it at 9-10 sigma, a new
 // feature, and the pose stays at the prediction. (The sports hall soak's one 7.7 deg heading frame
-// was this: docs/slam-results.md, "Ten laps".)
+// was this: docs/results/slam-results.md, "Ten laps".)
 TEST(slam_FastSlam, PredictiveAssociationChargesThePoseCorrection) {
   const Eigen::Vector3d light(5.0, 0.0, 6.5);
   const double offset_rad = 0.12, sigma_theta = 0.01;

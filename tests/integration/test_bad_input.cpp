@@ -103,8 +103,8 @@ TEST(BadInput, CaptureAndOdometryCountAndSkipBadTruthMessages) {
   pose_t good2 = pose(t0 + 20'000, 3);
   bus.lcm.publish(channels::kGroundTruthPose, &good2);
   bus.spinFor(0.2);
-  // One far-future stamp: it used to become each process's "previous utime", so the odometry
-  // refused every pose after it, and the capture counted up to it one period at a time (hung).
+  // One far-future stamp must not become a process's "previous utime" (the odometry would refuse
+  // every pose after it, the capture would count up to it one period at a time and hang).
   // Within the contract's 2^62 us (4.6e18); beyond it a utime is refused as corrupted outright.
   pose_t stray = pose(4'000'000'000'000'000'000, 4);
   bus.lcm.publish(channels::kGroundTruthPose, &stray);
@@ -140,8 +140,8 @@ TEST(BadInput, CaptureAndOdometryCountAndSkipBadTruthMessages) {
   EXPECT_NE(odometry.output().find("utime 9000000000000000000 beyond 2^62 us"), std::string::npos) << odometry.output();
 
   // A new timeline far ahead, continued by three messages in a row, is taken (a clock set, a
-  // source started again). The capture then computes its next image time in one step: it used to
-  // count up to the new time one period per loop (about 3e12 rounds here), deaf to SIGINT.
+  // source started again). The capture then computes its next image time in one step, not one period
+  // per loop (about 3e12 rounds here, deaf to SIGINT).
   const int64_t far = 3'000'000'000'000'000'000;
   for (int k = 0; k < 4; ++k) {
     pose_t p = pose(far + k * 1'000'000, 6 + k);  // 1 s apart: every one is due for an image
@@ -249,8 +249,8 @@ TEST(BadConfig, BadFlagsStopWithAMessageNamingTheFlag) {
   }
 }
 
-// omnislam-record opened (emptied) its file before LCM refused the channel regex, then crashed on
-// the null subscription: an existing recording was lost. Now both flags are checked first.
+// omnislam-record checks the channel regex and the URL before it opens (empties) its file, so a bad
+// flag never costs an existing recording (LCM refuses the regex only at subscription).
 TEST(BadConfig, RecorderRefusesABadRegexOrUrlBeforeTouchingItsFile) {
   t::TempDir dir;
   const std::string keep = dir.file("keep.lcm");
@@ -264,8 +264,8 @@ TEST(BadConfig, RecorderRefusesABadRegexOrUrlBeforeTouchingItsFile) {
   EXPECT_EQ(std::filesystem::file_size(keep), 20u) << "the file was emptied";
 }
 
-// omnislam-record closed its log through LCM, which ignores what fflush and fclose return: on a
-// full disk the last stdio buffer was lost at exit, and the run still ended 0 with "N events".
+// LCM's log writer ignores what fflush and fclose return, so on a full disk the last stdio buffer
+// would be lost at exit with the run ending 0 and "N events": omnislam-record must say so and fail.
 TEST(BadInput, RecorderOnAFullDiskSaysSoAndFails) {
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
   const std::string url = t::privateUdpUrl(41);
@@ -289,7 +289,7 @@ TEST(BadInput, RecorderOnAFullDiskSaysSoAndFails) {
       << r.output;
   EXPECT_NE(r.output.find("WRITE FAILURES (the first: writing LCM log '/dev/full' failed"), std::string::npos)
       << r.output;
-  // The 5 events never reached the device: they were reported written while lost with the buffer.
+  // The 5 events never reached the device: none is reported written (they are lost with the buffer).
   EXPECT_NE(r.output.find("[record] 0 events in the file, 0 MB"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("5 events lost with the write buffer"), std::string::npos) << r.output;
 }
@@ -306,7 +306,7 @@ TEST(BadConfig, MalformedWheelCsvNamesFileAndLine) {
       {"time,v,w\n1,0,0\n", ":1: expected the header"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,abc,0.0\n", ":3: non-numeric"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1\n", ":3: expected 3 columns"},
-      // A trailing comma is a fourth, empty column (it was accepted).
+      // A trailing comma is a fourth, empty column.
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1,0.0,\n", ":3: expected 3 columns (utime,v_mps,omega_radps), got 4"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0,5\n", ":2: expected 3 columns"},
       // Finite but beyond any robot: the integrated pose became infinite.

@@ -1,4 +1,4 @@
-// omnislam-gen-world and scripts/evaluate-worlds.sh (docs/world-families.md): the tool writes the
+// omnislam-gen-world and scripts/evaluate-worlds.sh (docs/results/world-families.md): the tool writes the
 // same world file and log for the same seed; the log holds the messages the live system records,
 // every one decoding and validating, in utime order; omnislam-slam replays it and answers every
 // frame; the script runs a family of 2 worlds end to end (both association methods) and writes its

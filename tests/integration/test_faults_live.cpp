@@ -108,14 +108,14 @@ TEST(FaultsLive, StrayStampsAndImplausibleTruthAreRefusedCountedAndChangeNothing
   std::cout << "ATE RMSE: undisturbed " << ate_clean << " m, with 15 faults " << ate << " m\n";
   EXPECT_LE(std::abs(ate - ate_clean), 0.1 * ate_clean);
 
-  // Each fault refused and counted where it arrived (PROCESS_STATUS, docs/lcm.md "Time faults").
+  // Each fault refused and counted where it arrived (PROCESS_STATUS, docs/user/lcm.md "Time faults").
   const auto st = lastStatuses(log);
   for (const std::string name : {"capture", "odometry"}) {
     ASSERT_TRUE(st.count(name)) << name;
     const process_status_t& s = st.at(name);
     // The copies with x = 1e300 and 1e6 m are stamped 0.5 s after their original, so that they
     // are still ahead of the stream when the injector publishes them on a loaded machine (1 us
-    // after was often behind the next real pose, and refused as out of order instead), and within
+    // after is often behind the next real pose, and refused as out of order instead), and within
     // the 1 s a 50 Hz stream may step: the plausibility bounds refuse them.
     EXPECT_NE(s.detail.find("[refused: 3 stray utimes, 2 implausible]"), std::string::npos) << name << ": " << s.detail;
     EXPECT_EQ(s.rejected_inputs, 6) << name << ": 3 stamps, x = 1e300 and 1e6 m (plausibility), NaN (validation)";

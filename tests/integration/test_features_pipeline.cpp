@@ -231,8 +231,8 @@ TEST(FeaturesProcess, OfflineRunOnTheVmrImagesWritesAnnotatedImages) {
   EXPECT_GT(lines, 10 * 20) << "header + at least 20 lines per image";
 }
 
-// SIGTERM part-way through an offline run: the images done so far keep their CSV rows (the
-// CSV used to be a buffer that the default signal action threw away: 89 PNGs, an empty CSV).
+// SIGTERM part-way through an offline run: the images done so far keep their CSV rows (a CSV held
+// in a buffer that the default signal action throws away would leave 89 PNGs and an empty CSV).
 TEST(FeaturesProcess, AStoppedOfflineRunKeepsTheCsvOfEveryImageItAnnotated) {
   t::TempDir in, out;
   cv::Mat img(480, 640, CV_8U, cv::Scalar(12));

@@ -24,9 +24,9 @@ namespace {
 
 TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
   // 10 s of wall time at speedup 25 before a stalled process counts as dead (the launch file's
-  // rule; its odometry_wait_s follows odometry_only_after_s). It was 3 s, the launch file's default:
-  // with four integration tests at once on two cores (ctest -j4), 63 frames in a row went
-  // unanswered, live and in the replay of the recording, so a pairing rule dropped them as a
+  // rule; its odometry_wait_s follows odometry_only_after_s). With the launch file's default, 3 s,
+  // and four integration tests at once on two cores (ctest -j4), 63 frames in a row went
+  // unanswered, live and in the replay of the recording, as a pairing rule dropped them while a
   // process lagged. The test checks the pipeline and the paper's figures, not how fast a loaded
   // machine runs it.
   const std::string stall_s = "250";

@@ -138,7 +138,7 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
   std::vector<Frame> frames;
   std::vector<int64_t> stream_last_seq;
   int unassigned = 0;
-  // The liveness rule (docs/slam-process.md, SlamDriver::maybePredict): the first odometry-only pose
+  // The liveness rule (docs/user/slam-process.md, SlamDriver::maybePredict): the first odometry-only pose
   // comes once odometry_only_after_s (3 s, the shipped default) of odometry time has passed since
   // the last frame *arrived*, i.e. since the newer of its utime and the newest odometry utime at its
   // arrival (a late frame still shows the features process alive); then one every

@@ -79,7 +79,7 @@ TEST(Launcher, SigintStopsEveryProcessCleanly) {
                                "  - {name: a, cmd: [sleep, '60']}\n"
                                "  - {name: b, cmd: [sleep, '60']}\n");
   t::Child launcher({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"});
-  // Its stop handlers are installed before it starts anything (a fixed pause here was a timing).
+  // Its stop handlers are installed before it starts anything: wait for that, not for a fixed pause.
   ASSERT_TRUE(launcher.waitForOutput("started b", 20)) << launcher.output();
   ASSERT_TRUE(launcher.alive()) << launcher.output();
   launcher.signal(SIGINT);
@@ -211,9 +211,9 @@ TEST(Launcher, SigintDuringTheDrainStopsTheRunAndKeepsTheRecording) {
   EXPECT_EQ(row[2], std::to_string(rounds)) << "SLAM_POSE messages recorded against rounds published";
 }
 
-// A required process that died during the drain was seen only when the drain ended: on a bus kept
-// busy (here by the sample publisher) that was drain_s later, with the failure unreported and the
-// rest of the system still running. The drain now ends at once and says why.
+// A required process that dies during the drain ends it at once and the launcher says why (not only
+// when the drain ends: on a bus kept busy, here by the sample publisher, that is drain_s later, with
+// the rest of the system still running).
 TEST(Launcher, ARequiredProcessDyingDuringTheDrainEndsItAtOnce) {
   t::TempDir dir;
   const std::string path = dir.file("launch.yaml");
@@ -265,8 +265,8 @@ TEST(Launcher, AChildThatFloodsItsOutputDoesNotWedgeTheLauncher) {
   EXPECT_LT(s, 10.0) << tail;
 }
 
-// Output without a newline was kept whole until one came: 300 MB of it grew the launcher by as
-// much. A line is printed once it reaches 64 KiB, saying that it was cut.
+// Output without a newline is not kept whole until one comes (300 MB of it would grow the launcher
+// by as much): a line is printed once it reaches 64 KiB, saying that it was cut.
 TEST(Launcher, ALineWithoutNewlineIsCutAt64KiB) {
   t::TempDir dir;
   const auto file = launchFile(dir,
@@ -346,11 +346,10 @@ TEST(Launcher, StoppingAProcessStopsTheProcessesItStarted) {
   EXPECT_EQ(r.exit_code, 1) << r.output;
 }
 
-// After the scenario the launcher listens until the bus is quiet, at most drain_s. On a bus that
-// stayed busy it was held past drain_s (and past a SIGINT, with no child's output read) until the
-// flood ended: LCM's test of the URL, on the drain's first subscription, lasted as long as the
-// flood or failed (the launcher then crashed on the missing subscription, or reported "0 messages"
-// once drain_s was spent), and its loop handled messages for as long as one was waiting.
+// After the scenario the launcher listens until the bus is quiet, at most drain_s, also on a bus
+// that stays busy: neither LCM's test of the URL on the drain's first subscription (which lasts as
+// long as the flood, or fails) nor a loop that handles messages while one is waiting may hold it
+// past drain_s or past a SIGINT, and a failed subscription is reported, not dereferenced.
 TEST(Launcher, ABusyBusDoesNotHoldTheDrainPastDrainS) {
   t::TempDir dir;
   const std::string url = t::privateUdpUrl(31);
@@ -423,9 +422,9 @@ TEST(Launcher, BadLaunchFilesNameTheKey) {
   EXPECT_NE(r.output.find("processes[0].cmdd' is not a known key"), std::string::npos) << r.output;
 }
 
-// A recorder that dies (kill -9, or a full disk: it ends on its first failed write) used to leave
-// the run going: the launcher printed "stopping", then drained for up to drain_s while everything
-// ran on unrecorded. The documented policy: the run stops at once, exit 1.
+// A recorder that dies (kill -9, or a full disk: it ends on its first failed write) stops the run at
+// once, exit 1 (the documented policy), without the drain of up to drain_s during which everything
+// would run on unrecorded.
 TEST(Launcher, ADeadRecorderStopsTheRunAtOnceWithoutTheDrain) {
   t::TempDir dir;
   const std::string path = dir.file("launch.yaml");
@@ -445,8 +444,8 @@ TEST(Launcher, ADeadRecorderStopsTheRunAtOnceWithoutTheDrain) {
   EXPECT_LT(s, 30.0) << "the drain (60 s, never quiet with drain_quiet_s 0) must not run\n" << r.output;
 }
 
-// A launch file naming a program that does not exist used to start every process before it and
-// fail only when it reached that one. Every program is now found before anything starts.
+// A launch file naming a program that does not exist starts nothing: every program is found before
+// anything starts, not when its turn comes.
 TEST(Launcher, AMissingProgramStopsTheRunBeforeAnythingStarts) {
   t::TempDir dir;
   const std::string marker = dir.file("started");
@@ -487,8 +486,8 @@ TEST(Launcher, ARecorderThatFailsToStartStopsTheRunBeforeAnythingStarts) {
   }
 }
 
-// SIGTERM while the launcher waits (up to 20 s) for the recorder to say it records: it used to
-// wait the 20 s out and then start every process anyway.
+// SIGTERM while the launcher waits (up to 20 s) for the recorder to say it records: it stops at
+// once and starts nothing (not the 20 s out, then every process).
 TEST(Launcher, AStopWhileWaitingForTheRecorderStartsNothing) {
   t::TempDir dir;
   const std::string fifo = dir.file("log.fifo");

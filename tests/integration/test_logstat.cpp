@@ -68,8 +68,8 @@ TEST(Logstat, PrintsEachProcesssLastStatus) {
   EXPECT_EQ(r.output.find("slam detail"), std::string::npos) << r.output;  // empty detail: no line
 }
 
-// An image whose sizes do not fit its bytes made --export-images read past the buffer (a
-// segfault, all output lost); a truncated log was listed as if complete.
+// An image whose sizes do not fit its bytes is reported, not read past its buffer by
+// --export-images; a truncated log is reported as truncated, not listed as if complete.
 TEST(Logstat, BadImagesAndATruncatedTailAreReportedNotFatal) {
   t::TempDir dir;
   const std::string path = dir.file("images.lcm");
@@ -86,8 +86,8 @@ TEST(Logstat, BadImagesAndATruncatedTailAreReportedNotFatal) {
       m.size = static_cast<int32_t>(m.data.size());
       log.write(m.utime, channels::kOmniImage, m);
     }
-    // The third repeats the first's utime and seq; the fourth's seq is corrupted far ahead (it
-    // used to count as some 9e18 missed messages, and a second such jump overflowed the count);
+    // The third repeats the first's utime and seq; the fourth's seq is corrupted far ahead (not
+    // some 9e18 missed messages, and a second such jump must not overflow the count);
     // the fifth goes on from the second.
     const int64_t utimes[] = {1'000'000, 1'020'000, 1'000'000, 1'040'000, 1'060'000};
     const int64_t seqs[] = {0, 1, 0, std::numeric_limits<int64_t>::max(), 2};

@@ -1,7 +1,7 @@
-// omnislam-record stops in bounded time on a bus that stays busy: its stop-time drain ran until the
-// bus was quiet, so in a flood it ignored SIGINT and SIGTERM (17 s after SIGINT in an audit) and a
-// launcher's SIGKILL would have lost the last buffer and the report. And a SIGKILL loses at most
-// the last flush interval: the recorder kept up to 32 KiB in its buffer until the stop.
+// omnislam-record stops in bounded time on a bus that stays busy: its stop-time drain does not wait
+// for a quiet bus (in a flood that would ignore SIGINT and SIGTERM, and a launcher's SIGKILL would
+// lose the last buffer and the report). And a SIGKILL loses at most the last flush interval, not
+// everything buffered since the start.
 #include <gtest/gtest.h>
 
 #include <lcm/lcm-cpp.hpp>
@@ -31,7 +31,7 @@ TEST(Record, StopsSoonAfterSigintWhileTheBusStaysBusy) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1500));
     const auto t0 = std::chrono::steady_clock::now();
     rec.signal(SIGINT);
-    r = rec.wait(5.0);  // the old recorder was still draining when the flood stopped
+    r = rec.wait(5.0);  // a recorder that drains its whole queue would still be draining when the flood stops
     stop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   EXPECT_FALSE(r.timed_out) << "still draining a busy bus 5 s after SIGINT:\n" << r.output;

@@ -24,7 +24,7 @@ void expectWithinTheTile(const std::string& eval_json) {
 }
 
 TEST(RoomSlam, LiveAndReplayWithinOneFloorTile) {
-  // Seed 6 of docs/room-scenario.md (seeds 1-10 all pass there; seed 6 is the third best of the ten,
+  // Seed 6 of docs/results/room-scenario.md (seeds 1-10 all pass there; seed 6 is the third best of the ten,
   // path 0.086 m: the test guards the pipeline, the tables measure the method).
   // 10 s of wall time at speedup 4 before a stalled process counts as dead (the launch file's 3 s,
   // as in the full-system test: the test checks the method, not how fast a loaded machine runs it).

@@ -62,7 +62,7 @@ TEST_F(SimPipeline, ImagesArriveAtOneHertzInSimulatedTimeNoneLost) {
 
 // The processes lose nothing: odometry answers every truth sample (its last seq equals the
 // simulator's). lcm-logger 1.3.1 itself may drop a few small messages when starved of CPU (its
-// subscription queue holds 30 messages; docs/lcm.md), so the recording is held to >= 99 %.
+// subscription queue holds 30 messages; docs/user/lcm.md), so the recording is held to >= 99 %.
 TEST_F(SimPipeline, TruthAndOdometryAreAtLeastTwentyHertzAndNoneLost) {
   const auto truth = lcmio::readChannel<pose_t>(log_, channels::kGroundTruthPose);
   const auto odo = lcmio::readChannel<odometry_t>(log_, channels::kOdometry);

@@ -78,7 +78,7 @@ void interruptedReplay(const std::string& out, const std::string& ckpt, int sig,
   if (sig == SIGKILL) {
     EXPECT_EQ(r.exit_code, 128 + SIGKILL) << "the replay ended before it was killed: " << r.output;
     EXPECT_FALSE(fs::exists(out)) << "a killed replay must not leave a complete-looking output";
-  } else {  // stopped: the outputs so far are kept (docs/slam-process.md), and the state is saved
+  } else {  // stopped: the outputs so far are kept (docs/user/slam-process.md), and the state is saved
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("checkpoint written to " + ckpt), std::string::npos) << r.output;
   }

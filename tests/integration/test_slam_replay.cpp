@@ -253,7 +253,7 @@ TEST(SlamReplay, SameSeedGivesByteIdenticalOutputAndBoundedPoseError) {
             << max_theta_err << " rad; map " << final_map.num_landmarks << " landmarks, " << matched
             << "/16 lights within 1 m, mean error " << (matched ? map_err_sum / matched : 0.0) << " m\n";
   // Bearings carry no scale: far from the start the pose inherits the scale of the map built from
-  // the first metres' odometry (docs/slam-core.md); back at the start the error is small again.
+  // the first metres' odometry (docs/design/slam-core.md); back at the start the error is small again.
   EXPECT_LT(max_err, 0.8);
   EXPECT_LT(max_err, max_dr_err);
   EXPECT_LT(final_err, 0.3);
@@ -337,10 +337,10 @@ TEST(SlamReplay, DegradedLogIsHandledByRuleAndReplayIsStillDeterministic) {
   (void)restart_at;
 }
 
-// Three ways a replay used to go wrong on bad bytes: a log event declaring 2^31 - 1 data bytes
-// crashed LCM's reader (a write through a null pointer); an odometry seq corrupted to INT64_MAX
-// printed sequence_gaps -9223372036854775808; and --out on a full disk lost the last buffer and
-// still said "N events written", exit 0.
+// Three kinds of bad bytes a replay reports: a log event declaring 2^31 - 1 data bytes (LCM's own
+// reader writes through a null pointer on it), an odometry seq corrupted to INT64_MAX (no
+// sequence_gaps -9223372036854775808), and --out on a full disk (the last buffer lost: exit 1, not
+// "N events written").
 TEST(SlamReplay, ACorruptLengthACorruptSeqAndAFullDiskAreReported) {
   const Synthetic& syn = synthetic();
   std::vector<Event> ev;
@@ -396,7 +396,7 @@ TEST(SlamReplay, BadConfigAndFlagsStopWithAMessageNamingTheKey) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("is the input log"), std::string::npos) << r.output;
   EXPECT_EQ(std::filesystem::file_size(dir.file("in.lcm")), 9u);
-  // An output that cannot be written is refused at start, not after the work (the map was lost at
+  // An output that cannot be written is refused at start, not after the work (and the map lost at
   // exit): nothing is read, nothing is written.
   for (const std::string& bad : std::vector<std::string>{"/proc/omnislam-no-such-folder/map.yaml", "/proc/map.yaml", dir.path()}) {
     r = t::run({t::binPath("omnislam-slam"), "--config", kConfig, "--replay", dir.file("in.lcm"), "--out",

@@ -100,9 +100,9 @@ const process_status_t* lastStatusOf(const std::vector<process_status_t>& all, c
   return last;
 }
 
-// Audit 40 (findings 7, 8, 12a, 12b): an RGBA or grey + alpha PNG is an ordinary image (the alpha
-// is dropped); an image every receiver would refuse (9000 x 2: the contract's sides are 1..8192)
-// is reported and not published (refused from its header, before decoding, since issue 46); the
+// An RGBA or grey + alpha PNG is an ordinary image (the alpha is dropped); an image every receiver
+// would refuse (9000 x 2: the contract's sides are 1..8192) is reported and not published (refused
+// from its header, before decoding); the
 // last status says whether the folder was gone through; and a
 // tiny speedup waits instead of overflowing into "publish everything at once".
 TEST(CaptureDir, AlphaIsDroppedARefusedImageIsNotPublishedAndTheLastStatusTellsTheEnd) {
@@ -194,7 +194,7 @@ TEST(OdometryCsv, AStopPartWayIsNotReportedAsFinished) {
   EXPECT_EQ(st->detail, "interrupted: 1 of 3 rows published");
 }
 
-// The test publisher's status said "starting" for its whole run (audit 40, 12c).
+// The test publisher's last status says it finished, not "starting".
 TEST(PublishSamples, ItsLastStatusSaysItFinishedAndHowManyRounds) {
   const std::string url = t::privateUdpUrl(11);
   lcm::LCM lcm(url);
@@ -214,9 +214,9 @@ TEST(PublishSamples, ItsLastStatusSaysItFinishedAndHowManyRounds) {
 
 // The simulated sources follow GROUND_TRUTH_POSE. When the truth starts a new timeline (the
 // simulator run again on the same bus, a truth log replayed again), each is a new run: capture
-// used to publish no image for the whole second run (its image clock waited for the first run's
-// next image time), and odometry integrated the jump back to the start as one step driven in
-// negative time (audit 40, findings 4 and 5).
+// publishes the second run's images (its image clock does not wait for the first run's next image
+// time), and odometry does not integrate the jump back to the start as one step driven in negative
+// time.
 TEST(SimSources, ANewTruthTimelineIsANewRunForCaptureAndOdometry) {
   const std::string url = t::privateUdpUrl(7);
   lcm::LCM lcm(url);

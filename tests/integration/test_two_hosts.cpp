@@ -2,7 +2,7 @@
 // machines on one link, LCM multicast with ttl=1 between them. Host A runs the simulator, capture,
 // odometry and features (config/launch/two_hosts_sensors.yaml), host B the SLAM process and the
 // recorder (config/launch/two_hosts_slam.yaml), each under its own omnislam-launch, as
-// docs/lcm.md ("Across machines") says to run it. First a control: ttl=0 never leaves a host, ttl=1
+// docs/user/lcm.md ("Across machines") says to run it. First a control: ttl=0 never leaves a host, ttl=1
 // crosses. Then the whole sports-hall run at speedup 25, scored as the one-host full-system test:
 // every frame answered on the other host, every light mapped once within paper 000's bars, and
 // the trajectory better than dead reckoning by a factor of two. Skips, saying why, where network

@@ -245,7 +245,7 @@ TEST(Viewer, LiveHeadlessDrawsTheBusCountsGarbageAndWritesTheFinalViewOnSigterm)
   for (int k = 2; k < 4; ++k) publishStep(k);
   // Steps 1..3 are complete (step 4 is still open): frame_000001..3.
   EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return fs::exists(out + "/frame_000003.png"); }, 10)) << viewer.output();
-  // Every message handled (its status counts them) before SIGTERM: a fixed pause here was a timing.
+  // Every message handled (its status counts them) before SIGTERM: wait for that, not a fixed pause.
   EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status["viewer"].messages_in >= published; }, 20))
       << bus.status["viewer"].messages_in << " of " << published << " messages handled\n" << viewer.output();
   viewer.signal(SIGTERM);
@@ -259,7 +259,7 @@ TEST(Viewer, LiveHeadlessDrawsTheBusCountsGarbageAndWritesTheFinalViewOnSigterm)
 }
 
 // A frame that cannot be written is reported, and the view goes on: the poses after it are applied
-// (they used to be refused, each retrying the same file), and the exit code says it.
+// (not refused, each retrying the same file), and the exit code says it.
 TEST(Viewer, AFrameThatCannotBeWrittenIsReportedAndLaterPosesStillApply) {
   const std::string url = t::privateUdpUrl(16);
   t::TempDir dir;

@@ -133,9 +133,9 @@ void writeBytes(const std::string& path, const std::string& bytes) {
   std::ofstream(path, std::ios::binary) << bytes;
 }
 
-// LCM 1.3.1's reader allocated data length + 1 bytes unchecked: 2^31 - 1 overflowed, and it read
-// into a null pointer (logstat, eval, smooth, viewer --log and slam --replay crashed on this
-// 72-byte file). Our reader checks every length against the file first.
+// LCM 1.3.1's reader allocates data length + 1 bytes unchecked: 2^31 - 1 overflows, and it reads
+// into a null pointer on this 72-byte file. Our reader (logstat, eval, viewer --log and slam
+// --replay read with it) checks every length against the file first.
 TEST(LogFiles, LengthsThatRunPastTheFileStopReadingWithAReason) {
   Dir d;
   writeBytes(d.file("huge.lcm"), rawLogEvent(0, "A", "good") + rawLogEvent(1, "A", "0123456789", 0x7fffffff));
@@ -200,9 +200,9 @@ lcmio::LogReadResult readThroughPipe(const Dir& d, const std::string& bytes, int
   return r;
 }
 
-// A pipe cannot seek back: the reader used to, after checking the next event's sync word, and
-// read no event of any log of two or more through a pipe (a helper's fuzzing found it). And a
-// corrupt length from a pipe, where no file size bounds it, must not allocate the length at once.
+// A pipe cannot seek back: the reader checks the next event's sync word without seeking, so a log
+// of two or more events is read whole through a pipe. And a corrupt length from a pipe, where no
+// file size bounds it, must not allocate the length at once.
 TEST(LogFiles, APipeIsReadWholeAndACorruptLengthThroughItCostsLittleMemory) {
   Dir d;
   const std::string log = rawLogEvent(0, "A", "zero") + rawLogEvent(1, "BB", "") + rawLogEvent(2, "A", "two");
@@ -300,10 +300,9 @@ TEST(LogFiles, AfterAFailedWriteNothingMoreIsWrittenAndCommitSaysSo) {
   EXPECT_LE(read, before);
 }
 
-// The writer counted an event once it was in stdio's buffer, so the events that a failing write or
-// flush lost with the buffer were reported as written (a full disk: 714 reported for 687 in the
-// file; /dev/full: 27 for none). Now an event counts once it is complete in the file, and the
-// ones a failure kept out are counted as lost.
+// An event counts once it is complete in the file, not once it is in a buffer, and the ones a
+// failing write or flush keeps out are counted as lost (counted at the buffer, a full disk showed
+// 714 reported for 687 in the file; /dev/full 27 for none).
 TEST(LogFiles, AfterAFailureTheCountIsWhatTheFileHolds) {
   Dir d;
   const std::string path = d.file("out.lcm");

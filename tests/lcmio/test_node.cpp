@@ -52,15 +52,14 @@ TEST(LcmioNode, CountsEveryKindOfBadInputAndPassesOnlyGoodOnes) {
   EXPECT_EQ(c.rejected_inputs, 3);
   EXPECT_EQ(c.sequence_gaps, 4);
   EXPECT_NE(c.last_error.find("ODOMETRY"), std::string::npos);
-  // A NaN or negative timeout handles only what is there (the NaN's cast to int was undefined).
+  // A NaN or negative timeout handles only what is there (a NaN's cast to int would be undefined).
   EXPECT_TRUE(node.handleFor(std::nan("")));
   EXPECT_TRUE(node.handleFor(-1.0));
 }
 
-// A seq corrupted far ahead (a flipped high bit) passes validation, as any seq >= 0 does. It used to
-// count as some 9e18 missed messages, and a second one overflowed the counter (undefined behaviour;
-// UBSan stopped every process under a flood of mutated messages). Now a jump over
-// max_sequence_gap is a restart, and a real gap is still counted as missed messages.
+// A seq corrupted far ahead (a flipped high bit) passes validation, as any seq >= 0 does. A jump
+// over max_sequence_gap is a restart, not some 9e18 missed messages (a second one would overflow the
+// counter: undefined behaviour), and a real gap is still counted as missed messages.
 TEST(LcmioNode, ASeqFarAheadIsARestartNotMissedMessages) {
   lcmio::Node node("unit", "memq://");
   std::vector<int64_t> seen;
@@ -81,8 +80,8 @@ TEST(LcmioNode, ASeqFarAheadIsARestartNotMissedMessages) {
   EXPECT_EQ(c.sequence_gaps, 7);      // the last step: 7 missing, counted
 }
 
-// A handler that threw unwound through LCM's C dispatch: LCM stayed "inside a handler" and its
-// next handle() aborted the process (assert !lcm->in_handle). Now the message is refused, named,
+// A handler that throws must not unwind through LCM's C dispatch (LCM would stay "inside a handler"
+// and its next handle() abort the process: assert !lcm->in_handle): the message is refused, named,
 // and the node goes on.
 TEST(LcmioNode, AHandlerThatThrowsRefusesThatMessageAndTheNodeGoesOn) {
   lcmio::Node node("unit", "memq://");
@@ -102,9 +101,9 @@ TEST(LcmioNode, AHandlerThatThrowsRefusesThatMessageAndTheNodeGoesOn) {
   EXPECT_EQ(node.counters().last_error, "ODOMETRY: handling it failed: two lines");
 }
 
-// The time order and sequence were advanced before the handler ran, so a message its handler refused
-// (by throwing) could not be sent again: the copy was refused as "a duplicate" of one that never
-// took effect. A refused message now leaves them as they were, as a message refused by validation does.
+// A message its handler refuses (by throwing) leaves the time order and sequence as they were, as a
+// message refused by validation does, so it can be sent again (not refused as "a duplicate" of one
+// that never took effect).
 TEST(LcmioNode, AMessageItsHandlerRefusedCanBeSentAgain) {
   lcmio::Node node("unit", "memq://");
   std::vector<int64_t> seen;
@@ -128,8 +127,8 @@ TEST(LcmioNode, AMessageItsHandlerRefusedCanBeSentAgain) {
   EXPECT_EQ(node.counters().sequence_restarts, 0);
 }
 
-// The time order and sequence state was kept per channel name: a second subscription to the same
-// channel saw every message as a duplicate of what the first had just admitted, and got nothing.
+// The time order and sequence state is per subscription, not per channel name: a second subscription
+// to the same channel must not see every message as a duplicate of what the first just admitted.
 TEST(LcmioNode, TwoSubscriptionsToOneChannelEachGetEveryMessage) {
   lcmio::Node node("unit", "memq://");
   std::vector<int64_t> first, second;
@@ -164,9 +163,9 @@ TEST(LcmioSequence, StepsAtTheBoundsAndASaturatingCount) {
   EXPECT_EQ(lcmio::saturatingAdd(3, 4), 7);
 }
 
-// One far-future utime is refused and the good messages after it pass (it used to become the
-// channel's "previous utime" and lock out every later message); a replay started again is taken
-// after its confirming messages, counted, and shown in PROCESS_STATUS.detail.
+// One far-future utime is refused and the good messages after it pass (it never becomes the
+// channel's "previous utime", which would lock out every later message); a replay started again is
+// taken after its confirming messages, counted, and shown in PROCESS_STATUS.detail.
 TEST(LcmioNode, AStrayFutureStampDoesNotLockAChannelAndARestartIsTaken) {
   lcmio::Node node("unit", "memq://");
   std::vector<int64_t> seen;

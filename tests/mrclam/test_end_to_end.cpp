@@ -1,4 +1,4 @@
-// MRCLAM dataset 6 end to end on a short stretch (docs/mrclam.md): omnislam-import-mrclam (robot
+// MRCLAM dataset 6 end to end on a short stretch (docs/results/mrclam.md): omnislam-import-mrclam (robot
 // sightings kept as clutter, the start pose written into a copy of config/slam/mrclam.yaml),
 // omnislam-slam --replay, omnislam-eval --align --json; every frame answered, the figures present
 // and the error bounded. Skips with a message when the dataset is absent.
@@ -51,7 +51,7 @@ TEST(MrclamEndToEnd, ShortStretchOfRobot3) {
             << dr_ate << " m, landmarks matched " << jsonNumber(j, "landmarks_matched") << ", spurious "
             << jsonNumber(j, "landmarks_spurious") << ", association precision " << jsonNumber(j, "assoc_precision")
             << " recall " << jsonNumber(j, "assoc_recall") << std::endl;
-  // Bounds. Measured 2026-11-22 (docs/mrclam.md): SLAM 0.87 m aligned (FastSLAM 2.0 before: 1.15 m),
+  // Bounds. Measured 2026-11-22 (docs/results/mrclam.md): SLAM 0.87 m aligned (FastSLAM 2.0 before: 1.15 m),
   // dead reckoning 0.50 m, 4 landmarks matched, 2 spurious. The ATE bound is a guard against divergence and regressions at
   // today's level, NOT issue 7's bar (0.4 m over whole runs), which the filter does not meet yet;
   // the spurious bound is the issue's (at most 5).

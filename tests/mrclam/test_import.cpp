@@ -1,7 +1,7 @@
 // omnislam-import-mrclam's library on small MRCLAM-format files written by the test: a good
 // dataset (counts, frames, labels, odometry integration, event order, start pose), every malformed
-// case with file and line in the message, the duplicated-time policy, dropping robot sightings, and
-// the two diagnostics: the oracle-association colours and the true map.
+// case with file and line in the message, the duplicated-time policy, dropping robot sightings, no
+// appearance in the features, and the true map (localisation in it).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -158,25 +158,16 @@ TEST(MrclamImport, DropRobotSightingsIsCounted) {
   EXPECT_EQ(dec.labels[0].landmark_id[0], 6);
 }
 
-TEST(MrclamImport, SubjectAsColourOnlyOnRequest) {
+TEST(MrclamImport, FeaturesCarryNoAppearance) {
   t::TempDir d;
   writeDataset(d);
-  mrclam::ImportOptions o;
-  const Decoded plain = decode(mrclam::importRobot(d.path(), o));  // named: a temporary would die before the loop
-  ASSERT_EQ(plain.features.size(), 3u);
-  ASSERT_EQ(plain.features[0].features.size(), 2u);
-  for (const feature_t& f : plain.features[0].features) {
-    EXPECT_EQ(f.colour_a[0], 0.0f);  // no appearance by default: the filter sees bearings only
-  }
-  o.subject_as_colour = true;
-  const Decoded dec = decode(mrclam::importRobot(d.path(), o));
+  const Decoded dec = decode(mrclam::importRobot(d.path(), mrclam::ImportOptions{}));
   ASSERT_EQ(dec.features.size(), 3u);
-  EXPECT_EQ(dec.features[0].features[0].colour_a[0], 6.0f);  // landmark 6 (barcode 63)
-  EXPECT_EQ(dec.features[0].features[1].colour_a[0], 2.0f);  // robot 2 (barcode 14)
-  EXPECT_EQ(dec.features[1].features[0].colour_a[0], 0.0f);  // unknown barcode 43
-  EXPECT_EQ(dec.features[2].features[0].colour_a[0], 7.0f);  // landmark 7 (barcode 81)
+  ASSERT_EQ(dec.features[0].features.size(), 2u);
   for (const auto& fr : dec.features) {
-    for (const feature_t& f : fr.features) EXPECT_EQ(f.colour_a[1] + f.colour_a[2] + f.colour_b[0], 0.0f);
+    for (const feature_t& f : fr.features) {  // no image: the filter sees bearings only
+      EXPECT_EQ(f.colour_a[0] + f.colour_a[1] + f.colour_a[2] + f.colour_b[0] + f.colour_b[1] + f.colour_b[2], 0.0f);
+    }
   }
 }
 
@@ -313,9 +304,9 @@ TEST(MrclamImport, MalformedFilesNameFileAndLine) {
   EXPECT_NE(e.find("Robot1_Odometry.dat:6: duplicated time"), std::string::npos) << e;
 }
 
-// Finite values far beyond anything physical used to reach the message check as a logic_error with
-// no file or line (1e308 m/s integrated to an infinite pose), or to give an infinite truth
-// covariance (a sigma of 1e200); a negative sigma was taken. Each is now refused where it is read.
+// Finite values far beyond anything physical (1e308 m/s, which integrates to an infinite pose; a
+// sigma of 1e200, an infinite truth covariance) and a negative sigma are each refused where they are
+// read, naming file, line and range.
 TEST(MrclamImport, ValuesBeyondPhysicalBoundsNameFileLineAndRange) {
   t::TempDir d;
   const std::string p = d.file("Robot1_Odometry.dat");
@@ -388,8 +379,8 @@ TEST(MrclamImport, AByteOrderMarkBeforeTheFirstLineIsNotData) {
   EXPECT_EQ(st.comment_lines, 1);
 }
 
-// Line ends of every kind: "\n", "\r\n" and a lone "\r" (old Mac files, which std::getline read as
-// one line: the header comment hid every data line and the file was "empty").
+// Line ends of every kind: "\n", "\r\n" and a lone "\r" (old Mac files, which std::getline reads as
+// one line: the header comment would hide every data line and the file would be "empty").
 TEST(MrclamImport, EveryKindOfLineEndEndsALine) {
   t::TempDir d;
   const std::string p = d.file("Robot1_Odometry.dat");

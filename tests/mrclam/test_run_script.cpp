@@ -92,7 +92,6 @@ TEST(MrclamRunScript, BadFlagsStopAtOnceNamingTheFlag) {
       {{"--out", o, "--seed", "1", "--seeds", "1 2"}, "give --seed or --seeds, not both"},
       {{"--out", o, "--robots", "1,2"}, "--robots takes robot numbers (1-5 in dataset 6), got '1,2'"},
       {{"--out", o, "--robots", " "}, "--robots needs at least one robot number"},
-      {{"--out", o, "--smooth", "both"}, "--smooth takes slam or labels, got 'both'"},
       {{"--out", o, "--config", o + "/missing.yaml"}, "--config: no such file"},
       {{"--out", o, "--particles", "3"}, "unknown argument '--particles'"},
   };
@@ -119,7 +118,7 @@ TEST(MrclamRunScript, HelpIsTheWholeHeaderCommentOfEachScript) {
     EXPECT_EQ(r.exit_code, 0) << c.script << "\n" << r.output;
     EXPECT_EQ(r.output.rfind(c.first_line, 0), 0u) << c.script << "\n" << r.output;
     EXPECT_NE(r.output.find(c.usage), std::string::npos) << c.script << "\n" << r.output;
-    // Comment markers stripped, and no code after the header (the old fixed line ranges printed some).
+    // Comment markers stripped, and no code after the header.
     EXPECT_EQ(r.output.find("\n#"), std::string::npos) << c.script << "\n" << r.output;
     EXPECT_EQ(r.output.find("set -euo pipefail"), std::string::npos) << c.script << "\n" << r.output;
   }

@@ -28,8 +28,8 @@ std::vector<int64_t> takenSamples(double truth_hz, double image_hz, int64_t samp
 }
 
 TEST(ImageClock, EveryRatioThTruthSampleIsTaken) {
-  // {truth, image, ratio}: 15 Hz is 66666.67 us, not whole microseconds; the per-period sum of the
-  // rounded period used to drift off the samples (images at k = 0, 2, 5, 7, 9, ...).
+  // {truth, image, ratio}: 15 Hz is 66666.67 us, not whole microseconds; a per-period sum of the
+  // rounded period would drift off the samples (images at k = 0, 2, 5, 7, 9, ...).
   const struct {
     double truth_hz, image_hz;
     int64_t ratio;
@@ -56,7 +56,7 @@ TEST(ImageClock, AGapSkipsItsImagesAndAFarJumpIsOneStep) {
   // A sample 1 us before the due time (rounding of the truth's stamp) is taken.
   EXPECT_TRUE(clock.take(start + 3'999'999));
   EXPECT_EQ(clock.nextUtime(), start + 5'000'000);
-  // Far ahead: computed at once (the old loop added one period at a time, ~9e12 rounds here).
+  // Far ahead: computed at once, not one period at a time (~9e12 rounds here).
   EXPECT_TRUE(clock.take(9'000'000'000'000'000'000));
   EXPECT_GT(clock.nextUtime(), 9'000'000'000'000'000'000);
   // Past the end of int64: no more images, and no overflow.

@@ -1,4 +1,4 @@
-// Room worlds (docs/world-file.md, "Room worlds"): the room's landmarks (panel boundaries of
+// Room worlds (docs/user/world-file.md, "Room worlds"): the room's landmarks (panel boundaries of
 // different colour, corners, box corners) and the ray caster, the Scaramuzza camera from the world
 // file, and bad values rejected with the key named.
 #include <gtest/gtest.h>
@@ -169,7 +169,7 @@ TEST(RoomWorld, BadValuesNameTheKey) {
               "key 'camera.mounting.z_m' must be inside the room, in (0, 2.500000) m (room.height_m), got 2.6");
   expectError(replace(ok, "mounting: {z_m: 0.5}", "mounting: {z_m: 0.0}"),
               "camera.mounting.z_m' must be inside the room");
-  // radius_m outside an arc was ignored (a turn on the spot where an arc was meant).
+  // radius_m outside an arc is refused, not ignored (a turn on the spot where an arc was meant).
   expectError(replace(ok, "segments: [{straight_m: 1.0}]", "segments: [{turn_deg: 90, radius_m: 2.0}]"),
               "trajectory.segments[0].radius_m' belongs to an arc_deg segment");
   // An arc turning faster than 180 deg/s (speed 0.3 m/s on 0.05 m): a truth sample's turn wrapped.

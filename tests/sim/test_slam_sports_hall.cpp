@@ -33,7 +33,7 @@ RunFigures runHall(uint64_t seed, slam::AssociationMethod method) {
 
   slam::FastSlamOptions opt;
   opt.association = method;
-  // The filter's motion noise is the world's odometry noise (docs/world-file.md), in the same shape:
+  // The filter's motion noise is the world's odometry noise (docs/user/world-file.md), in the same shape:
   // random-walk terms (variance proportional to distance and rotation) for the per-step noise, and
   // the per-run scale error and heading drift as per-metre terms (std proportional to distance).
   const sim::OdometryNoise& noise = w.odometry_noise;
@@ -45,7 +45,7 @@ RunFigures runHall(uint64_t seed, slam::AssociationMethod method) {
   opt.motion.lateral_sigma_per_m = 0.0;  // the wheels do not slip sideways
   opt.motion.trans_sigma_per_rad = 0.0;
   opt.motion.rot_sigma_per_rad = 0.0;
-  // Bearings carry no scale: anchor each particle's scale to the odometry (docs/slam-core.md).
+  // Bearings carry no scale: anchor each particle's scale to the odometry (docs/design/slam-core.md).
   opt.odometry_scale_correction = true;
   slam::FastSlam filter(opt, seed);
   filter.initialise(w.trajectory_options.start);
@@ -113,9 +113,9 @@ RunFigures runHall(uint64_t seed, slam::AssociationMethod method) {
   return f;
 }
 
-// Issue 4's acceptance: the paper's figures on each of 10 seeds, all 16 lights, nothing spurious.
-// Before the motion model matched the world and the scale was anchored to the odometry, the maps
-// came out 2-8 % too small and 1 of 10 seeds passed (docs/slam-core.md, "Map scale").
+// The paper's figures on each of 10 seeds, all 16 lights, nothing spurious. It needs the motion
+// model that matches the world and the scale anchored to the odometry: without them the maps come
+// out 2-8 % too small (docs/design/slam-core.md, "Map scale").
 TEST(SlamSportsHall, HungarianMeetsThePapersFiguresOnTenSeeds) {
   int failures = 0;
   for (uint64_t seed = 1; seed <= 10; ++seed) {

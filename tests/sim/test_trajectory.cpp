@@ -76,7 +76,7 @@ TEST(Trajectory, ArcAndTurnGeometryIsExact) {
   const Pose2 b = tr.at(t_arc + kPi).pose;  // then half a turn to the right on the spot
   EXPECT_NEAR(b.x_m, 2.0, 1e-12);
   EXPECT_NEAR(wrapAngle(b.theta_rad + kPi / 2), 0.0, 1e-12);
-  // NaN fails every comparison and used to index one past the segments (ASan: heap overflow).
+  // NaN fails every comparison: it must not index one past the segments.
   const Pose2 n = tr.at(std::nan("")).pose;
   EXPECT_EQ(n.x_m, 0.0);
   EXPECT_EQ(n.theta_rad, 0.0);

@@ -307,10 +307,9 @@ TEST(Pairer, AStrayFarFutureStampIsRefusedAndResetsNothing) {
   }
 }
 
-// The case that reset the filter before both streams had to agree (session 39's audit): two
-// consecutive frames with a stamp years ahead (or back) while the odometry goes on at the right
-// time. Confirming them on their own made the frame stream's time the far one, and the next good
-// frames a "restart" that re-initialised the filter.
+// Two consecutive frames with a stamp years ahead (or back) while the odometry goes on at the right
+// time: both streams have to agree on a jump. Confirmed on their own, they would make the frame
+// stream's time the far one, and the next good frames a "restart" that re-initialises the filter.
 TEST(Pairer, TwoConsecutiveStrayFramesAheadOrBackResetNothing) {
   for (const int64_t stray : {int64_t{9'000'000'000'000'000'000}, kT0 - 100'000'000'000}) {
     SCOPED_TRACE(stray);

@@ -232,10 +232,10 @@ TEST(SlamDriver, DegradedInputIsRefusedOrDroppedAndTheFilterCarriesOn) {
   EXPECT_EQ(d.stats().pairing.out_of_order, 1);
 }
 
-// Valid but implausible inputs (an auditor's finds): one ODOMETRY at x = 1e300 was re-based by the
-// pairing, leaving 1e282 m of rounding junk that made every later pose NaN; theta = 1e15 rad made
-// every step quantised; a frame whose camera sat 1e10 m above the robot moved every light's height
-// to -1e7 m. Each is refused now with its reason and counted, and the run goes on unharmed.
+// Valid but implausible inputs: one ODOMETRY at x = 1e300 (re-based by the pairing, it would leave
+// 1e282 m of rounding junk that makes every later pose NaN), theta = 1e15 rad (every step
+// quantised), a frame whose camera sits 1e10 m above the robot (every light's height -1e7 m). Each
+// is refused with its reason and counted, and the run goes on unharmed.
 TEST(SlamDriver, ImplausibleOdometryAndCameraPositionsAreRefusedAndTheRunGoesOn) {
   SlamDriver d{SlamProcessOptions{}};
   run(d, 10);
@@ -285,10 +285,10 @@ TEST(SlamDriver, ImplausibleOdometryAndCameraPositionsAreRefusedAndTheRunGoesOn)
   EXPECT_EQ(e.stats().implausible, 0);
 }
 
-// Session 39's audit: two consecutive frames stamped years ahead, mid-run, while the odometry goes
-// on. They were confirmed as a jump ahead on their own; the next good frames were then a step back,
-// a "restart", and the filter started again at the start pose, metres off. Now the odometry has to
-// jump too: the good frames refute the two strays, and the filter carries on.
+// Two consecutive frames stamped years ahead, mid-run, while the odometry goes on: a jump ahead of
+// the frames alone is not confirmed (the next good frames would be a step back, a "restart", and the
+// filter would start again at the start pose, metres off). The odometry has to jump too: the good
+// frames refute the two strays, and the filter carries on.
 TEST(SlamDriver, TwoStrayFramesStampedYearsAheadDoNotResetTheFilter) {
   SlamDriver d{SlamProcessOptions{}};
   ASSERT_FALSE(run(d, 10).empty());
@@ -439,8 +439,8 @@ TEST(SlamDriver, RestartReinitialisesTheFilterAndKeepsOutputSequences) {
   EXPECT_EQ(utime, d.lastStepUtime());
 }
 
-// A restart with no frame after it used to leave nothing to save: "map not saved: no frame was
-// processed" after hundreds had been, and the map was lost at exit.
+// A restart with no frame after it still leaves the map it ended to save (not "map not saved: no
+// frame was processed" after hundreds had been, and the map lost at exit).
 TEST(SlamDriver, TheMapEndedByARestartIsSavedWhenNoFrameFollowsIt) {
   SlamDriver d{SlamProcessOptions{}};
   int64_t utime = -1;

@@ -184,7 +184,7 @@ TEST(Soak, SportsHallTenLapsLive) {
   EXPECT_LE(slam_lap.back().ate_rmse_m, 2.0 * slam_lap.front().ate_rmse_m + 0.05);
   EXPECT_LT(slam_lap.back().ate_rmse_m, 0.5 * dr_lap.back().ate_rmse_m);
   // Heading, per lap: paper 000's bar of 5 deg on the maximum, on every lap. (Before the filter's
-  // predictive association, seed 3 had one frame at 7.7 deg in lap 9: docs/slam-results.md, "Ten laps".)
+  // predictive association, seed 3 had one frame at 7.7 deg in lap 9: docs/results/slam-results.md, "Ten laps".)
   for (int k = 0; k < kLaps; ++k) {
     EXPECT_LE(slam_lap[k].heading_max_rad, 5.0 * kPi / 180.0) << "lap " << k + 1;
     EXPECT_LE(slam_lap[k].heading_rmse_rad, 0.087) << "lap " << k + 1;

@@ -1,4 +1,4 @@
-// Soak (opt-in, labels `soak` and `data`): the MRCLAM tables of docs/mrclam.md are what the code
+// Soak (opt-in, labels `soak` and `data`): the MRCLAM tables of docs/results/mrclam.md are what the code
 // gives. scripts/run-mrclam.sh on all five robots of dataset 6, with one seed and with seeds 1-10
 // (about 2.5 min on two cores), must print every robot row of the two tables in "Results" exactly
 // as the page shows them, and a replay repeated with the same seed must write the same bytes
@@ -35,7 +35,7 @@ void expectRowsDocumented(const std::string& output, const std::string& doc, boo
     const auto rows = linesStartingWith(output, p);
     ASSERT_EQ(rows.size(), 1u) << "one row " << p << " in the script's table:\n" << output;
     EXPECT_FALSE(linesStartingWith(doc, rows[0]).empty())
-        << "docs/mrclam.md does not show this row of scripts/run-mrclam.sh:\n  " << rows[0];
+        << "docs/results/mrclam.md does not show this row of scripts/run-mrclam.sh:\n  " << rows[0];
   }
 }
 
@@ -43,7 +43,7 @@ TEST(SoakMrclam, RunScriptReproducesTheDocumentedTables) {
   const std::string data = t::datasetPath("mrclam/MRCLAM_Dataset6");
   if (!std::filesystem::exists(data + "/Robot1_Odometry.dat"))
     GTEST_SKIP() << "MRCLAM dataset 6 not found at " << data << " (set OMNISLAM_DATASETS)";
-  const std::string doc = t::readFile(t::sourcePath("docs/mrclam.md"));
+  const std::string doc = t::readFile(t::sourcePath("docs/results/mrclam.md"));
   ASSERT_FALSE(doc.empty());
   t::TempDir d;
   const std::vector<std::string> env{"OMNISLAM_BUILD_DIR=" + std::string(OMNISLAM_BUILD_DIR)};

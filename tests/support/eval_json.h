@@ -1,5 +1,5 @@
 // Reading one number out of omnislam-eval's --json output in tests (the keys are documented in
-// docs/evaluation.md); NaN when the key is absent, so a comparison with it fails.
+// docs/user/evaluation.md); NaN when the key is absent, so a comparison with it fails.
 #pragma once
 
 #include <cmath>

@@ -1,5 +1,5 @@
 // The features detectors' size and format check (procs/features/detectors.cpp): the size is judged
-// first (a 3-channel frame of another size used to be reported as "3 channels"), and the message
+// first (a 3-channel frame of another size is reported by its size, not as "3 channels"), and the message
 // gives what came and what the camera needs; the same check on a header (vision::HeaderProbe), as
 // omnislam-features runs it before decoding, gives the same message.
 #include <gtest/gtest.h>

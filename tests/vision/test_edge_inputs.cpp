@@ -1,5 +1,5 @@
-// Edge inputs of the vision library found by an audit: plots of values near the largest double or
-// far from the origin end (their grid loops never did), a vertical-line panorama without the
+// Edge inputs of the vision library: plots of values near the largest double or far from the
+// origin end (their grid loops stop), a vertical-line panorama without the
 // wrapped columns the seam needs is refused, and so are an automatic row count beyond the limit and
 // a panorama of more pixels than the bound.
 #include <gtest/gtest.h>
@@ -48,8 +48,8 @@ TEST(VisionEdgeInputs, AnAutomaticRowCountBeyondTheLimitIsRefused) {
   EXPECT_FALSE(validate(o).has_value()) << *validate(o);
 }
 
-// 20000 x 20000 passed each side's bound and asked for about 8 GB of remap tables when the detector
-// was built; the product is bounded now, at exactly 2^24 pixels.
+// 20000 x 20000 passes each side's bound but would ask for about 8 GB of remap tables when the
+// detector is built: the product is bounded too, at exactly 2^24 pixels.
 TEST(VisionEdgeInputs, APanoramaOfMoreThanTwoToTheTwentyFourPixelsIsRefused) {
   PanoramaOptions o;
   o.centre_u_px = 320, o.centre_v_px = 240, o.r_min_px = 40, o.r_max_px = 200;

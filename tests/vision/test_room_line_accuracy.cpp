@@ -172,7 +172,7 @@ TEST(RoomLineAccuracy, DetectorRecoversVisibleLineAzimuthsAlongTheTrajectory) {
   std::cout << std::endl;
   EXPECT_LT(rms_deg, 0.5);
   // Measured with room_lines.yaml (edge_threshold 60, min_length_rows 20), seed 11: 2070 / 2672 =
-  // 0.775 of expected lines, no false detection (docs/room-scenario.md). The most missed are door /
+  // 0.775 of expected lines, no false detection (docs/results/room-scenario.md). The most missed are door /
   // window-frame edges 8-10 cm from another edge and box corners between two faces.
   EXPECT_GE(rate, 0.75);
   EXPECT_LE(false_rate, 0.01);

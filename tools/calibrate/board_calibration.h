@@ -1,4 +1,4 @@
-// omnislam-calibrate's steps (docs/calibration.md): checkerboard corners in each image, intrinsic
+// omnislam-calibrate's steps (docs/user/calibration.md): checkerboard corners in each image, intrinsic
 // calibration with cv::omnidir (Mei unified model) or cv::fisheye (Kannala-Brandt), per-view
 // reprojection errors, the FileStorage YAML that `camera.model: auto` reads, annotated views.
 //

@@ -1,6 +1,6 @@
 // omnislam-calibrate: intrinsic calibration of an omnidirectional camera from a folder of
 // checkerboard images, with cv::omnidir (Mei) or cv::fisheye (Kannala-Brandt); writes the
-// FileStorage YAML that the features config reads with `camera.model: auto` (docs/calibration.md).
+// FileStorage YAML that the features config reads with `camera.model: auto` (docs/user/calibration.md).
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -136,7 +136,7 @@ int run(const Options& o) {
   std::snprintf(summary, sizeof(summary), "rms reprojection error %.4f px over %zu boards of %zu images", c.rms_px,
                 f.views.size(), f.files.size());
   calib::writeCalibration(o.out, c, f.views,
-                          {"omnislam-calibrate (docs/calibration.md), made with:", "  " + o.command, summary});
+                          {"omnislam-calibrate (docs/user/calibration.md), made with:", "  " + o.command, summary});
   std::cout << "wrote " << o.out << "\n";
   if (!o.annotate.empty()) writeAnnotated(o, f, c, board);
   return app::kOk;

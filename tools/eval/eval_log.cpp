@@ -88,7 +88,7 @@ struct PoseMaps {
 };
 
 /// Options of the time rule for a recording: a fixed 60 s jump threshold (a gap in a recording is
-/// data), the rest as the processes' (docs/lcm.md "Time faults").
+/// data), the rest as the processes' (docs/user/lcm.md "Time faults").
 lcmio::UtimeOrderOptions recordingTimeRule() {
   lcmio::UtimeOrderOptions topt;
   topt.min_forward_jump_us = topt.max_forward_jump_us;
@@ -105,7 +105,7 @@ bool admitFrame(int64_t utime, PoseMaps& p, const std::string& path, LogContent&
   return false;
 }
 
-/// The truth is judged as the processes judge it (docs/lcm.md "Time faults", docs/messages.md
+/// The truth is judged as the processes judge it (docs/user/lcm.md "Time faults", docs/user/messages.md
 /// "Plausibility"), with bounds for any dataset: a stray stamp (a copy 30 s back would replace the
 /// truth of another time) or a pose that jumps faster than 1000 m/s or 100 rad/s (x = 1e300) is
 /// left out and counted in c.skipped, never scored against; a refused pose leaves the time order as

@@ -1,5 +1,5 @@
 // omnislam-eval's outputs: the figures of one evaluation (Scores), printed as a table or one JSON
-// object (keys in docs/evaluation.md), the line that says a run is incomplete, TUM files and plots.
+// object (keys in docs/user/evaluation.md), the line that says a run is incomplete, TUM files and plots.
 #pragma once
 
 #include <cstdint>
@@ -34,7 +34,7 @@ struct Scores {
   eval::Coverage coverage;
 };
 
-/// The figures as one JSON object on one line (docs/evaluation.md lists the keys).
+/// The figures as one JSON object on one line (docs/user/evaluation.md lists the keys).
 std::string jsonReport(const Scores& s, const LogContent& c);
 
 /// The figures as a table for people, headed by the log's name.

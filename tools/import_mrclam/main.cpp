@@ -1,7 +1,7 @@
 // omnislam-import-mrclam: one robot of a UTIAS MRCLAM dataset -> an LCM log in the omnislam
 // message contract (ODOMETRY, OMNI_FEATURES, GROUND_TRUTH_POSE, GROUND_TRUTH_MAP,
 // GROUND_TRUTH_FEATURE_LABELS), and optionally the SLAM config with the known start pose.
-// See docs/mrclam.md. Malformed input: exit 1 with "FILE:LINE: reason"; a bad flag: exit 2.
+// See docs/results/mrclam.md. Malformed input: exit 1 with "FILE:LINE: reason"; a bad flag: exit 2.
 #include <CLI/CLI.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -79,8 +79,6 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"error", "keep-last"}));
   cli.add_flag("--odometry-from-truth", o.odometry_from_truth,
                "diagnostic: ODOMETRY from the Vicon truth instead of the wheels (perfect odometry)");
-  cli.add_flag("--subject-as-colour", o.subject_as_colour,
-               "diagnostic: colour_a = (barcode subject, 0, 0) for oracle association with filter.descriptor_gate 0.5");
   std::vector<double> still;
   cli.add_option("--skip-still-frames", still,
                  "diagnostic: leave out frames after less than M metres and DEG degrees of motion (M DEG)")

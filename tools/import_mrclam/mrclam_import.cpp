@@ -193,11 +193,11 @@ struct Subjects {
 };
 
 // The label of one sighting (counted in r); nullopt when it is to be dropped (a robot sighting with
-// drop_robot_sightings). `subject`: the barcode's subject, 0 for an unknown code.
-std::optional<int64_t> labelSighting(const Measurement& z, const ImportOptions& o, Subjects& subj, int& subject,
+// drop_robot_sightings).
+std::optional<int64_t> labelSighting(const Measurement& z, const ImportOptions& o, Subjects& subj,
                                      ImportReport& r) {
   const auto it = subj.subject_of_code.find(z.code);
-  subject = it == subj.subject_of_code.end() ? 0 : it->second;  // colour 0: no subject has this code
+  const int subject = it == subj.subject_of_code.end() ? 0 : it->second;  // 0: no subject has this code
   if (it == subj.subject_of_code.end()) {
     ++r.unknown_code_sightings;
     subj.unknown_codes.insert(z.code);
@@ -227,8 +227,7 @@ void frameOf(const std::vector<Measurement>& meas, size_t i, size_t j, const Imp
   for (int k = 0; k < 3; ++k) f.camera_position_m[k] = o.camera_position_m[static_cast<size_t>(k)];
   for (size_t k = i; k < j; ++k) {
     const Measurement& z = meas[k];
-    int subject = 0;
-    const std::optional<int64_t> label = labelSighting(z, o, subj, subject, r);
+    const std::optional<int64_t> label = labelSighting(z, o, subj, r);
     if (!label) continue;
     feature_t ft{};
     ft.kind = feature_t::KIND_VERTICAL_LINE;
@@ -236,7 +235,6 @@ void frameOf(const std::vector<Measurement>& meas, size_t i, size_t j, const Imp
     ft.elevation_rad = 0.0;
     ft.has_elevation = false;
     ft.covariance[0][0] = o.bearing_sigma_rad * o.bearing_sigma_rad;
-    if (o.subject_as_colour) ft.colour_a[0] = static_cast<float>(subject);
     r.max_abs_bearing_rad = std::max(r.max_abs_bearing_rad, std::abs(ft.azimuth_rad));
     f.features.push_back(ft);
     lab.landmark_id.push_back(*label);
@@ -290,7 +288,7 @@ void addFrames(const ImportOptions& o, const std::vector<Measurement>& meas, con
 }
 
 // The start pose: the truth at the first frame the SLAM process will process (odometry samples
-// around it at most max_odometry_gap_s apart: docs/slam-process.md, pairing rule 5).
+// around it at most max_odometry_gap_s apart: docs/user/slam-process.md, pairing rule 5).
 void findStartPose(const ImportOptions& o, const std::vector<OdometrySample>& odo, const std::vector<PoseSample>& truth,
                    ImportedLog& log) {
   for (const auto& e : log.events) {

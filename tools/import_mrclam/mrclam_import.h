@@ -1,5 +1,5 @@
 // One robot of an MRCLAM dataset -> the events of an LCM log in the omnislam message contract
-// (docs/mrclam.md, docs/messages.md):
+// (docs/results/mrclam.md, docs/user/messages.md):
 //   ODOMETRY          cumulative pose integrated from (v, omega) (exact arcs, zero-order hold over
 //                     each sample interval); the odometry frame is the robot's pose at the first
 //                     sample (0, 0, 0), as the contract says
@@ -31,10 +31,10 @@ struct ImportOptions {
   /// (true, counted).
   bool drop_robot_sightings = false;
   /// Standard deviation of each bearing [rad] written in the feature's covariance: the camera's
-  /// bearing noise measured against the Vicon truth (docs/mrclam.md, "Bearing noise"): 1 deg.
+  /// bearing noise measured against the Vicon truth (docs/results/mrclam.md, "Bearing noise"): 1 deg.
   double bearing_sigma_rad = 0.017453292519943295;
   /// Optical centre in the robot frame [m] (features_t.camera_position_m): the dataset's bearings
-  /// are given from the robot's centre (docs/mrclam.md), hence 0.
+  /// are given from the robot's centre (docs/results/mrclam.md), hence 0.
   std::array<double, 3> camera_position_m{0.0, 0.0, 0.0};
   DuplicateTimes duplicate_times = DuplicateTimes::kError;
   /// Import only [t0, t0 + max_duration_s] with t0 the first odometry time; <= 0: everything.
@@ -50,10 +50,6 @@ struct ImportOptions {
   /// less than still_frame_rad since the last frame written (counted); 0 = keep every frame.
   double still_frame_m = 0.0;
   double still_frame_rad = 0.0;
-  /// Diagnostic only (oracle association): each feature's colour_a = (subject, 0, 0) of its barcode
-  /// (0 when unknown), so that omnislam-slam with filter.descriptor_gate 0.5 can associate only the
-  /// sightings of one subject: the filter with known identities, an upper bound for the association.
-  bool subject_as_colour = false;
 
   std::string validate() const;  ///< empty when valid
 };

@@ -2,7 +2,7 @@
 // the N-th with --skip), alters it (its utime shifted by --utime-offset-s, fields set with --set
 // x=1e300, theta=nan, ...) and publishes it once on the same channel, then prints what it sent and
 // exits. For checking that every process refuses, counts and reports a stray or implausible
-// message and goes on (docs/lcm.md, "Time faults"; docs/messages.md, "Plausibility").
+// message and goes on (docs/user/lcm.md, "Time faults"; docs/user/messages.md, "Plausibility").
 #include <CLI/CLI.hpp>
 
 #include <lcm/lcm-cpp.hpp>
@@ -32,7 +32,7 @@ struct Alteration {
   std::map<std::string, double> fields;  ///< field name -> value (set --set)
 };
 
-/// The message's type from its channel name (the contract's, docs/messages.md), or --type.
+/// The message's type from its channel name (the contract's, docs/user/messages.md), or --type.
 std::string typeOfChannel(const std::string& channel) {
   if (channel == channels::kOmniImage) return "image";
   if (channel == channels::kOmniFeatures) return "features";

@@ -81,8 +81,8 @@ class FreeSpaceWatch {
 };
 
 // Records until a stop signal, a failed LCM receive (returns true) or the first write failure
-// (said at once: a full disk used to show only at the stop; ending lets a launcher see the recorder
-// die and apply its policy instead of running on unrecorded).
+// (said at once, not only at the stop; ending lets a launcher see the recorder die and apply its
+// policy instead of running on unrecorded).
 bool recordUntilStopped(lcm::LCM& bus, omnislam::lcmio::LogWriter& log, Recorder& rec, double flush_interval_s,
                         FreeSpaceWatch& space) {
   // Wall time, not the messages' utime: this bounds what a crash of this process loses.
@@ -153,7 +153,7 @@ void reportEnd(const omnislam::lcmio::LogWriter& log, const Recorder& rec, bool 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App cli{"omnislam-record: records an LCM bus into a log file (a flood can overflow UDP buffers: docs/lcm.md)"};
+  CLI::App cli{"omnislam-record: records an LCM bus into a log file (a flood can overflow UDP buffers: docs/user/lcm.md)"};
   std::string url, path, channels = ".*";
   int queue = 20000;
   double flush_interval_s = 0.5;

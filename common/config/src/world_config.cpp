@@ -1,4 +1,4 @@
-// World file parsing: see world_config.h and docs/world-file.md.
+// World file parsing: see world_config.h and docs/user/world-file.md.
 #include "omnislam/config/world_config.h"
 
 #include <Eigen/QR>

@@ -52,7 +52,7 @@ void walkRepeatedKeys(const YAML::Node& n, const std::string& source, const std:
 }
 
 /// Throws ConfigError for a key given twice in one map, anywhere below `n` (yaml-cpp keeps both and
-/// lookups return the first, so an override appended at the end of a file was silently ignored),
+/// lookups return the first, so an override appended at the end of a file would be silently ignored),
 /// and for an alias of a map or list.
 void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const std::string& path) {
   std::set<int> containers;
@@ -60,7 +60,7 @@ void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const st
 }
 
 /// The first document of `docs`; a later one that holds anything is refused (yaml-cpp's Load reads
-/// only the first, so everything after a '---' line was ignored without a word).
+/// only the first, so everything after a '---' line would be ignored without a word).
 YAML::Node onlyDocument(const std::vector<YAML::Node>& docs, const std::string& source) {
   for (size_t i = 1; i < docs.size(); ++i)
     if (!docs[i].IsNull())
@@ -183,8 +183,8 @@ void Node::fail(const std::string& key, const std::string& what) const {
   throw ConfigError(where(key) + " " + what + (n ? origin(key, n) : origin(key, node_)));
 }
 
-// A key written with no value ("particles:", "--set seed=") is present: its getter refuses it. It
-// used to count as absent, so a value deleted by mistake silently became the default.
+// A key written with no value ("particles:", "--set seed=") is present: its getter refuses it, so a
+// value deleted by mistake never silently becomes the default.
 bool Node::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
 
 void Node::failIfEmpty(const std::string& key, const char* required) const {
@@ -255,7 +255,7 @@ int64_t Node::getInt(const std::string& key, int64_t lo, int64_t hi) const {
   const YAML::Node n = scalar(key);
   const std::string range = "a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   // Decimal digits only, as a person reads them: yaml-cpp would take "0100" as octal 64 and "0x10"
-  // as 16 (doubles have no such reading, so "010" was 10 there and 8 here).
+  // as 16 (doubles have no such reading, so "010" would be 10 there and 8 here).
   const std::string& text = n.Scalar();
   const char* first = text.data() + (!text.empty() && text.front() == '+' ? 1 : 0);
   const char* last = text.data() + text.size();

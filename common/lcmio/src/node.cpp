@@ -86,7 +86,7 @@ void Node::publishStatus() {
   if (counters_.sequence_restarts > 0 || counters_.utime_restarts > 0)
     st.detail += " [inputs restarted: " + std::to_string(counters_.sequence_restarts) + " seq, " +
                  std::to_string(counters_.utime_restarts) + " utime]";
-  // Time jumps refused (strays, docs/lcm.md "Time faults") and implausible values, both also in
+  // Time jumps refused (strays, docs/user/lcm.md "Time faults") and implausible values, both also in
   // rejected_inputs: named here so that a reader of the status can tell them from other refusals.
   if (counters_.utime_strays > 0 || counters_.implausible > 0)
     st.detail += " [refused: " + std::to_string(counters_.utime_strays) + " stray utimes, " +

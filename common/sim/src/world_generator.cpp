@@ -1,5 +1,5 @@
 // Random ceiling-light worlds: see world_generator.h; ranges and their sources in
-// docs/world-families.md.
+// docs/results/world-families.md.
 #include "omnislam/sim/world_generator.h"
 
 #include <algorithm>
@@ -29,7 +29,7 @@ class Draw {
 
 double roundTo(double v, double step) { return std::round(v / step) * step; }
 
-// Margins and the robot's limits (docs/world-families.md, "Trajectories").
+// Margins and the robot's limits (docs/results/world-families.md, "Trajectories").
 constexpr double kWallMargin_m = 1.0;      ///< the path keeps this far from the walls
 constexpr double kCorridorMargin_m = 0.5;  ///< ... in a corridor (2.5 m wide at the least)
 constexpr double kMaxYawRate_radps = 0.52; ///< paper 000: <= 0.52 rad/s
@@ -138,7 +138,7 @@ double pathLength(const Path& p) {
   return L;
 }
 
-/// Speeds of the paper's robot (docs/world-families.md): 0.15-0.30 m/s, turns 10-28.6 deg/s.
+/// Speeds of the paper's robot (docs/results/world-families.md): 0.15-0.30 m/s, turns 10-28.6 deg/s.
 TrajectoryOptions drawMotion(Draw& d) {
   TrajectoryOptions o;
   o.speed_mps = roundTo(d.uniform(0.15, 0.30), 0.001);

@@ -1,4 +1,4 @@
-// Writing a generated world as a world file (docs/world-file.md), and the detection range of its
+// Writing a generated world as a world file (docs/user/world-file.md), and the detection range of its
 // lamps: see world_generator.h.
 #include <cmath>
 #include <cstdio>

@@ -45,7 +45,7 @@ void blendDescriptor(ColourDescriptor& into, const ColourDescriptor& z, double r
 
 // Inverse and log-determinant of a 1x1 or 2x2 symmetric positive definite matrix in closed form
 // (false when it is not positive definite). The generic LLT solves of these tiny matrices took a
-// quarter of a 100-particle step (docs/benchmarks.md).
+// quarter of a 100-particle step (docs/results/benchmarks.md).
 bool smallSpdInverse(const MeasMat& S, MeasMat& S_inv, double& log_det) {
   if (S.rows() == 1) {
     const double a = S(0, 0);

@@ -1,4 +1,4 @@
-// Loading a world file (docs/world-file.md) into the pure sim::World description.
+// Loading a world file (docs/user/world-file.md) into the pure sim::World description.
 #pragma once
 
 #include <string>

@@ -1,5 +1,5 @@
 // Angle helpers shared by every model: wrapping and bearing <-> unit-vector conversion.
-// Conventions (docs/conventions.md): azimuth counter-clockwise from +x in the x-y plane, wrapped
+// Conventions (docs/user/conventions.md): azimuth counter-clockwise from +x in the x-y plane, wrapped
 // to (-pi, pi]; elevation above the x-y plane in [-pi/2, pi/2].
 #pragma once
 

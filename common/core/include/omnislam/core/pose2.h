@@ -1,5 +1,5 @@
 // Planar pose (x, y, theta) of a frame in another, with composition and interpolation.
-// theta counter-clockwise, wrapped to (-pi, pi]; see docs/conventions.md.
+// theta counter-clockwise, wrapped to (-pi, pi]; see docs/user/conventions.md.
 #pragma once
 
 #include <Eigen/Core>

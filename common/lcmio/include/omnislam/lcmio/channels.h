@@ -1,4 +1,4 @@
-// Channel names of the message contract (docs/messages.md). Names are part of the contract.
+// Channel names of the message contract (docs/user/messages.md). Names are part of the contract.
 #pragma once
 
 namespace omnislam::channels {

@@ -46,8 +46,8 @@ struct LogReadResult {
 /// Reads an LCM log (lcm-logger's format: per event a 28-byte big-endian header, the sync word
 /// 0xEDA1DA01, event number, timestamp, channel length, data length; then the channel and the
 /// data) with every length checked against the file before anything is allocated or read. LCM
-/// 1.3.1's own reader allocates datalen + 1 bytes unchecked: a data length of 2^31 - 1 made it
-/// write through a null pointer (every log tool crashed on a 71-byte file).
+/// 1.3.1's own reader allocates datalen + 1 bytes unchecked: a data length of 2^31 - 1 makes it
+/// write through a null pointer (a 71-byte file is enough).
 class LogReader {
  public:
   /// Opens `path`; throws std::runtime_error if it cannot.

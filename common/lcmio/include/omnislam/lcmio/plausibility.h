@@ -2,7 +2,7 @@
 // workspace is refused; so is one that implies a speed or a turn rate beyond the robot's from the
 // last pose taken, unless confirm_messages poses in a row agree with each other at the new place
 // (a real jump: a source restarted, a localisation reset). One implausible message never becomes
-// the reference that later ones are judged by. Rule and defaults: docs/messages.md, "Plausibility".
+// the reference that later ones are judged by. Rule and defaults: docs/user/messages.md, "Plausibility".
 #pragma once
 
 #include <cstdint>

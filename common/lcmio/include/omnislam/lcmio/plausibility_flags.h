@@ -1,5 +1,5 @@
 // The command-line flags of a PosePlausibility (plausibility.h), shared by the processes that take
-// a pose stream (omnislam-odometry and omnislam-capture on GROUND_TRUTH_POSE); docs/messages.md,
+// a pose stream (omnislam-odometry and omnislam-capture on GROUND_TRUTH_POSE); docs/user/messages.md,
 // "Plausibility". Header-only: the processes link CLI11, the lcmio library does not.
 #pragma once
 

@@ -3,7 +3,7 @@
 // and lock out every good message after it). A jump (ahead, or back by restart_back_jump_us or
 // more) is believed only when several messages in a row continue it: then it is a new timeline (a
 // source or a replayed log started again, a clock set); a jump that is not continued is a stray,
-// refused and counted. The rule, and the SLAM pairing's form of it: docs/lcm.md, "Time faults".
+// refused and counted. The rule, and the SLAM pairing's form of it: docs/user/lcm.md, "Time faults".
 // Used per channel by lcmio::Node and by the viewer's log reader.
 #pragma once
 

@@ -1,8 +1,8 @@
-// Feature-level simulation of a ceiling-light world (the fast fidelity of docs/world-families.md):
+// Feature-level simulation of a ceiling-light world (the fast fidelity of docs/results/world-families.md):
 // what the capture + ceiling-light features processes would publish, computed from the geometry
 // without rendering an image, beside the odometry process's noisy odometry and the true poses.
 //
-// Detector model (figures from docs/detectors.md, "Simulated hall", and the world's nuisances):
+// Detector model (figures from docs/design/detectors.md, "Simulated hall", and the world's nuisances):
 //   - a lamp is detected when its whole disc projects into the image (the detector drops blobs cut
 //     by the border) and the disc's image covers >= min_area_px (the detector's min_area_px);
 //   - it is then missed with the world's window-wall probability (lamps within band_m of the line
@@ -31,14 +31,14 @@ namespace omnislam::sim {
 
 struct FeatureSimOptions {
   /// Centroid noise, px: the centroid sigma floor measured on the simulated hall's rendered images
-  /// (mean NEES of the bearings 2.17 at 0.03 px, docs/detectors.md; config/features/ceiling_lights.yaml).
+  /// (mean NEES of the bearings 2.17 at 0.03 px, docs/design/detectors.md; config/features/ceiling_lights.yaml).
   double pixel_sigma_px = 0.03;
   /// Smallest blob the detector keeps, px (ceiling_lights.min_area_px, library default).
   double min_area_px = 2.0;
-  /// Lamps in view missed by the detector on the simulated hall: 1 of 5136 (docs/detectors.md).
+  /// Lamps in view missed by the detector on the simulated hall: 1 of 5136 (docs/design/detectors.md).
   double miss_probability = 1.0 / 5136.0;
   /// Share of the rendered false blobs the detector publishes: 52 features matched to no light
-  /// from 102 false blobs rendered over 321 frames of the simulated hall (docs/detectors.md).
+  /// from 102 false blobs rendered over 321 frames of the simulated hall (docs/design/detectors.md).
   double clutter_published_fraction = 52.0 / 102.0;
   /// Points on the rim of a lamp's disc projected to find its image (area and truncation).
   int rim_points = 16;

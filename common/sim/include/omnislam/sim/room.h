@@ -1,4 +1,4 @@
-// An indoor room of paper 002's kind (docs/room-scenario.md): walls made of coloured panels, floor,
+// An indoor room of paper 002's kind (docs/results/room-scenario.md): walls made of coloured panels, floor,
 // ceiling and free-standing boxes (cabinets, table legs and tops). Every vertical boundary between
 // two differently coloured surfaces (and every room or box corner) is a vertical-line landmark,
 // measured by azimuth only. Pure geometry (Eigen + std): the renderer (common/vision render_room)

@@ -1,4 +1,4 @@
-// The description of a simulated world (docs/world-file.md): landmarks, the camera and its
+// The description of a simulated world (docs/user/world-file.md): landmarks, the camera and its
 // mounting, the trajectory, sensor rates, and the nuisances of a real experiment.
 #pragma once
 

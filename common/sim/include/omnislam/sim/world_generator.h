@@ -1,4 +1,4 @@
-// Random ceiling-light worlds for sweeps (docs/world-families.md): a family name and a seed give a
+// Random ceiling-light worlds for sweeps (docs/results/world-families.md): a family name and a seed give a
 // whole sim::World (lamps, walls, drivable trajectory, sensors), deterministic bit for bit.
 //
 // Frames and units: world frame W, metres; the hall is the axis-aligned rectangle `hall` of W with
@@ -19,7 +19,7 @@
 
 namespace omnislam::sim {
 
-/// The families of docs/world-families.md.
+/// The families of docs/results/world-families.md.
 enum class WorldFamily {
   kHalls,      ///< rectangular halls 20-60 m, regular lamp grids (4-10 m) with gaps and extras, flat 3-10 m
   kIrregular,  ///< halls 20-60 m, scattered lamps and close pairs 0.5-1.5 m apart, ceilings 4-7 m
@@ -65,7 +65,7 @@ struct GeneratedWorld {
 /// Draws a world of the family from the seed. Throws std::invalid_argument for bad options.
 GeneratedWorld generateWorld(WorldFamily family, uint64_t seed, const GeneratorOptions& options = {});
 
-/// The world as a world file (docs/world-file.md) that config::loadWorld reads back to the same
+/// The world as a world file (docs/user/world-file.md) that config::loadWorld reads back to the same
 /// World; numbers written with 10 significant digits, so the bytes depend only on the World. Writes
 /// what generated worlds use: lights (as a list), the Pajdla-Bakstein camera, the trajectory, the
 /// wheel odometry noise, the image nuisances and `hall`. `header` lines are written as comments.

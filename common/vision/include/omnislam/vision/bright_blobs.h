@@ -3,7 +3,7 @@
 //  - detectBrightBlobs: a fixed grey threshold, connected components, size filter and the
 //    intensity-weighted centroid above a fixed background (simple images, tests, tools);
 //  - detectLampBlobs: lamps as light sources, relative to each frame and to the local background,
-//    for auto-exposed real images (docs/detectors.md, "Ceiling lights"):
+//    for auto-exposed real images (docs/design/detectors.md, "Ceiling lights"):
 //      B      = median of the image over a background_window_px square (the lamp-scale background:
 //               a lamp narrower than about window / 2.8 covers less than half of any window on it)
 //      stats  = noise sigma (1.4826 MAD of neighbour differences / sqrt 2), median, black (the dark

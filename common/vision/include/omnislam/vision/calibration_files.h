@@ -1,4 +1,4 @@
-// Readers of the camera calibration files users already have (docs/calibration.md): OpenCV
+// Readers of the camera calibration files users already have (docs/user/calibration.md): OpenCV
 // FileStorage YAML/XML from cv::omnidir (Mei) or cv::fisheye (Kannala-Brandt) calibration, Kalibr
 // camchain.yaml, OCamCalib calib_results.txt; format detection by content; the camera model built
 // from what was read.

@@ -3,7 +3,7 @@
 // (the camera's size, 8 bits) and a truncated JPEG or PNG are refused with a one-line reason before
 // OpenCV allocates any pixel. Every path of the project that decodes image bytes goes through here:
 // lcmio::decodeImage (OMNI_IMAGE), omnislam-features --images, omnislam-capture --source dir
-// (docs/messages.md, "Images: what is refused before decoding").
+// (docs/user/messages.md, "Images: what is refused before decoding").
 #pragma once
 
 #include <opencv2/core.hpp>

@@ -2,7 +2,7 @@
 // the header of a PNG, JPEG (baseline, extended, progressive, lossless), BMP or PGM/PPM/PBM, and
 // whether its bytes end where the format says they must (a truncated JPEG or PNG). Pure byte
 // parsing, no pixel decoded, no allocation beyond the result: a decompression bomb is refused on
-// these figures before OpenCV allocates its pixels (image_decode.h, docs/messages.md "Images").
+// these figures before OpenCV allocates its pixels (image_decode.h, docs/user/messages.md "Images").
 #pragma once
 
 #include <cstddef>

@@ -1,7 +1,7 @@
 // Image masks: which pixels of a camera image the detectors may use (CV_8U, 255 = use, 0 = ignore),
 // from a mask image file and/or an annulus about the mirror's centre, combined by AND.
 //
-// Pixel (u, v) = (column, row), (0, 0) = centre of the top-left pixel (docs/camera-models.md). The
+// Pixel (u, v) = (column, row), (0, 0) = centre of the top-left pixel (docs/design/camera-models.md). The
 // annulus keeps the pixels whose centre lies at r_min_px <= |(u, v) - (centre_u_px, centre_v_px)|
 // <= r_max_px; a catadioptric image's mirror annulus (inside: the camera's own reflection; outside
 // the mirror's rim: the room seen directly, which the mirror's geometry does not describe).

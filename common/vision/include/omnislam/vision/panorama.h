@@ -2,7 +2,7 @@
 // sec. III-B): a radial line of the omnidirectional image (a vertical line of the world) becomes a
 // column of the panorama.
 //
-// Geometry (image pixels, (0, 0) = centre of the top-left pixel, docs/camera-models.md):
+// Geometry (image pixels, (0, 0) = centre of the top-left pixel, docs/design/camera-models.md):
 //   panorama column c  ->  image angle alpha(c) = -pi + (c - pad + 0.5) * 2 pi / columns
 //   panorama row r     ->  image radius rho(r) = r_min + r * (r_max - r_min) / (rows - 1)
 //   pixel = (centre_u + rho cos(alpha), centre_v + rho sin(alpha))

@@ -10,7 +10,7 @@
 // Gaussian pixel noise per channel (image.noise_sigma_grey) from the caller's seeded generator.
 // Pixels without a valid bearing (outside the image circle / field of view) are black.
 //
-// Frames: world W (z up, metres), robot pose T_RinW, camera mounting in R (docs/conventions.md).
+// Frames: world W (z up, metres), robot pose T_RinW, camera mounting in R (docs/user/conventions.md).
 // Output: 8-bit BGR (OpenCV order), camera.widthPx() x camera.heightPx().
 #pragma once
 

@@ -1,7 +1,7 @@
 // Abstract omnidirectional camera: pixel <-> direction in the camera frame C, with optional
 // fixed-size Jacobians, plus the propagation of pixel noise into (azimuth, elevation) covariance.
 //
-// Frames and units (docs/conventions.md, docs/camera-models.md):
+// Frames and units (docs/user/conventions.md, docs/design/camera-models.md):
 //   - d_C: direction in the camera frame C (origin at the optical centre, z_C = optical axis).
 //   - px = (u, v) in pixels: u = column, v = row; (0, 0) is the CENTRE of the top-left pixel
 //     (C / OpenCV / OCamCalib convention), so pixel (i, j) covers [i - 0.5, i + 0.5) x [j - 0.5, j + 0.5).

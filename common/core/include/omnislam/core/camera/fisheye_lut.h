@@ -8,7 +8,7 @@
 // half-ranges as a measure of the pixel's angular extent. Angles in rad, camera frame C (see
 // pajdla_bakstein.h); zeta is the zenith angle from +z_C.
 //
-// Choices (docs/camera-models.md):
+// Choices (docs/design/camera-models.md):
 //  - Azimuths are unwrapped per pixel around the pixel's running mid-range, so pixels on the -x_C
 //    half-axis (phi near +-pi) get a correct range. The pixel(s) containing the optical axis see
 //    every azimuth: their azimuth mid-range is meaningless, but their zenith is ~0 so the bearing
@@ -68,7 +68,7 @@ class FisheyeLut {
   /// Bytes held by this object (table storage + the object itself).
   std::size_t memoryBytes() const;
 
-  /// Versioned little-endian byte image (format in docs/camera-models.md): magic "OMNILUT\0",
+  /// Versioned little-endian byte image (format in docs/design/camera-models.md): magic "OMNILUT\0",
   /// u32 version = 1, u32 width, u32 height, f64 delta_phi, f64 delta_zeta, f64 x 8 camera parameters
   /// (a, b, c, d, u0, v0, beta, max_zenith), u64 float count (= 4 width height), then the floats (f32).
   std::vector<std::uint8_t> serialize() const;

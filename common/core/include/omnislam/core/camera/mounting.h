@@ -1,6 +1,6 @@
 // Camera mounting extrinsic: where the optical centre sits in the robot frame R and how the camera
 // axes are rotated (yaw, pitch, roll), with the direction/point transforms between C and R
-// (docs/conventions.md, docs/camera-models.md "Mounting").
+// (docs/user/conventions.md, docs/design/camera-models.md "Mounting").
 //
 // C is R translated to p_CinR = (x_m, y_m, z_m) and rotated by R_CtoR = Rz(yaw) Ry(pitch) Rx(roll)
 // (intrinsic z-y'-x'' angles: yaw about z_R, then pitch about the new y, then roll about the new x):

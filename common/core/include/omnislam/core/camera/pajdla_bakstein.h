@@ -2,7 +2,7 @@
 // exact inverse (safeguarded Newton) and analytic Jacobians both ways.
 //
 // Frame C: origin at the optical centre, z_C = optical axis (up for the project's camera),
-// u (column) grows along +x_C, v (row) along +y_C (docs/conventions.md). Angles in rad, image in px.
+// u (column) grows along +x_C, v (row) along +y_C (docs/user/conventions.md). Angles in rad, image in px.
 //   zeta = atan2(hypot(x, y), z)                zenith angle = angle from +z_C (the paper's "theta",
 //                                               which it calls elevation; el = pi/2 - zeta here)
 //   phi  = atan2(y, x)                          azimuth in the x_C-y_C plane
@@ -23,7 +23,7 @@
 namespace omnislam::camera {
 
 /// Parameters of eq. 1. The defaults are THE DEFAULT CAMERA OF THE PROJECT: a 190-degree fish-eye
-/// whose image circle, radius r(95 deg) = 234.66 px, fits in 640 x 480 (docs/camera-models.md).
+/// whose image circle, radius r(95 deg) = 234.66 px, fits in 640 x 480 (docs/design/camera-models.md).
 struct PajdlaBaksteinParams {
   double a_px = 200.0;   ///< coefficient of tan(zeta / b) [px]; with c_px, r must increase on [0, max_zenith]
   double b = 3.0;        ///< divisor of zeta in tan [-]; must be > 2 max_zenith_rad / pi (tan finite)

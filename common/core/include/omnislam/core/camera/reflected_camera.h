@@ -4,7 +4,7 @@
 //   d_C = S d_inner,   S = diag(1, 1, -1)   (a reflection, det S = -1; S^-1 = S)
 //   project(d_C)   = inner.project(S d_C),    J_px_d = J_inner_px_d S   (third column negated)
 //   unproject(px)  = S inner.unproject(px),   J_d_px = S J_inner_d_px   (third row negated)
-// Why (docs/camera-models.md, "Catadioptric cameras: the reflection"): z_C is up for the project's
+// Why (docs/design/camera-models.md, "Catadioptric cameras: the reflection"): z_C is up for the project's
 // cameras, u grows along +x_C and v along +y_C. A camera looking up into a mirror sees, at the image
 // centre, the camera itself, i.e. DOWN (-z_C), and its azimuths are those seen from below, like the
 // upward fish-eye. A planar calibration board cannot tell the handedness of the light path, so the

@@ -9,7 +9,7 @@
 // calib_results.txt stores the centre as "xc yc" = (row, column), and the size as "height width".
 // OCamCalib writes f(0) = pol[0] < 0: the centre pixel sees -z_ocam.
 //
-// Our axes (docs/conventions.md): u = column grows along +x_C, v = row along +y_C, z_C = optical
+// Our axes (docs/user/conventions.md): u = column grows along +x_C, v = row along +y_C, z_C = optical
 // axis (up for the project's cameras). With s_z = +1 (catadioptric) or -1 (dioptric):
 //   d_C = (y_s, x_s, s_z f(rho)) / norm                       (x_C <- column, y_C <- row)
 //  - kCatadioptric (paper 002: camera looking up into a convex mirror): the centre pixel sees the

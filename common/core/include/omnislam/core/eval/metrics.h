@@ -102,7 +102,7 @@ Rigid2D rigidFromPoses(const Pose2& from, const Pose2& to);
 /// sample at that utime); nothing outside its span or across a gap longer than max_gap_us.
 std::optional<Pose2> poseAt(const std::vector<TimedPose>& trajectory, int64_t utime, int64_t max_gap_us);
 
-/// Data association scored against truth labels, feature by feature (docs/evaluation.md,
+/// Data association scored against truth labels, feature by feature (docs/user/evaluation.md,
 /// "Association"). A feature associated with map landmark L is correct when L is matched (by the
 /// landmark assignment of mapErrors) to the true landmark the feature's label names.
 struct AssociationScore {

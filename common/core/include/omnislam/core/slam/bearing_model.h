@@ -64,7 +64,7 @@ MeasVec measurementVector(const BearingMeasurement& m);
 /// fish-eye produces, and which keeps the azimuth linearisation honest near the zenith.
 MeasMat measurementCovariance(const BearingMeasurement& m, bool inflate_azimuth_near_zenith);
 
-/// z - zhat with every component wrapped to (-pi, pi] (angle differences, docs/conventions.md).
+/// z - zhat with every component wrapped to (-pi, pi] (angle differences, docs/user/conventions.md).
 MeasVec innovation(const MeasVec& z, const MeasVec& zhat);
 
 /// log N(r; 0, S) = -(dim log(2 pi) + log|S| + r^T S^-1 r) / 2; -infinity if S is not positive

@@ -20,7 +20,7 @@ struct CandidateOptions {
   int ncross_valid = 5;  ///< NCROSS_VALID: valid cross-points needed
   /// ANG_Min [rad]: least parallax (angle subtended at the cross-point by the two camera centres,
   /// = angle between the two rays). The paper prints "1.22 rad (7 deg)"; 7 deg = 0.122 rad is the
-  /// value that makes sense for lights 4.7-28 m away seen from 0.27 m steps (docs/slam-core.md).
+  /// value that makes sense for lights 4.7-28 m away seen from 0.27 m steps (docs/design/slam-core.md).
   double min_parallax_rad = 0.122;
   /// Validity b): the cross-point must lie above the optical centres (ceiling lights). Disable for
   /// cameras whose landmarks may lie below them.
@@ -54,7 +54,7 @@ struct CandidateOptions {
   /// variance, the heading variance of the motion model over the path since the first ray: the
   /// particle's path, sampled step by step, wanders that much between the rays, and a triangulation
   /// that ignores it is overconfident (paper 002's triangulation error model includes the odometry
-  /// error). See docs/slam-core.md, "Ray noise from the motion model".
+  /// error). See docs/design/slam-core.md, "Ray noise from the motion model".
   bool ray_motion_noise = false;
 
   /// Empty when valid, otherwise a message naming the first bad field and its accepted range.

@@ -7,7 +7,7 @@
 // landmarks (3D mean in W, 3x3 covariance, counter i_j, type); candidate landmarks (their rays).
 // Motion: motion_model.h (R_t from cumulative odometry). Measurement: bearing_model.h, chosen by
 // landmark kind. Glossary: Q_t measurement covariance, Q_{j,l} innovation covariance, P_new the
-// likelihood of a new landmark, ESS effective sample size. Choices: docs/slam-core.md.
+// likelihood of a new landmark, ESS effective sample size. Choices: docs/design/slam-core.md.
 #pragma once
 
 #include <Eigen/Core>
@@ -54,7 +54,7 @@ enum class WeightTerm : std::uint8_t {
   /// from which rays it triangulated them, not on how well it explains the measurement; it made the
   /// particle with the more confident (younger-born, rotated) map win, and each term's non-zero mean
   /// made particles with more associations win. With exact inputs that rotated the map by 0.45 deg
-  /// on average (0.90 deg with 100 particles); see docs/slam-core.md, "Weight term".
+  /// on average (0.84 deg with 100 particles); see docs/design/slam-core.md, "Weight term".
   kConsistency = 1,
 };
 
@@ -94,13 +94,13 @@ struct FastSlamOptions {
   /// moving objects, false detections, landmarks not yet mapped) per frame and per unit of the
   /// measurement space [1/rad for azimuth-only features, 1/rad^2 for azimuth + elevation]. A pair
   /// (l, j) has the likelihood ratio r = p_in N(z_l; h(L_j, x_t), Q_t) / (density (1 - p_in)) against
-  /// "l is clutter and j is missed" (docs/slam-core.md, "Sampled association").
+  /// "l is clutter and j is missed" (docs/design/slam-core.md, "Sampled association").
   double clutter_density = 1.0;
   /// Odometry scale anchoring (deviation, off by default = the paper): bearings do not observe the
   /// scale of map + path, so each particle keeps the maximum-likelihood factor s between its path and
   /// the odometry (ratio of their lengths along the direction of travel, for a random-walk odometry
   /// error) and rescales its pose, map and candidates about the start position and the camera height
-  /// by s at every step. Inactive with a prior map. See docs/slam-core.md, "Map scale".
+  /// by s at every step. Inactive with a prior map. See docs/design/slam-core.md, "Map scale".
   bool odometry_scale_correction = false;
   /// Largest relative rescaling applied in one step (guards the first, least informed steps).
   double scale_correction_max_step = 0.05;
@@ -194,7 +194,7 @@ class FastSlam {
   const FastSlamOptions& options() const { return options_; }
   std::uint64_t numSteps() const { return num_steps_; }
 
-  // --- Checkpoints (filter_state.cpp; format in docs/slam-process.md, "Checkpoints") -----------
+  // --- Checkpoints (filter_state.cpp; format in docs/user/slam-process.md, "Checkpoints") -----------
   /// Appends the complete state to `w`: every particle (pose, weight, landmark map, candidates with
   /// their rays and counters, scale sums), the weights and poses before resampling, the generator's
   /// state, the landmark id counter and the other counters. Storage shared between particles (maps,

@@ -13,7 +13,7 @@ namespace omnislam::slam::stages {
 struct HungarianAssociation {};          ///< the paper: the minimum total -log likelihood
 struct MaximumLikelihoodAssociation {};  ///< greedy in measurement order (the paper's comparison)
 /// Data association sampling: one joint assignment drawn per particle, the weight the sum over the
-/// assignments (docs/slam-core.md, "Sampled association").
+/// assignments (docs/design/slam-core.md, "Sampled association").
 struct AssociationSampling {
   double clutter_density = 1.0;  ///< clutter per frame and unit of measurement space
 };

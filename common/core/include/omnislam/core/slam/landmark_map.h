@@ -1,7 +1,7 @@
 // Copy-on-write landmark map of one particle: a persistent treap (tree of shared_ptr<const Node>)
 // keyed by a 2D grid cell, each node holding its cell's landmarks. Copying a map copies one
 // pointer; an edit copies only the edited cells and the O(log cells) nodes above them, so
-// resampling never deep-copies maps and particles share every untouched part (docs/slam-core.md).
+// resampling never deep-copies maps and particles share every untouched part (docs/design/slam-core.md).
 #pragma once
 
 #include <cstddef>

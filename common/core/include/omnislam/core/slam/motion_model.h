@@ -1,7 +1,7 @@
 // Motion model of a differential-drive robot driven by cumulative odometry (paper 000, Alg. 1
 // line 3: xhat_t = g(x_{t-1}, u_t), and the motion noise R_t used by Alg. 2 and Alg. 3).
 //
-// u_t = odom_prev^-1 * odom_now = (dx, dy, dtheta) in the previous robot frame (docs/conventions.md).
+// u_t = odom_prev^-1 * odom_now = (dx, dy, dtheta) in the previous robot frame (docs/user/conventions.md).
 // g(x, u) = x * u  (Pose2 composition).  Noise is added to u in the previous robot frame:
 //   d = hypot(dx, dy), a = |dtheta|, chord direction alpha = atan2(dy, dx)
 //   sigma_long^2  = (trans_sigma_per_m d)^2 + (trans_sigma_per_rad a)^2 + min_sigma_xy_m^2   (along the chord)
@@ -48,7 +48,7 @@ struct MotionNoiseOptions {
   double rot_sigma_per_rad = 0.05;     ///< heading std per radian turned [rad/rad] (5 %)
   double rot_sigma_per_m = 0.01;       ///< heading std per metre travelled [rad/m] (0.57 deg/m)
   // Random-walk terms (variance proportional to distance / rotation, as the wheel-encoder noise of
-  // docs/world-file.md): add (k^2 d) or (k^2 a) to the variances above. 0 by default (the paper's
+  // docs/user/world-file.md): add (k^2 d) or (k^2 a) to the variances above. 0 by default (the paper's
   // model is per metre); with them R_t does not depend on the frame rate.
   double trans_sigma_per_sqrt_m = 0.0;    ///< along-track std after 1 m [m/sqrt(m)]
   double lateral_sigma_per_sqrt_m = 0.0;  ///< cross-track std after 1 m [m/sqrt(m)]

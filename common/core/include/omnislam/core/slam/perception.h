@@ -1,6 +1,6 @@
 // Perceptual range / field of view of the camera (paper 000, Sec. III-C "landmarks that can be
 // seen" and Alg. 4 lines 21-23 "p_in" and "inside perceptual range"). Angles are bearings in
-// robot-parallel axes from the optical centre (docs/conventions.md).
+// robot-parallel axes from the optical centre (docs/user/conventions.md).
 #pragma once
 
 #include <Eigen/Core>

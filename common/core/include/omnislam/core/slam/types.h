@@ -1,5 +1,5 @@
 // Plain data types shared by the FastSLAM core: landmark kinds and types, bearing measurements,
-// landmarks. Frames and units follow docs/conventions.md (W world, R robot, C camera; SI units).
+// landmarks. Frames and units follow docs/user/conventions.md (W world, R robot, C camera; SI units).
 #pragma once
 
 #include <Eigen/Core>
@@ -33,7 +33,7 @@ struct ColourDescriptor {
 };
 
 /// One detected feature. The bearing is expressed in axes parallel to the robot frame R with its
-/// origin at the camera's optical centre, whose position in R is p_CinR_m (docs/conventions.md).
+/// origin at the camera's optical centre, whose position in R is p_CinR_m (docs/user/conventions.md).
 struct BearingMeasurement {
   double azimuth_rad = 0.0;    ///< counter-clockwise from +x_R, (-pi, pi]
   double elevation_rad = 0.0;  ///< above the x_R-y_R plane, [-pi/2, pi/2]; unused for kVerticalLine

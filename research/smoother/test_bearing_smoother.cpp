@@ -10,7 +10,7 @@
 
 #include "omnislam/core/angles.h"
 #include "omnislam/core/slam/bearing_model.h"
-#include "omnislam/core/slam/bearing_smoother.h"
+#include "bearing_smoother.h"
 #include "omnislam/core/slam/motion_model.h"
 #include "omnislam/core/slam/random.h"
 

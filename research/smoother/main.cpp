@@ -1,4 +1,4 @@
-// omnislam-smooth: batch or incremental smoothing of a recorded omnislam-slam run (docs/smoothing.md). Reads the
+// omnislam-smooth: batch or incremental smoothing of a recorded omnislam-slam run (research/smoothing.md). Reads the
 // SLAM output log, smooths poses and vertical-line landmarks with the filter's motion noise (from
 // its SLAM config) and the association of --associations, and writes a copy of the log with
 // SLAM_POSE and SLAM_MAP replaced, for omnislam-eval. Prints a one-line summary on stderr.

@@ -1,4 +1,4 @@
-// Batch or incremental smoothing of a recorded omnislam-slam run (docs/smoothing.md): reads a log with ODOMETRY,
+// Batch or incremental smoothing of a recorded omnislam-slam run (research/smoothing.md): reads a log with ODOMETRY,
 // OMNI_FEATURES and the SLAM output, builds the problem of core/slam/bearing_smoother.h from it (one
 // pose per SLAM_POSE, one odometry factor per pair of consecutive frames with the filter's motion
 // noise, one bearing factor per associated vertical-line feature) and writes a copy of the log with
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "omnislam/core/slam/bearing_smoother.h"
+#include "bearing_smoother.h"
 #include "omnislam/core/slam/motion_model.h"
 
 namespace omnislam::smooth {
@@ -41,7 +41,7 @@ struct SmoothLogOptions {
   /// pairing.max_odometry_gap_s, the filter's own rule); a frame across a longer gap gets none.
   int64_t max_odometry_gap_us = 2'000'000;
   /// --incremental: called with a one-line progress report every 10 % of the frames and at least
-  /// every 30 s (the run is quadratic in the frames: docs/smoothing.md); may be empty.
+  /// every 30 s (the run is quadratic in the frames: research/smoothing.md); may be empty.
   std::function<void(const std::string&)> progress;
   slam::SmootherOptions smoother;
   /// Empty when the incremental fields are in range (checked with --incremental only), otherwise a

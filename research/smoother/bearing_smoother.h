@@ -13,7 +13,7 @@
 //             first ray of a landmark seen once, which is how a landmark can join at its first sighting)
 // It answers "how well could the trajectory be known with this association?": the FastSLAM filter
 // samples one path per particle, the smoother optimises over all of them jointly. It does not
-// associate; a wrong association is only down-weighted by the kernel. docs/smoothing.md.
+// associate; a wrong association is only down-weighted by the kernel. research/smoothing.md.
 #pragma once
 
 #include <Eigen/Core>

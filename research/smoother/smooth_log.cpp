@@ -48,7 +48,7 @@ std::optional<Msg> decodeValid(const lcmio::LogEvent& ev, Counter& bad) {
   // Inputs are kept by utime: a duplicate or a step back would silently replace or re-sort one.
   // A recording's gaps are data (an odometry logger paused for 10 s), not faults to guard a live
   // filter from: a jump is more than 60 s ahead here, as before the live rule followed each
-  // stream's rate (docs/lcm.md, "Time faults").
+  // stream's rate (docs/user/lcm.md, "Time faults").
   lcmio::UtimeOrderOptions opt;
   opt.min_forward_jump_us = opt.max_forward_jump_us;
   if (bad.order[ev.channel].admit(m->utime, opt)) {

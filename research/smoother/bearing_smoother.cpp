@@ -1,6 +1,6 @@
 // Robust batch smoothing of poses and vertical-line landmarks (bearing_smoother.h): residuals,
 // Jacobians and a Levenberg-Marquardt loop on Eigen's sparse LDL^T.
-#include "omnislam/core/slam/bearing_smoother.h"
+#include "bearing_smoother.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

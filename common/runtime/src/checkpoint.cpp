@@ -1,6 +1,6 @@
 // Checkpoints of the SLAM process: the state of SlamDriver and Pairer to and from bytes, the file's
 // envelope, the atomic write and the resume rules; see checkpoint.h and docs/slam-process.md.
-#include "checkpoint.h"
+#include "omnislam/runtime/checkpoint.h"
 
 #include <fcntl.h>
 #include <unistd.h>

@@ -1,5 +1,5 @@
 // Frame <-> odometry pairing rules: see pairing.h and docs/slam-process.md.
-#include "pairing.h"
+#include "omnislam/runtime/pairing.h"
 
 #include <algorithm>
 #include <cmath>

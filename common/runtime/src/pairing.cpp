@@ -95,7 +95,7 @@ InputResult Pairer::checkOrder(StreamState& self, int64_t utime) {
     self.order.forget();
   } else if (const TimeStep step = self.order.classify(utime, order_opt_);
              step == TimeStep::kDuplicate || step == TimeStep::kOutOfOrder || step == TimeStep::kJumpBack) {
-    // A jump back that reaches here is one of held messages applied after their stream went on.
+    // Any step back is refused here; add() has already held those far enough back to be a restart.
     if (step == TimeStep::kDuplicate) {
       r.verdict = Verdict::kDuplicate;
       r.reason = "utime " + us(utime) + " repeated (duplicate)";

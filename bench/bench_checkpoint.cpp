@@ -1,4 +1,4 @@
-// bench_checkpoint: time and size of one SLAM checkpoint (procs/slam/checkpoint.h) on the sports
+// bench_checkpoint: time and size of one SLAM checkpoint (common/runtime/include/omnislam/runtime/checkpoint.h) on the sports
 // hall: the regression fixture tests/data/regression/sports_hall.lcm (151 frames, 16 lights) replayed
 // through SlamDriver with config/slam/sports_hall.yaml and its default particle count (or
 // OMNISLAM_BENCH_PARTICLES), as `omnislam-slam --replay` does, then the state at the end of the log
@@ -15,7 +15,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "checkpoint.h"
+#include "omnislam/runtime/checkpoint.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/decode.h"
 #include "omnislam/lcmio/log_reader.h"

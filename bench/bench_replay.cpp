@@ -37,7 +37,7 @@
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/validate.h"
 #include "slam_config.h"
-#include "slam_driver.h"
+#include "omnislam/runtime/slam_driver.h"
 
 #ifndef OMNISLAM_SOURCE_DIR
 #define OMNISLAM_SOURCE_DIR "."

@@ -18,7 +18,7 @@ import sys
 # Parser source -> the page that documents its keys.
 PAGES = {
     "procs/slam/slam_config.cpp": "docs/user/slam-process.md",
-    "procs/slam/map_file.cpp": "docs/user/slam-process.md",
+    "common/runtime/src/map_file.cpp": "docs/user/slam-process.md",
     "procs/features/detectors.cpp": "docs/design/detectors.md",
     "procs/launch/launcher.cpp": "docs/user/launch-file.md",
     "common/config/src/world_config.cpp": "docs/user/world-file.md",

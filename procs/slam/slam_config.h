@@ -10,7 +10,7 @@
 #include "omnislam/config/yaml_node.h"
 #include "omnislam/core/pose2.h"
 #include "omnislam/core/slam/fastslam.h"
-#include "pairing.h"
+#include "omnislam/runtime/pairing.h"
 
 namespace omnislam::slamproc {
 

@@ -1,4 +1,4 @@
-// Time and value faults at the SLAM process's code path (procs/slam: pairing.h, slam_driver.h),
+// Time and value faults at the SLAM process's code path (common/runtime: pairing.h, slam_driver.h),
 // issue 47: one message stamped 100 s or 10^6 s ahead or 30 s behind, on either input stream, is
 // refused and counted and resets nothing; one implausible odometry pose is refused without
 // becoming the reference; a confirmed restart re-initialises the filter from its last estimate
@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "omnislam/core/angles.h"
-#include "slam_driver.h"
+#include "omnislam/runtime/slam_driver.h"
 
 using namespace omnislam;
 using namespace omnislam::slamproc;

@@ -1,14 +1,14 @@
-// Time faults in lcmio::UtimeOrder (issue 47): one stray stamp ahead or behind on a stream of
+// Time faults in UtimeOrder (common/core; issue 47): one stray stamp ahead or behind on a stream of
 // any rate is refused and counted, never a restart; the jump threshold follows the stream's rate.
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <string>
 
-#include "omnislam/lcmio/utime_order.h"
+#include "omnislam/core/utime_order.h"
 
-using omnislam::lcmio::UtimeOrder;
-using omnislam::lcmio::UtimeOrderOptions;
+using omnislam::UtimeOrder;
+using omnislam::UtimeOrderOptions;
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <fstream>
 #include <map>
 
-#include "map_file.h"
+#include "omnislam/runtime/map_file.h"
 #include "mrclam_import.h"
 #include "omnislam/feature_labels_t.hpp"
 #include "omnislam/features_t.hpp"

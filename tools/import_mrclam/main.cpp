@@ -9,7 +9,7 @@
 #include <fstream>
 #include <iostream>
 
-#include "map_file.h"
+#include "omnislam/runtime/map_file.h"
 #include "mrclam_import.h"
 #include "omnislam/core/angles.h"
 #include "omnislam/lcmio/app.h"

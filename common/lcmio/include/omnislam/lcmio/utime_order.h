@@ -1,65 +1,13 @@
-// Time order of one input stream: which utimes may be delivered. Duplicates and steps back are
-// refused; so is a jump far ahead (one stray future stamp must not become "the previous utime"
-// and lock out every good message after it). A jump (ahead, or back by restart_back_jump_us or
-// more) is believed only when several messages in a row continue it: then it is a new timeline (a
-// source or a replayed log started again, a clock set); a jump that is not continued is a stray,
-// refused and counted. The rule, and the SLAM pairing's form of it: docs/user/lcm.md, "Time faults".
-// Used per channel by lcmio::Node and by the viewer's log reader.
+// The time-order rule of every input of lcmio::Node under lcmio's names: the one implementation is
+// omnislam/core/utime_order.h (shared with the SLAM pairing, which is not an LCM component).
 #pragma once
 
-#include <array>
-#include <cstdint>
-#include <optional>
-#include <string>
+#include "omnislam/core/utime_order.h"
 
 namespace omnislam::lcmio {
 
-struct UtimeOrderOptions {
-  /// A step ahead of the previous accepted utime is a jump when it is more than
-  /// forward_jump_intervals times the stream's usual interval (the median of its last 8 accepted
-  /// steps), clamped to [min_forward_jump_us, max_forward_jump_us]; before the stream has a step,
-  /// max_forward_jump_us. So a 50 Hz stream takes 1 s as a jump, a 2 Hz one 5 s, and a stream
-  /// slower than one message in max_forward_jump_us cannot be followed.
-  int64_t max_forward_jump_us = 60'000'000;
-  int64_t min_forward_jump_us = 1'000'000;
-  double forward_jump_intervals = 10.0;
-  /// A step back at least this large may start a new timeline; a smaller one is only refused
-  /// (a late or duplicated message).
-  int64_t restart_back_jump_us = 5'000'000;
-  /// A jump (back or ahead) is accepted as a new timeline when this many messages in a row
-  /// continue it, each after the one before and within the jump threshold of it; the earlier
-  /// ones of the row are refused. 1 accepts a jump at once. Range 1..1000.
-  int restart_confirm_messages = 3;
-};
-
-class UtimeOrder {
- public:
-  /// Nothing if `utime` may be delivered (it becomes the previous utime), else the one-line reason
-  /// it is refused, e.g. "utime 5 not after previous 9 (duplicate or out of order)".
-  std::optional<std::string> admit(int64_t utime, const UtimeOrderOptions& opt = {});
-  /// New timelines accepted so far.
-  int64_t restarts() const { return restarts_; }
-  /// Messages refused as a jump (ahead, or far back) that no confirmed timeline took: strays.
-  int64_t strays() const { return strays_; }
-  /// The reason line of the last restart accepted ("" if none), for the caller's report.
-  const std::string& lastRestart() const { return last_restart_; }
-  bool empty() const { return !have_; }
-  int64_t last() const { return last_; }
-  /// The step ahead beyond which a message is a jump, now (see UtimeOrderOptions).
-  int64_t forwardJumpUs(const UtimeOrderOptions& opt) const;
-
- private:
-  void noteStep(int64_t step_us);
-
-  bool have_ = false;
-  int64_t last_ = 0;
-  int pending_count_ = 0;     ///< messages in a row that continue a possible new timeline
-  int64_t pending_utime_ = 0; ///< the newest of them
-  int64_t restarts_ = 0;
-  int64_t strays_ = 0;
-  std::array<int64_t, 8> steps_{};  ///< the last accepted steps (ring), for the usual interval
-  int num_steps_ = 0;
-  std::string last_restart_;
-};
+using omnislam::TimeStep;
+using omnislam::UtimeOrder;
+using omnislam::UtimeOrderOptions;
 
 }  // namespace omnislam::lcmio

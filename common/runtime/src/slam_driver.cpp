@@ -1,5 +1,5 @@
 // The SLAM process's shared code path: see slam_driver.h and docs/user/slam-process.md.
-#include "slam_driver.h"
+#include "omnislam/runtime/slam_driver.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // Checkpoints of the SLAM process: the state of SlamDriver and Pairer to and from bytes, the file's
 // envelope, the atomic write and the resume rules; see checkpoint.h and docs/user/slam-process.md.
-#include "checkpoint.h"
+#include "omnislam/runtime/checkpoint.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -127,6 +127,15 @@ std::string firstDifference(const std::string& a, const std::string& b) {
   }
 }
 
+/// A stream's time order as saved: its last utime, kept when it has none (after a restart) so that
+/// a state saved again gives the same bytes. The usual interval is not saved: the pairing's
+/// threshold is fixed (PairingOptions::timeOrder).
+void restoreOrder(UtimeOrder& order, bool have_last, int64_t last_utime) {
+  order.forget();
+  order.take(last_utime);
+  if (!have_last) order.forget();
+}
+
 }  // namespace
 
 // ---- Pairer ---------------------------------------------------------------------------------
@@ -153,12 +162,12 @@ void Pairer::saveState(ByteWriter& w) const {
   w.i64(last_odom_utime_);
   putPose(w, last_odom_in_);
   for (const StreamState* s : {&odom_state_, &frame_state_}) {
-    w.boolean(s->have_last);
-    w.i64(s->last_utime);
+    w.boolean(!s->order.empty());
+    w.i64(s->order.last());
     w.boolean(s->awaiting_restart);
   }
-  w.boolean(have_epoch_newest_);
-  w.i64(epoch_newest_utime_);
+  w.boolean(!epoch_.empty());
+  w.i64(epoch_.last());
   w.boolean(have_newest_frame_);
   w.i64(newest_frame_utime_);
   putCounts(w, pairingCounters(stats_));
@@ -189,12 +198,12 @@ void Pairer::loadState(ByteReader& r) {
   last_odom_utime_ = r.i64("last_odom_utime");
   last_odom_in_ = getPose(r, "last_odom_in");
   for (StreamState* s : {&odom_state_, &frame_state_}) {
-    s->have_last = r.boolean("stream.have_last");
-    s->last_utime = r.i64("stream.last_utime");
+    const bool have_last = r.boolean("stream.have_last");
+    restoreOrder(s->order, have_last, r.i64("stream.last_utime"));
     s->awaiting_restart = r.boolean("stream.awaiting_restart");
   }
-  have_epoch_newest_ = r.boolean("have_epoch_newest");
-  epoch_newest_utime_ = r.i64("epoch_newest_utime");
+  const bool have_epoch_newest = r.boolean("have_epoch_newest");
+  restoreOrder(epoch_, have_epoch_newest, r.i64("epoch_newest_utime"));
   have_newest_frame_ = r.boolean("have_newest_frame");
   newest_frame_utime_ = r.i64("newest_frame_utime");
   getCounts(r, pairingCounters(stats_), "pairing counters");

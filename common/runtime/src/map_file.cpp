@@ -1,5 +1,5 @@
 // Saved maps: YAML text, atomic writes (see map_file.h).
-#include "map_file.h"
+#include "omnislam/runtime/map_file.h"
 
 #include <fcntl.h>
 #include <unistd.h>

@@ -1,5 +1,5 @@
 // Frame <-> odometry pairing rules: see pairing.h and docs/user/slam-process.md.
-#include "pairing.h"
+#include "omnislam/runtime/pairing.h"
 
 #include <algorithm>
 #include <cmath>
@@ -23,6 +23,14 @@ std::string PairingOptions::validate() const {
   if (restart_confirm_messages < 1)
     return "restart_confirm_messages must be >= 1, got " + std::to_string(restart_confirm_messages);
   return "";
+}
+
+UtimeOrderOptions PairingOptions::timeOrder() const {
+  UtimeOrderOptions o;
+  o.max_forward_jump_us = o.min_forward_jump_us = max_forward_jump_us;  // fixed: min >= max
+  o.restart_back_jump_us = restart_jump_us;
+  o.restart_confirm_messages = restart_confirm_messages;
+  return o;
 }
 
 // ---- OdometryBuffer -------------------------------------------------------------------------
@@ -69,37 +77,38 @@ OdometryBuffer::Lookup OdometryBuffer::at(int64_t utime, int64_t max_gap_us) con
 
 // ---- Pairer ---------------------------------------------------------------------------------
 
-Pairer::Pairer(const PairingOptions& options) : opt_(options), odom_(options.odometry_buffer_us) {}
+Pairer::Pairer(const PairingOptions& options)
+    : opt_(options), order_opt_(options.timeOrder()), odom_(options.odometry_buffer_us) {}
 
 InputResult Pairer::checkOrder(StreamState& self, int64_t utime) {
   InputResult r;
   if (self.awaiting_restart) {
     // The other stream restarted: this stream's messages from before the restart are stale until
     // it comes back to the new epoch's time.
-    if (utime > epoch_newest_utime_ + opt_.restart_jump_us) {
+    if (utime > epoch_.last() + opt_.restart_jump_us) {
       r.verdict = Verdict::kStaleAfterRestart;
-      r.reason = "utime " + us(utime) + " is from before the restart (new epoch at " + us(epoch_newest_utime_) + ")";
+      r.reason = "utime " + us(utime) + " is from before the restart (new epoch at " + us(epoch_.last()) + ")";
       ++stats_.stale_after_restart;
       return r;
     }
     self.awaiting_restart = false;
-    self.have_last = false;
-  } else if (self.have_last && utime <= self.last_utime) {
-    if (utime == self.last_utime) {
+    self.order.forget();
+  } else if (const TimeStep step = self.order.classify(utime, order_opt_);
+             step == TimeStep::kDuplicate || step == TimeStep::kOutOfOrder || step == TimeStep::kJumpBack) {
+    // Any step back is refused here; add() has already held those far enough back to be a restart.
+    if (step == TimeStep::kDuplicate) {
       r.verdict = Verdict::kDuplicate;
       r.reason = "utime " + us(utime) + " repeated (duplicate)";
       ++stats_.duplicates;
     } else {
       r.verdict = Verdict::kOutOfOrder;
-      r.reason = "utime " + us(utime) + " before previous " + us(self.last_utime) + " (out of order)";
+      r.reason = "utime " + us(utime) + " before previous " + us(self.order.last()) + " (out of order)";
       ++stats_.out_of_order;
     }
     return r;
   }
-  self.have_last = true;
-  self.last_utime = utime;
-  if (!have_epoch_newest_ || utime > epoch_newest_utime_) epoch_newest_utime_ = utime;
-  have_epoch_newest_ = true;
+  self.order.take(utime);
+  if (epoch_.empty() || utime > epoch_.last()) epoch_.take(utime);
   return r;
 }
 
@@ -114,10 +123,11 @@ void Pairer::restart(int64_t utime, std::vector<PairEvent>& out) {
   bool held_frame = false, held_odom = false;
   for (const Input& h : held_) (h.is_frame ? held_frame : held_odom) = true;
   for (auto [st, held] : {std::pair{&frame_state_, held_frame}, std::pair{&odom_state_, held_odom}}) {
-    st->awaiting_restart = !held && st->have_last;
-    st->have_last = false;
+    st->awaiting_restart = !held && !st->order.empty();
+    st->order.forget();
   }
-  epoch_newest_utime_ = utime;
+  epoch_.forget();
+  epoch_.take(utime);
   have_newest_frame_ = false;
   PairEvent ev;
   ev.kind = PairEvent::Kind::kReset;
@@ -158,16 +168,14 @@ InputResult Pairer::addFrame(Frame frame, std::vector<PairEvent>& out) {
 
 InputResult Pairer::add(Input in, std::vector<PairEvent>& out) {
   StreamState& self = in.is_frame ? frame_state_ : odom_state_;
-  // utimes are validated >= 0, so neither difference overflows.
-  const bool jumped_back =
-      !self.awaiting_restart && self.have_last && self.last_utime - in.utime >= opt_.restart_jump_us;
-  const bool jumped_ahead =
-      !self.awaiting_restart && have_epoch_newest_ && in.utime - epoch_newest_utime_ > opt_.max_forward_jump_us;
+  // Back: from this stream's last utime; ahead: from the newest utime of either stream.
+  const bool jumped_back = !self.awaiting_restart && self.order.classify(in.utime, order_opt_) == TimeStep::kJumpBack;
+  const bool jumped_ahead = !self.awaiting_restart && epoch_.classify(in.utime, order_opt_) == TimeStep::kJumpAhead;
   if (jumped_ahead) return holdAhead(std::move(in), out);
   if (jumped_back) {
     InputResult pre;
     if (held_ahead_) refuseHeld(pre);  // a jump ahead then one back: the first was a stray
-    const std::string why = "utime jumped back from " + us(self.last_utime) + " to " + us(in.utime);
+    const std::string why = "utime jumped back from " + us(self.order.last()) + " to " + us(in.utime);
     held_.push_back(std::move(in));
     if (!heldConfirmed()) {
       InputResult r;
@@ -212,7 +220,7 @@ bool Pairer::heldAheadCaughtUp(const Input* in) const {
     if (in && h.is_frame == in->is_frame) newest_same = std::max(newest_same, h.utime);
   }
   if (in) return newest_same >= 0 && in->utime > newest_same;
-  return newest - epoch_newest_utime_ <= opt_.max_forward_jump_us;
+  return epoch_.classify(newest, order_opt_) != TimeStep::kJumpAhead;
 }
 
 InputResult Pairer::holdAhead(Input in, std::vector<PairEvent>& out) {
@@ -239,7 +247,7 @@ InputResult Pairer::holdAhead(Input in, std::vector<PairEvent>& out) {
     if (in.utime - newest > opt_.max_forward_jump_us || newest - in.utime > opt_.max_forward_jump_us) continues = false;
   }
   if (!held_.empty() && !continues) refuseHeld(pre);
-  const std::string why = "utime " + us(in.utime) + " jumps ahead of the newest input " + us(epoch_newest_utime_) +
+  const std::string why = "utime " + us(in.utime) + " jumps ahead of the newest input " + us(epoch_.last()) +
                           " by more than " + us(opt_.max_forward_jump_us) + " us";
   held_ahead_ = true;
   held_.push_back(std::move(in));
@@ -276,7 +284,7 @@ bool Pairer::heldConfirmed() const {
   // stream cannot confirm when it has said nothing in this epoch, and it may have gone silent: the
   // wait ends after max_wait_us of the held stream's own time or kMaxHeldMessages messages.
   const StreamState& other = held_frame ? odom_state_ : frame_state_;
-  if (!other.have_last || other.awaiting_restart) return true;
+  if (other.order.empty() || other.awaiting_restart) return true;
   return last - first >= opt_.max_wait_us || static_cast<int>(held_.size()) >= kMaxHeldMessages;
 }
 

@@ -1,4 +1,4 @@
-// Checkpoints of the SLAM process (procs/slam/checkpoint.h): a driver resumed from a checkpoint
+// Checkpoints of the SLAM process (common/runtime/include/omnislam/runtime/checkpoint.h): a driver resumed from a checkpoint
 // taken after any message (a frame waiting for odometry, messages held for a jump, after an input
 // restart) publishes exactly what the driver that never stopped publishes, byte for byte, with the
 // same counts; the options and the file are checked; the already-processed rule and the schedule.
@@ -9,7 +9,7 @@
 #include <random>
 #include <variant>
 
-#include "checkpoint.h"
+#include "omnislam/runtime/checkpoint.h"
 #include "omnislam/core/angles.h"
 
 using namespace omnislam;

@@ -18,7 +18,7 @@
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
-#include "pairing.h"
+#include "omnislam/runtime/pairing.h"
 #include "slam_config.h"
 
 namespace omnislam::slamproc {

@@ -2,7 +2,9 @@
 // cumulative odometry poses interpolated at a frame's utime, and the rules that decide, from the
 // utimes of the two streams only (never the receive clock), when a frame is processed, waits or is
 // dropped, and what duplicates, out-of-order messages and restarts (a replayed log starting again)
-// do. Rules and defaults: docs/user/slam-process.md.
+// do. Rules and defaults: docs/user/slam-process.md. Each stream's time order is the rule of every process
+// (omnislam/core/utime_order.h) with a fixed threshold; what is the pairing's own is that a jump's
+// messages are held, not refused, and confirmed across the two streams.
 #pragma once
 
 #include <cstdint>
@@ -14,6 +16,7 @@
 #include "omnislam/core/byte_codec.h"
 #include "omnislam/core/pose2.h"
 #include "omnislam/core/slam/types.h"
+#include "omnislam/core/utime_order.h"
 
 namespace omnislam::slamproc {
 
@@ -53,6 +56,9 @@ struct PairingOptions {
 
   /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
   std::string validate() const;
+  /// The time-order thresholds of each stream (utime_order.h): ahead max_forward_jump_us (fixed,
+  /// measured from the newest utime of either stream), back restart_jump_us.
+  UtimeOrderOptions timeOrder() const;
 };
 
 /// Cumulative odometry poses (frame O) by utime, strictly increasing; linear interpolation of
@@ -182,8 +188,7 @@ class Pairer {
 
  private:
   struct StreamState {
-    bool have_last = false;
-    int64_t last_utime = 0;
+    UtimeOrder order;               ///< its last accepted utime (UtimeOrder::take, never admit)
     bool awaiting_restart = false;  ///< the other stream restarted: this one's old-epoch messages are stale
   };
   struct Input {
@@ -211,6 +216,7 @@ class Pairer {
   void drop(std::vector<PairEvent>& out, std::string reason, int64_t& counter);
 
   PairingOptions opt_;
+  UtimeOrderOptions order_opt_;  ///< opt_.timeOrder()
   OdometryBuffer odom_;
   std::deque<Frame> pending_;
   std::vector<Input> held_;  ///< messages that jumped back (or ahead), waiting to be confirmed or refuted
@@ -220,8 +226,9 @@ class Pairer {
   int64_t last_odom_utime_ = 0;
   Pose2 last_odom_in_;        ///< last accepted odometry pose as received
   StreamState odom_state_, frame_state_;
-  bool have_epoch_newest_ = false;
-  int64_t epoch_newest_utime_ = 0;  ///< newest utime accepted on either stream since the last restart
+  /// The newest utime accepted on either stream since the last restart (a jump ahead is measured
+  /// from it, so that frames after a stretch without features are no jump while odometry goes on).
+  UtimeOrder epoch_;
   bool have_newest_frame_ = false;
   int64_t newest_frame_utime_ = 0;  ///< newest frame utime of the epoch (the clock of max_wait_us)
   PairingStats stats_;

@@ -1,15 +1,17 @@
-// lcmio::UtimeOrder: duplicates and steps back refused, a stray far-future stamp refused without
-// locking the stream, a new timeline (a log replayed again, a clock set) taken after the
-// confirming messages in a row.
+// UtimeOrder (common/core), the time-order rule of every input stream: duplicates and steps back
+// refused, a stray far-future stamp refused without locking the stream, a new timeline (a log
+// replayed again, a clock set) taken after the confirming messages in a row; classify() exact for
+// any two utimes and a fixed threshold when min >= max.
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <limits>
 
-#include "omnislam/lcmio/utime_order.h"
+#include "omnislam/core/utime_order.h"
 
-using omnislam::lcmio::UtimeOrder;
-using omnislam::lcmio::UtimeOrderOptions;
+using omnislam::TimeStep;
+using omnislam::UtimeOrder;
+using omnislam::UtimeOrderOptions;
 
 namespace {
 
@@ -77,6 +79,40 @@ TEST(UtimeOrder, ANewTimelineIsTakenAfterTheConfirmingMessages) {
   ASSERT_FALSE(once.admit(kT0 + 60'000'000, opt));
   EXPECT_FALSE(once.admit(kT0, opt));
   EXPECT_EQ(once.restarts(), 1);
+}
+
+TEST(UtimeOrder, ClassifiesEachStepOfTheRule) {
+  UtimeOrderOptions opt;  // 60 s before a step, back 5 s
+  UtimeOrder o;
+  EXPECT_EQ(o.classify(kT0, opt), TimeStep::kFirst);
+  o.take(kT0);
+  EXPECT_EQ(o.classify(kT0 + 60'000'000, opt), TimeStep::kNext);
+  EXPECT_EQ(o.classify(kT0 + 60'000'001, opt), TimeStep::kJumpAhead);
+  EXPECT_EQ(o.classify(kT0, opt), TimeStep::kDuplicate);
+  EXPECT_EQ(o.classify(kT0 - 4'999'999, opt), TimeStep::kOutOfOrder);
+  EXPECT_EQ(o.classify(kT0 - 5'000'000, opt), TimeStep::kJumpBack);
+  // Exact for any two utimes: one microsecond after a utime beyond 2^53 is the next one, and the
+  // widest span of int64 is a jump, not an overflow.
+  UtimeOrder far;
+  far.take((int64_t{1} << 60));
+  EXPECT_EQ(far.classify((int64_t{1} << 60) + 1, opt), TimeStep::kNext);
+  far.take(std::numeric_limits<int64_t>::max());
+  EXPECT_EQ(far.classify(std::numeric_limits<int64_t>::min(), opt), TimeStep::kJumpBack);
+  far.forget();
+  EXPECT_TRUE(far.empty());
+  EXPECT_EQ(far.classify(0, opt), TimeStep::kFirst);
+}
+
+TEST(UtimeOrder, MinAtOrAboveMaxIsAFixedThresholdWhateverTheRate) {
+  UtimeOrderOptions fixed;  // the SLAM pairing's form: 5 s whatever the stream's rate
+  fixed.max_forward_jump_us = fixed.min_forward_jump_us = 5'000'000;
+  UtimeOrderOptions adaptive;
+  UtimeOrder o;
+  for (int64_t t = kT0; t <= kT0 + 20 * kStep; t += kStep) o.take(t);
+  EXPECT_EQ(o.forwardJumpUs(fixed), 5'000'000);
+  EXPECT_EQ(o.forwardJumpUs(adaptive), 1'000'000) << "10 intervals of 20 ms, clamped to 1 s";
+  EXPECT_EQ(o.classify(o.last() + 5'000'000, fixed), TimeStep::kNext);
+  EXPECT_EQ(o.classify(o.last() + 5'000'001, fixed), TimeStep::kJumpAhead);
 }
 
 }  // namespace

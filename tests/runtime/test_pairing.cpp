@@ -1,10 +1,10 @@
-// Pairing of feature frames with odometry (procs/slam/pairing.h): interpolation at a utime, the
+// Pairing of feature frames with odometry (common/runtime/include/omnislam/runtime/pairing.h): interpolation at a utime, the
 // bounded wait in stream time, gaps, duplicates, out-of-order messages and restarts.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "pairing.h"
+#include "omnislam/runtime/pairing.h"
 
 using namespace omnislam;
 using namespace omnislam::slamproc;

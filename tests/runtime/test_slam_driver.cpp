@@ -1,4 +1,4 @@
-// The SLAM process's shared code path (procs/slam/slam_driver.h): message conversion, outputs
+// The SLAM process's shared code path (common/runtime/include/omnislam/runtime/slam_driver.h): message conversion, outputs
 // stamped with the frame's utime and answering its seq, determinism, and degraded input that
 // never corrupts the filter.
 #include <gtest/gtest.h>
@@ -11,7 +11,7 @@
 #include <limits>
 
 #include "omnislam/core/angles.h"
-#include "slam_driver.h"
+#include "omnislam/runtime/slam_driver.h"
 
 using namespace omnislam;
 using namespace omnislam::slamproc;

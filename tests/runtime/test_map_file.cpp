@@ -1,4 +1,4 @@
-// Saved maps (procs/slam/map_file.h): exact round trip, atomic replacement, and every malformed
+// Saved maps (common/runtime/include/omnislam/runtime/map_file.h): exact round trip, atomic replacement, and every malformed
 // file refused with a message naming the file and the key.
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <fstream>
 #include <limits>
 
-#include "map_file.h"
+#include "omnislam/runtime/map_file.h"
 #include "omnislam/config/yaml_node.h"
 
 using namespace omnislam;

@@ -12,7 +12,7 @@
 
 #include "omnislam/core/byte_codec.h"
 #include "slam_config.h"
-#include "slam_driver.h"
+#include "omnislam/runtime/slam_driver.h"
 
 namespace omnislam::slamproc {
 

@@ -225,8 +225,9 @@ TEST(Supervise, AKilledRecorderUnderRestartGoesOnInASecondPartAndLogstatShowsThe
                                                            ": [0-9.]+ s unrecorded[^;\\n]*; ([0-9]+) messages lost by seq")))
       << stat.output;
   EXPECT_GT(std::stol(m[1]), 0) << "a SIGKILLed recorder loses at least the gap: " << stat.output;
-  if (std::regex_search(stat.output, m, std::regex("gap between [^\\n]* OMNI_IMAGE ([0-9]+)")))
+  if (std::regex_search(stat.output, m, std::regex("gap between [^\\n]* OMNI_IMAGE ([0-9]+)"))) {
     EXPECT_LE(std::stol(m[1]), lost) << stat.output;
+  }
   }
 }
 

@@ -6,6 +6,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -563,12 +564,13 @@ void addRay(Candidate& cand, const Measurement& m, const Pose2& x_t, const FastS
   }
   cand.observations.push_back(makeObservation(cand.kind, x_t, m.p_CinR_m, m.z, Q_ray));
   if (static_cast<int>(cand.observations.size()) <= o.candidates.max_observations) return;
-  // Azimuth-only (vertical-line) rays carry no depth: their parallax is all there is to
-  // triangulate, and a slow or still robot fills the window with nearly parallel rays. Keep the
-  // first and the newest ray and drop the one taken nearest to the ray before it (the window
-  // thins out evenly in space); other kinds drop the oldest (unchanged).
+  // Parallax is what triangulates, and a slow, still or fast-framing robot fills a window of the
+  // newest rays with nearly parallel ones (16 rays at 10 Hz span 0.4 m). Keep the first and the
+  // newest ray and drop the one taken nearest to the ray before it: the window thins out evenly in
+  // space and spans the whole baseline, whatever the frame rate. (XSPREAD=0: the oldest for points.)
   size_t drop = 0;
-  if (cand.kind == LandmarkKind::kVerticalLine && cand.observations.size() > 2) {
+  static const bool spread_points = !(std::getenv("XSPREAD") && std::atoi(std::getenv("XSPREAD")) == 0);
+  if ((spread_points || cand.kind == LandmarkKind::kVerticalLine) && cand.observations.size() > 2) {
     double nearest = kInf;
     for (size_t i = 1; i + 1 < cand.observations.size(); ++i) {
       const double b = (cand.observations[i].p_CinW_m - cand.observations[i - 1].p_CinW_m).head<2>().norm();

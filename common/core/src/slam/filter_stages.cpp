@@ -6,7 +6,6 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -567,10 +566,9 @@ void addRay(Candidate& cand, const Measurement& m, const Pose2& x_t, const FastS
   // Parallax is what triangulates, and a slow, still or fast-framing robot fills a window of the
   // newest rays with nearly parallel ones (16 rays at 10 Hz span 0.4 m). Keep the first and the
   // newest ray and drop the one taken nearest to the ray before it: the window thins out evenly in
-  // space and spans the whole baseline, whatever the frame rate. (XSPREAD=0: the oldest for points.)
+  // space and spans the whole baseline, whatever the frame rate.
   size_t drop = 0;
-  static const bool spread_points = !(std::getenv("XSPREAD") && std::atoi(std::getenv("XSPREAD")) == 0);
-  if ((spread_points || cand.kind == LandmarkKind::kVerticalLine) && cand.observations.size() > 2) {
+  if (cand.observations.size() > 2) {
     double nearest = kInf;
     for (size_t i = 1; i + 1 < cand.observations.size(); ++i) {
       const double b = (cand.observations[i].p_CinW_m - cand.observations[i - 1].p_CinW_m).head<2>().norm();

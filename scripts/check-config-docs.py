@@ -17,7 +17,7 @@ import sys
 
 # Parser source -> the page that documents its keys.
 PAGES = {
-    "procs/slam/slam_config.cpp": "docs/slam-process.md",
+    "common/config/src/slam_config.cpp": "docs/slam-process.md",
     "procs/slam/map_file.cpp": "docs/slam-process.md",
     "procs/features/detectors.cpp": "docs/detectors.md",
     "procs/launch/launcher.cpp": "docs/launch-file.md",

@@ -28,7 +28,7 @@
 #include "omnislam/lcmio/validate.h"
 #include "checkpoint.h"
 #include "map_file.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 #include "slam_driver.h"
 
 using namespace omnislam;

@@ -19,7 +19,7 @@
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "pairing.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 
 namespace omnislam::slamproc {
 

@@ -1,4 +1,4 @@
-// The SLAM process config (config/slam/*.yaml, procs/slam/slam_config.h): the shipped file loads
+// The SLAM process config (config/slam/*.yaml, common/config/include/omnislam/config/slam_config.h): the shipped file loads
 // with the paper's values, and every mistake names its key.
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "omnislam/core/angles.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 
 using namespace omnislam;
 using namespace omnislam::slamproc;
@@ -97,21 +97,13 @@ TEST(SlamConfig, CheckpointKeys) {
 
 // One name table serves the config key, --association and the start-up echo.
 TEST(SlamConfig, AssociationNamesRoundTrip) {
-  EXPECT_EQ(associationNames(), (std::vector<std::string>{"hungarian", "ml", "sampled"}));
+  EXPECT_EQ(associationNames(), (std::vector<std::string>{"hungarian", "ml"}));
   EXPECT_EQ(associationFromName("hungarian"), slam::AssociationMethod::kHungarian);
   EXPECT_EQ(associationFromName("ml"), slam::AssociationMethod::kMaximumLikelihood);
-  EXPECT_EQ(associationFromName("sampled"), slam::AssociationMethod::kSampled);
+  EXPECT_THROW(associationFromName("sampled"), std::invalid_argument);  // removed (docs/decisions.md)
   EXPECT_THROW(associationFromName("greedy"), std::invalid_argument);
   const SlamProcessOptions o = parseSlamOptions(config::Node::loadString("{}", "x"));
   EXPECT_NE(describe(o).find("association hungarian, motion noise"), std::string::npos) << describe(o);
-}
-
-TEST(SlamConfig, SampledAssociationAndClutterDensity) {
-  const SlamProcessOptions o = parseSlamOptions(config::Node::loadString(
-      "filter: {association: sampled, proposal: fastslam1, clutter_density: 0.31}\n", "x"));
-  EXPECT_EQ(o.filter.association, slam::AssociationMethod::kSampled);
-  EXPECT_DOUBLE_EQ(o.filter.clutter_density, 0.31);
-  EXPECT_NE(describe(o).find("association sampled, clutter density 0.31, "), std::string::npos) << describe(o);
 }
 
 TEST(SlamConfig, MistakesNameTheKey) {
@@ -122,12 +114,9 @@ TEST(SlamConfig, MistakesNameTheKey) {
   const Case cases[] = {
       {"particles: 10", "particles: 0", "filter.particles"},
       {"association: hungarian", "association: greedy", "filter.association"},
-      // the sports hall file has FastSLAM 2.0, which samples its pose from the association
-      {"association: hungarian", "association: sampled", "key 'filter.association' kSampled needs proposal kFastSlam1"},
       // FastSLAM 1.0 already scores each pairing at its sampled pose
       {"association_predictive: true", "association_predictive: true\n  proposal: fastslam1",
        "key 'filter.association_predictive' needs proposal kFastSlam2"},
-      {"association: hungarian", "association: hungarian\n  clutter_density: 0", "filter.clutter_density"},
       {"nz_min: 3", "nz_min: three", "filter.candidates.nz_min"},
       {"min_parallax_deg: 7.0", "min_parallax_deg: 120", "filter.candidates.min_parallax_deg"},
       {"detection_probability: 0.9", "detection_probability: 1.5", "filter.perception.detection_probability"},

@@ -48,11 +48,8 @@ struct FastSlamOptions {
   int num_particles = 10;  ///< M (paper: 10)
   AssociationMethod association = AssociationMethod::kHungarian;
   ProposalKind proposal = ProposalKind::kFastSlam2;
-  /// Appearance gate (paper 002: lines are matched across frames by their neighbourhood colours):
-  /// when > 0, a measurement and a landmark or candidate that both carry a colour descriptor can be
-  /// associated only if their descriptors are closer than this (RGB units, Euclidean over the six
-  /// values). Descriptors are running means (weight descriptor_update_rate). 0 = off (default).
-  double descriptor_gate = 0.0;
+  /// Landmarks and candidates keep the running mean of their measurements' colour descriptors
+  /// (published with the map; the association does not use them), with this weight per update.
   double descriptor_update_rate = 0.2;
   /// false = localisation only: the map given to initialise() is fixed. Landmarks are associated
   /// and weigh the particles but are neither updated, counted, deleted nor created; no candidates.
@@ -63,23 +60,11 @@ struct FastSlamOptions {
   double resample_ess_fraction = 1.0;
   /// Raise the azimuth variance to var(el) / cos^2(el) (isotropic angular noise near the zenith).
   bool inflate_azimuth_near_zenith = true;
-  /// Alg. 4 line 14 evaluates the weight at the sampled pose x_t (paper, false). true: at the
-  /// predicted pose xhat_t as in FastSLAM 2.0 (Probabilistic Robotics Table 13.3).
-  bool weight_at_predicted_pose = false;
   /// FastSLAM 2.0 only. false (the paper, Alg. 2): a pairing's likelihood is N(z; h(mu_j, mu_x,j,l),
   /// Q_jl) after the pose has been corrected by that pairing's own measurement, so the correction
   /// itself costs nothing. true (deviation): the predictive density N(z; h(mu_j, xhat), H_x R H_x^T +
   /// Q_jl) at the predicted pose, which charges the correction against the motion noise.
   bool association_predictive = false;
-  /// Multiply the weight by P_new for each measurement not associated with a map landmark
-  /// (FastSLAM's new-landmark likelihood; the paper does not, false).
-  bool weight_unassociated_with_p_new = false;
-  /// association = kSampled only: the density of clutter measurements (features of no map landmark:
-  /// moving objects, false detections, landmarks not yet mapped) per frame and per unit of the
-  /// measurement space [1/rad for azimuth-only features, 1/rad^2 for azimuth + elevation]. A pair
-  /// (l, j) has the likelihood ratio r = p_in N(z_l; h(L_j, x_t), Q_t) / (density (1 - p_in)) against
-  /// "l is clutter and j is missed" (docs/slam-core.md, "Sampled association").
-  double clutter_density = 1.0;
   /// Odometry scale anchoring (deviation, off by default = the paper): bearings do not observe the
   /// scale of map + path, so each particle keeps the maximum-likelihood factor s between its path and
   /// the odometry (ratio of their lengths along the direction of travel, for a random-walk odometry

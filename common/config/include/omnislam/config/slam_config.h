@@ -98,7 +98,7 @@ SlamProcessOptions loadSlamOptions(const std::string& path, const std::vector<st
 std::string describe(const SlamProcessOptions& o);
 
 /// The names of filter.association and of omnislam-slam --association, in the order of
-/// slam::AssociationMethod: "hungarian", "ml", "sampled".
+/// slam::AssociationMethod: "hungarian", "ml".
 const std::vector<std::string>& associationNames();
 /// The method of one of associationNames(); throws std::invalid_argument for any other name.
 slam::AssociationMethod associationFromName(const std::string& name);

@@ -1,5 +1,5 @@
 // SLAM process config parsing: see slam_config.h and docs/slam-process.md.
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 
 #include <algorithm>
 #include <cmath>
@@ -103,23 +103,18 @@ ConfigError validationError(const Node& n, const std::string& err) {
 }
 
 void parseFilter(const Node& n, slam::FastSlamOptions& f) {
-  n.rejectUnknownKeys({"particles", "association", "proposal", "descriptor_gate", "descriptor_update_rate", "p_new_mahalanobis_sq", "resample_ess_fraction",
-                       "inflate_azimuth_near_zenith", "weight_at_predicted_pose", "association_predictive", "weight_unassociated_with_p_new",
-                       "clutter_density", "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
+  n.rejectUnknownKeys({"particles", "association", "proposal", "descriptor_update_rate", "p_new_mahalanobis_sq", "resample_ess_fraction",
+                       "inflate_azimuth_near_zenith", "association_predictive", "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
                        "perception", "candidates"});
   f.num_particles = static_cast<int>(n.getInt("particles", 1, 100000, f.num_particles));
   f.association = associationFromName(n.getEnum("association", associationNames(), associationNames()[0]));
   const std::string proposal = n.getEnum("proposal", {"fastslam2", "fastslam1"}, "fastslam2");
   f.proposal = proposal == "fastslam1" ? slam::ProposalKind::kFastSlam1 : slam::ProposalKind::kFastSlam2;
-  f.descriptor_gate = n.getDouble("descriptor_gate", 0.0, 1e4, f.descriptor_gate);
   f.descriptor_update_rate = n.getDouble("descriptor_update_rate", 1e-6, 1.0, f.descriptor_update_rate);
   f.p_new_mahalanobis_sq = n.getDouble("p_new_mahalanobis_sq", 1e-6, 1e6, f.p_new_mahalanobis_sq);
   f.resample_ess_fraction = n.getDouble("resample_ess_fraction", 0.0, 1.0, f.resample_ess_fraction);
   f.inflate_azimuth_near_zenith = n.getBool("inflate_azimuth_near_zenith", f.inflate_azimuth_near_zenith);
-  f.weight_at_predicted_pose = n.getBool("weight_at_predicted_pose", f.weight_at_predicted_pose);
   f.association_predictive = n.getBool("association_predictive", f.association_predictive);
-  f.weight_unassociated_with_p_new = n.getBool("weight_unassociated_with_p_new", f.weight_unassociated_with_p_new);
-  f.clutter_density = n.getDouble("clutter_density", 1e-6, 1e6, f.clutter_density);
   f.map_cell_size_m = n.getDouble("map_cell_size_m", 0.01, 1e4, f.map_cell_size_m);
   f.odometry_scale_correction = n.getBool("odometry_scale_correction", f.odometry_scale_correction);
   f.scale_correction_max_step = n.getDouble("scale_correction_max_step", 1e-6, 1.0, f.scale_correction_max_step);
@@ -245,7 +240,7 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
 }
 
 const std::vector<std::string>& associationNames() {
-  static const std::vector<std::string> names{"hungarian", "ml", "sampled"};  // index = AssociationMethod
+  static const std::vector<std::string> names{"hungarian", "ml"};  // index = AssociationMethod
   return names;
 }
 
@@ -268,7 +263,6 @@ std::string describe(const SlamProcessOptions& o) {
   s << "filter: " << f.num_particles << " particles, "
     << (f.proposal == slam::ProposalKind::kFastSlam2 ? "FastSLAM 2.0" : "FastSLAM 1.0") << ", association "
     << associationNames().at(static_cast<std::size_t>(f.association));
-  if (f.association == slam::AssociationMethod::kSampled) s << ", clutter density " << f.clutter_density;
   s << ", motion noise "
     << (f.motion.model == slam::MotionNoiseModel::kChord ? "chord" : "translate-then-rotate") << ", P_new at Mahalanobis^2 "
     << f.p_new_mahalanobis_sq << ", NZ_min " << f.candidates.nz_min << ", NCROSS_valid " << f.candidates.ncross_valid

@@ -220,4 +220,46 @@ TEST(SlamConfig, FileErrorsKeepTheirLineBesideOverrides) {
   }
 }
 
+// filter.preset: paper 000 as published (its Sec. IV values and no deviation), paper 002's
+// variant, keys given beside a preset override it, and the echo names every deviation.
+TEST(SlamConfig, PresetsSetDefaultsAndKeysOverride) {
+  const auto load = [](const std::string& text) { return parseSlamOptions(config::Node::loadString(text, "x")); };
+  const slam::FastSlamOptions p0 = load("filter: {preset: paper000}\n").filter;
+  EXPECT_EQ(p0.num_particles, 10);
+  EXPECT_EQ(p0.proposal, slam::ProposalKind::kFastSlam2);
+  EXPECT_EQ(p0.association, slam::AssociationMethod::kHungarian);
+  EXPECT_EQ(p0.candidates.nz_min, 3);
+  EXPECT_EQ(p0.candidates.ncross_valid, 5);
+  EXPECT_NEAR(p0.candidates.min_parallax_rad, 7.0 * kPi / 180.0, 1e-3);
+  EXPECT_EQ(p0.candidates.d_min_m, 8.0);
+  EXPECT_EQ(p0.candidates.initial_cov_diag_m2, Eigen::Vector3d::Constant(0.0025));
+  EXPECT_EQ(p0.p_new_mahalanobis_sq, 64.0);
+  EXPECT_EQ(p0.resample_ess_fraction, 1.0);
+  EXPECT_TRUE(slam::presetDeviations(p0).empty());
+  EXPECT_NE(describe(load("filter: {preset: paper000}\n")).find("deviations from paper 000: none"), std::string::npos);
+
+  const slam::FastSlamOptions p2 = load("filter: {preset: paper002}\n").filter;
+  EXPECT_EQ(p2.proposal, slam::ProposalKind::kFastSlam1);
+  EXPECT_EQ(p2.association, slam::AssociationMethod::kMaximumLikelihood);
+  EXPECT_EQ(p2.motion.model, slam::MotionNoiseModel::kTranslateThenRotate);
+  const slam::FastSlamOptions p2_hungarian = load("filter: {preset: paper002, association: hungarian}\n").filter;
+  EXPECT_EQ(p2_hungarian.association, slam::AssociationMethod::kHungarian);
+  EXPECT_EQ(p2_hungarian.proposal, slam::ProposalKind::kFastSlam1);
+
+  const SlamProcessOptions rec = load("filter: {preset: recommended, association_predictive: true}\n");
+  EXPECT_EQ(load("filter: {preset: recommended}\n").filter.candidates.refine_initial_point,
+            slam::FastSlamOptions{}.candidates.refine_initial_point);
+  const std::string echo = describe(rec);
+  for (const char* d : {"inflate_azimuth_near_zenith=true", "association_predictive=true",
+                        "candidates.initial_cov_from_triangulation=true", "candidates.refine_initial_point=true"}) {
+    EXPECT_NE(echo.find(d), std::string::npos) << d << " in " << echo;
+  }
+  try {
+    load("filter: {preset: paper001}\n");
+    FAIL() << "an unknown preset was accepted";
+  } catch (const config::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("filter.preset"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace

@@ -25,7 +25,8 @@ void parseMotion(const Node& n, slam::MotionNoiseOptions& m) {
                        "err_rot_per_sqrt_rad", "err_drift_rad_per_sqrt_m", "trans_sigma_per_m", "lateral_sigma_per_m", "trans_sigma_per_rad", "rot_sigma_per_rad",
                        "rot_sigma_per_m", "trans_sigma_per_sqrt_m", "lateral_sigma_per_sqrt_m", "rot_sigma_per_sqrt_rad",
                        "rot_sigma_per_sqrt_m", "min_sigma_xy_m", "min_sigma_theta_rad"});
-  const std::string model = n.getEnum("model", {"chord", "translate_then_rotate"}, "chord");
+  const std::string model = n.getEnum("model", {"chord", "translate_then_rotate"},
+                                      m.model == slam::MotionNoiseModel::kChord ? "chord" : "translate_then_rotate");
   m.model = model == "translate_then_rotate" ? slam::MotionNoiseModel::kTranslateThenRotate
                                              : slam::MotionNoiseModel::kChord;
   m.err_tran_per_m = n.getDouble("err_tran_per_m", 0.0, 10.0, m.err_tran_per_m);
@@ -103,12 +104,19 @@ ConfigError validationError(const Node& n, const std::string& err) {
 }
 
 void parseFilter(const Node& n, slam::FastSlamOptions& f) {
-  n.rejectUnknownKeys({"particles", "association", "proposal", "descriptor_update_rate", "p_new_mahalanobis_sq", "resample_ess_fraction",
+  n.rejectUnknownKeys({"preset", "particles", "association", "proposal", "descriptor_update_rate", "p_new_mahalanobis_sq", "resample_ess_fraction",
                        "inflate_azimuth_near_zenith", "association_predictive", "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
                        "perception", "candidates"});
+  if (n.has("preset")) {  // first: the keys below override the preset's values
+    const auto& names = slam::presetNames();
+    const std::string preset = n.getEnum("preset", names);
+    f = slam::presetOptions(static_cast<slam::Preset>(std::find(names.begin(), names.end(), preset) - names.begin()));
+  }
   f.num_particles = static_cast<int>(n.getInt("particles", 1, 100000, f.num_particles));
-  f.association = associationFromName(n.getEnum("association", associationNames(), associationNames()[0]));
-  const std::string proposal = n.getEnum("proposal", {"fastslam2", "fastslam1"}, "fastslam2");
+  f.association = associationFromName(
+      n.getEnum("association", associationNames(), associationNames().at(static_cast<std::size_t>(f.association))));
+  const std::string proposal =
+      n.getEnum("proposal", {"fastslam2", "fastslam1"}, f.proposal == slam::ProposalKind::kFastSlam1 ? "fastslam1" : "fastslam2");
   f.proposal = proposal == "fastslam1" ? slam::ProposalKind::kFastSlam1 : slam::ProposalKind::kFastSlam2;
   f.descriptor_update_rate = n.getDouble("descriptor_update_rate", 1e-6, 1.0, f.descriptor_update_rate);
   f.p_new_mahalanobis_sq = n.getDouble("p_new_mahalanobis_sq", 1e-6, 1e6, f.p_new_mahalanobis_sq);
@@ -268,6 +276,10 @@ std::string describe(const SlamProcessOptions& o) {
     << f.p_new_mahalanobis_sq << ", NZ_min " << f.candidates.nz_min << ", NCROSS_valid " << f.candidates.ncross_valid
     << ", ANG_min " << rad2deg(f.candidates.min_parallax_rad) << " deg, D_min " << f.candidates.d_min_m
     << " m, p_in " << f.perception.detection_probability << ", seed " << o.seed << "\n";
+  const std::vector<std::string> deviations = slam::presetDeviations(f);
+  s << "deviations from paper 000: ";
+  for (std::size_t i = 0; i < deviations.size(); ++i) s << (i ? ", " : "") << deviations[i];
+  s << (deviations.empty() ? "none\n" : "\n");
   s << "pairing: max_wait " << o.pairing.max_wait_us * 1e-6 << " s, max odometry gap "
     << o.pairing.max_odometry_gap_us * 1e-6 << " s, buffer " << o.pairing.odometry_buffer_us * 1e-6
     << " s, max pending " << o.pairing.max_pending_frames << ", restart jump " << o.pairing.restart_jump_us * 1e-6

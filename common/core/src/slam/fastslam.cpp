@@ -38,7 +38,7 @@ std::vector<std::int64_t> landmarkIdsOf(const std::vector<int>& landmark_of_meas
 // ---------------------------------------------------------------------------------------------
 std::string FastSlamOptions::validate() const {
   detail::FieldChecker c;
-  c.inClosed("num_particles", num_particles, 1, 1e6)
+  c.inClosed("num_particles", num_particles, 1, 1e5)
       .require(association == AssociationMethod::kHungarian || association == AssociationMethod::kMaximumLikelihood,
                "association", "must be kHungarian or kMaximumLikelihood")
       .require(!association_predictive || proposal == ProposalKind::kFastSlam2, "association_predictive",
@@ -54,6 +54,47 @@ std::string FastSlamOptions::validate() const {
       .nested("perception", perception.validate())
       .nested("candidates", candidates.validate());
   return c.message();
+}
+
+FastSlamOptions presetOptions(Preset preset) {
+  FastSlamOptions o;  // kRecommended: the in-class defaults
+  if (preset == Preset::kRecommended) return o;
+  // Both papers: the measurement covariance as published, Sigma_0 fixed, the chosen cross-point as is.
+  o.inflate_azimuth_near_zenith = false;
+  o.candidates.initial_cov_from_triangulation = false;
+  o.candidates.refine_initial_point = false;
+  if (preset == Preset::kPaper000) return o;
+  // Paper 002: FastSLAM 1.0 ("traditional FastSLAM"), maximum likelihood per measurement (Sec. III-D),
+  // the translate-then-rotate odometry model (Sec. III-C), a 2D Gaussian triangulation error model.
+  o.proposal = ProposalKind::kFastSlam1;
+  o.association = AssociationMethod::kMaximumLikelihood;
+  o.motion.model = MotionNoiseModel::kTranslateThenRotate;
+  o.candidates.initial_cov_from_triangulation = true;
+  return o;
+}
+
+const std::vector<std::string>& presetNames() {
+  static const std::vector<std::string> names{"recommended", "paper000", "paper002"};  // index = Preset
+  return names;
+}
+
+std::vector<std::string> presetDeviations(const FastSlamOptions& o) {
+  const FastSlamOptions p = presetOptions(Preset::kPaper000);
+  std::vector<std::string> out;
+  const auto flag = [&out](const char* name, bool value, bool paper) {
+    if (value != paper) out.push_back(std::string(name) + "=" + (value ? "true" : "false"));
+  };
+  flag("inflate_azimuth_near_zenith", o.inflate_azimuth_near_zenith, p.inflate_azimuth_near_zenith);
+  flag("association_predictive", o.association_predictive, p.association_predictive);
+  flag("odometry_scale_correction", o.odometry_scale_correction, p.odometry_scale_correction);
+  flag("candidates.initial_cov_from_triangulation", o.candidates.initial_cov_from_triangulation,
+       p.candidates.initial_cov_from_triangulation);
+  flag("candidates.refine_initial_point", o.candidates.refine_initial_point, p.candidates.refine_initial_point);
+  flag("candidates.ray_motion_noise", o.candidates.ray_motion_noise, p.candidates.ray_motion_noise);
+  if (o.resample_ess_fraction != p.resample_ess_fraction) {
+    out.push_back("resample_ess_fraction=" + std::to_string(o.resample_ess_fraction).substr(0, 4));
+  }
+  return out;
 }
 
 struct FastSlam::ParticleStepInfo {

@@ -84,6 +84,21 @@ struct FastSlamOptions {
   std::string validate() const;
 };
 
+/// Named settings of the filter (docs/slam-core.md, "Presets"). kRecommended is the in-class
+/// defaults of FastSlamOptions and its parts, the start of every shipped config; it deviates from
+/// paper 000 where the deviation was measured to help (the list in presetDeviations()).
+enum class Preset : std::uint8_t {
+  kRecommended = 0,
+  kPaper000 = 1,  ///< paper 000 as published: FastSLAM 2.0, Hungarian, Sigma_0 fixed, no refinement
+  kPaper002 = 2,  ///< paper 002 as published: FastSLAM 1.0, per-measurement ML, translate-then-rotate
+};
+/// The options of a preset (the config key `filter.preset` starts from them; keys given override).
+FastSlamOptions presetOptions(Preset preset);
+/// The names of `filter.preset`, in the order of Preset: "recommended", "paper000", "paper002".
+const std::vector<std::string>& presetNames();
+/// The fields in which `o` differs from paper 000 as published, as "field=value" (the start-up echo).
+std::vector<std::string> presetDeviations(const FastSlamOptions& o);
+
 /// One particle k of Y_t.
 struct Particle {
   Pose2 pose;

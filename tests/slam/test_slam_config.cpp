@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "omnislam/core/angles.h"
 #include "omnislam/config/slam_config.h"
+#include "omnislam/core/slam/options_table.h"
 
 using namespace omnislam;
 using namespace omnislam::slamproc;
@@ -103,7 +105,8 @@ TEST(SlamConfig, AssociationNamesRoundTrip) {
   EXPECT_THROW(associationFromName("sampled"), std::invalid_argument);  // removed (docs/decisions.md)
   EXPECT_THROW(associationFromName("greedy"), std::invalid_argument);
   const SlamProcessOptions o = parseSlamOptions(config::Node::loadString("{}", "x"));
-  EXPECT_NE(describe(o).find("association hungarian, motion noise"), std::string::npos) << describe(o);
+  EXPECT_NE(describe(o).find("filter: particles=10 association=hungarian proposal=fastslam2 "), std::string::npos)
+      << describe(o);
 }
 
 TEST(SlamConfig, MistakesNameTheKey) {
@@ -260,6 +263,50 @@ TEST(SlamConfig, PresetsSetDefaultsAndKeysOverride) {
   } catch (const config::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("filter.preset"), std::string::npos) << e.what();
   }
+}
+
+// The options tables drive the parser and the core's validation alike: every numeric key accepts
+// its upper bound (its lower one when the upper is open), stored in the member's units, and refuses a value beyond it with its key named;
+// the core refuses the member beyond its range with the field named; every default is in range.
+// `companion` (a "key: value" of the same section) is written beside every other key: a value that
+// other keys constrain (ncross_valid needs enough pairs of max_observations) is tested against it.
+template <class S, class Get>
+void expectTableDrivesParserAndCore(const std::string& section, const std::vector<slam::options::Field<S>>& table,
+                                    Get member_of, const std::string& companion = "") {
+  using slam::options::Kind;
+  EXPECT_EQ(slam::options::checkRanges(S{}, table), "") << section;
+  for (const auto& f : table) {
+    if (f.kind != Kind::kReal && f.kind != Kind::kInt) continue;
+    if (!std::isfinite(f.hi)) continue;  // an unlimited end: nothing beyond it
+    const double edge = f.bounds == slam::options::Bounds::kHighOpen ? f.lo : f.hi;
+    std::ostringstream ok, bad;
+    const std::string with = companion.empty() || companion.rfind(f.key, 0) == 0 ? "" : ", " + companion;
+    ok << "filter: {" << section << f.key << ": " << edge << with << "}" << std::string(section.empty() ? "" : "}") << "\n";
+    bad << "filter: {" << section << f.key << ": " << (f.hi + 1.0) * 2.0 << with << "}" << std::string(section.empty() ? "" : "}") << "\n";
+    const SlamProcessOptions o = parseSlamOptions(config::Node::loadString(ok.str(), "x"));
+    const S& parsed = member_of(o);
+    EXPECT_NEAR(f.value(parsed), edge, 1e-9 * std::max(1.0, std::abs(edge))) << f.key;
+    try {
+      parseSlamOptions(config::Node::loadString(bad.str(), "x"));
+      ADD_FAILURE() << f.key << " accepted beyond its range";
+    } catch (const config::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(f.key) + "' must be"), std::string::npos) << e.what();
+    }
+    S beyond = parsed;
+    if (f.kind == Kind::kReal) beyond.*f.real = f.memberHi() * 2.0 + 1.0;
+    else beyond.*f.integer = static_cast<int>(f.hi) * 2 + 1;
+    EXPECT_EQ(slam::options::checkRanges(beyond, table).rfind(std::string(f.field) + " must be in ", 0), 0u)
+        << slam::options::checkRanges(beyond, table);
+  }
+}
+
+TEST(SlamConfig, OptionsTablesDriveParserAndCore) {
+  namespace opt = slam::options;
+  expectTableDrivesParserAndCore("", opt::fastSlamFields(), [](const SlamProcessOptions& o) -> const slam::FastSlamOptions& { return o.filter; });
+  expectTableDrivesParserAndCore("motion: {", opt::motionFields(), [](const SlamProcessOptions& o) -> const slam::MotionNoiseOptions& { return o.filter.motion; });
+  expectTableDrivesParserAndCore("perception: {", opt::perceptionFields(), [](const SlamProcessOptions& o) -> const slam::PerceptionOptions& { return o.filter.perception; });
+  expectTableDrivesParserAndCore("candidates: {", opt::candidateFields(), [](const SlamProcessOptions& o) -> const slam::CandidateOptions& { return o.filter.candidates; },
+                                 "max_observations: 1000");
 }
 
 }  // namespace

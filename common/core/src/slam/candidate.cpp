@@ -9,23 +9,15 @@
 
 #include "omnislam/core/slam/landmark_type.h"
 #include "omnislam/core/slam/triangulation.h"
+#include "omnislam/core/slam/options_table.h"
 #include "omnislam/core/slam/validation.h"
 
 namespace omnislam::slam {
 
 std::string CandidateOptions::validate() const {
-  const double inf = std::numeric_limits<double>::infinity();
+  const std::string ranges = options::checkRanges(*this, options::candidateFields());  // options_table.h
+  if (!ranges.empty()) return ranges;
   detail::FieldChecker c;
-  c.inClosed("nz_min", nz_min, 2, 1e6)
-      .inClosed("ncross_valid", ncross_valid, 1, 1e6)
-      .inRightOpen("min_parallax_rad", min_parallax_rad, 0.0, kPi)
-      .inClosed("min_height_above_camera_m", min_height_above_camera_m, -inf, inf)
-      .inLeftOpen("d_min_m", d_min_m, 0.0, inf)
-      .inLeftOpen("initial_cov_diag_m2.x", initial_cov_diag_m2.x(), 0.0, inf)
-      .inLeftOpen("initial_cov_diag_m2.y", initial_cov_diag_m2.y(), 0.0, inf)
-      .inLeftOpen("initial_cov_diag_m2.z", initial_cov_diag_m2.z(), 0.0, inf)
-      .inClosed("refine_iterations", refine_iterations, 0, 100)
-      .inClosed("max_observations", max_observations, 2, 1000);
   // NCROSS_valid cross-points need enough pairs among the kept rays.
   c.require(static_cast<long>(max_observations) * (max_observations - 1) / 2 >= ncross_valid, "max_observations",
             "must give at least ncross_valid pairs: n (n - 1) / 2 >= ncross_valid");

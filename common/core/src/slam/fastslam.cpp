@@ -11,6 +11,7 @@
 #include <variant>
 
 #include "omnislam/core/slam/filter_stages.h"
+#include "omnislam/core/slam/options_table.h"
 #include "omnislam/core/slam/resampling.h"
 #include "omnislam/core/slam/validation.h"
 
@@ -37,19 +38,11 @@ std::vector<std::int64_t> landmarkIdsOf(const std::vector<int>& landmark_of_meas
 
 // ---------------------------------------------------------------------------------------------
 std::string FastSlamOptions::validate() const {
+  const std::string ranges = options::checkRanges(*this, options::fastSlamFields());  // options_table.h
+  if (!ranges.empty()) return ranges;
   detail::FieldChecker c;
-  c.inClosed("num_particles", num_particles, 1, 1e5)
-      .require(association == AssociationMethod::kHungarian || association == AssociationMethod::kMaximumLikelihood,
-               "association", "must be kHungarian or kMaximumLikelihood")
-      .require(!association_predictive || proposal == ProposalKind::kFastSlam2, "association_predictive",
-               "needs proposal kFastSlam2 (FastSLAM 1.0 already scores each pairing at its sampled pose)")
-      .require(proposal == ProposalKind::kFastSlam2 || proposal == ProposalKind::kFastSlam1, "proposal",
-               "must be kFastSlam2 or kFastSlam1")
-      .inLeftOpen("p_new_mahalanobis_sq", p_new_mahalanobis_sq, 0.0, kInf)
-      .inLeftOpen("descriptor_update_rate", descriptor_update_rate, 0.0, 1.0)
-      .inClosed("resample_ess_fraction", resample_ess_fraction, 0.0, 1.0)
-      .inLeftOpen("scale_correction_max_step", scale_correction_max_step, 0.0, 1.0)
-      .inLeftOpen("map_cell_size_m", map_cell_size_m, 0.0, kInf)
+  c.require(!association_predictive || proposal == ProposalKind::kFastSlam2, "association_predictive",
+            "needs proposal kFastSlam2 (FastSLAM 1.0 already scores each pairing at its sampled pose)")
       .nested("motion", motion.validate())
       .nested("perception", perception.validate())
       .nested("candidates", candidates.validate());

@@ -117,7 +117,7 @@ void runSteps(benchmark::State& state, FastSlamOptions o) {
 
 void BM_FilterStep(benchmark::State& state, bool deep_copy) {
   FastSlamOptions o;
-  o.resample_deep_copy = deep_copy;
+  o.experimental.resample_deep_copy = deep_copy;
   runSteps(state, o);
 }
 

@@ -231,7 +231,7 @@ TEST(slam_FastSlam, ResamplingSharesMapsCopyOnWrite) {
     FastSlamOptions o;
     o.num_particles = 50;
     o.perception.max_range_m = 10.0;
-    o.resample_deep_copy = deep;
+    o.experimental.resample_deep_copy = deep;
     FastSlam f(o, 7);
     f.initialise(Pose2{0.2, 0.1, 0.0}, prior);
     {

@@ -333,7 +333,7 @@ void FastSlam::finishStep(StepResult& result, const std::vector<ParticleStepInfo
     for (int k = 0; k < m; ++k) {
       next.push_back(particles_[idx[k]]);  // shares map and candidates (copy-on-write)
       Particle& np = next.back();
-      if (options_.resample_deep_copy) {
+      if (options_.experimental.resample_deep_copy) {
         np.map = np.map.deepCopy();
         for (auto& c : np.candidates) c = std::make_shared<Candidate>(*c);
       }

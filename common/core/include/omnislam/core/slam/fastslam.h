@@ -74,8 +74,13 @@ struct FastSlamOptions {
   /// Largest relative rescaling applied in one step (guards the first, least informed steps).
   double scale_correction_max_step = 0.05;
   double map_cell_size_m = 4.0;  ///< grid cell of the copy-on-write map [m]
-  /// Benchmark baseline only: resampling deep-copies every map and candidate (no sharing).
-  bool resample_deep_copy = false;
+  /// Experimental switches: no config key, no shipped use; each a baseline or a trial a benchmark or
+  /// test needs (docs/slam-core.md, "Presets"). Not part of any preset.
+  struct Experimental {
+    /// Benchmark baseline: resampling deep-copies every map and candidate (no sharing).
+    bool resample_deep_copy = false;
+  };
+  Experimental experimental;
   MotionNoiseOptions motion;
   PerceptionOptions perception;
   CandidateOptions candidates;

@@ -117,17 +117,15 @@ void runSteps(benchmark::State& state, FastSlamOptions o) {
 
 void BM_FilterStep(benchmark::State& state, bool deep_copy) {
   FastSlamOptions o;
-  o.resample_deep_copy = deep_copy;
+  o.experimental.resample_deep_copy = deep_copy;
   runSteps(state, o);
 }
 
-// FastSLAM 1.0 with each map-level association method (sampled: clutter density 0.1 / rad^2, the
-// default p_in 0.9).
+// FastSLAM 1.0 with each map-level association method.
 void BM_FilterStepFastSlam1(benchmark::State& state, AssociationMethod method) {
   FastSlamOptions o;
   o.proposal = ProposalKind::kFastSlam1;
   o.association = method;
-  o.clutter_density = 0.1;
   runSteps(state, o);
 }
 
@@ -166,7 +164,6 @@ void fastSlam1Args(benchmark::internal::Benchmark* b) {
 }
 BENCHMARK_CAPTURE(BM_FilterStepFastSlam1, hungarian, AssociationMethod::kHungarian)->Apply(fastSlam1Args);
 BENCHMARK_CAPTURE(BM_FilterStepFastSlam1, ml, AssociationMethod::kMaximumLikelihood)->Apply(fastSlam1Args);
-BENCHMARK_CAPTURE(BM_FilterStepFastSlam1, sampled, AssociationMethod::kSampled)->Apply(fastSlam1Args);
 
 // ---- One association level on a frame of many features (e.g. 256 of clutter) ----------------
 // Each of nz features is scored against 4 nz candidates; a feature's finite costs are the three

@@ -36,7 +36,7 @@
 #include "omnislam/lcmio/decode.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "omnislam/lcmio/validate.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 #include "omnislam/runtime/slam_driver.h"
 
 #ifndef OMNISLAM_SOURCE_DIR

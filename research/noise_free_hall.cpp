@@ -15,7 +15,7 @@
 
 #include "omnislam/core/angles.h"
 #include "omnislam/core/slam/fastslam.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 
 using namespace omnislam;
 using namespace omnislam::slam;

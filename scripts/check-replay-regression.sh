@@ -37,15 +37,10 @@ cases=(
   "mrclam-fs1-ml|mrclam_robot1.lcm|config/slam/mrclam.yaml|--association ml"
   "mrclam-fs2-hungarian|mrclam_robot1.lcm|config/slam/mrclam.yaml|--association hungarian --set filter.proposal=fastslam2"
   "mrclam-fs2-ml|mrclam_robot1.lcm|config/slam/mrclam.yaml|--association ml --set filter.proposal=fastslam2"
-  # The options the combinations above leave at their defaults: sampled association (FastSLAM 1.0
-  # only), the paper's weight (Alg. 4 at x_t, the density), P_new for unassociated measurements,
-  # predictive pairing.
-  "room-fs1-sampled|room.lcm|config/slam/room.yaml|--association sampled"
-  "mrclam-fs1-sampled|mrclam_robot1.lcm|config/slam/mrclam.yaml|--association sampled"
+  # The options the combinations above leave at their defaults: the paper's weight (Alg. 4 at x_t,
+  # the density) and predictive pairing.
   "hall-fs2-hungarian-weight-paper|sports_hall.lcm|config/slam/sports_hall.yaml|--association hungarian --set filter.weight_at_predicted_pose=false --set filter.weight_term=density"
-  "hall-fs2-ml-pnew-unassociated|sports_hall.lcm|config/slam/sports_hall.yaml|--association ml --set filter.weight_unassociated_with_p_new=true"
   "mrclam-fs2-hungarian-predictive|mrclam_robot1.lcm|config/slam/mrclam.yaml|--association hungarian --set filter.proposal=fastslam2 --set filter.association_predictive=true"
-  "room-fs1-hungarian-pnew-unassociated|room.lcm|config/slam/room.yaml|--association hungarian --set filter.weight_unassociated_with_p_new=true"
 )
 
 fail=0

@@ -20,9 +20,9 @@
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/log_writer.h"
 #include "omnislam/lcmio/node.h"
+#include "omnislam/config/slam_config.h"
 #include "omnislam/runtime/replay.h"
 #include "omnislam/runtime/slam_runtime.h"
-#include "slam_config.h"
 
 using namespace omnislam;
 using slamproc::DriverResult;

@@ -9,7 +9,7 @@
 
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 #include "smooth_log.h"
 
 using namespace omnislam;

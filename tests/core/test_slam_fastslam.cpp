@@ -76,11 +76,6 @@ TEST(slam_FastSlam, OptionsValidate) {
   o.proposal = ProposalKind::kFastSlam1;
   EXPECT_NE(o.validate().find("association_predictive needs proposal kFastSlam2"), std::string::npos) << o.validate();
   o = FastSlamOptions{};
-  o.weight_at_predicted_pose = true;  // FastSLAM 1.0 weighs at its sampled pose: it was silently ignored
-  EXPECT_EQ(o.validate(), "");
-  o.proposal = ProposalKind::kFastSlam1;
-  EXPECT_NE(o.validate().find("weight_at_predicted_pose needs proposal kFastSlam2"), std::string::npos) << o.validate();
-  o = FastSlamOptions{};
   o.resample_ess_fraction = 1.5;
   try {
     FastSlam f(o, 1);
@@ -88,23 +83,6 @@ TEST(slam_FastSlam, OptionsValidate) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("resample_ess_fraction"), std::string::npos);
   }
-  o = FastSlamOptions{};
-  o.association = AssociationMethod::kSampled;  // with the default FastSLAM 2.0 proposal
-  EXPECT_NE(o.validate().find("association kSampled needs proposal kFastSlam1"), std::string::npos) << o.validate();
-  o.proposal = ProposalKind::kFastSlam1;
-  EXPECT_EQ(o.validate(), "");
-  o.perception.detection_probability = 0.0;
-  EXPECT_NE(o.validate().find("perception.detection_probability must be in (0, 1) with association kSampled"),
-            std::string::npos)
-      << o.validate();
-  o.perception.detection_probability = 0.5;
-  o.weight_unassociated_with_p_new = true;
-  EXPECT_NE(o.validate().find("weight_unassociated_with_p_new must be false with association kSampled"),
-            std::string::npos)
-      << o.validate();
-  o.weight_unassociated_with_p_new = false;
-  o.clutter_density = 0.0;
-  EXPECT_NE(o.validate().find("clutter_density must be in (0, "), std::string::npos) << o.validate();
   // Paper defaults.
   const FastSlamOptions d;
   EXPECT_EQ(d.num_particles, 10);
@@ -253,7 +231,7 @@ TEST(slam_FastSlam, ResamplingSharesMapsCopyOnWrite) {
     FastSlamOptions o;
     o.num_particles = 50;
     o.perception.max_range_m = 10.0;
-    o.resample_deep_copy = deep;
+    o.experimental.resample_deep_copy = deep;
     FastSlam f(o, 7);
     f.initialise(Pose2{0.2, 0.1, 0.0}, prior);
     {
@@ -585,13 +563,12 @@ TEST(slam_FastSlam, LocalisationOnlyKeepsThePriorMapFixed) {
 
 // FastSLAM 1.0 (paper 002): poses from the motion model, association and weight at the sampled
 // pose. With the prior map it still localises (more particles: the proposal is not corrected), with
-// the paper's ML association and with sampled association (a clutter density of 0.1 / rad).
+// the paper's ML association.
 TEST(slam_FastSlam, FastSlam1LocalisesAndAssociates) {
-  for (const auto method : {AssociationMethod::kMaximumLikelihood, AssociationMethod::kSampled}) {
+  for (const auto method : {AssociationMethod::kMaximumLikelihood}) {
     FastSlamOptions o;
     o.proposal = ProposalKind::kFastSlam1;
     o.association = method;
-    o.clutter_density = 0.1;
     o.num_particles = 200;
     Pose2 truth;
     std::vector<Landmark> prior;
@@ -708,30 +685,6 @@ TEST(slam_FastSlam, PredictiveAssociationChargesThePoseCorrection) {
   }
 }
 
-// Sampled association: a particle's weight is the likelihood of the frame summed over the
-// assignments; with one landmark in range and one measurement, w = (1 - p_in) lambda (the
-// measurement is clutter, the landmark missed) + p_in N(z; h(L, x_t), Qt) (it is the landmark).
-// Two particles at different poses: the ratio of their weights is the closed form's, for a clutter
-// density below, near and above N (54 and 91 here), and whichever assignment each particle draws
-// (eight filter seeds).
-TEST(slam_FastSlam, SampledAssociationWeightSumsOverTheAssignments) {
-  for (int run = 0; run < 24; ++run) {
-    const double lambda = std::vector<double>{0.05, 80.0, 400.0}[run / 8];
-    const std::uint64_t seed = 1 + run % 8;
-    FastSlamOptions o;
-    o.proposal = ProposalKind::kFastSlam1;
-    o.association = AssociationMethod::kSampled;
-    o.clutter_density = lambda;
-    o.perception.detection_probability = 0.6;
-    const TwoParticleStep s = twoParticleStep(o, seed, Eigen::Vector3d(0.02, 0.02, 0.004));
-    ASSERT_EQ(s.w.size(), 2u);
-    std::vector<double> w_closed;
-    for (double log_n : s.log_n) w_closed.push_back((1.0 - 0.6) * lambda + 0.6 * std::exp(log_n));
-    EXPECT_NEAR(std::log(s.w[0] / s.w[1]), std::log(w_closed[0] / w_closed[1]), 1e-6)
-        << "lambda " << lambda << ", seed " << seed;
-  }
-}
-
 // posesBeforeResampling / weightsBeforeResampling: the set that was resampled (weights sum to 1, and
 // resampling then draws only poses from it).
 TEST(slam_FastSlam, ParticleSetBeforeResamplingIsReported) {
@@ -756,45 +709,3 @@ TEST(slam_FastSlam, ParticleSetBeforeResamplingIsReported) {
   }
 }
 
-// Paper 002's colour matching: two vertical lines 5 cm apart (indistinguishable by bearing from
-// 3 m) with different neighbourhood colours. Without the gate the measurement goes to the nearer
-// line; with it, to the line of matching colour; a landmark or measurement without a descriptor
-// is never gated.
-TEST(slam_FastSlam, ColourDescriptorGateSeparatesCloseLines) {
-  const auto run = [](double gate, bool measurement_has_colour) {
-    FastSlamOptions o;
-    o.num_particles = 1;
-    o.descriptor_gate = gate;
-    o.motion.min_sigma_xy_m = 1e-9;
-    o.motion.min_sigma_theta_rad = 1e-9;
-    o.motion.trans_sigma_per_m = o.motion.lateral_sigma_per_m = o.motion.trans_sigma_per_rad = 0.0;
-    o.motion.rot_sigma_per_rad = o.motion.rot_sigma_per_m = 0.0;
-    Landmark a, b;
-    a.id = 1;
-    b.id = 2;
-    a.kind = b.kind = LandmarkKind::kVerticalLine;
-    a.p_LinW_m = Eigen::Vector3d(3.0, 0.0, 0.0);
-    b.p_LinW_m = Eigen::Vector3d(3.0, 0.05, 0.0);
-    a.cov_LinW_m2 = b.cov_LinW_m2 = Eigen::Matrix3d::Identity() * 1e-4;
-    a.counter = b.counter = 50;
-    a.descriptor.valid = b.descriptor.valid = true;
-    a.descriptor.rgb = {200, 190, 170, 90, 60, 40};  // beige wall | door frame
-    b.descriptor.rgb = {90, 60, 40, 160, 110, 66};   // door frame | wooden door
-    FastSlam f(o, 1);
-    f.initialise(Pose2{0, 0, 0}, {a, b});
-    BearingMeasurement z;
-    z.kind = LandmarkKind::kVerticalLine;
-    z.azimuth_rad = 0.0;  // exactly at line a
-    z.cov_rad2 = Eigen::Matrix2d::Identity() * 1e-5;
-    z.descriptor.valid = measurement_has_colour;
-    z.descriptor.rgb = b.descriptor.rgb;  // ... but with line b's colours
-    const StepResult r = f.step(Pose2{0, 0, 0}, Pose2{0, 0, 0}, {z});
-    return r.landmark_of_measurement.at(0);
-  };
-  EXPECT_EQ(run(0.0, true), 1) << "no gate: the nearer line";
-  EXPECT_EQ(run(40.0, true), 2) << "gate: the line of matching colour";
-  EXPECT_EQ(run(40.0, false), 1) << "a measurement without colours is not gated";
-  FastSlamOptions bad;
-  bad.descriptor_gate = -1.0;
-  EXPECT_NE(bad.validate().find("descriptor_gate"), std::string::npos);
-}

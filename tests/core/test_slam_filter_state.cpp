@@ -115,13 +115,11 @@ std::vector<Variant> variants() {
   v.push_back({"fastslam2_hungarian", base});
   FastSlamOptions fs1 = base;
   fs1.proposal = ProposalKind::kFastSlam1;
-  fs1.association = AssociationMethod::kSampled;
   fs1.perception.detection_probability = 0.9;
-  v.push_back({"fastslam1_sampled", fs1});
-  FastSlamOptions kept = base;  // log weights carried between steps, scale anchoring, colour gate
+  v.push_back({"fastslam1_hungarian", fs1});
+  FastSlamOptions kept = base;  // log weights carried between steps, scale anchoring
   kept.resample_ess_fraction = 0.5;
   kept.odometry_scale_correction = true;
-  kept.descriptor_gate = 50.0;
   kept.association = AssociationMethod::kMaximumLikelihood;
   v.push_back({"ess_resampling_scale_ml", kept});
   return v;

@@ -126,7 +126,7 @@ TEST(slam_MotionModel, ValidateNamesField) {
   EXPECT_NE(o.validate().find("min_sigma_xy_m"), std::string::npos);
   o = MotionNoiseOptions{};
   o.rot_sigma_per_m = -1.0;
-  EXPECT_NE(o.validate().find("rot_sigma_per_m must be in [0, inf]"), std::string::npos) << o.validate();
+  EXPECT_NE(o.validate().find("rot_sigma_per_m must be in [0, 10]"), std::string::npos) << o.validate();
 }
 
 }  // namespace

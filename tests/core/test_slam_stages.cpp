@@ -52,7 +52,6 @@ TEST(slam_Stages, HierarchicalAssociationLevel1IsTheBruteForceMinimumAndFeedsThe
   const FastSlamOptions options;
   const std::vector<std::shared_ptr<const Candidate>> no_candidates;
   const std::vector<stages::Measurement> no_measurements;
-  Rng rng(1);
   for (int trial = 0; trial < 100; ++trial) {
     const int nz = 1 + trial % 4, n = trial % 5;
     Eigen::MatrixXd cost(nz, n);
@@ -71,7 +70,7 @@ TEST(slam_Stages, HierarchicalAssociationLevel1IsTheBruteForceMinimumAndFeedsThe
       EXPECT_EQ(l1.landmark_of_measurement.size(), static_cast<size_t>(nz));
       return proposed;
     };
-    const stages::HierarchicalAssociation a = stages::associateHierarchically(level1, rng, propose, level2);
+    const stages::HierarchicalAssociation a = stages::associateHierarchically(level1, propose, level2);
     EXPECT_EQ(calls, 1);
     EXPECT_EQ(a.x_t.vec(), proposed.vec());
     double total = 0.0;
@@ -84,7 +83,6 @@ TEST(slam_Stages, HierarchicalAssociationLevel1IsTheBruteForceMinimumAndFeedsThe
     EXPECT_NEAR(total, bruteForceMinimum(cost, cost_new), 1e-9) << "trial " << trial;
     EXPECT_EQ(a.leftover, leftover);
     EXPECT_TRUE(a.candidate_of_leftover.empty());  // level 2 disabled (localisation only)
-    EXPECT_EQ(a.level1.log_w_association, 0.0);
   }
 }
 
@@ -111,7 +109,7 @@ TEST(slam_Stages, MissesCountDownAndDelete) {
   map.apply({}, {seen_often, last_chance, far});
   stages::ParticleUpdate up;
   std::vector<LandmarkMap::Ref> near;
-  stages::accountMisses(map, Pose2{0.0, 0.0, 0.0}, Eigen::Vector3d::Zero(), o, stages::WeightAlg4{}, near, up);
+  stages::accountMisses(map, Pose2{0.0, 0.0, 0.0}, Eigen::Vector3d::Zero(), o, near, up);
   EXPECT_DOUBLE_EQ(up.log_w, 2.0 * std::log(1.0 - o.perception.detection_probability));
   ASSERT_EQ(up.edits.size(), 2u);
   EXPECT_EQ(up.num_deleted, 1);
@@ -141,42 +139,30 @@ TEST(slam_Stages, TypeIAndIIRule) {
   EXPECT_FALSE(correctsPoseAndWeighs(l));
 }
 
-// The options map to one variant; a combination that makes no sense cannot be written as a type
-// (static_asserts) and is refused from the options with validate()'s message.
-static_assert(!std::is_constructible_v<stages::DeterministicAssociation, stages::AssociationSampling>,
-              "FastSLAM 2.0 and level 2 cannot sample their association");
-static_assert(!std::is_constructible_v<stages::FilterVariant, stages::AssociationSampling>);
-
+// The options map to one variant; a combination that makes no sense (a pair score for FastSLAM 1.0,
+// which has none) is refused from the options with validate()'s message.
 TEST(slam_Stages, OptionsMapToOneVariant) {
   FastSlamOptions o;
   const stages::FilterVariant paper = stages::filterVariantOf(o);
   ASSERT_TRUE(std::holds_alternative<stages::FastSlam2>(paper));
   EXPECT_TRUE(std::holds_alternative<stages::CorrectedPairScore>(std::get<stages::FastSlam2>(paper).pair_score));
   EXPECT_TRUE(std::holds_alternative<stages::WeightAlg4>(stages::weightingOf(paper)));
-  EXPECT_TRUE(std::holds_alternative<stages::HungarianAssociation>(stages::mapAssociationOf(paper)));
+  EXPECT_TRUE(std::holds_alternative<stages::HungarianAssociation>(stages::associationOf(paper)));
 
   o.proposal = ProposalKind::kFastSlam1;
-  o.association = AssociationMethod::kSampled;
-  o.clutter_density = 0.5;
-  const stages::FilterVariant sampled = stages::filterVariantOf(o);
-  ASSERT_TRUE(std::holds_alternative<stages::FastSlam1>(sampled));
-  const auto& s = std::get<stages::AssociationSampling>(std::get<stages::FastSlam1>(sampled).association);
-  EXPECT_EQ(s.clutter_density, 0.5);
-  EXPECT_TRUE(std::holds_alternative<stages::WeightAssociationSum>(stages::weightingOf(sampled)));
-  EXPECT_TRUE(std::holds_alternative<stages::HungarianAssociation>(stages::candidateAssociationOf(sampled)));
-
   o.association = AssociationMethod::kMaximumLikelihood;
+  EXPECT_TRUE(std::holds_alternative<stages::FastSlam1>(stages::filterVariantOf(o)));
   EXPECT_TRUE(std::holds_alternative<stages::WeightMarginal>(stages::weightingOf(stages::filterVariantOf(o))));
   EXPECT_TRUE(std::holds_alternative<stages::MaximumLikelihoodAssociation>(
-      stages::candidateAssociationOf(stages::filterVariantOf(o))));
+      stages::associationOf(stages::filterVariantOf(o))));
 
-  o.proposal = ProposalKind::kFastSlam2;
-  o.association = AssociationMethod::kSampled;
+  o.association_predictive = true;
   try {
     (void)stages::filterVariantOf(o);
-    FAIL() << "FastSLAM 2.0 with sampled association was accepted";
+    FAIL() << "FastSLAM 1.0 with a predictive pair score was accepted";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("kSampled needs proposal kFastSlam1"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("association_predictive needs proposal kFastSlam2"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -145,7 +145,7 @@ TEST(SlamCheckpoint, UnusableCheckpointsStopTheProgramAtStartWithTheReason) {
       {write("text", {'h', 'e', 'l', 'l', 'o', '\n'}), "truncated", {}, hallFixture()},
       {write("magic", std::vector<uint8_t>(bytes.size(), 'x')), "wrong magic", {}, hallFixture()},
       {write("version", version), "format version 7, this program reads version 1", {}, hallFixture()},
-      {write("particles", bytes), "written with other options: 'filter: 10 particles", {"--particles", "20"}, hallFixture()},
+      {write("particles", bytes), "written with other options: 'filter: particles=10 ", {"--particles", "20"}, hallFixture()},
       {write("otherlog", bytes), "of another log", {}, t::sourcePath("tests/data/regression/room.lcm")},
   };
   for (const Case& c : cases) {

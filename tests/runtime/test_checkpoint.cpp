@@ -200,7 +200,7 @@ TEST(Checkpoint, OtherOptionsOrDamageAreRefusedWithTheReasonAndLeaveTheDriverAlo
   };
   SlamProcessOptions more = opt;
   more.filter.num_particles = 20;
-  EXPECT_NE(reason(file, more).find("written with other options: 'filter: 8 particles"), std::string::npos)
+  EXPECT_NE(reason(file, more).find("written with other options: 'filter: particles=8 "), std::string::npos)
       << reason(file, more);
   SlamProcessOptions seed = opt;
   seed.seed = 9;

@@ -1,14 +1,16 @@
-// The SLAM process config (config/slam/*.yaml, procs/slam/slam_config.h): the shipped file loads
+// The SLAM process config (config/slam/*.yaml, common/config/include/omnislam/config/slam_config.h): the shipped file loads
 // with the paper's values, and every mistake names its key.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "omnislam/core/angles.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
+#include "omnislam/core/slam/options_table.h"
 
 using namespace omnislam;
 using namespace omnislam::slamproc;
@@ -97,21 +99,14 @@ TEST(SlamConfig, CheckpointKeys) {
 
 // One name table serves the config key, --association and the start-up echo.
 TEST(SlamConfig, AssociationNamesRoundTrip) {
-  EXPECT_EQ(associationNames(), (std::vector<std::string>{"hungarian", "ml", "sampled"}));
+  EXPECT_EQ(associationNames(), (std::vector<std::string>{"hungarian", "ml"}));
   EXPECT_EQ(associationFromName("hungarian"), slam::AssociationMethod::kHungarian);
   EXPECT_EQ(associationFromName("ml"), slam::AssociationMethod::kMaximumLikelihood);
-  EXPECT_EQ(associationFromName("sampled"), slam::AssociationMethod::kSampled);
+  EXPECT_THROW(associationFromName("sampled"), std::invalid_argument);  // removed (docs/decisions.md)
   EXPECT_THROW(associationFromName("greedy"), std::invalid_argument);
   const SlamProcessOptions o = parseSlamOptions(config::Node::loadString("{}", "x"));
-  EXPECT_NE(describe(o).find("association hungarian, motion noise"), std::string::npos) << describe(o);
-}
-
-TEST(SlamConfig, SampledAssociationAndClutterDensity) {
-  const SlamProcessOptions o = parseSlamOptions(config::Node::loadString(
-      "filter: {association: sampled, proposal: fastslam1, clutter_density: 0.31}\n", "x"));
-  EXPECT_EQ(o.filter.association, slam::AssociationMethod::kSampled);
-  EXPECT_DOUBLE_EQ(o.filter.clutter_density, 0.31);
-  EXPECT_NE(describe(o).find("association sampled, clutter density 0.31, "), std::string::npos) << describe(o);
+  EXPECT_NE(describe(o).find("filter: particles=10 association=hungarian proposal=fastslam2 "), std::string::npos)
+      << describe(o);
 }
 
 TEST(SlamConfig, MistakesNameTheKey) {
@@ -122,12 +117,9 @@ TEST(SlamConfig, MistakesNameTheKey) {
   const Case cases[] = {
       {"particles: 10", "particles: 0", "filter.particles"},
       {"association: hungarian", "association: greedy", "filter.association"},
-      // the sports hall file has FastSLAM 2.0, which samples its pose from the association
-      {"association: hungarian", "association: sampled", "key 'filter.association' kSampled needs proposal kFastSlam1"},
       // FastSLAM 1.0 already scores each pairing at its sampled pose
       {"association_predictive: true", "association_predictive: true\n  proposal: fastslam1",
        "key 'filter.association_predictive' needs proposal kFastSlam2"},
-      {"association: hungarian", "association: hungarian\n  clutter_density: 0", "filter.clutter_density"},
       {"nz_min: 3", "nz_min: three", "filter.candidates.nz_min"},
       {"min_parallax_deg: 7.0", "min_parallax_deg: 120", "filter.candidates.min_parallax_deg"},
       {"detection_probability: 0.9", "detection_probability: 1.5", "filter.perception.detection_probability"},
@@ -229,6 +221,92 @@ TEST(SlamConfig, FileErrorsKeepTheirLineBesideOverrides) {
   } catch (const omnislam::config::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("got -4 (line " + std::to_string(line) + ")"), std::string::npos) << e.what();
   }
+}
+
+// filter.preset: paper 000 as published (its Sec. IV values and no deviation), paper 002's
+// variant, keys given beside a preset override it, and the echo names every deviation.
+TEST(SlamConfig, PresetsSetDefaultsAndKeysOverride) {
+  const auto load = [](const std::string& text) { return parseSlamOptions(config::Node::loadString(text, "x")); };
+  const slam::FastSlamOptions p0 = load("filter: {preset: paper000}\n").filter;
+  EXPECT_EQ(p0.num_particles, 10);
+  EXPECT_EQ(p0.proposal, slam::ProposalKind::kFastSlam2);
+  EXPECT_EQ(p0.association, slam::AssociationMethod::kHungarian);
+  EXPECT_EQ(p0.candidates.nz_min, 3);
+  EXPECT_EQ(p0.candidates.ncross_valid, 5);
+  EXPECT_NEAR(p0.candidates.min_parallax_rad, 7.0 * kPi / 180.0, 1e-3);
+  EXPECT_EQ(p0.candidates.d_min_m, 8.0);
+  EXPECT_EQ(p0.candidates.initial_cov_diag_m2, Eigen::Vector3d::Constant(0.0025));
+  EXPECT_EQ(p0.p_new_mahalanobis_sq, 64.0);
+  EXPECT_EQ(p0.resample_ess_fraction, 1.0);
+  EXPECT_TRUE(slam::presetDeviations(p0).empty());
+  EXPECT_NE(describe(load("filter: {preset: paper000}\n")).find("deviations from paper 000: none"), std::string::npos);
+
+  const slam::FastSlamOptions p2 = load("filter: {preset: paper002}\n").filter;
+  EXPECT_EQ(p2.proposal, slam::ProposalKind::kFastSlam1);
+  EXPECT_EQ(p2.association, slam::AssociationMethod::kMaximumLikelihood);
+  EXPECT_EQ(p2.motion.model, slam::MotionNoiseModel::kTranslateThenRotate);
+  const slam::FastSlamOptions p2_hungarian = load("filter: {preset: paper002, association: hungarian}\n").filter;
+  EXPECT_EQ(p2_hungarian.association, slam::AssociationMethod::kHungarian);
+  EXPECT_EQ(p2_hungarian.proposal, slam::ProposalKind::kFastSlam1);
+
+  const SlamProcessOptions rec = load("filter: {preset: recommended, association_predictive: true}\n");
+  EXPECT_EQ(load("filter: {preset: recommended}\n").filter.candidates.refine_initial_point,
+            slam::FastSlamOptions{}.candidates.refine_initial_point);
+  const std::string echo = describe(rec);
+  for (const char* d : {"inflate_azimuth_near_zenith=true", "association_predictive=true",
+                        "candidates.initial_cov_from_triangulation=true", "candidates.refine_initial_point=true"}) {
+    EXPECT_NE(echo.find(d), std::string::npos) << d << " in " << echo;
+  }
+  try {
+    load("filter: {preset: paper001}\n");
+    FAIL() << "an unknown preset was accepted";
+  } catch (const config::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("filter.preset"), std::string::npos) << e.what();
+  }
+}
+
+// The options tables drive the parser and the core's validation alike: every numeric key accepts
+// its upper bound (its lower one when the upper is open), stored in the member's units, and refuses a value beyond it with its key named;
+// the core refuses the member beyond its range with the field named; every default is in range.
+// `companion` (a "key: value" of the same section) is written beside every other key: a value that
+// other keys constrain (ncross_valid needs enough pairs of max_observations) is tested against it.
+template <class S, class Get>
+void expectTableDrivesParserAndCore(const std::string& section, const std::vector<slam::options::Field<S>>& table,
+                                    Get member_of, const std::string& companion = "") {
+  using slam::options::Kind;
+  EXPECT_EQ(slam::options::checkRanges(S{}, table), "") << section;
+  for (const auto& f : table) {
+    if (f.kind != Kind::kReal && f.kind != Kind::kInt) continue;
+    if (!std::isfinite(f.hi)) continue;  // an unlimited end: nothing beyond it
+    const double edge = f.bounds == slam::options::Bounds::kHighOpen ? f.lo : f.hi;
+    std::ostringstream ok, bad;
+    const std::string with = companion.empty() || companion.rfind(f.key, 0) == 0 ? "" : ", " + companion;
+    ok << "filter: {" << section << f.key << ": " << edge << with << "}" << std::string(section.empty() ? "" : "}") << "\n";
+    bad << "filter: {" << section << f.key << ": " << (f.hi + 1.0) * 2.0 << with << "}" << std::string(section.empty() ? "" : "}") << "\n";
+    const SlamProcessOptions o = parseSlamOptions(config::Node::loadString(ok.str(), "x"));
+    const S& parsed = member_of(o);
+    EXPECT_NEAR(f.value(parsed), edge, 1e-9 * std::max(1.0, std::abs(edge))) << f.key;
+    try {
+      parseSlamOptions(config::Node::loadString(bad.str(), "x"));
+      ADD_FAILURE() << f.key << " accepted beyond its range";
+    } catch (const config::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(f.key) + "' must be"), std::string::npos) << e.what();
+    }
+    S beyond = parsed;
+    if (f.kind == Kind::kReal) beyond.*f.real = f.memberHi() * 2.0 + 1.0;
+    else beyond.*f.integer = static_cast<int>(f.hi) * 2 + 1;
+    EXPECT_EQ(slam::options::checkRanges(beyond, table).rfind(std::string(f.field) + " must be in ", 0), 0u)
+        << slam::options::checkRanges(beyond, table);
+  }
+}
+
+TEST(SlamConfig, OptionsTablesDriveParserAndCore) {
+  namespace opt = slam::options;
+  expectTableDrivesParserAndCore("", opt::fastSlamFields(), [](const SlamProcessOptions& o) -> const slam::FastSlamOptions& { return o.filter; });
+  expectTableDrivesParserAndCore("motion: {", opt::motionFields(), [](const SlamProcessOptions& o) -> const slam::MotionNoiseOptions& { return o.filter.motion; });
+  expectTableDrivesParserAndCore("perception: {", opt::perceptionFields(), [](const SlamProcessOptions& o) -> const slam::PerceptionOptions& { return o.filter.perception; });
+  expectTableDrivesParserAndCore("candidates: {", opt::candidateFields(), [](const SlamProcessOptions& o) -> const slam::CandidateOptions& { return o.filter.candidates; },
+                                 "max_observations: 1000");
 }
 
 }  // namespace

@@ -15,7 +15,7 @@
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/log_writer.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 
 using namespace omnislam;
 

@@ -1,6 +1,7 @@
 // Checked YAML access: see yaml_node.h.
 #include "omnislam/config/yaml_node.h"
 
+#include <algorithm>
 #include <yaml-cpp/depthguard.h>
 
 #include <charconv>
@@ -360,15 +361,16 @@ std::string Node::getExistingFile(const std::string& key) const {
 }
 
 void Node::rejectUnknownKeys(std::initializer_list<const char*> known) const {
+  rejectUnknownKeysIn(std::vector<std::string>(known.begin(), known.end()));
+}
+
+void Node::rejectUnknownKeysIn(const std::vector<std::string>& known) const {
   for (const auto& kv : node_) {
     const std::string k = kv.first.Scalar();
-    bool ok = false;
-    for (const char* c : known) ok = ok || k == c;
-    if (!ok) {
-      std::string list;
-      for (const char* c : known) list += (list.empty() ? "" : ", ") + std::string(c);
-      throw ConfigError(where(k) + " is not a known key (known here: " + list + ")" + origin(k, kv.first));
-    }
+    if (std::find(known.begin(), known.end(), k) != known.end()) continue;
+    std::string list;
+    for (const auto& c : known) list += (list.empty() ? "" : ", ") + c;
+    throw ConfigError(where(k) + " is not a known key (known here: " + list + ")" + origin(k, kv.first));
   }
 }
 

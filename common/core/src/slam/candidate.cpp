@@ -9,25 +9,15 @@
 
 #include "omnislam/core/slam/landmark_type.h"
 #include "omnislam/core/slam/triangulation.h"
+#include "omnislam/core/slam/options_table.h"
 #include "omnislam/core/slam/validation.h"
 
 namespace omnislam::slam {
 
 std::string CandidateOptions::validate() const {
-  const double inf = std::numeric_limits<double>::infinity();
+  const std::string ranges = options::checkRanges(*this, options::candidateFields());  // options_table.h
+  if (!ranges.empty()) return ranges;
   detail::FieldChecker c;
-  c.inClosed("nz_min", nz_min, 2, 1e6)
-      .inClosed("ncross_valid", ncross_valid, 1, 1e6)
-      .inRightOpen("min_parallax_rad", min_parallax_rad, 0.0, kPi)
-      .inClosed("min_height_above_camera_m", min_height_above_camera_m, -inf, inf)
-      .inLeftOpen("d_min_m", d_min_m, 0.0, inf)
-      .inLeftOpen("initial_cov_diag_m2.x", initial_cov_diag_m2.x(), 0.0, inf)
-      .inLeftOpen("initial_cov_diag_m2.y", initial_cov_diag_m2.y(), 0.0, inf)
-      .inLeftOpen("initial_cov_diag_m2.z", initial_cov_diag_m2.z(), 0.0, inf)
-      .inClosed("refine_iterations", refine_iterations, 0, 100)
-      .inClosed("max_observations", max_observations, 2, 1000)
-      .inClosed("min_range_m", min_range_m, 0.0, inf)
-      .inLeftOpen("max_range_m", max_range_m, min_range_m, inf);
   // NCROSS_valid cross-points need enough pairs among the kept rays.
   c.require(static_cast<long>(max_observations) * (max_observations - 1) / 2 >= ncross_valid, "max_observations",
             "must give at least ncross_valid pairs: n (n - 1) / 2 >= ncross_valid");
@@ -93,13 +83,13 @@ double totalLogLikelihood(const Candidate& c, const Eigen::Vector3d& X) {
 }
 
 // Validity d): X within [min_range_m, max_range_m] of every observation's optical centre.
-bool insideRanges(const Candidate& c, const Eigen::Vector3d& X, const CandidateOptions& o) {
-  if (o.min_range_m <= 0.0 && o.max_range_m == std::numeric_limits<double>::infinity()) return true;
+bool insideRanges(const Candidate& c, const Eigen::Vector3d& X, const RangeLimits& o) {
+  if (o.min_m <= 0.0 && o.max_m == std::numeric_limits<double>::infinity()) return true;
   const bool line = c.kind == LandmarkKind::kVerticalLine;
   for (const auto& oi : c.observations) {
     const Eigen::Vector3d d = X - oi.p_CinW_m;
     const double r = line ? std::hypot(d.x(), d.y()) : d.norm();
-    if (r < o.min_range_m || r > o.max_range_m) return false;
+    if (r < o.min_m || r > o.max_m) return false;
   }
   return true;
 }
@@ -121,7 +111,8 @@ int distinctViews(const Candidate& c, const Eigen::Vector3d& X, double spacing_r
 
 // Gauss-Newton on sum_i |z_i - h(X, x_i)|^2_{Q_i^-1}, starting from X0; returns the improved point
 // or X0. Vertical lines move in x-y only.
-Eigen::Vector3d refinePoint(const Candidate& c, const Eigen::Vector3d& X0, double ll0, const CandidateOptions& o) {
+Eigen::Vector3d refinePoint(const Candidate& c, const Eigen::Vector3d& X0, double ll0, const CandidateOptions& o,
+                            const RangeLimits& range) {
   Eigen::Vector3d X = X0;
   double ll = ll0;
   const bool line = c.kind == LandmarkKind::kVerticalLine;
@@ -151,7 +142,7 @@ Eigen::Vector3d refinePoint(const Candidate& c, const Eigen::Vector3d& X0, doubl
     }
     const Eigen::Vector3d Xn = X + dx;
     if (!line && o.require_above_camera && !(Xn.z() > min_cam_z + o.min_height_above_camera_m)) break;
-    if (!insideRanges(c, Xn, o)) break;  // d)
+    if (!insideRanges(c, Xn, range)) break;  // d)
     const double lln = totalLogLikelihood(c, Xn);
     if (!(lln > ll)) break;
     X = Xn;
@@ -163,7 +154,8 @@ Eigen::Vector3d refinePoint(const Candidate& c, const Eigen::Vector3d& X0, doubl
 
 }  // namespace
 
-CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions& o, double p_new_mahalanobis_sq) {
+CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions& o, double p_new_mahalanobis_sq,
+                                      const RangeLimits& range) {
   CandidateEvaluation ev;
   const int n = static_cast<int>(c.observations.size());
   if (n < 2) return ev;
@@ -181,7 +173,7 @@ CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions
           !(x->p_XinW_m.z() > std::max(oa.p_CinW_m.z(), ob.p_CinW_m.z()) + o.min_height_above_camera_m)) {
         continue;  // b)
       }
-      if (!insideRanges(c, x->p_XinW_m, o)) continue;  // d)
+      if (!insideRanges(c, x->p_XinW_m, range)) continue;  // d)
       double sum_ll = 0.0;
       bool ok = true;
       for (const auto& oi : c.observations) {  // c)
@@ -213,7 +205,7 @@ CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions
   ev.ready = c.num_associated >= o.nz_min && ev.num_valid >= o.ncross_valid && ev.valid_with_latest;
   if (ev.ready && !point) ev.ready = distinctViews(c, ev.best_p_LinW_m, 0.5 * o.min_parallax_rad) >= 3;  // e)
   if (ev.ready && o.refine_initial_point) {
-    ev.best_p_LinW_m = refinePoint(c, ev.best_p_LinW_m, ev.best_log_likelihood, o);
+    ev.best_p_LinW_m = refinePoint(c, ev.best_p_LinW_m, ev.best_log_likelihood, o, range);
   }
   if (ev.has_best) {
     ev.cov_m2 = initialCovariance(c, ev.best_p_LinW_m, o);

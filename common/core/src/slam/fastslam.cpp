@@ -11,6 +11,7 @@
 #include <variant>
 
 #include "omnislam/core/slam/filter_stages.h"
+#include "omnislam/core/slam/options_table.h"
 #include "omnislam/core/slam/resampling.h"
 #include "omnislam/core/slam/validation.h"
 
@@ -37,36 +38,60 @@ std::vector<std::int64_t> landmarkIdsOf(const std::vector<int>& landmark_of_meas
 
 // ---------------------------------------------------------------------------------------------
 std::string FastSlamOptions::validate() const {
+  const std::string ranges = options::checkRanges(*this, options::fastSlamFields());  // options_table.h
+  if (!ranges.empty()) return ranges;
   detail::FieldChecker c;
-  c.inClosed("num_particles", num_particles, 1, 1e6)
-      .require(association == AssociationMethod::kHungarian || association == AssociationMethod::kMaximumLikelihood ||
-                   association == AssociationMethod::kSampled,
-               "association", "must be kHungarian, kMaximumLikelihood or kSampled")
-      .require(association != AssociationMethod::kSampled || proposal == ProposalKind::kFastSlam1, "association",
-               "kSampled needs proposal kFastSlam1 (FastSLAM 2.0 samples the pose from the association)")
-      .require(association != AssociationMethod::kSampled ||
-                   (perception.detection_probability > 0.0 && perception.detection_probability < 1.0),
-               "perception.detection_probability", "must be in (0, 1) with association kSampled")
-      .require(association != AssociationMethod::kSampled || !weight_unassociated_with_p_new,
-               "weight_unassociated_with_p_new", "must be false with association kSampled (the clutter density "
-               "already weighs the unassigned measurements)")
-      .require(!association_predictive || proposal == ProposalKind::kFastSlam2, "association_predictive",
-               "needs proposal kFastSlam2 (FastSLAM 1.0 already scores each pairing at its sampled pose)")
+  c.require(!association_predictive || proposal == ProposalKind::kFastSlam2, "association_predictive",
+            "needs proposal kFastSlam2 (FastSLAM 1.0 already scores each pairing at its sampled pose)")
       .require(!weight_at_predicted_pose || proposal == ProposalKind::kFastSlam2, "weight_at_predicted_pose",
                "needs proposal kFastSlam2 (FastSLAM 1.0 weighs at its sampled pose; it would be ignored)")
-      .inLeftOpen("clutter_density", clutter_density, 0.0, 1e6)
-      .require(proposal == ProposalKind::kFastSlam2 || proposal == ProposalKind::kFastSlam1, "proposal",
-               "must be kFastSlam2 or kFastSlam1")
-      .inLeftOpen("p_new_mahalanobis_sq", p_new_mahalanobis_sq, 0.0, kInf)
-      .inClosed("descriptor_gate", descriptor_gate, 0.0, 1e4)
-      .inLeftOpen("descriptor_update_rate", descriptor_update_rate, 0.0, 1.0)
-      .inClosed("resample_ess_fraction", resample_ess_fraction, 0.0, 1.0)
-      .inLeftOpen("scale_correction_max_step", scale_correction_max_step, 0.0, 1.0)
-      .inLeftOpen("map_cell_size_m", map_cell_size_m, 0.0, kInf)
       .nested("motion", motion.validate())
       .nested("perception", perception.validate())
       .nested("candidates", candidates.validate());
   return c.message();
+}
+
+FastSlamOptions presetOptions(Preset preset) {
+  FastSlamOptions o;  // kRecommended: the in-class defaults
+  if (preset == Preset::kRecommended) return o;
+  // Both papers: the measurement covariance as published, Sigma_0 fixed, the chosen cross-point as is.
+  o.inflate_azimuth_near_zenith = false;
+  o.candidates.initial_cov_from_triangulation = false;
+  o.candidates.refine_initial_point = false;
+  if (preset == Preset::kPaper000) return o;
+  // Paper 002: FastSLAM 1.0 ("traditional FastSLAM"), maximum likelihood per measurement (Sec. III-D),
+  // the translate-then-rotate odometry model (Sec. III-C), a 2D Gaussian triangulation error model.
+  o.proposal = ProposalKind::kFastSlam1;
+  o.association = AssociationMethod::kMaximumLikelihood;
+  o.motion.model = MotionNoiseModel::kTranslateThenRotate;
+  o.candidates.initial_cov_from_triangulation = true;
+  return o;
+}
+
+const std::vector<std::string>& presetNames() {
+  static const std::vector<std::string> names{"recommended", "paper000", "paper002"};  // index = Preset
+  return names;
+}
+
+std::vector<std::string> presetDeviations(const FastSlamOptions& o) {
+  const FastSlamOptions p = presetOptions(Preset::kPaper000);
+  std::vector<std::string> out;
+  const auto flag = [&out](const char* name, bool value, bool paper) {
+    if (value != paper) out.push_back(std::string(name) + "=" + (value ? "true" : "false"));
+  };
+  flag("inflate_azimuth_near_zenith", o.inflate_azimuth_near_zenith, p.inflate_azimuth_near_zenith);
+  flag("association_predictive", o.association_predictive, p.association_predictive);
+  flag("weight_at_predicted_pose", o.weight_at_predicted_pose, p.weight_at_predicted_pose);
+  if (o.weight_term != p.weight_term) out.push_back("weight_term=consistency");
+  flag("odometry_scale_correction", o.odometry_scale_correction, p.odometry_scale_correction);
+  flag("candidates.initial_cov_from_triangulation", o.candidates.initial_cov_from_triangulation,
+       p.candidates.initial_cov_from_triangulation);
+  flag("candidates.refine_initial_point", o.candidates.refine_initial_point, p.candidates.refine_initial_point);
+  flag("candidates.ray_motion_noise", o.candidates.ray_motion_noise, p.candidates.ray_motion_noise);
+  if (o.resample_ess_fraction != p.resample_ess_fraction) {
+    out.push_back("resample_ess_fraction=" + std::to_string(o.resample_ess_fraction).substr(0, 4));
+  }
+  return out;
 }
 
 struct FastSlam::ParticleStepInfo {
@@ -188,34 +213,25 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
   // Alg. 2. FastSLAM 1.0 samples x_t from the motion model first and scores the pairs there.
   Pose2 x_fs1;
   if (!fs2) x_fs1 = stages::sampleMotionModel(pred, rng_);
-  const Eigen::MatrixXd cost = fs2 ? stages::scorePairs(*fs2, vis, Z, pred, o.descriptor_gate)
-                                   : stages::scorePairsAtPose(vis, Z, x_fs1, o.descriptor_gate);
+  const Eigen::MatrixXd cost = fs2 ? stages::scorePairs(*fs2, vis, Z, pred) : stages::scorePairsAtPose(vis, Z, x_fs1);
   std::vector<double> cost_new(Z.size());
   for (std::size_t l = 0; l < Z.size(); ++l) cost_new[l] = Z[l].neg_log_p_new;
-  const stages::MapAssociationMethod method = stages::mapAssociationOf(variant_);
-  std::vector<double> log_prior;  // of the sampled association (FastSLAM 1.0 only: x_t is known)
-  if (const auto* sampling = std::get_if<stages::AssociationSampling>(&method)) {
-    log_prior = stages::sampledAssociationLogPrior(vis, x_fs1, p_CinR_vis_m, o.perception, sampling->clutter_density);
-  }
+  const stages::DeterministicAssociation method = stages::associationOf(variant_);
 
   // Sec. III-C: level 1 (the map), the proposal (Alg. 3), level 2 (the candidates, at x_t).
-  const stages::MapLevelInput level1{cost, cost_new, method, &log_prior};
-  const stages::CandidateLevelInput level2{p.candidates, Z, o, stages::candidateAssociationOf(variant_), o.update_map,
-                                           &candidate_cost_buffer_};
+  const stages::MapLevelInput level1{cost, cost_new, method};
+  const stages::CandidateLevelInput level2{p.candidates, Z, o, method, o.update_map, &candidate_cost_buffer_};
   const auto propose = [&](const stages::MapAssociation& l1) {
     return fs2 ? stages::sampleFastSlam2Pose(pred, vis, Z, l1.landmark_of_measurement, rng_) : x_fs1;
   };
-  const stages::HierarchicalAssociation a = stages::associateHierarchically(level1, rng_, propose, level2);
+  const stages::HierarchicalAssociation a = stages::associateHierarchically(level1, propose, level2);
   const Pose2& x_t = a.x_t;
 
-  // Alg. 4: landmark EKFs, the weight, types I/II, misses; P_new for the rest when asked.
+  // Alg. 4: landmark EKFs, the weight, types I/II, misses.
   const stages::Weighting weighting = stages::weightingOf(variant_);
   stages::ParticleUpdate up;
   stages::updateObservedLandmarks(pred, x_t, vis, Z, a.level1.landmark_of_measurement, o, weighting, up);
-  stages::accountMisses(p.map, x_t, p_CinR_vis_m, o, weighting, near, up);
-  if (o.weight_unassociated_with_p_new) {
-    for (const int l : a.leftover) up.log_w -= Z[l].neg_log_p_new;
-  }
+  stages::accountMisses(p.map, x_t, p_CinR_vis_m, o, near, up);
 
   ParticleStepInfo info;
   info.landmark_of_measurement = landmarkIdsOf(a.level1.landmark_of_measurement, vis);
@@ -233,7 +249,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
   p.map.apply(up.edits, inserts);
   p.pose = x_t;
   if (scale_anchored_) anchorScale(p, pred.x_prev, u, p_CinR_vis_m);
-  info.log_w = up.log_w + a.level1.log_w_association;
+  info.log_w = up.log_w;
   return info;
 }
 
@@ -321,7 +337,7 @@ void FastSlam::finishStep(StepResult& result, const std::vector<ParticleStepInfo
     for (int k = 0; k < m; ++k) {
       next.push_back(particles_[idx[k]]);  // shares map and candidates (copy-on-write)
       Particle& np = next.back();
-      if (options_.resample_deep_copy) {
+      if (options_.experimental.resample_deep_copy) {
         np.map = np.map.deepCopy();
         for (auto& c : np.candidates) c = std::make_shared<Candidate>(*c);
       }

@@ -76,9 +76,7 @@ bool candidateInsideRange(const Candidate& c, const Pose2& x_t, const Perception
   return std::abs(wrapAngle(az - per.azimuth_centre_rad)) <= per.azimuth_half_width_rad;
 }
 
-bool pairCompatible(const Measurement& m, const Landmark& L, double gate) {
-  return m.kind == L.kind && descriptorsCompatible(m.descriptor, L.descriptor, gate);
-}
+bool pairCompatible(const Measurement& m, const Landmark& L) { return m.kind == L.kind; }
 
 // Alg. 2 lines 6-11 for one pair whose zbar, H_x, H_m were predicted at xhat (lines 2-4).
 double correctedPairCost(const Landmark& L, const Measurement& m, const MotionPrediction& pred, const MeasVec& zbar,
@@ -116,7 +114,7 @@ double predictivePairCost(const Landmark& L, const Measurement& m, const MotionP
 // pair cost (a function of the above) per compatible measurement.
 template <class PairCost>
 Eigen::MatrixXd scorePairsAtPrediction(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
-                                       const MotionPrediction& pred, double gate, PairCost pair_cost) {
+                                       const MotionPrediction& pred, PairCost pair_cost) {
   const int nz = static_cast<int>(Z.size()), nv = static_cast<int>(visible.size());
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nz, nv, kInf);
   for (int j = 0; j < nv && nz > 0; ++j) {
@@ -126,7 +124,7 @@ Eigen::MatrixXd scorePairsAtPrediction(const std::vector<LandmarkMap::Ref>& visi
     const Eigen::Vector3d* cached_cam = nullptr;
     for (int l = 0; l < nz; ++l) {
       const Measurement& m = Z[l];
-      if (!pairCompatible(m, L, gate)) continue;
+      if (!pairCompatible(m, L)) continue;
       if (cached_cam == nullptr || *cached_cam != m.p_CinR_m) {  // Alg. 2 lines 2-4
         zbar = predictMeasurement(L.kind, L.p_LinW_m, pred.x_hat, m.p_CinR_m, &Hx, &Hm);
         cached_cam = &m.p_CinR_m;
@@ -144,49 +142,23 @@ Eigen::MatrixXd scorePairsAtPrediction(const std::vector<LandmarkMap::Ref>& visi
 FilterVariant filterVariantOf(const FastSlamOptions& o) {
   const std::string msg = o.validate();
   if (!msg.empty()) throw std::invalid_argument("FastSlamOptions: " + msg);
-  const DeterministicAssociation deterministic = o.association == AssociationMethod::kMaximumLikelihood
-                                                     ? DeterministicAssociation{MaximumLikelihoodAssociation{}}
-                                                     : DeterministicAssociation{HungarianAssociation{}};
-  if (o.proposal == ProposalKind::kFastSlam1) {
-    if (o.association == AssociationMethod::kSampled) return FastSlam1{AssociationSampling{o.clutter_density}};
-    return FastSlam1{std::visit([](auto m) { return MapAssociationMethod{m}; }, deterministic)};
-  }
-  FastSlam2 v{deterministic, CorrectedPairScore{}, WeightAlg4{}};
+  const DeterministicAssociation association = o.association == AssociationMethod::kMaximumLikelihood
+                                                   ? DeterministicAssociation{MaximumLikelihoodAssociation{}}
+                                                   : DeterministicAssociation{HungarianAssociation{}};
+  if (o.proposal == ProposalKind::kFastSlam1) return FastSlam1{association};
+  FastSlam2 v{association, CorrectedPairScore{}, WeightAlg4{}};
   if (o.association_predictive) v.pair_score = PredictivePairScore{};
   if (o.weight_at_predicted_pose) v.weight = WeightAtPredictedPose{};
   return v;
 }
 
 Weighting weightingOf(const FilterVariant& v) {
-  return std::visit(Overloaded{[](const FastSlam1& f) -> Weighting {
-                                 if (std::holds_alternative<AssociationSampling>(f.association)) {
-                                   return WeightAssociationSum{};
-                                 }
-                                 return WeightMarginal{};
-                               },
-                               [](const FastSlam2& f) {
-                                 return std::visit([](auto w) { return Weighting{w}; }, f.weight);
-                               }},
-                    v);
+  if (const auto* f = std::get_if<FastSlam2>(&v)) return std::visit([](auto w) { return Weighting{w}; }, f->weight);
+  return WeightMarginal{};
 }
 
-MapAssociationMethod mapAssociationOf(const FilterVariant& v) {
-  return std::visit(Overloaded{[](const FastSlam1& f) { return f.association; },
-                               [](const FastSlam2& f) {
-                                 return std::visit([](auto m) { return MapAssociationMethod{m}; }, f.association);
-                               }},
-                    v);
-}
-
-DeterministicAssociation candidateAssociationOf(const FilterVariant& v) {
-  return std::visit(Overloaded{[](const FastSlam1& f) -> DeterministicAssociation {
-                                 if (std::holds_alternative<MaximumLikelihoodAssociation>(f.association)) {
-                                   return MaximumLikelihoodAssociation{};
-                                 }
-                                 return HungarianAssociation{};  // Hungarian, or under sampling
-                               },
-                               [](const FastSlam2& f) { return f.association; }},
-                    v);
+DeterministicAssociation associationOf(const FilterVariant& v) {
+  return std::visit([](const auto& f) { return f.association; }, v);
 }
 
 // --- Measurements ------------------------------------------------------------------------------------
@@ -255,32 +227,32 @@ void predictVisibleLandmarks(const LandmarkMap& map, const Pose2& x_hat, const E
 
 // --- Alg. 2 -------------------------------------------------------------------------------------------
 Eigen::MatrixXd scorePairsCorrected(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
-                                    const MotionPrediction& pred, double descriptor_gate) {
-  return scorePairsAtPrediction(visible, Z, pred, descriptor_gate, correctedPairCost);
+                                    const MotionPrediction& pred) {
+  return scorePairsAtPrediction(visible, Z, pred, correctedPairCost);
 }
 
 Eigen::MatrixXd scorePairsPredictive(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
-                                     const MotionPrediction& pred, double descriptor_gate) {
-  return scorePairsAtPrediction(visible, Z, pred, descriptor_gate, predictivePairCost);
+                                     const MotionPrediction& pred) {
+  return scorePairsAtPrediction(visible, Z, pred, predictivePairCost);
 }
 
 Eigen::MatrixXd scorePairs(const FastSlam2& variant, const std::vector<LandmarkMap::Ref>& visible,
-                           const std::vector<Measurement>& Z, const MotionPrediction& pred, double descriptor_gate) {
+                           const std::vector<Measurement>& Z, const MotionPrediction& pred) {
   if (std::holds_alternative<PredictivePairScore>(variant.pair_score)) {
-    return scorePairsPredictive(visible, Z, pred, descriptor_gate);
+    return scorePairsPredictive(visible, Z, pred);
   }
-  return scorePairsCorrected(visible, Z, pred, descriptor_gate);
+  return scorePairsCorrected(visible, Z, pred);
 }
 
 Eigen::MatrixXd scorePairsAtPose(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
-                                 const Pose2& x_t, double descriptor_gate) {
+                                 const Pose2& x_t) {
   const int nz = static_cast<int>(Z.size()), nv = static_cast<int>(visible.size());
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nz, nv, kInf);
   for (int j = 0; j < nv && nz > 0; ++j) {
     const Landmark& L = *visible[j].landmark;
     for (int l = 0; l < nz; ++l) {
       const Measurement& m = Z[l];
-      if (!pairCompatible(m, L, descriptor_gate)) continue;
+      if (!pairCompatible(m, L)) continue;
       MeasJac Hx, Hm;
       const auto zt = predictMeasurement(L.kind, L.p_LinW_m, x_t, m.p_CinR_m, &Hx, &Hm);
       if (!zt) continue;
@@ -293,11 +265,11 @@ Eigen::MatrixXd scorePairsAtPose(const std::vector<LandmarkMap::Ref>& visible, c
 }
 
 // --- Sec. III-C ---------------------------------------------------------------------------------------
-HierarchicalAssociation associateHierarchically(const MapLevelInput& level1, Rng& rng,
+HierarchicalAssociation associateHierarchically(const MapLevelInput& level1,
                                                 const std::function<Pose2(const MapAssociation&)>& propose,
                                                 const CandidateLevelInput& level2) {
   HierarchicalAssociation a;
-  a.level1 = associateWithMap(level1, rng);  // level 1: the map
+  a.level1 = associateWithMap(level1);  // level 1: the map
   a.x_t = propose(a.level1);                 // Alg. 3 (the candidates are scored at x_t)
   const std::vector<int>& lm_of_meas = a.level1.landmark_of_measurement;
   for (int l = 0; l < static_cast<int>(lm_of_meas.size()); ++l) {
@@ -308,44 +280,11 @@ HierarchicalAssociation associateHierarchically(const MapLevelInput& level1, Rng
   return a;
 }
 
-MapAssociation associateWithMap(const MapLevelInput& in, Rng& rng) {
+MapAssociation associateWithMap(const MapLevelInput& in) {
   MapAssociation out;
-  if (!std::holds_alternative<AssociationSampling>(in.method)) {
-    const AssociationMethod m = std::holds_alternative<HungarianAssociation>(in.method)
-                                    ? AssociationMethod::kHungarian
-                                    : AssociationMethod::kMaximumLikelihood;
-    out.landmark_of_measurement = associate(in.cost, in.cost_new, m);
-    return out;
-  }
-  // One joint assignment drawn with probability proportional to its likelihood ratio against "all
-  // clutter, all missed"; the pairs beyond the P_new gate (8 sigma by default) are left out, as by
-  // the other methods.
-  const Eigen::Index nz = in.cost.rows(), nv = in.cost.cols();
-  Eigen::MatrixXd log_r = Eigen::MatrixXd::Constant(nz, nv, -kInf);
-  for (Eigen::Index j = 0; j < nv; ++j) {
-    const double log_base = (*in.sampled_log_prior)[static_cast<std::size_t>(j)];
-    for (Eigen::Index l = 0; l < nz; ++l) {
-      if (std::isfinite(in.cost(l, j)) && in.cost(l, j) < in.cost_new[l]) log_r(l, j) = log_base - in.cost(l, j);
-    }
-  }
-  SampledAssociation draw = sampleAssociation(log_r, [&rng] { return rng.uniform01(); });
-  out.landmark_of_measurement = std::move(draw.landmark_of_measurement);
-  out.log_w_association = draw.log_normaliser;
+  const AssociationMethod m = methodEnum(in.method);
+  out.landmark_of_measurement = associate(in.cost, in.cost_new, m);
   return out;
-}
-
-std::vector<double> sampledAssociationLogPrior(const std::vector<LandmarkMap::Ref>& visible, const Pose2& x_t,
-                                               const Eigen::Vector3d& p_CinR_vis_m, const PerceptionOptions& per,
-                                               double clutter_density) {
-  const double pd = per.detection_probability;
-  std::vector<double> log_base;
-  log_base.reserve(visible.size());
-  for (const auto& r : visible) {
-    const Landmark& L = *r.landmark;
-    const bool in_range = insidePerceptualRange(L.p_LinW_m, L.kind, x_t, p_CinR_vis_m, per);
-    log_base.push_back(std::log(pd) - std::log(clutter_density) - (in_range ? std::log1p(-pd) : 0.0));
-  }
-  return log_base;
 }
 
 std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Pose2& x_t,
@@ -358,8 +297,8 @@ std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Po
   in.cost_buffer->assign(static_cast<size_t>(nl) * static_cast<size_t>(nc), kInf);
   Eigen::Map<Eigen::MatrixXd> cost(in.cost_buffer->data(), nl, nc);
   std::vector<double> cost_new(nl);
-  const double min_range_m = std::max(o.candidates.min_range_m, o.perception.min_range_m);
-  const double max_range_m = std::min(o.candidates.max_range_m, o.perception.max_range_m);
+  const double min_range_m = o.perception.min_range_m;
+  const double max_range_m = o.perception.max_range_m;
   // What a candidate predicts at x_t does not depend on the measurement: made once per candidate
   // (on its first pair), not once per pair.
   std::vector<CandidatePrediction> predictions(nl > 0 ? nc : 0);
@@ -369,7 +308,7 @@ std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Po
     const CandidateObservation now = makeObservation(m.kind, x_t, m.p_CinR_m, m.z, m.Q);  // once, not per candidate
     for (int c = 0; c < nc; ++c) {
       const Candidate& cand = *in.candidates[c];
-      if (cand.kind != m.kind || !descriptorsCompatible(m.descriptor, cand.descriptor, o.descriptor_gate)) continue;
+      if (cand.kind != m.kind) continue;
       cost(r, c) = -candidateLogLikelihood(cand, now, min_range_m, max_range_m, predictions[c]);
     }
   }
@@ -472,13 +411,11 @@ double weightTerm(WeightTerm form, const MeasVec& nu, const MeasMat& S) {
   return -0.5 * (m2 - static_cast<double>(nu.size()));
 }
 
-// Lines 11-14: log w^_j of a type I landmark, or nothing (no term: WeightAssociationSum, or no
-// prediction at xhat_t).
+// Lines 11-14: log w^_j of a type I landmark, or nothing (no prediction at xhat_t).
 std::optional<double> typeIWeight(const Weighting& weighting, WeightTerm form, const Landmark& L,
                                   const Measurement& m, const Innovation& in, const MotionPrediction& pred) {
   return std::visit(
       Overloaded{
-          [](WeightAssociationSum) -> std::optional<double> { return std::nullopt; },  // MapAssociation's sum
           [&](WeightMarginal) -> std::optional<double> { return weightTerm(form, in.nu, in.Qt); },  // N(z; h(L, x_t), Qt)
           [&](WeightAtPredictedPose) -> std::optional<double> {
             MeasJac Hxp, Hmp;
@@ -521,10 +458,8 @@ void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t, con
 }
 
 void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector3d& p_CinR_vis_m,
-                   const FastSlamOptions& o, const Weighting& weight, std::vector<LandmarkMap::Ref>& near,
-                   ParticleUpdate& out) {
+                   const FastSlamOptions& o, std::vector<LandmarkMap::Ref>& near, ParticleUpdate& out) {
   const PerceptionOptions& per = o.perception;
-  const bool sampled = std::holds_alternative<WeightAssociationSum>(weight);
   std::vector<const Landmark*>& updated = out.updated;
   std::sort(updated.begin(), updated.end());
   near.clear();
@@ -533,10 +468,9 @@ void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector
   const double log_miss = std::log1p(-per.detection_probability);
   for (const auto& r : near) {
     const bool seen = std::binary_search(updated.begin(), updated.end(), r.landmark);
-    if (seen && !sampled) continue;
-    if (!insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, x_t, p_CinR_vis_m, per)) continue;
-    out.log_w += log_miss;  // w_hat = 1 - p_in (sampled: for every landmark in range, r divides it out)
     if (seen) continue;
+    if (!insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, x_t, p_CinR_vis_m, per)) continue;
+    out.log_w += log_miss;  // w_hat = 1 - p_in
     LandmarkMap::Edit e;
     e.ref = r;
     e.value = *r.landmark;
@@ -584,10 +518,8 @@ void addRay(Candidate& cand, const Measurement& m, const Pose2& x_t, const FastS
 // Delayed initialisation: the landmark the candidate becomes when its cross-points meet the
 // conditions (evaluateCandidate), else nothing (its best estimate kept for the range test).
 std::optional<Landmark> tryInitialise(Candidate& cand, const FastSlamOptions& o, std::uint64_t& next_landmark_id) {
-  CandidateOptions co = o.candidates;  // validity d) with the tighter of the two range limits
-  co.min_range_m = std::max(co.min_range_m, o.perception.min_range_m);
-  co.max_range_m = std::min(co.max_range_m, o.perception.max_range_m);
-  const CandidateEvaluation ev = evaluateCandidate(cand, co, o.p_new_mahalanobis_sq);
+  const RangeLimits range{o.perception.min_range_m, o.perception.max_range_m};  // validity d)
+  const CandidateEvaluation ev = evaluateCandidate(cand, o.candidates, o.p_new_mahalanobis_sq, range);
   if (ev.ready) {
     Landmark lm;
     lm.id = next_landmark_id++;
@@ -664,9 +596,6 @@ CandidateUpdate updateCandidates(const std::vector<std::shared_ptr<const Candida
 }
 
 // --- Small rules --------------------------------------------------------------------------------------
-bool descriptorsCompatible(const ColourDescriptor& a, const ColourDescriptor& b, double gate) {
-  return gate <= 0.0 || !a.valid || !b.valid || a.distanceTo(b) <= gate;
-}
 
 int hitIncrement(double p_in) {
   if (p_in >= 0.5) return 1;

@@ -4,33 +4,12 @@
 #include <cmath>
 #include <limits>
 
-#include "omnislam/core/slam/validation.h"
+#include "omnislam/core/slam/options_table.h"
 
 namespace omnislam::slam {
 
 std::string MotionNoiseOptions::validate() const {
-  const double inf = std::numeric_limits<double>::infinity();
-  detail::FieldChecker c;
-  c.inClosed("trans_sigma_per_m", trans_sigma_per_m, 0.0, inf)
-      .inClosed("lateral_sigma_per_m", lateral_sigma_per_m, 0.0, inf)
-      .inClosed("trans_sigma_per_rad", trans_sigma_per_rad, 0.0, inf)
-      .inClosed("rot_sigma_per_rad", rot_sigma_per_rad, 0.0, inf)
-      .inClosed("rot_sigma_per_m", rot_sigma_per_m, 0.0, inf)
-      .inClosed("trans_sigma_per_sqrt_m", trans_sigma_per_sqrt_m, 0.0, inf)
-      .inClosed("lateral_sigma_per_sqrt_m", lateral_sigma_per_sqrt_m, 0.0, inf)
-      .inClosed("rot_sigma_per_sqrt_rad", rot_sigma_per_sqrt_rad, 0.0, inf)
-      .inClosed("rot_sigma_per_sqrt_m", rot_sigma_per_sqrt_m, 0.0, inf)
-      .require(model == MotionNoiseModel::kChord || model == MotionNoiseModel::kTranslateThenRotate, "model",
-               "must be kChord or kTranslateThenRotate")
-      .inClosed("err_tran_per_m", err_tran_per_m, 0.0, inf)
-      .inClosed("err_rot_per_rad", err_rot_per_rad, 0.0, inf)
-      .inClosed("err_drift_rad_per_m", err_drift_rad_per_m, 0.0, inf)
-      .inClosed("err_tran_per_sqrt_m", err_tran_per_sqrt_m, 0.0, inf)
-      .inClosed("err_rot_per_sqrt_rad", err_rot_per_sqrt_rad, 0.0, inf)
-      .inClosed("err_drift_rad_per_sqrt_m", err_drift_rad_per_sqrt_m, 0.0, inf)
-      .inLeftOpen("min_sigma_xy_m", min_sigma_xy_m, 0.0, inf)
-      .inLeftOpen("min_sigma_theta_rad", min_sigma_theta_rad, 0.0, inf);
-  return c.message();
+  return options::checkRanges(*this, options::motionFields());  // options_table.h
 }
 
 Pose2 odometryIncrement(const Pose2& odom_prev, const Pose2& odom_now) { return odom_prev.between(odom_now); }

@@ -4,23 +4,17 @@
 #include <cmath>
 
 #include "omnislam/core/slam/bearing_model.h"
+#include "omnislam/core/slam/options_table.h"
 #include "omnislam/core/slam/validation.h"
 
 namespace omnislam::slam {
 
 std::string PerceptionOptions::validate() const {
-  const double inf = std::numeric_limits<double>::infinity();
+  const std::string ranges = options::checkRanges(*this, options::perceptionFields());  // options_table.h
+  if (!ranges.empty()) return ranges;
   detail::FieldChecker c;
-  c.inClosed("min_elevation_rad", min_elevation_rad, -kPi / 2, kPi / 2)
-      .inClosed("max_elevation_rad", max_elevation_rad, min_elevation_rad, kPi / 2)
-      .inClosed("azimuth_centre_rad", azimuth_centre_rad, -kPi, kPi)
-      .inLeftOpen("azimuth_half_width_rad", azimuth_half_width_rad, 0.0, kPi)
-      .inClosed("min_range_m", min_range_m, 0.0, inf)
-      .inLeftOpen("max_range_m", max_range_m, min_range_m, inf)
-      .inRightOpen("detection_probability", detection_probability, 0.0, 1.0)
-      .inClosed("association_margin_rad", association_margin_rad, 0.0, kPi)
-      .inClosed("association_margin_m", association_margin_m, 0.0, inf)
-      .require(default_p_CinR_m.allFinite(), "default_p_CinR_m", "must be finite");
+  c.require(max_elevation_rad >= min_elevation_rad, "max_elevation_rad", "must be >= min_elevation_rad")
+      .require(max_range_m > min_range_m, "max_range_m", "must be > min_range_m");
   return c.message();
 }
 

@@ -80,6 +80,8 @@ class Node {
 
   /// Throws if the map has a key not in `known` (catches typos such as "sigm_px").
   void rejectUnknownKeys(std::initializer_list<const char*> known) const;
+  /// The same for a list built at run time (the keys of an options table, options_table.h).
+  void rejectUnknownKeysIn(const std::vector<std::string>& known) const;
 
   /// "file: key 'a.b' " prefix used in messages.
   std::string where(const std::string& key) const;

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "omnislam/core/byte_codec.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 #include "omnislam/runtime/slam_driver.h"
 
 namespace omnislam::slamproc {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "omnislam/core/slam/types.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 
 namespace omnislam::slamproc {
 

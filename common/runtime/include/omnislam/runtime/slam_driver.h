@@ -18,8 +18,8 @@
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "omnislam/config/slam_config.h"
 #include "omnislam/runtime/pairing.h"
-#include "slam_config.h"
 
 namespace omnislam::slamproc {
 

@@ -14,7 +14,7 @@
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/runtime/checkpoint.h"
 #include "omnislam/runtime/slam_driver.h"
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 
 namespace omnislam::slamproc {
 

@@ -42,14 +42,6 @@ struct CandidateOptions {
   int refine_iterations = 5;  ///< Gauss-Newton iterations of the refinement
   /// Rays kept per candidate (the oldest is dropped beyond this; bounds the O(n^3) evaluation).
   int max_observations = 16;
-  /// Validity d) [m]: the cross-point (and the refined point) must lie at a range within
-  /// [min_range_m, max_range_m] of the optical centre of every observation (horizontal range for
-  /// vertical lines, 3D for points): a landmark can only have been seen from inside the camera's
-  /// perceptual range. Rejects the degenerate cross-points of rays of different landmarks taken from
-  /// nearly the same place (they cross at the camera), which nothing else rejects for 2D lines.
-  /// FastSlam uses the tighter of these and PerceptionOptions' min/max_range_m. Default: no limit.
-  double min_range_m = 0.0;
-  double max_range_m = std::numeric_limits<double>::infinity();
   /// Deviation (the paper: false). A candidate's ray after the first gets, on top of the bearing
   /// variance, the heading variance of the motion model over the path since the first ray: the
   /// particle's path, sampled step by step, wanders that much between the rays, and a triangulation
@@ -59,6 +51,17 @@ struct CandidateOptions {
 
   /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
   std::string validate() const;
+};
+
+/// Validity d) [m]: the cross-point (and the refined point) must lie at a range within [min_m, max_m]
+/// of the optical centre of every observation (horizontal range for vertical lines, 3D for points):
+/// a landmark can only have been seen from inside the camera's perceptual range. Rejects the
+/// degenerate cross-points of rays of different landmarks taken from nearly the same place (they
+/// cross at the camera), which nothing else rejects for 2D lines. FastSlam passes
+/// PerceptionOptions' min/max_range_m. Default: no limit.
+struct RangeLimits {
+  double min_m = 0.0;
+  double max_m = std::numeric_limits<double>::infinity();
 };
 
 /// One measurement stored in a candidate, with the particle pose it was taken from.
@@ -104,12 +107,12 @@ struct CandidateEvaluation {
 /// Computes every cross-point of pairs of the candidate's rays and their validity:
 /// a) parallax > min_parallax_rad; b) (points, if required) above both optical centres;
 /// c) every observation i has (z_i - h(X, x_i))^T Q_i^-1 (...) < p_new_mahalanobis_sq, i.e. its
-///    probability exceeds its P_New; d) X within [min_range_m, max_range_m] of every optical centre.
+///    probability exceeds its P_New; d) X within `range` of every optical centre.
 /// For vertical lines ready also needs e): X seen from at least three views pairwise more than
 /// min_parallax_rad / 2 apart (two azimuth rays always cross, so one pair confirms nothing; a third
 /// view between the two of a valid pair does). Type I when both poses of the best pair are within d_min_m (x-y).
 CandidateEvaluation evaluateCandidate(const Candidate& candidate, const CandidateOptions& options,
-                                      double p_new_mahalanobis_sq);
+                                      double p_new_mahalanobis_sq, const RangeLimits& range = {});
 
 /// log p(z | x_t, C) for the level-2 association. With an estimate X (a valid cross-point):
 /// N(z; h(X, x_t), Q + H_m Sigma_X H_m^T). Without: the ray of the newest observation is

@@ -62,11 +62,8 @@ struct FastSlamOptions {
   int num_particles = 10;  ///< M (paper: 10)
   AssociationMethod association = AssociationMethod::kHungarian;
   ProposalKind proposal = ProposalKind::kFastSlam2;
-  /// Appearance gate (paper 002: lines are matched across frames by their neighbourhood colours):
-  /// when > 0, a measurement and a landmark or candidate that both carry a colour descriptor can be
-  /// associated only if their descriptors are closer than this (RGB units, Euclidean over the six
-  /// values). Descriptors are running means (weight descriptor_update_rate). 0 = off (default).
-  double descriptor_gate = 0.0;
+  /// Landmarks and candidates keep the running mean of their measurements' colour descriptors
+  /// (published with the map; the association does not use them), with this weight per update.
   double descriptor_update_rate = 0.2;
   /// false = localisation only: the map given to initialise() is fixed. Landmarks are associated
   /// and weigh the particles but are neither updated, counted, deleted nor created; no candidates.
@@ -87,15 +84,6 @@ struct FastSlamOptions {
   /// itself costs nothing. true (deviation): the predictive density N(z; h(mu_j, xhat), H_x R H_x^T +
   /// Q_jl) at the predicted pose, which charges the correction against the motion noise.
   bool association_predictive = false;
-  /// Multiply the weight by P_new for each measurement not associated with a map landmark
-  /// (FastSLAM's new-landmark likelihood; the paper does not, false).
-  bool weight_unassociated_with_p_new = false;
-  /// association = kSampled only: the density of clutter measurements (features of no map landmark:
-  /// moving objects, false detections, landmarks not yet mapped) per frame and per unit of the
-  /// measurement space [1/rad for azimuth-only features, 1/rad^2 for azimuth + elevation]. A pair
-  /// (l, j) has the likelihood ratio r = p_in N(z_l; h(L_j, x_t), Q_t) / (density (1 - p_in)) against
-  /// "l is clutter and j is missed" (docs/design/slam-core.md, "Sampled association").
-  double clutter_density = 1.0;
   /// Odometry scale anchoring (deviation, off by default = the paper): bearings do not observe the
   /// scale of map + path, so each particle keeps the maximum-likelihood factor s between its path and
   /// the odometry (ratio of their lengths along the direction of travel, for a random-walk odometry
@@ -105,8 +93,13 @@ struct FastSlamOptions {
   /// Largest relative rescaling applied in one step (guards the first, least informed steps).
   double scale_correction_max_step = 0.05;
   double map_cell_size_m = 4.0;  ///< grid cell of the copy-on-write map [m]
-  /// Benchmark baseline only: resampling deep-copies every map and candidate (no sharing).
-  bool resample_deep_copy = false;
+  /// Experimental switches: no config key, no shipped use; each a baseline or a trial a benchmark or
+  /// test needs (docs/slam-core.md, "Presets"). Not part of any preset.
+  struct Experimental {
+    /// Benchmark baseline: resampling deep-copies every map and candidate (no sharing).
+    bool resample_deep_copy = false;
+  };
+  Experimental experimental;
   MotionNoiseOptions motion;
   PerceptionOptions perception;
   CandidateOptions candidates;
@@ -114,6 +107,21 @@ struct FastSlamOptions {
   /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
   std::string validate() const;
 };
+
+/// Named settings of the filter (docs/slam-core.md, "Presets"). kRecommended is the in-class
+/// defaults of FastSlamOptions and its parts, the start of every shipped config; it deviates from
+/// paper 000 where the deviation was measured to help (the list in presetDeviations()).
+enum class Preset : std::uint8_t {
+  kRecommended = 0,
+  kPaper000 = 1,  ///< paper 000 as published: FastSLAM 2.0, Hungarian, Sigma_0 fixed, no refinement
+  kPaper002 = 2,  ///< paper 002 as published: FastSLAM 1.0, per-measurement ML, translate-then-rotate
+};
+/// The options of a preset (the config key `filter.preset` starts from them; keys given override).
+FastSlamOptions presetOptions(Preset preset);
+/// The names of `filter.preset`, in the order of Preset: "recommended", "paper000", "paper002".
+const std::vector<std::string>& presetNames();
+/// The fields in which `o` differs from paper 000 as published, as "field=value" (the start-up echo).
+std::vector<std::string> presetDeviations(const FastSlamOptions& o);
 
 /// One particle k of Y_t.
 struct Particle {

@@ -5,7 +5,7 @@
 //   predictVisibleLandmarks  (before Alg. 2)   the landmarks that can be seen from xhat_t
 //   scorePairs*              Alg. 2            -log phi_{l,j} for every measurement-landmark pair
 //   associateHierarchically  Sec. III-C        level 1 (map, Alg. 1 line 5), the proposal, level 2
-//     associateWithMap         level 1           Hungarian / ML / sampled on the map landmarks
+//     associateWithMap         level 1           Hungarian / ML on the map landmarks
 //     sampleFastSlam2Pose      Alg. 3            the FastSLAM 2.0 proposal (FastSLAM 1.0: before Alg. 2)
 //     associateWithCandidates  level 2           Hungarian / ML on the candidates (Alg. 4 line 28)
 //   updateObservedLandmarks  Alg. 4 lines 3-17 landmark EKFs, the type I weights, types I/II
@@ -57,11 +57,8 @@ std::optional<Measurement> prepareMeasurement(const BearingMeasurement& m, std::
 FilterVariant filterVariantOf(const FastSlamOptions& o);
 /// The weighting the variant implies.
 Weighting weightingOf(const FilterVariant& v);
-/// Level 1's method.
-MapAssociationMethod mapAssociationOf(const FilterVariant& v);
-/// Level 2's method: level 1's, except the Hungarian method under sampled association (candidates
-/// carry no weight, so a draw there would have no weight to go with it).
-DeterministicAssociation candidateAssociationOf(const FilterVariant& v);
+/// The association method of both levels (the map, then the candidates).
+DeterministicAssociation associationOf(const FilterVariant& v);
 
 // --- Alg. 1 line 3 --------------------------------------------------------------------------------
 struct MotionPrediction {
@@ -86,42 +83,39 @@ void predictVisibleLandmarks(const LandmarkMap& map, const Pose2& x_hat, const E
 
 // --- Alg. 2: measurement-landmark likelihoods ------------------------------------------------------
 // Each returns the N_z x N_vis matrix of -log phi_{l,j}; +infinity where the pair is impossible
-// (different kinds, descriptors further apart than descriptor_gate, no prediction, Q not PD).
+// (different kinds, no prediction, Q not PD).
 
 /// FastSLAM 2.0, the paper: after each pair's own pose correction (lines 2-11),
 /// mu_x,jl = xhat + Sigma_x,jl H_x^T Q_jl^-1 (z_l - zbar_j), phi = N(z_l; h(mu_j, mu_x,jl), Q_jl).
 Eigen::MatrixXd scorePairsCorrected(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
-                                    const MotionPrediction& pred, double descriptor_gate);
+                                    const MotionPrediction& pred);
 /// FastSLAM 2.0, deviation (association_predictive): N(z_l; zbar_j, H_x R_t H_x^T + Q_jl) at xhat_t.
 Eigen::MatrixXd scorePairsPredictive(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
-                                     const MotionPrediction& pred, double descriptor_gate);
+                                     const MotionPrediction& pred);
 /// FastSLAM 1.0: N(z_l; h(mu_j, x_t), Q_l + H_m Sigma_j H_m^T) at the sampled pose x_t.
 Eigen::MatrixXd scorePairsAtPose(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
-                                 const Pose2& x_t, double descriptor_gate);
+                                 const Pose2& x_t);
 /// FastSLAM 2.0 with its pair score (one of the two above).
 Eigen::MatrixXd scorePairs(const FastSlam2& variant, const std::vector<LandmarkMap::Ref>& visible,
-                           const std::vector<Measurement>& Z, const MotionPrediction& pred, double descriptor_gate);
+                           const std::vector<Measurement>& Z, const MotionPrediction& pred);
 
 // --- Sec. III-C: the hierarchical association ------------------------------------------------------
 /// Level 1: measurements against the visible map landmarks.
 struct MapAssociation {
   std::vector<int> landmark_of_measurement;  ///< per measurement: column of `visible`, -1 = none
-  double log_w_association = 0.0;  ///< sampled association: log of the sum over assignments; else 0
 };
 /// What level 1 needs besides its costs.
 struct MapLevelInput {
   const Eigen::MatrixXd& cost;          ///< Alg. 2, N_z x N_vis
   const std::vector<double>& cost_new;  ///< -log P_new,l per measurement
-  MapAssociationMethod method;
-  /// AssociationSampling only: per column log(p_in / (clutter_density (1 - p_in)^[in range of x_t])).
-  const std::vector<double>* sampled_log_prior = nullptr;
+  DeterministicAssociation method;
 };
 /// Level 2: the measurements level 1 left against the particle's candidates, at the sampled x_t.
 struct CandidateLevelInput {
   const std::vector<std::shared_ptr<const Candidate>>& candidates;
   const std::vector<Measurement>& Z;
   const FastSlamOptions& options;
-  DeterministicAssociation method;   ///< candidateAssociationOf()
+  DeterministicAssociation method;   ///< associationOf()
   bool enabled = true;               ///< false (localisation only): no level 2
   std::vector<double>* cost_buffer;  ///< scratch for the cost matrix, reused across calls
 };
@@ -134,17 +128,12 @@ struct HierarchicalAssociation {
 /// The paper's hierarchical association, both levels: level 1 on the map; then `propose` samples
 /// x_t given level 1 (Alg. 3; FastSLAM 1.0 returns the pose it sampled before Alg. 2), because the
 /// candidates' likelihoods are evaluated at x_t; then level 2 on the candidates with the rest.
-HierarchicalAssociation associateHierarchically(const MapLevelInput& level1, Rng& rng,
+HierarchicalAssociation associateHierarchically(const MapLevelInput& level1,
                                                 const std::function<Pose2(const MapAssociation&)>& propose,
                                                 const CandidateLevelInput& level2);
 
-/// Level 1 on its own (Alg. 1 line 5): Hungarian or ML via associate(); sampled draws one joint
-/// assignment with probability proportional to its likelihood ratio (pairs beyond P_new left out).
-MapAssociation associateWithMap(const MapLevelInput& in, Rng& rng);
-/// The per-column prior of the sampled association (MapLevelInput::sampled_log_prior).
-std::vector<double> sampledAssociationLogPrior(const std::vector<LandmarkMap::Ref>& visible, const Pose2& x_t,
-                                               const Eigen::Vector3d& p_CinR_vis_m, const PerceptionOptions& per,
-                                               double clutter_density);
+/// Level 1 on its own (Alg. 1 line 5): Hungarian or ML via associate().
+MapAssociation associateWithMap(const MapLevelInput& in);
 /// Level 2 on its own: per leftover measurement, the candidate index or -1 (a new candidate).
 std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Pose2& x_t,
                                          const std::vector<int>& leftover);
@@ -170,10 +159,9 @@ void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t, con
                              const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
                              const FastSlamOptions& o, const Weighting& weight, ParticleUpdate& out);
 /// Alg. 4 lines 18-25: w *= 1 - p_in and i_j - 1 for each unseen landmark inside the perceptual
-/// range of x_t; deleted when i_j < 0. WeightAssociationSum: every landmark in range counts 1 - p_in
-/// (its ratio divides it out again), the map edits as above. Only the weight when !update_map.
+/// range of x_t; deleted when i_j < 0. Only the weight when !update_map.
 void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector3d& p_CinR_vis_m,
-                   const FastSlamOptions& o, const Weighting& weight, std::vector<LandmarkMap::Ref>& near,
+                   const FastSlamOptions& o, std::vector<LandmarkMap::Ref>& near,
                    ParticleUpdate& out);
 
 // --- Sec. III-F 1: updateCandidateLandmarks() --------------------------------------------------------
@@ -190,8 +178,6 @@ CandidateUpdate updateCandidates(const std::vector<std::shared_ptr<const Candida
                                  const FastSlamOptions& o, std::uint64_t& next_landmark_id);
 
 // --- Small rules shared by the stages ---------------------------------------------------------------
-/// The appearance gate: false when both descriptors are valid and further apart than gate.
-bool descriptorsCompatible(const ColourDescriptor& a, const ColourDescriptor& b, double gate);
 /// Counter increment of a detection: 1 (the paper) when p_in >= 0.5, else ceil((1 - p_in) / p_in).
 int hitIncrement(double p_in);
 

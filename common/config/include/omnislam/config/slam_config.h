@@ -94,11 +94,16 @@ SlamProcessOptions loadSlamOptions(const std::string& path);
 /// The file with "dotted.key=value" overrides applied first (config::Node::loadFileWithOverrides).
 SlamProcessOptions loadSlamOptions(const std::string& path, const std::vector<std::string>& overrides);
 
-/// One line per option group, for the start-up echo.
+/// One line per option group, for the start-up echo: every filter key with its value (from the
+/// options tables, options_table.h) and the deviations from paper 000 that are on.
 std::string describe(const SlamProcessOptions& o);
 
+/// The filter's keys as a Markdown table (key, field, unit, range, default, meaning), generated from
+/// the options tables: the block of docs/slam-process.md that scripts/check-config-docs.py checks.
+std::string filterKeysMarkdown();
+
 /// The names of filter.association and of omnislam-slam --association, in the order of
-/// slam::AssociationMethod: "hungarian", "ml", "sampled".
+/// slam::AssociationMethod: "hungarian", "ml".
 const std::vector<std::string>& associationNames();
 /// The method of one of associationNames(); throws std::invalid_argument for any other name.
 slam::AssociationMethod associationFromName(const std::string& name);

@@ -1,5 +1,5 @@
 // SLAM process config parsing: see slam_config.h and docs/user/slam-process.md.
-#include "slam_config.h"
+#include "omnislam/config/slam_config.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "omnislam/core/angles.h"
+#include "omnislam/core/slam/options_table.h"
 
 namespace omnislam::slamproc {
 
@@ -20,78 +21,56 @@ int64_t seconds_us(const Node& n, const std::string& key, double lo, double hi, 
   return static_cast<int64_t>(std::llround(n.getDouble(key, lo, hi, static_cast<double>(def_us) * 1e-6) * 1e6));
 }
 
-void parseMotion(const Node& n, slam::MotionNoiseOptions& m) {
-  n.rejectUnknownKeys({"model", "err_tran_per_m", "err_rot_per_rad", "err_drift_rad_per_m", "err_tran_per_sqrt_m",
-                       "err_rot_per_sqrt_rad", "err_drift_rad_per_sqrt_m", "trans_sigma_per_m", "lateral_sigma_per_m", "trans_sigma_per_rad", "rot_sigma_per_rad",
-                       "rot_sigma_per_m", "trans_sigma_per_sqrt_m", "lateral_sigma_per_sqrt_m", "rot_sigma_per_sqrt_rad",
-                       "rot_sigma_per_sqrt_m", "min_sigma_xy_m", "min_sigma_theta_rad"});
-  const std::string model = n.getEnum("model", {"chord", "translate_then_rotate"}, "chord");
-  m.model = model == "translate_then_rotate" ? slam::MotionNoiseModel::kTranslateThenRotate
-                                             : slam::MotionNoiseModel::kChord;
-  m.err_tran_per_m = n.getDouble("err_tran_per_m", 0.0, 10.0, m.err_tran_per_m);
-  m.err_rot_per_rad = n.getDouble("err_rot_per_rad", 0.0, 10.0, m.err_rot_per_rad);
-  m.err_drift_rad_per_m = n.getDouble("err_drift_rad_per_m", 0.0, 10.0, m.err_drift_rad_per_m);
-  m.err_tran_per_sqrt_m = n.getDouble("err_tran_per_sqrt_m", 0.0, 10.0, m.err_tran_per_sqrt_m);
-  m.err_rot_per_sqrt_rad = n.getDouble("err_rot_per_sqrt_rad", 0.0, 10.0, m.err_rot_per_sqrt_rad);
-  m.err_drift_rad_per_sqrt_m = n.getDouble("err_drift_rad_per_sqrt_m", 0.0, 10.0, m.err_drift_rad_per_sqrt_m);
-  m.trans_sigma_per_m = n.getDouble("trans_sigma_per_m", 0.0, 10.0, m.trans_sigma_per_m);
-  m.lateral_sigma_per_m = n.getDouble("lateral_sigma_per_m", 0.0, 10.0, m.lateral_sigma_per_m);
-  m.trans_sigma_per_rad = n.getDouble("trans_sigma_per_rad", 0.0, 10.0, m.trans_sigma_per_rad);
-  m.rot_sigma_per_rad = n.getDouble("rot_sigma_per_rad", 0.0, 10.0, m.rot_sigma_per_rad);
-  m.rot_sigma_per_m = n.getDouble("rot_sigma_per_m", 0.0, 10.0, m.rot_sigma_per_m);
-  m.trans_sigma_per_sqrt_m = n.getDouble("trans_sigma_per_sqrt_m", 0.0, 10.0, m.trans_sigma_per_sqrt_m);
-  m.lateral_sigma_per_sqrt_m = n.getDouble("lateral_sigma_per_sqrt_m", 0.0, 10.0, m.lateral_sigma_per_sqrt_m);
-  m.rot_sigma_per_sqrt_rad = n.getDouble("rot_sigma_per_sqrt_rad", 0.0, 10.0, m.rot_sigma_per_sqrt_rad);
-  m.rot_sigma_per_sqrt_m = n.getDouble("rot_sigma_per_sqrt_m", 0.0, 10.0, m.rot_sigma_per_sqrt_m);
-  m.min_sigma_xy_m = n.getDouble("min_sigma_xy_m", 1e-9, 10.0, m.min_sigma_xy_m);
-  m.min_sigma_theta_rad = n.getDouble("min_sigma_theta_rad", 1e-9, 10.0, m.min_sigma_theta_rad);
+Node::Open openOf(slam::options::Bounds b) {
+  return b == slam::options::Bounds::kLowOpen ? Node::Open::kLow
+         : b == slam::options::Bounds::kHighOpen ? Node::Open::kHigh
+                                                 : Node::Open::kNone;
+}
+
+// The keys of one options table given in section n, each read within its range and converted to
+// the member's units; a key not given keeps the member's value (the preset's or the default).
+template <class S>
+void parseFields(const Node& n, S& s, const std::vector<slam::options::Field<S>>& table) {
+  using slam::options::Kind;
+  for (const auto& f : table) {
+    if (!n.has(f.key)) continue;
+    switch (f.kind) {
+      case Kind::kReal: {
+        const double v = n.getDouble(f.key, f.lo, f.hi, openOf(f.bounds));
+        s.*f.real = f.degrees ? deg2rad(v) : v;
+        break;
+      }
+      case Kind::kInt:
+        s.*f.integer = static_cast<int>(n.getInt(f.key, static_cast<int64_t>(f.lo), static_cast<int64_t>(f.hi)));
+        break;
+      case Kind::kBool: s.*f.flag = n.getBool(f.key); break;
+      case Kind::kVec3: {
+        const auto v = n.getDoubles(f.key, 3, f.lo, f.hi);
+        s.*f.vec3 = Eigen::Vector3d(v[0], v[1], v[2]);
+        break;
+      }
+      case Kind::kEnum: {
+        const std::string v = n.getEnum(f.key, *f.names);
+        f.set_index(s, static_cast<int>(std::find(f.names->begin(), f.names->end(), v) - f.names->begin()));
+        break;
+      }
+    }
+  }
+}
+
+// The keys a section accepts: its table's and the names of its subsections.
+template <class S>
+std::vector<std::string> keysOf(const std::vector<slam::options::Field<S>>& table, std::vector<std::string> extra = {}) {
+  for (const auto& f : table) extra.emplace_back(f.key);
+  return extra;
 }
 
 void parsePerception(const Node& n, slam::PerceptionOptions& p) {
-  n.rejectUnknownKeys({"min_elevation_deg", "max_elevation_deg", "azimuth_centre_deg", "azimuth_half_width_deg",
-                       "min_range_m", "max_range_m", "detection_probability", "association_margin_deg",
-                       "association_margin_m", "default_camera_position_m"});
-  p.min_elevation_rad = deg2rad(n.getDouble("min_elevation_deg", -90.0, 90.0, rad2deg(p.min_elevation_rad)));
-  p.max_elevation_rad = deg2rad(n.getDouble("max_elevation_deg", -90.0, 90.0, rad2deg(p.max_elevation_rad)));
+  n.rejectUnknownKeysIn(keysOf(slam::options::perceptionFields()));
+  parseFields(n, p, slam::options::perceptionFields());
   if (p.max_elevation_rad < p.min_elevation_rad)
     throw ConfigError(n.where("max_elevation_deg") + " must be >= min_elevation_deg");
-  p.azimuth_centre_rad = deg2rad(n.getDouble("azimuth_centre_deg", -180.0, 180.0, rad2deg(p.azimuth_centre_rad)));
-  p.azimuth_half_width_rad =
-      deg2rad(n.getDouble("azimuth_half_width_deg", 0.0, 180.0, rad2deg(p.azimuth_half_width_rad), Node::Open::kLow));
-  p.min_range_m = n.getDouble("min_range_m", 0.0, 1e6, p.min_range_m);
-  if (n.has("max_range_m")) {  // absent: unlimited
-    p.max_range_m = n.getDouble("max_range_m", 0.0, 1e6);
-    if (p.max_range_m <= p.min_range_m) throw ConfigError(n.where("max_range_m") + " must be > min_range_m");
-  }
-  p.detection_probability = n.getDouble("detection_probability", 0.0, 1.0, p.detection_probability, Node::Open::kHigh);
-  p.association_margin_rad =
-      deg2rad(n.getDouble("association_margin_deg", 0.0, 90.0, rad2deg(p.association_margin_rad)));
-  p.association_margin_m = n.getDouble("association_margin_m", 0.0, 1e3, p.association_margin_m);
-  if (n.has("default_camera_position_m")) {
-    const auto v = n.getDoubles("default_camera_position_m", 3, -10.0, 10.0);
-    p.default_p_CinR_m = Eigen::Vector3d(v[0], v[1], v[2]);
-  }
-}
-
-void parseCandidates(const Node& n, slam::CandidateOptions& c) {
-  n.rejectUnknownKeys({"nz_min", "ncross_valid", "min_parallax_deg", "require_above_camera",
-                       "min_height_above_camera_m", "d_min_m", "initial_cov_diag_m2", "initial_cov_from_triangulation",
-                       "refine_initial_point", "refine_iterations", "max_observations", "ray_motion_noise"});
-  c.nz_min = static_cast<int>(n.getInt("nz_min", 2, 1000, c.nz_min));
-  c.ncross_valid = static_cast<int>(n.getInt("ncross_valid", 1, 100000, c.ncross_valid));
-  c.min_parallax_rad = deg2rad(n.getDouble("min_parallax_deg", 0.0, 90.0, rad2deg(c.min_parallax_rad)));
-  c.require_above_camera = n.getBool("require_above_camera", c.require_above_camera);
-  c.min_height_above_camera_m = n.getDouble("min_height_above_camera_m", 0.0, 100.0, c.min_height_above_camera_m);
-  c.d_min_m = n.getDouble("d_min_m", 0.0, 1e4, c.d_min_m);
-  if (n.has("initial_cov_diag_m2")) {
-    const auto v = n.getDoubles("initial_cov_diag_m2", 3, 1e-12, 1e4);
-    c.initial_cov_diag_m2 = Eigen::Vector3d(v[0], v[1], v[2]);
-  }
-  c.initial_cov_from_triangulation = n.getBool("initial_cov_from_triangulation", c.initial_cov_from_triangulation);
-  c.refine_initial_point = n.getBool("refine_initial_point", c.refine_initial_point);
-  c.ray_motion_noise = n.getBool("ray_motion_noise", c.ray_motion_noise);
-  c.refine_iterations = static_cast<int>(n.getInt("refine_iterations", 0, 100, c.refine_iterations));
-  c.max_observations = static_cast<int>(n.getInt("max_observations", 2, 1000, c.max_observations));
+  if (p.max_range_m <= p.min_range_m) throw ConfigError(n.where("max_range_m") + " must be > min_range_m");
 }
 
 // An options struct's validate() message starts with the field it names ("proposal needs ...",
@@ -103,32 +82,23 @@ ConfigError validationError(const Node& n, const std::string& err) {
 }
 
 void parseFilter(const Node& n, slam::FastSlamOptions& f) {
-  n.rejectUnknownKeys({"particles", "association", "proposal", "descriptor_gate", "descriptor_update_rate", "p_new_mahalanobis_sq", "resample_ess_fraction",
-                       "inflate_azimuth_near_zenith", "weight_at_predicted_pose", "weight_term", "association_predictive", "weight_unassociated_with_p_new",
-                       "clutter_density", "map_cell_size_m", "odometry_scale_correction", "scale_correction_max_step", "motion",
-                       "perception", "candidates"});
-  f.num_particles = static_cast<int>(n.getInt("particles", 1, 100000, f.num_particles));
-  f.association = associationFromName(n.getEnum("association", associationNames(), associationNames()[0]));
-  const std::string proposal = n.getEnum("proposal", {"fastslam2", "fastslam1"}, "fastslam2");
-  f.proposal = proposal == "fastslam1" ? slam::ProposalKind::kFastSlam1 : slam::ProposalKind::kFastSlam2;
-  f.descriptor_gate = n.getDouble("descriptor_gate", 0.0, 1e4, f.descriptor_gate);
-  f.descriptor_update_rate = n.getDouble("descriptor_update_rate", 1e-6, 1.0, f.descriptor_update_rate);
-  f.p_new_mahalanobis_sq = n.getDouble("p_new_mahalanobis_sq", 1e-6, 1e6, f.p_new_mahalanobis_sq);
-  f.resample_ess_fraction = n.getDouble("resample_ess_fraction", 0.0, 1.0, f.resample_ess_fraction);
-  f.inflate_azimuth_near_zenith = n.getBool("inflate_azimuth_near_zenith", f.inflate_azimuth_near_zenith);
-  f.weight_at_predicted_pose = n.getBool("weight_at_predicted_pose", f.weight_at_predicted_pose);
-  const std::string term = n.getEnum("weight_term", {"density", "consistency"},
-                                      f.weight_term == slam::WeightTerm::kConsistency ? "consistency" : "density");
-  f.weight_term = term == "consistency" ? slam::WeightTerm::kConsistency : slam::WeightTerm::kDensity;
-  f.association_predictive = n.getBool("association_predictive", f.association_predictive);
-  f.weight_unassociated_with_p_new = n.getBool("weight_unassociated_with_p_new", f.weight_unassociated_with_p_new);
-  f.clutter_density = n.getDouble("clutter_density", 1e-6, 1e6, f.clutter_density);
-  f.map_cell_size_m = n.getDouble("map_cell_size_m", 0.01, 1e4, f.map_cell_size_m);
-  f.odometry_scale_correction = n.getBool("odometry_scale_correction", f.odometry_scale_correction);
-  f.scale_correction_max_step = n.getDouble("scale_correction_max_step", 1e-6, 1.0, f.scale_correction_max_step);
-  if (auto m = n.optChild("motion")) parseMotion(*m, f.motion);
+  namespace opt = slam::options;
+  n.rejectUnknownKeysIn(keysOf(opt::fastSlamFields(), {"preset", "motion", "perception", "candidates"}));
+  if (n.has("preset")) {  // first: the keys given override the preset's values
+    const auto& names = slam::presetNames();
+    const std::string preset = n.getEnum("preset", names);
+    f = slam::presetOptions(static_cast<slam::Preset>(std::find(names.begin(), names.end(), preset) - names.begin()));
+  }
+  parseFields(n, f, opt::fastSlamFields());
+  if (auto m = n.optChild("motion")) {
+    m->rejectUnknownKeysIn(keysOf(opt::motionFields()));
+    parseFields(*m, f.motion, opt::motionFields());
+  }
   if (auto p = n.optChild("perception")) parsePerception(*p, f.perception);
-  if (auto c = n.optChild("candidates")) parseCandidates(*c, f.candidates);
+  if (auto c = n.optChild("candidates")) {
+    c->rejectUnknownKeysIn(keysOf(opt::candidateFields()));
+    parseFields(*c, f.candidates, opt::candidateFields());
+  }
   const std::string err = f.validate();
   if (!err.empty()) throw validationError(n, err);
 }
@@ -247,10 +217,7 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
   return o;
 }
 
-const std::vector<std::string>& associationNames() {
-  static const std::vector<std::string> names{"hungarian", "ml", "sampled"};  // index = AssociationMethod
-  return names;
-}
+const std::vector<std::string>& associationNames() { return slam::options::associationNames(); }
 
 slam::AssociationMethod associationFromName(const std::string& name) {
   const auto& names = associationNames();
@@ -268,15 +235,15 @@ SlamProcessOptions loadSlamOptions(const std::string& path, const std::vector<st
 std::string describe(const SlamProcessOptions& o) {
   std::ostringstream s;
   const auto& f = o.filter;
-  s << "filter: " << f.num_particles << " particles, "
-    << (f.proposal == slam::ProposalKind::kFastSlam2 ? "FastSLAM 2.0" : "FastSLAM 1.0") << ", association "
-    << associationNames().at(static_cast<std::size_t>(f.association));
-  if (f.association == slam::AssociationMethod::kSampled) s << ", clutter density " << f.clutter_density;
-  s << ", motion noise "
-    << (f.motion.model == slam::MotionNoiseModel::kChord ? "chord" : "translate-then-rotate") << ", P_new at Mahalanobis^2 "
-    << f.p_new_mahalanobis_sq << ", NZ_min " << f.candidates.nz_min << ", NCROSS_valid " << f.candidates.ncross_valid
-    << ", ANG_min " << rad2deg(f.candidates.min_parallax_rad) << " deg, D_min " << f.candidates.d_min_m
-    << " m, p_in " << f.perception.detection_probability << ", seed " << o.seed << "\n";
+  namespace opt = slam::options;
+  s << "filter: " << opt::describeFields(f, opt::fastSlamFields()) << "; seed " << o.seed << "\n";
+  s << "filter.motion: " << opt::describeFields(f.motion, opt::motionFields()) << "\n";
+  s << "filter.perception: " << opt::describeFields(f.perception, opt::perceptionFields()) << "\n";
+  s << "filter.candidates: " << opt::describeFields(f.candidates, opt::candidateFields()) << "\n";
+  const std::vector<std::string> deviations = slam::presetDeviations(f);
+  s << "deviations from paper 000: ";
+  for (std::size_t i = 0; i < deviations.size(); ++i) s << (i ? ", " : "") << deviations[i];
+  s << (deviations.empty() ? "none\n" : "\n");
   s << "pairing: max_wait " << o.pairing.max_wait_us * 1e-6 << " s, max odometry gap "
     << o.pairing.max_odometry_gap_us * 1e-6 << " s, buffer " << o.pairing.odometry_buffer_us * 1e-6
     << " s, max pending " << o.pairing.max_pending_frames << ", restart jump " << o.pairing.restart_jump_us * 1e-6
@@ -297,6 +264,35 @@ std::string describe(const SlamProcessOptions& o) {
   if (!o.load_map_path.empty())
     s << "\nmap: start from " << o.load_map_path << (o.localisation_only ? " (localisation only: fixed)" : " (updated)");
   if (!o.save_map_path.empty()) s << (o.load_map_path.empty() ? "\n" : "; ") << "map: saved to " << o.save_map_path << " on exit";
+  return s.str();
+}
+
+namespace {
+
+template <class S>
+void markdownRows(std::ostringstream& s, const std::string& section, const std::vector<slam::options::Field<S>>& table) {
+  const S defaults{};
+  for (const auto& f : table) {
+    s << "| `" << section << f.key << "` | `" << f.field << "` | " << f.unit << " | " << slam::options::rangeText(f)
+      << " | " << slam::options::valueText(f, defaults) << " | " << f.doc << " |\n";
+  }
+}
+
+}  // namespace
+
+std::string filterKeysMarkdown() {
+  namespace opt = slam::options;
+  std::ostringstream s;
+  s << "| key | field | unit | range | default | meaning |\n|---|---|---|---|---|---|\n";
+  s << "| `filter.preset` | - | | " << [] {
+    std::string n;
+    for (const auto& p : slam::presetNames()) n += (n.empty() ? "" : ", ") + p;
+    return n;
+  }() << " | none (= recommended) | every key below at once; keys given beside it override it |\n";
+  markdownRows(s, "filter.", opt::fastSlamFields());
+  markdownRows(s, "filter.motion.", opt::motionFields());
+  markdownRows(s, "filter.perception.", opt::perceptionFields());
+  markdownRows(s, "filter.candidates.", opt::candidateFields());
   return s.str();
 }
 

@@ -1,0 +1,249 @@
+// The tables of the SLAM options structs (see options_table.h): one row per field. The ranges are
+// the physically sensible ones; the defaults are the structs' in-class values (the recommended
+// preset, docs/slam-core.md "Presets").
+#include "omnislam/core/slam/options_table.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace omnislam::slam::options {
+
+namespace {
+
+template <class S>
+Field<S> real(const char* key, double S::*m, const char* field, const char* unit, double lo, double hi, Bounds b,
+              const char* doc, bool degrees = false) {
+  Field<S> f;
+  f.key = key, f.field = field, f.unit = unit, f.kind = Kind::kReal, f.lo = lo, f.hi = hi, f.bounds = b;
+  f.degrees = degrees, f.doc = doc, f.real = m;
+  return f;
+}
+template <class S>
+Field<S> integer(const char* key, int S::*m, const char* field, double lo, double hi, const char* doc) {
+  Field<S> f;
+  f.key = key, f.field = field, f.kind = Kind::kInt, f.lo = lo, f.hi = hi, f.doc = doc, f.integer = m;
+  return f;
+}
+template <class S>
+Field<S> flag(const char* key, bool S::*m, const char* field, const char* doc) {
+  Field<S> f;
+  f.key = key, f.field = field, f.kind = Kind::kBool, f.doc = doc, f.flag = m;
+  return f;
+}
+template <class S>
+Field<S> vec3(const char* key, Eigen::Vector3d S::*m, const char* field, const char* unit, double lo, double hi,
+              const char* doc) {
+  Field<S> f;
+  f.key = key, f.field = field, f.unit = unit, f.kind = Kind::kVec3, f.lo = lo, f.hi = hi, f.doc = doc, f.vec3 = m;
+  return f;
+}
+template <class S>
+Field<S> enumeration(const char* key, const char* field, const std::vector<std::string>& names,
+                     int (*get)(const S&), void (*set)(S&, int), const char* doc) {
+  Field<S> f;
+  f.key = key, f.field = field, f.kind = Kind::kEnum, f.doc = doc, f.names = &names, f.get_index = get;
+  f.set_index = set;
+  return f;
+}
+
+constexpr Bounds kC = Bounds::kClosed, kLo = Bounds::kLowOpen, kHi = Bounds::kHighOpen;
+using F = FastSlamOptions;
+using M = MotionNoiseOptions;
+using P = PerceptionOptions;
+using C = CandidateOptions;
+
+std::string number(double v) {
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+const std::vector<std::string>& associationNames() {
+  static const std::vector<std::string> n{"hungarian", "ml"};
+  return n;
+}
+const std::vector<std::string>& proposalNames() {
+  static const std::vector<std::string> n{"fastslam2", "fastslam1"};
+  return n;
+}
+const std::vector<std::string>& weightTermNames() {
+  static const std::vector<std::string> n{"density", "consistency"};
+  return n;
+}
+const std::vector<std::string>& motionModelNames() {
+  static const std::vector<std::string> n{"chord", "translate_then_rotate"};
+  return n;
+}
+
+const std::vector<Field<FastSlamOptions>>& fastSlamFields() {
+  static const std::vector<Field<F>> t{
+      integer<F>("particles", &F::num_particles, "num_particles", 1, 1e5, "M, the number of particles"),
+      enumeration<F>(
+          "association", "association", associationNames(), [](const F& o) { return static_cast<int>(o.association); },
+          [](F& o, int i) { o.association = static_cast<AssociationMethod>(i); },
+          "level-1 and level-2 association: Hungarian (paper 000) or per-measurement maximum likelihood (paper 002)"),
+      enumeration<F>(
+          "proposal", "proposal", proposalNames(), [](const F& o) { return static_cast<int>(o.proposal); },
+          [](F& o, int i) { o.proposal = static_cast<ProposalKind>(i); },
+          "FastSLAM 2.0 (paper 000, Alg. 3) or 1.0 (paper 002: poses from the motion model alone)"),
+      real<F>("p_new_mahalanobis_sq", &F::p_new_mahalanobis_sq, "p_new_mahalanobis_sq", "", 0.0, 1e6, kLo,
+              "P_new = N at this squared Mahalanobis distance (paper: 64)"),
+      real<F>("resample_ess_fraction", &F::resample_ess_fraction, "resample_ess_fraction", "", 0.0, 1.0, kC,
+              "resample when ESS < fraction * M (1 = every step, the paper)"),
+      flag<F>("inflate_azimuth_near_zenith", &F::inflate_azimuth_near_zenith, "inflate_azimuth_near_zenith",
+              "deviation: azimuth variance at least var(el) / cos^2(el) (slam-core.md, \"Azimuth near the zenith\")"),
+      flag<F>("association_predictive", &F::association_predictive, "association_predictive",
+              "deviation, FastSLAM 2.0 only: a pairing scored with the pose correction it needs (slam-core.md)"),
+      flag<F>("weight_at_predicted_pose", &F::weight_at_predicted_pose, "weight_at_predicted_pose",
+              "deviation, FastSLAM 2.0 only: weigh at the predicted pose (Probabilistic Robotics Table 13.3)"),
+      enumeration<F>(
+          "weight_term", "weight_term", weightTermNames(), [](const F& o) { return static_cast<int>(o.weight_term); },
+          [](F& o, int i) { o.weight_term = static_cast<WeightTerm>(i); },
+          "density (paper: log N(nu; 0, L)) or consistency (deviation: -1/2 (nu^T L^-1 nu - dim); slam-core.md, \"Weight term\")"),
+      real<F>("descriptor_update_rate", &F::descriptor_update_rate, "descriptor_update_rate", "", 0.0, 1.0, kLo,
+              "weight of a measurement in the running mean of a landmark's colour descriptor (published, not used)"),
+      real<F>("map_cell_size_m", &F::map_cell_size_m, "map_cell_size_m", "m", 0.01, 1e4, kC,
+              "grid cell of the copy-on-write map"),
+      flag<F>("odometry_scale_correction", &F::odometry_scale_correction, "odometry_scale_correction",
+              "deviation: each particle's map scale anchored to the odometry path length (slam-core.md, \"Map scale\")"),
+      real<F>("scale_correction_max_step", &F::scale_correction_max_step, "scale_correction_max_step", "", 0.0, 1.0,
+              kLo, "largest relative rescaling of one step (odometry_scale_correction)"),
+  };
+  return t;
+}
+
+const std::vector<Field<MotionNoiseOptions>>& motionFields() {
+  static const std::vector<Field<M>> t{
+      enumeration<M>(
+          "model", "model", motionModelNames(), [](const M& o) { return static_cast<int>(o.model); },
+          [](M& o, int i) { o.model = static_cast<MotionNoiseModel>(i); },
+          "chord (along / across the chord) or translate_then_rotate (paper 002); formulas in motion_model.h"),
+      real<M>("trans_sigma_per_m", &M::trans_sigma_per_m, "trans_sigma_per_m", "m/m", 0, 10, kC, "chord: along-track std per metre"),
+      real<M>("lateral_sigma_per_m", &M::lateral_sigma_per_m, "lateral_sigma_per_m", "m/m", 0, 10, kC, "chord: cross-track std per metre"),
+      real<M>("trans_sigma_per_rad", &M::trans_sigma_per_rad, "trans_sigma_per_rad", "m/rad", 0, 10, kC, "chord: translation std per radian turned"),
+      real<M>("rot_sigma_per_rad", &M::rot_sigma_per_rad, "rot_sigma_per_rad", "rad/rad", 0, 10, kC, "chord: heading std per radian turned"),
+      real<M>("rot_sigma_per_m", &M::rot_sigma_per_m, "rot_sigma_per_m", "rad/m", 0, 10, kC, "chord: heading std per metre"),
+      real<M>("trans_sigma_per_sqrt_m", &M::trans_sigma_per_sqrt_m, "trans_sigma_per_sqrt_m", "m/sqrt(m)", 0, 10, kC, "chord: along-track random walk"),
+      real<M>("lateral_sigma_per_sqrt_m", &M::lateral_sigma_per_sqrt_m, "lateral_sigma_per_sqrt_m", "m/sqrt(m)", 0, 10, kC, "chord: cross-track random walk"),
+      real<M>("rot_sigma_per_sqrt_rad", &M::rot_sigma_per_sqrt_rad, "rot_sigma_per_sqrt_rad", "rad/sqrt(rad)", 0, 10, kC, "chord: heading random walk per rotation"),
+      real<M>("rot_sigma_per_sqrt_m", &M::rot_sigma_per_sqrt_m, "rot_sigma_per_sqrt_m", "rad/sqrt(m)", 0, 10, kC, "chord: heading random walk per distance"),
+      real<M>("err_tran_per_m", &M::err_tran_per_m, "err_tran_per_m", "m/m", 0, 10, kC, "translate_then_rotate: distance std per metre"),
+      real<M>("err_rot_per_rad", &M::err_rot_per_rad, "err_rot_per_rad", "rad/rad", 0, 10, kC, "translate_then_rotate: rotation std per radian"),
+      real<M>("err_drift_rad_per_m", &M::err_drift_rad_per_m, "err_drift_rad_per_m", "rad/m", 0, 10, kC, "translate_then_rotate: heading drift std per metre"),
+      real<M>("err_tran_per_sqrt_m", &M::err_tran_per_sqrt_m, "err_tran_per_sqrt_m", "m/sqrt(m)", 0, 10, kC, "translate_then_rotate: distance random walk"),
+      real<M>("err_rot_per_sqrt_rad", &M::err_rot_per_sqrt_rad, "err_rot_per_sqrt_rad", "rad/sqrt(rad)", 0, 10, kC, "translate_then_rotate: rotation random walk"),
+      real<M>("err_drift_rad_per_sqrt_m", &M::err_drift_rad_per_sqrt_m, "err_drift_rad_per_sqrt_m", "rad/sqrt(m)", 0, 10, kC, "translate_then_rotate: heading drift random walk"),
+      real<M>("min_sigma_xy_m", &M::min_sigma_xy_m, "min_sigma_xy_m", "m", 0, 10, kLo, "floor of both translation stds (keeps R_t invertible)"),
+      real<M>("min_sigma_theta_rad", &M::min_sigma_theta_rad, "min_sigma_theta_rad", "rad", 0, 10, kLo, "floor of the heading std"),
+  };
+  return t;
+}
+
+const std::vector<Field<PerceptionOptions>>& perceptionFields() {
+  static const std::vector<Field<P>> t{
+      real<P>("min_elevation_deg", &P::min_elevation_rad, "min_elevation_rad", "deg", -90, 90, kC, "lowest elevation seen", true),
+      real<P>("max_elevation_deg", &P::max_elevation_rad, "max_elevation_rad", "deg", -90, 90, kC, "highest elevation seen (>= min_elevation_deg)", true),
+      real<P>("azimuth_centre_deg", &P::azimuth_centre_rad, "azimuth_centre_rad", "deg", -180, 180, kC, "centre of the azimuth window", true),
+      real<P>("azimuth_half_width_deg", &P::azimuth_half_width_rad, "azimuth_half_width_rad", "deg", 0, 180, kLo, "half width of the azimuth window (180 = all round)", true),
+      real<P>("min_range_m", &P::min_range_m, "min_range_m", "m", 0, 1e6, kC, "nearest range seen (horizontal for lines); also candidate validity d)"),
+      real<P>("max_range_m", &P::max_range_m, "max_range_m", "m", 0, kInfinity, kLo, "farthest range seen (> min_range_m; absent = unlimited)"),
+      real<P>("detection_probability", &P::detection_probability, "detection_probability", "", 0, 1, kHi, "p_in of Alg. 4 line 21"),
+      real<P>("association_margin_deg", &P::association_margin_rad, "association_margin_rad", "deg", 0, 90, kC, "window widening for the landmarks that enter the association", true),
+      real<P>("association_margin_m", &P::association_margin_m, "association_margin_m", "m", 0, 1e3, kC, "range widening for the same"),
+      vec3<P>("default_camera_position_m", &P::default_p_CinR_m, "default_p_CinR_m", "m", -10, 10, "optical centre in R before any measurement carried one"),
+  };
+  return t;
+}
+
+const std::vector<Field<CandidateOptions>>& candidateFields() {
+  static const std::vector<Field<C>> t{
+      integer<C>("nz_min", &C::nz_min, "nz_min", 2, 1000, "NZ_min: measurements a candidate needs"),
+      integer<C>("ncross_valid", &C::ncross_valid, "ncross_valid", 1, 1e5, "NCROSS_valid: valid cross-points needed"),
+      real<C>("min_parallax_deg", &C::min_parallax_rad, "min_parallax_rad", "deg", 0, 90, kC, "ANG_min: least parallax of a valid cross-point", true),
+      flag<C>("require_above_camera", &C::require_above_camera, "require_above_camera", "validity b): points above the optical centres (ceiling lights)"),
+      real<C>("min_height_above_camera_m", &C::min_height_above_camera_m, "min_height_above_camera_m", "m", 0, 100, kC, "margin of validity b)"),
+      real<C>("d_min_m", &C::d_min_m, "d_min_m", "m", 0, 1e4, kLo, "D_min: type I when initialised from within this x-y distance"),
+      vec3<C>("initial_cov_diag_m2", &C::initial_cov_diag_m2, "initial_cov_diag_m2", "m^2", 1e-12, 1e4, "Sigma_0 diagonal (paper: 0.0025)"),
+      flag<C>("initial_cov_from_triangulation", &C::initial_cov_from_triangulation, "initial_cov_from_triangulation", "deviation: Sigma_0 from the rays plus the diagonal as a floor"),
+      flag<C>("refine_initial_point", &C::refine_initial_point, "refine_initial_point", "deviation: Gauss-Newton refinement of the chosen cross-point"),
+      integer<C>("refine_iterations", &C::refine_iterations, "refine_iterations", 0, 100, "iterations of that refinement"),
+      integer<C>("max_observations", &C::max_observations, "max_observations", 2, 1000, "rays kept per candidate"),
+      flag<C>("ray_motion_noise", &C::ray_motion_noise, "ray_motion_noise", "deviation: a ray carries the motion model's heading variance since the first ray"),
+  };
+  return t;
+}
+
+template <class S>
+std::string rangeText(const Field<S>& f) {
+  if (f.kind == Kind::kBool) return "true, false";
+  if (f.kind == Kind::kEnum) {
+    std::string s;
+    for (const auto& n : *f.names) s += (s.empty() ? "" : ", ") + n;
+    return s;
+  }
+  return std::string(f.bounds == Bounds::kLowOpen ? "(" : "[") + number(f.lo) + ", " + number(f.hi) +
+         (f.bounds == Bounds::kHighOpen ? ")" : "]");
+}
+
+template <class S>
+std::string valueText(const Field<S>& f, const S& s) {
+  switch (f.kind) {
+    case Kind::kBool: return s.*f.flag ? "true" : "false";
+    case Kind::kEnum: return f.names->at(static_cast<std::size_t>(f.get_index(s)));
+    case Kind::kVec3: {
+      const Eigen::Vector3d& v = s.*f.vec3;
+      return "[" + number(v.x()) + ", " + number(v.y()) + ", " + number(v.z()) + "]";
+    }
+    case Kind::kReal:
+    case Kind::kInt: break;
+  }
+  return number(f.value(s));
+}
+
+template <class S>
+std::string checkRanges(const S& s, const std::vector<Field<S>>& table) {
+  const auto fail = [](const Field<S>& f, const std::string& field, double v) {  // v in the member's units
+    return field + " must be in " + std::string(f.bounds == Bounds::kLowOpen ? "(" : "[") + number(f.memberLo()) +
+           ", " + number(f.memberHi()) + (f.bounds == Bounds::kHighOpen ? ")" : "]") + ", got " + number(v);
+  };
+  for (const auto& f : table) {
+    if (f.kind == Kind::kVec3) {
+      const Eigen::Vector3d& v = s.*f.vec3;
+      for (int i = 0; i < 3; ++i) {
+        if (!f.memberInRange(v(i))) return fail(f, std::string(f.field) + "." + "xyz"[i], v(i));
+      }
+      continue;
+    }
+    if (f.kind == Kind::kEnum) {
+      const int i = f.get_index(s);
+      if (i < 0 || i >= static_cast<int>(f.names->size())) return std::string(f.field) + " is not a known value";
+      continue;
+    }
+    const double v = f.kind == Kind::kReal ? s.*f.real : f.value(s);  // the member's units
+    if (f.kind != Kind::kBool && !f.memberInRange(v)) return fail(f, f.field, v);
+  }
+  return "";
+}
+
+template <class S>
+std::string describeFields(const S& s, const std::vector<Field<S>>& table) {
+  std::string out;
+  for (const auto& f : table) out += (out.empty() ? "" : " ") + std::string(f.key) + "=" + valueText(f, s);
+  return out;
+}
+
+#define OMNISLAM_OPTIONS_TABLE_INSTANTIATE(S)                                       \
+  template std::string rangeText<S>(const Field<S>&);                              \
+  template std::string valueText<S>(const Field<S>&, const S&);                    \
+  template std::string checkRanges<S>(const S&, const std::vector<Field<S>>&);     \
+  template std::string describeFields<S>(const S&, const std::vector<Field<S>>&);
+OMNISLAM_OPTIONS_TABLE_INSTANTIATE(FastSlamOptions)
+OMNISLAM_OPTIONS_TABLE_INSTANTIATE(MotionNoiseOptions)
+OMNISLAM_OPTIONS_TABLE_INSTANTIATE(PerceptionOptions)
+OMNISLAM_OPTIONS_TABLE_INSTANTIATE(CandidateOptions)
+#undef OMNISLAM_OPTIONS_TABLE_INSTANTIATE
+
+}  // namespace omnislam::slam::options

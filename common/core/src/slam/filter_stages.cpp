@@ -495,14 +495,20 @@ void addRay(Candidate& cand, const Measurement& m, const Pose2& x_t, const FastS
     const Pose2& first = cand.observations.front().T_WtoR;
     Q_ray(0, 0) += motionCovariance(first, first.between(x_t), o.motion)(2, 2);
   }
-  cand.observations.push_back(makeObservation(cand.kind, x_t, m.p_CinR_m, m.z, Q_ray));
+  CandidateObservation ray = makeObservation(cand.kind, x_t, m.p_CinR_m, m.z, Q_ray);
+  const std::size_t n = cand.observations.size();
+  if (n >= 2 && (ray.p_CinW_m - cand.observations[n - 2].p_CinW_m).head<2>().norm() < o.candidates.min_ray_baseline_m) {
+    cand.observations.back() = ray;  // too close to the ray before the newest: the window keeps its baseline
+    return;
+  }
+  cand.observations.push_back(ray);
   if (static_cast<int>(cand.observations.size()) <= o.candidates.max_observations) return;
-  // Parallax is what triangulates, and a slow, still or fast-framing robot fills a window of the
-  // newest rays with nearly parallel ones (16 rays at 10 Hz span 0.4 m). Keep the first and the
-  // newest ray and drop the one taken nearest to the ray before it: the window thins out evenly in
-  // space and spans the whole baseline, whatever the frame rate.
+  // Azimuth-only (vertical-line) rays carry no depth: their parallax is all there is to
+  // triangulate, and a slow or still robot fills the window with nearly parallel rays. Keep the
+  // first and the newest ray and drop the one taken nearest to the ray before it (the window
+  // thins out evenly in space); other kinds drop the oldest.
   size_t drop = 0;
-  if (cand.observations.size() > 2) {
+  if (cand.kind == LandmarkKind::kVerticalLine && cand.observations.size() > 2) {
     double nearest = kInf;
     for (size_t i = 1; i + 1 < cand.observations.size(); ++i) {
       const double b = (cand.observations[i].p_CinW_m - cand.observations[i - 1].p_CinW_m).head<2>().norm();

@@ -171,6 +171,8 @@ const std::vector<Field<CandidateOptions>>& candidateFields() {
       flag<C>("refine_initial_point", &C::refine_initial_point, "refine_initial_point", "deviation: Gauss-Newton refinement of the chosen cross-point"),
       integer<C>("refine_iterations", &C::refine_iterations, "refine_iterations", 0, 100, "iterations of that refinement"),
       integer<C>("max_observations", &C::max_observations, "max_observations", 2, 1000, "rays kept per candidate"),
+      real<C>("min_ray_baseline_m", &C::min_ray_baseline_m, "min_ray_baseline_m", "m", 0.0, 100.0, kC,
+              "deviation: a ray nearer than this to the ray before the newest replaces the newest (baseline, not frames)"),
       flag<C>("ray_motion_noise", &C::ray_motion_noise, "ray_motion_noise", "deviation: a ray carries the motion model's heading variance since the first ray"),
   };
   return t;

@@ -42,6 +42,13 @@ struct CandidateOptions {
   int refine_iterations = 5;  ///< Gauss-Newton iterations of the refinement
   /// Rays kept per candidate (the oldest is dropped beyond this; bounds the O(n^3) evaluation).
   int max_observations = 16;
+  /// Least camera displacement [m] (x-y) between a candidate's stored rays: a ray taken closer than
+  /// this to the ray before the newest replaces the newest instead of joining the window, so the
+  /// window holds baseline, not frames, whatever the frame rate (16 rays at 10 Hz and 0.27 m/s span
+  /// 0.4 m: too little parallax to initialise anything). 0 = every ray joins (the paper). Physical
+  /// choice: the window's span (max_observations - 1) * this must reach the baseline that gives
+  /// ANG_min at the farthest landmark of interest, e.g. 15 * 0.2 m = 3 m: 7 deg at 25 m.
+  double min_ray_baseline_m = 0.0;
   /// Deviation (the paper: false). A candidate's ray after the first gets, on top of the bearing
   /// variance, the heading variance of the motion model over the path since the first ray: the
   /// particle's path, sampled step by step, wanders that much between the rays, and a triangulation

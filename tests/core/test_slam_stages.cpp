@@ -252,3 +252,21 @@ TEST(slam_Stages, ConsistencyWeightTermIsTheDensityWithoutItsNormaliser) {
   EXPECT_NEAR(log_w[1], -0.5 * (m2 - 2.0), 1e-9);
   EXPECT_NEAR(log_w[0], -0.5 * (m2 + std::log((2.0 * kPi * S).determinant())), 1e-9);
 }
+
+// Under the consistency term a measurement that neither the map nor a candidate takes costs what an
+// association at the P_new gate would score, -1/2 (p_new_mahalanobis_sq - dim); one a candidate takes
+// costs nothing; the density term adds nothing here (the paper).
+TEST(slam_Stages, UnexplainedMeasurementsCostTheGatesConsistencyTerm) {
+  FastSlamOptions o;
+  std::vector<stages::Measurement> Z(3);
+  Z[0].z = MeasVec::Zero(2), Z[1].z = MeasVec::Zero(2), Z[2].z = MeasVec::Zero(1);
+  stages::HierarchicalAssociation a;
+  a.level1.landmark_of_measurement = {0, -1, -1};
+  a.leftover = {1, 2};
+  a.candidate_of_leftover = {4, -1};  // measurement 1 to candidate 4, measurement 2 new
+  EXPECT_EQ(stages::unexplainedWeight(a, Z, o), 0.0);
+  o.weight_term = WeightTerm::kConsistency;
+  EXPECT_DOUBLE_EQ(stages::unexplainedWeight(a, Z, o), -0.5 * (o.p_new_mahalanobis_sq - 1.0));
+  a.candidate_of_leftover.clear();  // no level 2 (localisation only): every leftover is unexplained
+  EXPECT_DOUBLE_EQ(stages::unexplainedWeight(a, Z, o), -0.5 * (o.p_new_mahalanobis_sq - 2.0) - 0.5 * (o.p_new_mahalanobis_sq - 1.0));
+}

@@ -232,6 +232,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
   stages::ParticleUpdate up;
   stages::updateObservedLandmarks(pred, x_t, vis, Z, a.level1.landmark_of_measurement, o, weighting, up);
   stages::accountMisses(p.map, x_t, p_CinR_vis_m, o, near, up);
+  up.log_w += stages::unexplainedWeight(a, Z, o);
 
   ParticleStepInfo info;
   info.landmark_of_measurement = landmarkIdsOf(a.level1.landmark_of_measurement, vis);

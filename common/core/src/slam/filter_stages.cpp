@@ -482,6 +482,17 @@ void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector
   }
 }
 
+double unexplainedWeight(const HierarchicalAssociation& a, const std::vector<Measurement>& Z, const FastSlamOptions& o) {
+  if (o.weight_term != WeightTerm::kConsistency) return 0.0;
+  double log_w = 0.0;
+  for (std::size_t r = 0; r < a.leftover.size(); ++r) {
+    const bool to_candidate = r < a.candidate_of_leftover.size() && a.candidate_of_leftover[r] >= 0;
+    if (to_candidate) continue;
+    log_w -= 0.5 * (o.p_new_mahalanobis_sq - static_cast<double>(Z[static_cast<std::size_t>(a.leftover[r])].z.size()));
+  }
+  return log_w;
+}
+
 // --- Sec. III-F 1 -------------------------------------------------------------------------------------
 namespace {
 

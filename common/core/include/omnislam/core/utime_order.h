@@ -6,7 +6,7 @@
 // started again, a clock set) and otherwise a stray (one future stamp must not become "the previous
 // utime" and lock out every good message after it).
 // classify() is the rule for one message; admit() adds the confirmation of one stream on its own
-// (lcmio::Node, the viewer, omnislam-smooth, omnislam-eval). The SLAM pairing classifies with the
+// (lcmio::Node, the viewer, omnislam-eval; research's omnislam-smooth). The SLAM pairing classifies with the
 // same class and confirms a jump across its two streams (common/runtime/.../pairing.h).
 #pragma once
 

@@ -164,6 +164,13 @@ void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector
                    const FastSlamOptions& o, std::vector<LandmarkMap::Ref>& near,
                    ParticleUpdate& out);
 
+/// WeightTerm::kConsistency only (else 0): each measurement that neither a map landmark nor a candidate
+/// takes (it starts a new candidate) adds -1/2 (p_new_mahalanobis_sq - dim), the consistency term of
+/// an association at the P_new gate, so that the weight stays continuous across the association
+/// decision and a particle that explains its measurements outweighs one that leaves them unexplained
+/// (the density's normaliser did this before; without it a mislocalised particle lost nothing).
+double unexplainedWeight(const HierarchicalAssociation& a, const std::vector<Measurement>& Z, const FastSlamOptions& o);
+
 // --- Sec. III-F 1: updateCandidateLandmarks() --------------------------------------------------------
 struct CandidateUpdate {
   std::vector<std::shared_ptr<const Candidate>> candidates;  ///< the particle's next candidates

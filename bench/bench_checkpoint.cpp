@@ -1,9 +1,8 @@
-// bench_checkpoint: time and size of one SLAM checkpoint (common/runtime/include/omnislam/runtime/checkpoint.h) on the sports
-// hall: the regression fixture tests/data/regression/sports_hall.lcm (151 frames, 16 lights) replayed
-// through SlamDriver with config/slam/sports_hall.yaml and its default particle count (or
-// OMNISLAM_BENCH_PARTICLES), as `omnislam-slam --replay` does, then the state at the end of the log
-// encoded, decoded, and written atomically (PATH.tmp, fsync, rename, folder fsync) into $TMPDIR.
-// Counter `bytes`: the checkpoint's size.
+// bench_checkpoint: time and size of one SLAM checkpoint (common/runtime/include/omnislam/runtime/checkpoint.h) on the
+// sports hall: the regression fixture tests/data/regression/sports_hall.lcm (151 frames, 16 lights) replayed through
+// SlamDriver with config/slam/sports_hall.yaml and its default particle count (or OMNISLAM_BENCH_PARTICLES), as
+// `omnislam-slam --replay` does, then the state at the end of the log encoded, decoded, and written atomically
+// (PATH.tmp, fsync, rename, folder fsync) into $TMPDIR. Counter `bytes`: the checkpoint's size.
 //
 // Usage: build/bin/bench_checkpoint [--benchmark_repetitions=5 ...]
 #include <benchmark/benchmark.h>
@@ -36,9 +35,9 @@ struct Setup {
 Setup& setup() {
   static Setup* s = [] {
     auto* st = new Setup;
-    st->options = loadSlamOptions(std::string(OMNISLAM_SOURCE_DIR) + "/config/slam/sports_hall.yaml",
-                                  {"pairing.max_wait_s=15", "pairing.odometry_buffer_s=15",
-                                   "pairing.max_pending_frames=1000"});
+    st->options =
+        loadSlamOptions(std::string(OMNISLAM_SOURCE_DIR) + "/config/slam/sports_hall.yaml",
+                        {"pairing.max_wait_s=15", "pairing.odometry_buffer_s=15", "pairing.max_pending_frames=1000"});
     if (const char* m = std::getenv("OMNISLAM_BENCH_PARTICLES")) st->options.filter.num_particles = std::atoi(m);
     st->driver = std::make_unique<SlamDriver>(st->options);
     lcmio::forEachEvent(std::string(OMNISLAM_SOURCE_DIR) + "/tests/data/regression/sports_hall.lcm",

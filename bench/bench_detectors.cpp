@@ -17,8 +17,8 @@
 // detector's CPU time as a ratio of its operations' and of decoding the frame. The real frame is
 // omni-images/opencv-omnidir-catadioptric/1.jpg of the shared datasets ($OMNISLAM_DATASETS, else
 // ../shared/datasets beside the source tree); without it the real-frame runs are skipped with a
-// message. The synthetic frame: 24 sectors of grey 8 and 36 in turn about the real mirror's centre (edges for the lines, below the
-// lights' threshold) and 16 discs of grey 220 (lights), noise sigma 2, blur 0.6 px, JPEG quality 95.
+// message. The synthetic frame: 24 sectors of grey 8 and 36 in turn about the real mirror's centre (edges for the
+// lines, below the lights' threshold) and 16 discs of grey 220 (lights), noise sigma 2, blur 0.6 px, JPEG quality 95.
 // OpenCV runs single-threaded in the 1280 x 960 runs (cv::setNumThreads(1), restored after), so
 // that the CPU time of the benchmark's thread is all the work done.
 // Run: build/bin/bench_detectors (or scripts/run-bench.sh detectors).
@@ -165,7 +165,8 @@ void BM_PlainRemapBgr(benchmark::State& st) {
   const sim::World& w = roomWorld();
   const auto cam = sim::makeCamera(w.camera);
   std::mt19937_64 rng(1);
-  const cv::Mat src = vision::RoomRenderer(*cam, w.camera.mounting, *w.room, w.nuisance).render(Pose2{1.5, 1.2, 0.3}, &rng);
+  const cv::Mat src =
+      vision::RoomRenderer(*cam, w.camera.mounting, *w.room, w.nuisance).render(Pose2{1.5, 1.2, 0.3}, &rng);
   cv::Mat mx(src.size(), CV_32F), my(src.size(), CV_32F), dst;  // a half-pixel shift: bilinear everywhere
   for (int v = 0; v < src.rows; ++v)
     for (int u = 0; u < src.cols; ++u) mx.at<float>(v, u) = u + 0.5f, my.at<float>(v, u) = v + 0.5f;
@@ -179,7 +180,7 @@ void BM_PlainRemapBgr(benchmark::State& st) {
 struct Frame1280 {
   std::vector<uint8_t> jpeg;  ///< the encoded frame (the file's bytes for the real one)
   cv::Mat bgr, grey;
-  std::string source;         ///< path, or why there is none
+  std::string source;  ///< path, or why there is none
 };
 
 cv::Mat synthetic1280() {
@@ -425,7 +426,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
       const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
       if (r.run_type == Run::RT_Aggregate && !median) continue;
       const std::string key = r.run_name.function_name + "/" + r.run_name.args;
-      if (median || !final_.count(key)) cpu_ms_[key] = r.GetAdjustedCPUTime() * 1e3 / benchmark::GetTimeUnitMultiplier(r.time_unit);
+      if (median || !final_.count(key))
+        cpu_ms_[key] = r.GetAdjustedCPUTime() * 1e3 / benchmark::GetTimeUnitMultiplier(r.time_unit);
       if (median) final_[key] = true;
     }
   }
@@ -444,11 +446,14 @@ class RatioReporter : public benchmark::ConsoleReporter {
         std::printf("  not run\n");
         continue;
       }
-      std::printf("  ceiling lights %.2f = %.2fx (threshold + connectedComponentsWithStats %.2f) = %.2fx imdecode %.2f\n",
-                  lights, lights / tcc, tcc, lights / decode, decode);
-      std::printf("  vertical lines %.2f = %.2fx (remap + Sobel %.2f) = %.2fx (BGR->grey + remap + Sobel %.2f) = %.2fx imdecode\n",
-                  lines, lines / remap_sobel, remap_sobel, lines / (remap_sobel + ms("BgrToGrey")),
-                  remap_sobel + ms("BgrToGrey"), lines / decode);
+      std::printf(
+          "  ceiling lights %.2f = %.2fx (threshold + connectedComponentsWithStats %.2f) = %.2fx imdecode %.2f\n",
+          lights, lights / tcc, tcc, lights / decode, decode);
+      std::printf(
+          "  vertical lines %.2f = %.2fx (remap + Sobel %.2f) = %.2fx (BGR->grey + remap + Sobel %.2f) = %.2fx "
+          "imdecode\n",
+          lines, lines / remap_sobel, remap_sobel, lines / (remap_sobel + ms("BgrToGrey")),
+          remap_sobel + ms("BgrToGrey"), lines / decode);
       std::printf("  header checks (header + EOI walk) %.3f = %.4fx imdecode\n", ms("HeaderChecks"),
                   ms("HeaderChecks") / decode);
       std::printf("  checked decode (checks + libjpeg) %.2f = %.2fx imdecode\n", ms("CheckedDecodeBgr"),

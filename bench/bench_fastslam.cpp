@@ -228,8 +228,18 @@ void BM_Associate(benchmark::State& state, bool by_components) {
     benchmark::DoNotOptimize(a.data());
   }
 }
-BENCHMARK_CAPTURE(BM_Associate, dense, false)->Arg(32)->Arg(128)->Arg(256)->ArgName("features")->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_Associate, components, true)->Arg(32)->Arg(128)->Arg(256)->ArgName("features")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Associate, dense, false)
+    ->Arg(32)
+    ->Arg(128)
+    ->Arg(256)
+    ->ArgName("features")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Associate, components, true)
+    ->Arg(32)
+    ->Arg(128)
+    ->Arg(256)
+    ->ArgName("features")
+    ->Unit(benchmark::kMicrosecond);
 
 // ---- Candidate costs: one measurement against many candidates ------------------------------
 // The candidate level scores every leftover measurement against every candidate. The baseline is
@@ -272,9 +282,11 @@ void BM_CandidateCosts(benchmark::State& state, bool prediction_once, LandmarkKi
   }
 }
 BENCHMARK_CAPTURE(BM_CandidateCosts, lights_per_pair, false, LandmarkKind::kPoint3D)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_CandidateCosts, lights_prediction_once, true, LandmarkKind::kPoint3D)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_CandidateCosts, lights_prediction_once, true, LandmarkKind::kPoint3D)
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_CandidateCosts, lines_per_pair, false, LandmarkKind::kVerticalLine)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_CandidateCosts, lines_prediction_once, true, LandmarkKind::kVerticalLine)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_CandidateCosts, lines_prediction_once, true, LandmarkKind::kVerticalLine)
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

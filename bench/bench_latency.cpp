@@ -132,14 +132,20 @@ bool runOnce(const std::string& launcher, const std::string& launch_file, const 
     std::cerr << "bench_latency: LCM cannot start on " << url << std::endl;
     return false;
   }
-  for (const char* ch : {channels::kOmniImage, channels::kOmniFeatures, channels::kSlamPose, channels::kGroundTruthPose})
+  for (const char* ch :
+       {channels::kOmniImage, channels::kOmniFeatures, channels::kSlamPose, channels::kGroundTruthPose})
     lcm.subscribeFunction(ch, &onMessage, &l)->setQueueCapacity(100000);
 
-  std::vector<std::string> args = {launcher,   launch_file,
-                                   "--url",    url,
-                                   "--no-log", "--set",
-                                   "speedup=" + fmt(speedup, 3), "--set",
-                                   "duration=" + fmt(duration, 3), "--set",
+  std::vector<std::string> args = {launcher,
+                                   launch_file,
+                                   "--url",
+                                   url,
+                                   "--no-log",
+                                   "--set",
+                                   "speedup=" + fmt(speedup, 3),
+                                   "--set",
+                                   "duration=" + fmt(duration, 3),
+                                   "--set",
                                    "particles=" + std::to_string(particles)};
   const auto t0 = std::chrono::steady_clock::now();
   const pid_t pid = fork();
@@ -223,7 +229,8 @@ int main(int argc, char** argv) {
   cli.add_option("--speedup", speedup, "simulated seconds per real second")->check(CLI::Range(0.1, 100.0));
   cli.add_option("--duration", duration, "simulated seconds per run")->check(CLI::Range(5.0, 100000.0));
   cli.add_option("--reps", reps, "runs per particle count, alternating")->check(CLI::Range(1, 100));
-  cli.add_option("--port", port, "UDP port of the first run's private bus, each next run the next port (default: from the pid)")
+  cli.add_option("--port", port,
+                 "UDP port of the first run's private bus, each next run the next port (default: from the pid)")
       ->check(CLI::Range(1024, 60000));
   cli.add_option("--out-dir", out_dir, "the launcher's output goes to OUT_DIR/bench_latency-M<particles>-<rep>.log");
   cli.add_option("--json", json_path, "also write the figures as one JSON object here");
@@ -237,7 +244,8 @@ int main(int argc, char** argv) {
     }
     for (size_t j = 0; j < i; ++j)
       if (particles[j] == particles[i]) {
-        std::cerr << "bench_latency: --particles: " << particles[i] << " is given twice (runs are pooled per count)" << std::endl;
+        std::cerr << "bench_latency: --particles: " << particles[i] << " is given twice (runs are pooled per count)"
+                  << std::endl;
         return 2;
       }
   }
@@ -274,8 +282,8 @@ int main(int argc, char** argv) {
       RunResult r;
       std::cout << "run M=" << m << " rep " << rep + 1 << " on " << url << " ... " << std::flush;
       if (!runOnce(launcher, launch_file, url, m, speedup, duration, log, r)) return 1;
-      std::cout << "exit " << r.exit_code << ", " << fmt(r.wall_s, 1) << " s, " << r.images << " images, "
-                << r.features << " features, " << r.poses << " poses answering an image\n";
+      std::cout << "exit " << r.exit_code << ", " << fmt(r.wall_s, 1) << " s, " << r.images << " images, " << r.features
+                << " features, " << r.poses << " poses answering an image\n";
       if (r.poses == 0) {
         std::cerr << "bench_latency: no SLAM_POSE answered an image (see " << log << ")" << std::endl;
         return 1;
@@ -313,7 +321,8 @@ int main(int argc, char** argv) {
   std::cout << "\nlatency [ms] (receive-time differences on the bus; median / p99 / max over all frames)\n";
   std::cout << std::left << std::setw(6) << "M" << std::right << std::setw(8) << "frames" << std::setw(26)
             << "image -> SLAM_POSE" << std::setw(26) << "image -> OMNI_FEATURES" << std::setw(26)
-            << "OMNI_FEATURES -> POSE" << std::setw(26) << "(truth pose -> image)" << "\n";
+            << "OMNI_FEATURES -> POSE" << std::setw(26) << "(truth pose -> image)"
+            << "\n";
   const auto cell = [](const Stats& s) {
     return fmt(s.median_ms, 1) + " / " + fmt(s.p99_ms, 1) + " / " + fmt(s.max_ms, 1);
   };

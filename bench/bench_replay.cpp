@@ -91,7 +91,8 @@ RunResult runOnce(const std::vector<Event>& events, const SlamProcessOptions& op
       ++r.outputs;
       r.checksum += o.pose.x_m + o.pose.y_m;
     }
-    if (storage_trace && !d.outputs.empty() && driver.filter()) storage_trace->push_back(driver.filter()->storageStats());
+    if (storage_trace && !d.outputs.empty() && driver.filter())
+      storage_trace->push_back(driver.filter()->storageStats());
   };
   const double cpu0 = threadCpuSeconds();
   const auto t0 = std::chrono::steady_clock::now();
@@ -265,15 +266,16 @@ int main(int argc, char** argv) {
   std::cout << std::left << std::setw(22) << "configuration" << std::right << std::setw(7) << "frames" << std::setw(9)
             << "wall s" << std::setw(8) << "cpu s" << std::setw(9) << "frames/s" << std::setw(10) << "ms/frame"
             << std::setw(10) << "cpu ms/f" << std::setw(11) << "x realtime" << std::setw(12) << "B/particle"
-            << std::setw(12) << "deep B/p" << std::setw(9) << "sharing" << std::setw(13) << "peak B/p" << "\n";
+            << std::setw(12) << "deep B/p" << std::setw(9) << "sharing" << std::setw(13) << "peak B/p"
+            << "\n";
   for (const Config& c : configs) {
     const Summary& s = sum[c.name];
     const double m = double(std::max<std::size_t>(s.storage.num_particles, 1));
     const double ub = double(s.storage.unique_bytes) / m, db = double(s.storage.deep_copy_bytes) / m;
     std::cout << std::left << std::setw(22) << c.name << std::right << std::setw(7) << s.frames << std::setw(9)
               << fmt(s.wall, 3) << std::setw(8) << fmt(s.cpu, 3) << std::setw(9) << fmt(s.fps, 0) << std::setw(10)
-              << fmt(s.ms_per_frame, 3) << std::setw(10) << fmt(s.cpu_ms_per_frame, 3) << std::setw(11)
-              << fmt(s.rtf, 0) << std::setw(12) << fmt(ub, 0) << std::setw(12) << fmt(db, 0) << std::setw(9)
+              << fmt(s.ms_per_frame, 3) << std::setw(10) << fmt(s.cpu_ms_per_frame, 3) << std::setw(11) << fmt(s.rtf, 0)
+              << std::setw(12) << fmt(ub, 0) << std::setw(12) << fmt(db, 0) << std::setw(9)
               << (ub > 0 ? fmt(db / ub, 2) : "-") << std::setw(13) << fmt(s.peak_unique_per_particle, 0)
               << (s.deterministic ? "" : "  (repetitions differ!)") << "\n";
   }
@@ -284,9 +286,8 @@ int main(int argc, char** argv) {
   std::cout << "\n(B/particle = FastSlam::storageStats() unique bytes / M after the run; deep B/p = bytes of M\n"
                " independent maps / M; sharing = deep / unique; peak B/p = the largest unique bytes / M after any\n"
                " frame of an extra untimed run, whose mean sharing ratio is below.)\n\n";
-  std::cout << "ratio M=100 / M=10 (" << (cfg_anchor ? "anchoring on" : "anchoring off")
-            << "): wall " << fmt(s100.wall / s10.wall, 2) << "x, cpu " << fmt(s100.cpu / s10.cpu, 2)
-            << "x (10x the particles)\n";
+  std::cout << "ratio M=100 / M=10 (" << (cfg_anchor ? "anchoring on" : "anchoring off") << "): wall "
+            << fmt(s100.wall / s10.wall, 2) << "x, cpu " << fmt(s100.cpu / s10.cpu, 2) << "x (10x the particles)\n";
   const std::string on = cfg_anchor ? "on" : "off", off = cfg_anchor ? "off" : "on";
   std::cout << "anchoring " << on << " / " << off << ", M=100: time per frame " << fmt(s100.wall / s100x.wall, 2)
             << "x wall, " << fmt(s100.cpu / s100x.cpu, 2) << "x cpu; bytes per particle after the run "
@@ -316,8 +317,8 @@ int main(int argc, char** argv) {
         log_json += ch;
       }
     }
-    js << "{\n  \"log\": \"" << log_json << "\",\n  \"simulated_s\": " << sim_s << ",\n  \"frames_in_log\": " << n_frames
-       << ",\n  \"reps\": " << reps << ",\n  \"configurations\": [\n";
+    js << "{\n  \"log\": \"" << log_json << "\",\n  \"simulated_s\": " << sim_s
+       << ",\n  \"frames_in_log\": " << n_frames << ",\n  \"reps\": " << reps << ",\n  \"configurations\": [\n";
     for (size_t i = 0; i < configs.size(); ++i) {
       const Summary& s = sum[configs[i].name];
       js << "    {\"name\": \"" << configs[i].name << "\", \"particles\": " << configs[i].particles

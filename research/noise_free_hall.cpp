@@ -136,8 +136,8 @@ int main(int argc, char** argv) {
       const size_t n = f.bestMap().size();
       if (trace && (n != born || std::fmod(s / v, 10.0) < 0.5)) {
         const Pose2 m = f.meanPose();
-        std::cout << "  seed " << seed << " t " << std::setw(5) << s / v << " s: heading err "
-                  << std::setw(8) << rad2deg(wrapAngle(m.theta_rad - truth.theta_rad)) << " deg, pos err "
+        std::cout << "  seed " << seed << " t " << std::setw(5) << s / v << " s: heading err " << std::setw(8)
+                  << rad2deg(wrapAngle(m.theta_rad - truth.theta_rad)) << " deg, pos err "
                   << std::hypot(m.x_m - truth.x_m, m.y_m - truth.y_m) << " m, landmarks " << n << "\n";
       }
       born = n;
@@ -147,7 +147,8 @@ int main(int argc, char** argv) {
     within += std::abs(fit.rotation_deg) <= 0.3 && fit.mean_m <= 0.05;
     std::cout << "seed " << seed << ": map rotation " << std::fixed << std::setprecision(3) << fit.rotation_deg
               << " deg, landmark mean " << fit.mean_m << " m (" << fit.mean_derotated_m << " m derotated), matched "
-              << fit.matched << "/16\n" << std::defaultfloat;
+              << fit.matched << "/16\n"
+              << std::defaultfloat;
   }
   std::cout << "mean |rotation| " << sum_abs_rot / seeds << " deg; " << within << " of " << seeds
             << " runs with |rotation| <= 0.3 deg and mean <= 0.05 m\n";

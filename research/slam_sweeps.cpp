@@ -62,16 +62,16 @@ void linesSweep() {
       for (int noisy = 0; noisy < 2; ++noisy) {
         FastSlamOptions o = roomLineOptions();
         o.proposal = method > 0 ? ProposalKind::kFastSlam1 : ProposalKind::kFastSlam2;
-        o.association = method >= 2  ? AssociationMethod::kSampled
+        o.association = method >= 2   ? AssociationMethod::kSampled
                         : method == 1 ? AssociationMethod::kMaximumLikelihood
                                       : AssociationMethod::kHungarian;
         o.clutter_density = std::vector<double>{1.0, 1.0, 0.1, 1.0, 10.0}[method];
         o.candidates.ray_motion_noise = ray != 0;
         std::cout << (method >= 2 ? "FastSLAM 1.0 + sampled, clutter " + std::to_string(o.clutter_density).substr(0, 4)
-                      : method ? "FastSLAM 1.0 + ML"
-                               : "FastSLAM 2.0 + Hungarian")
-                  << ", ray_motion_noise " << ray
-                  << ", odometry " << (noisy ? "noisy" : "exact") << ": final position / heading error";
+                      : method    ? "FastSLAM 1.0 + ML"
+                                  : "FastSLAM 2.0 + Hungarian")
+                  << ", ray_motion_noise " << ray << ", odometry " << (noisy ? "noisy" : "exact")
+                  << ": final position / heading error";
         for (std::uint64_t seed = 1; seed <= 5; ++seed) {
           const LineRun r = runLines(o, seed, noisy != 0, false);
           std::cout << "  " << std::fixed << std::setprecision(2) << r.final_pos_err_m << " m / "

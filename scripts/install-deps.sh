@@ -18,6 +18,7 @@ PKGS=(
   libbenchmark-dev                                    # bench/
   xvfb xauth x11-apps imagemagick                     # headless lcm-spy check and its screenshot
   python3                                             # small test helpers
+  clang-format                                        # scripts/format.sh: the style check CI runs
   iproute2                                            # ip: check-multicast.sh adds a multicast route
 )
 

@@ -65,7 +65,6 @@ struct Publisher {
   }
 };
 
-
 int64_t wallUtime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
@@ -92,45 +91,50 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
   lcmio::PoseStreamCheck truth_check;
   lcmio::InputOptions truth_opt;
   truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
-  node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
-    const bool new_timeline = have_truth && p.utime <= last_truth_utime;
-    // Checked before anything changes: a refused pose (thrown) is never rendered and leaves the
-    // image clock and the channel's time order as they were (docs/user/messages.md, "Plausibility").
-    lcmio::PoseStreamCheck check = new_timeline ? lcmio::PoseStreamCheck{} : truth_check;
-    if (auto why = check.admit(p.utime, p.x_m, p.y_m, p.theta_rad, plausible))
-      throw lcmio::Refused("seq " + std::to_string(p.seq) + " utime " + std::to_string(p.utime) + ": " + *why);
-    if (check.jumpsTaken() != truth_check.jumpsTaken() && !new_timeline)
-      std::cerr << node.tag() << "GROUND_TRUTH_POSE: " << check.lastJump() << std::endl;
-    truth_check = check;
-    if (new_timeline) {
-      // The node took a new timeline (the simulation run again, a truth log replayed again): a new
-      // run. Its image times start again, and so does seq, as a new capture process would; the
-      // clock would otherwise wait for the old run's next image time and publish nothing.
-      clock = sim::ImageClock(world.start_utime, world.image_rate_hz, world.truth_rate_hz);
-      pub.seq = 0;
-      std::cerr << node.tag() << "GROUND_TRUTH_POSE started a new timeline at utime " << p.utime
-                << ": image times and seq start again" << std::endl;
-    }
-    have_truth = true;
-    last_truth_utime = p.utime;
-    if (!clock.take(p.utime)) return;  // not an image time (the clock moves on when it is)
-    const Pose2 T_RinW{p.x_m, p.y_m, p.theta_rad};
-    if (room) {
-      const auto t0 = std::chrono::steady_clock::now();
-      const cv::Mat img = room->render(T_RinW, &rng);
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      pub.publish(img, p.utime);
-      ++frames;
-      node.setDetail("frame " + std::to_string(frames) + ": room rendered in " + std::to_string(std::lround(ms)) + " ms");
-    } else {
-      vision::RenderReport rep;
-      const cv::Mat img = lights->render(T_RinW, world.lights, rng, &rep);
-      pub.publish(img, p.utime);
-      ++frames;
-      node.setDetail("frame " + std::to_string(frames) + ": " + std::to_string(rep.lights_drawn) + " lights, " +
-                     std::to_string(rep.lights_missed) + " missed, " + std::to_string(rep.false_blobs) + " false blobs");
-    }
-  }, truth_opt);
+  node.subscribe<pose_t>(
+      channels::kGroundTruthPose,
+      [&](const pose_t& p) {
+        const bool new_timeline = have_truth && p.utime <= last_truth_utime;
+        // Checked before anything changes: a refused pose (thrown) is never rendered and leaves the
+        // image clock and the channel's time order as they were (docs/user/messages.md, "Plausibility").
+        lcmio::PoseStreamCheck check = new_timeline ? lcmio::PoseStreamCheck{} : truth_check;
+        if (auto why = check.admit(p.utime, p.x_m, p.y_m, p.theta_rad, plausible))
+          throw lcmio::Refused("seq " + std::to_string(p.seq) + " utime " + std::to_string(p.utime) + ": " + *why);
+        if (check.jumpsTaken() != truth_check.jumpsTaken() && !new_timeline)
+          std::cerr << node.tag() << "GROUND_TRUTH_POSE: " << check.lastJump() << std::endl;
+        truth_check = check;
+        if (new_timeline) {
+          // The node took a new timeline (the simulation run again, a truth log replayed again): a new
+          // run. Its image times start again, and so does seq, as a new capture process would; the
+          // clock would otherwise wait for the old run's next image time and publish nothing.
+          clock = sim::ImageClock(world.start_utime, world.image_rate_hz, world.truth_rate_hz);
+          pub.seq = 0;
+          std::cerr << node.tag() << "GROUND_TRUTH_POSE started a new timeline at utime " << p.utime
+                    << ": image times and seq start again" << std::endl;
+        }
+        have_truth = true;
+        last_truth_utime = p.utime;
+        if (!clock.take(p.utime)) return;  // not an image time (the clock moves on when it is)
+        const Pose2 T_RinW{p.x_m, p.y_m, p.theta_rad};
+        if (room) {
+          const auto t0 = std::chrono::steady_clock::now();
+          const cv::Mat img = room->render(T_RinW, &rng);
+          const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+          pub.publish(img, p.utime);
+          ++frames;
+          node.setDetail("frame " + std::to_string(frames) + ": room rendered in " + std::to_string(std::lround(ms)) +
+                         " ms");
+        } else {
+          vision::RenderReport rep;
+          const cv::Mat img = lights->render(T_RinW, world.lights, rng, &rep);
+          pub.publish(img, p.utime);
+          ++frames;
+          node.setDetail("frame " + std::to_string(frames) + ": " + std::to_string(rep.lights_drawn) + " lights, " +
+                         std::to_string(rep.lights_missed) + " missed, " + std::to_string(rep.false_blobs) +
+                         " false blobs");
+        }
+      },
+      truth_opt);
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
   std::cerr << node.tag() << "rendering '" << world.name << "' (" << (room ? "room, colour" : "ceiling lights")
             << ") at " << world.image_rate_hz << " Hz, " << cam->widthPx() << "x" << cam->heightPx() << ", seed "
@@ -242,7 +246,8 @@ int main(int argc, char** argv) {
   cli.add_option("--world", world_path, "world file (source sim)");
   cli.add_option("--seed", seed, "seed of the image noise and nuisances (source sim)")->check(app::SeedRange());
   cli.add_option("--dir", dir, "directory of images (source dir)");
-  cli.add_option("--rate-hz", rate_hz, "frame rate (sources dir and device)")->check(omnislam::app::FiniteRange(0.01, 1000.0));
+  cli.add_option("--rate-hz", rate_hz, "frame rate (sources dir and device)")
+      ->check(omnislam::app::FiniteRange(0.01, 1000.0));
   cli.add_option("--speedup", speedup, "source dir: replay speed-up, 0 = as fast as possible")
       ->check(omnislam::app::FiniteRange(0.0, 1000.0));
   cli.add_option("--start-utime", start_utime, "source dir: utime of the first image (default: now)")

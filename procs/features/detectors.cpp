@@ -78,13 +78,14 @@ void ocamSetup(const Node& c, camera::ScaramuzzaParams p, const std::string& pat
 std::pair<int, int> calibrationSize(const Node& c, const vision::CameraCalibration& cal, const std::string& path) {
   if (cal.width_px == 0) {
     if (!c.has("width_px") || !c.has("height_px"))
-      throw ConfigError(c.where("file") + " '" + path + "' states no image size: set camera.width_px and camera.height_px");
+      throw ConfigError(c.where("file") + " '" + path +
+                        "' states no image size: set camera.width_px and camera.height_px");
     return {static_cast<int>(c.getInt("width_px", 1, 16384)), static_cast<int>(c.getInt("height_px", 1, 16384))};
   }
   for (const auto& [key, v] : {std::pair<const char*, int>{"width_px", cal.width_px}, {"height_px", cal.height_px}})
     if (c.has(key) && c.getInt(key, 1, 16384) != v)
-      throw ConfigError(c.where(key) + " is " + std::to_string(c.getInt(key, 1, 16384)) + " but '" + path +
-                        "' says " + std::to_string(v));
+      throw ConfigError(c.where(key) + " is " + std::to_string(c.getInt(key, 1, 16384)) + " but '" + path + "' says " +
+                        std::to_string(v));
   return {cal.width_px, cal.height_px};
 }
 
@@ -161,8 +162,8 @@ CameraSetup parseCamera(const Node& c) {
   c.rejectUnknownKeys({"model", "world", "file", "kalibr_camera", "optics", "min_elevation_deg", "max_elevation_deg",
                        "min_radius_px", "max_radius_px", "width_px", "height_px", "mounting", "mask", "mask_annulus"});
   CameraSetup s;
-  const std::string model = c.getEnum(
-      "model", {"world", "auto", "opencv_omnidir", "opencv_fisheye", "kalibr", "ocamcalib", "centre_only"});
+  const std::string model =
+      c.getEnum("model", {"world", "auto", "opencv_omnidir", "opencv_fisheye", "kalibr", "ocamcalib", "centre_only"});
   if (model == "world") {
     const sim::World w = config::loadWorld(c.getExistingFile("world"));
     s.model = sim::makeCamera(w.camera);  // the world's model: Pajdla-Bakstein or Scaramuzza
@@ -207,12 +208,13 @@ std::string checkSizeAndFormat(const cv::Mat& img, int w, int h, bool colour_ok)
   if (img.empty()) return "empty image";
   const bool size_ok = img.cols == w && img.rows == h;
   if (size_ok && img.depth() == CV_8U && (img.channels() == 1 || (colour_ok && img.channels() == 3))) return {};
-  static const char* const kDepth[] = {"8-bit", "8-bit signed", "16-bit", "16-bit signed", "32-bit integer",
-                                       "32-bit float", "64-bit float", "16-bit float"};
+  static const char* const kDepth[] = {"8-bit",          "8-bit signed", "16-bit",       "16-bit signed",
+                                       "32-bit integer", "32-bit float", "64-bit float", "16-bit float"};
   auto dims = [](int cols, int rows) { return std::to_string(cols) + "x" + std::to_string(rows); };
-  return (size_ok ? std::string("format") : "size " + dims(img.cols, img.rows)) + " does not match the camera (received " +
-         dims(img.cols, img.rows) + ", " + std::to_string(img.channels()) + (img.channels() == 1 ? " channel, " : " channels, ") +
-         kDepth[img.depth()] + "; the camera needs " + dims(w, h) + ", 8-bit " + (colour_ok ? "grey or BGR)" : "grey)");
+  return (size_ok ? std::string("format") : "size " + dims(img.cols, img.rows)) +
+         " does not match the camera (received " + dims(img.cols, img.rows) + ", " + std::to_string(img.channels()) +
+         (img.channels() == 1 ? " channel, " : " channels, ") + kDepth[img.depth()] + "; the camera needs " +
+         dims(w, h) + ", 8-bit " + (colour_ok ? "grey or BGR)" : "grey)");
 }
 
 class LightsDetector final : public Detector {
@@ -312,7 +314,8 @@ class LinesDetector final : public Detector {
     std::ostringstream s;
     s << "vertical lines, " << cam_.description << ", panorama centre (" << p.centre_u_px << ", " << p.centre_v_px
       << ") px, radii " << p.r_min_px << ".." << p.r_max_px << " px, " << p.columns << " columns";
-    if (!cam_.mask.empty()) s << ", mask uses " << std::lround(100.0 * vision::usedFraction(cam_.mask)) << " % of the pixels";
+    if (!cam_.mask.empty())
+      s << ", mask uses " << std::lround(100.0 * vision::usedFraction(cam_.mask)) << " % of the pixels";
     return s.str();
   }
 
@@ -356,7 +359,8 @@ vision::CeilingLightOptions parseLights(const Node& n) {
   o.blobs = parseLampBlobs(n);
   o.background_window_rad = n.getDouble("background_window_rad", 1e-3, 1.0, o.background_window_rad);
   o.max_elongation = n.getDouble("max_elongation", 1.0, 100.0, o.max_elongation);
-  o.max_clipped_elongation = n.getDouble("max_clipped_elongation", 1.0, 100.0, std::max(o.max_elongation, o.max_clipped_elongation));
+  o.max_clipped_elongation =
+      n.getDouble("max_clipped_elongation", 1.0, 100.0, std::max(o.max_elongation, o.max_clipped_elongation));
   if (o.max_clipped_elongation < o.max_elongation)
     throw ConfigError(n.where("max_clipped_elongation") + " must be >= max_elongation");
   // "auto" (or absent): the frame's own noise estimate.
@@ -364,18 +368,40 @@ vision::CeilingLightOptions parseLights(const Node& n) {
     o.noise_sigma_grey = n.getDouble("noise_sigma_grey", 0.0, 100.0);
   o.pixel_sigma_floor_px = n.getDouble("pixel_sigma_floor_px", 1e-3, 100.0, o.pixel_sigma_floor_px);
   o.truncated_blobs = n.getEnum("truncated_blobs", {"drop", "keep"}, "drop") == "drop" ? vision::TruncatedBlobs::kDrop
-                                                                                      : vision::TruncatedBlobs::kKeep;
+                                                                                       : vision::TruncatedBlobs::kKeep;
   return o;
 }
 
 vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
-  n.rejectUnknownKeys({"centre_u_px", "centre_v_px", "r_min_px", "r_max_px", "columns", "rows", "pad_columns",
-                       "edge_threshold", "min_run_rows", "max_gap_rows", "merge_columns", "merge_gap_rows",
-                       "min_length_rows", "max_drift_columns", "max_rms_columns", "colour_offset_columns",
-                       "colour_width_columns", "pixel_sigma_px", "max_opposite_fraction", "bar_max_width_px",
-                       "cell_row_min_lines", "cell_max_aspect", "cell_max_spacing_ratio",
-                       "contrast_exponent", "contrast_reference_grey", "contrast_offset_grey", "contrast_window_columns",
-                       "clahe_clip_limit", "clahe_tile_columns"});
+  n.rejectUnknownKeys({"centre_u_px",
+                       "centre_v_px",
+                       "r_min_px",
+                       "r_max_px",
+                       "columns",
+                       "rows",
+                       "pad_columns",
+                       "edge_threshold",
+                       "min_run_rows",
+                       "max_gap_rows",
+                       "merge_columns",
+                       "merge_gap_rows",
+                       "min_length_rows",
+                       "max_drift_columns",
+                       "max_rms_columns",
+                       "colour_offset_columns",
+                       "colour_width_columns",
+                       "pixel_sigma_px",
+                       "max_opposite_fraction",
+                       "bar_max_width_px",
+                       "cell_row_min_lines",
+                       "cell_max_aspect",
+                       "cell_max_spacing_ratio",
+                       "contrast_exponent",
+                       "contrast_reference_grey",
+                       "contrast_offset_grey",
+                       "contrast_window_columns",
+                       "clahe_clip_limit",
+                       "clahe_tile_columns"});
   vision::VerticalLineOptions o;
   auto& p = o.panorama;
   if (cam.centre_px && !n.has("centre_u_px") && !n.has("centre_v_px")) {
@@ -430,7 +456,8 @@ std::unique_ptr<Detector> makeDetector(const Node& root) {
   if (kind == "ceiling_lights") {
     if (!cam.model)
       throw ConfigError(root.child("camera").where("model") + " ceiling_lights needs a camera model (not centre_only)");
-    const auto opt = root.has("ceiling_lights") ? parseLights(root.child("ceiling_lights")) : vision::CeilingLightOptions{};
+    const auto opt =
+        root.has("ceiling_lights") ? parseLights(root.child("ceiling_lights")) : vision::CeilingLightOptions{};
     return std::make_unique<LightsDetector>(std::move(cam), opt, max_features);
   }
   checkLevelForLines(root.child("camera"), cam);
@@ -448,7 +475,8 @@ vision::VerticalLineOptions verticalLineOptions(const Node& root) {
 CeilingLightSetup ceilingLightSetup(const Node& root) {
   CameraSetup cam = parseCamera(root.child("camera"));
   if (!cam.model)
-    throw ConfigError(root.child("camera").where("model") + " ceiling_lights needs a camera model (world or ocamcalib)");
+    throw ConfigError(root.child("camera").where("model") +
+                      " ceiling_lights needs a camera model (world or ocamcalib)");
   CeilingLightSetup s;
   s.camera = std::move(cam.model);
   s.mounting = cam.mounting;

@@ -137,8 +137,8 @@ LoadedImage loadImage(const features::Detector& det, const fs::path& path) {
 }
 
 void printFeatures(const std::string& name, const std::vector<feature_t>& f, double decode_ms, double detect_ms) {
-  std::cout << name << ": " << f.size() << " features (decode " << fmt1(decode_ms) << " ms, detect "
-            << fmt1(detect_ms) << " ms)";
+  std::cout << name << ": " << f.size() << " features (decode " << fmt1(decode_ms) << " ms, detect " << fmt1(detect_ms)
+            << " ms)";
   for (const auto& x : f) {
     std::cout << (x.has_elevation ? " (" : " ") << std::fixed;
     std::cout.precision(2);

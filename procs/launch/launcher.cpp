@@ -43,7 +43,9 @@ namespace {
 RestartOptions restartOptions(const config::Node& p) {
   RestartOptions o;
   const std::string mode = p.getEnum("restart", {"never", "on_failure", "always"}, "never");
-  o.mode = mode == "always" ? RestartMode::kAlways : mode == "on_failure" ? RestartMode::kOnFailure : RestartMode::kNever;
+  o.mode = mode == "always"       ? RestartMode::kAlways
+           : mode == "on_failure" ? RestartMode::kOnFailure
+                                  : RestartMode::kNever;
   o.delay_s = p.getDouble("restart_delay_s", 0.0, 3600.0, o.delay_s);
   o.delay_max_s = p.getDouble("restart_delay_max_s", 0.0, 3600.0, std::max(o.delay_max_s, o.delay_s));
   if (o.delay_max_s < o.delay_s) {
@@ -161,7 +163,8 @@ ProcessSpec loadProcess(const config::Node& p, const std::map<std::string, std::
   // The launcher's own lines and the recorder's carry these names: a process of either name could
   // print lines that pass for theirs.
   if (spec.name == "launch" || spec.name == "logger")
-    throw config::ConfigError(p.where("name") + " '" + spec.name + "' is reserved (the launcher's own lines and the "
+    throw config::ConfigError(p.where("name") + " '" + spec.name +
+                              "' is reserved (the launcher's own lines and the "
                               "recorder's are prefixed with 'launch' and 'logger')");
   for (const auto& other : plan.processes)
     if (other.name == spec.name) throw config::ConfigError(p.where("name") + " '" + spec.name + "' is used twice");
@@ -201,14 +204,14 @@ bool isExecutableFile(const fs::path& p) {
 }  // namespace
 
 std::vector<std::string> recorderArgv(const Plan& plan, const std::string& file) {
-  return plan.log_tool == "lcm-logger"
-             ? std::vector<std::string>{"lcm-logger", "--lcm-url=" + plan.lcm_url, "-f", file}
-             : std::vector<std::string>{"omnislam-record", "--url", plan.lcm_url, "-f", file};
+  return plan.log_tool == "lcm-logger" ? std::vector<std::string>{"lcm-logger", "--lcm-url=" + plan.lcm_url, "-f", file}
+                                       : std::vector<std::string>{"omnislam-record", "--url", plan.lcm_url, "-f", file};
 }
 
 std::optional<std::string> findProgram(const std::string& prog, const std::string& bin_dir) {
   if (prog.empty()) return std::nullopt;
-  if (prog.find('/') != std::string::npos) return isExecutableFile(prog) ? std::optional<std::string>(prog) : std::nullopt;
+  if (prog.find('/') != std::string::npos)
+    return isExecutableFile(prog) ? std::optional<std::string>(prog) : std::nullopt;
   if (isExecutableFile(fs::path(bin_dir) / prog)) return (fs::path(bin_dir) / prog).string();
   const char* path = std::getenv("PATH");
   std::string dirs = path ? path : "";
@@ -225,8 +228,8 @@ std::optional<std::string> findProgram(const std::string& prog, const std::strin
 void checkPrograms(const Plan& plan, const std::string& bin_dir) {
   auto check = [&](const std::string& who, const std::string& prog) {
     if (!findProgram(prog, bin_dir))
-      throw std::invalid_argument(who + ": program '" + prog + "' not found or not executable (looked in " +
-                                  bin_dir + " and PATH); nothing was started");
+      throw std::invalid_argument(who + ": program '" + prog + "' not found or not executable (looked in " + bin_dir +
+                                  " and PATH); nothing was started");
   };
   if (plan.log_enabled) check("logger (" + plan.log_tool + ")", recorderArgv(plan, plan.log_file).front());
   for (const auto& p : plan.processes) check("process '" + p.name + "'", p.argv.empty() ? "" : p.argv.front());

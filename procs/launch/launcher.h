@@ -31,14 +31,14 @@ struct Plan {
   std::string lcm_url;
   bool log_enabled = true;
   std::string log_tool = "omnislam-record";  ///< omnislam-record | lcm-logger
-  std::string log_file;  ///< full path of the recording (its first part)
+  std::string log_file;                      ///< full path of the recording (its first part)
   RecorderFailure on_recorder_failure = RecorderFailure::kStop;
   /// kRestart: restarts at once (no delay), at most this many within recorder_restart_window_s;
   /// one more failure then stops the run as kStop does.
   int recorder_restart_limit = 3;
   double recorder_restart_window_s = 60.0;
   std::vector<ProcessSpec> processes;
-  double stop_grace_s = 5.0;   ///< SIGINT, then SIGKILL after this
+  double stop_grace_s = 5.0;  ///< SIGINT, then SIGKILL after this
   /// After the scenario ends, the processes work through what they have queued before they are
   /// stopped: the wait ends once no message but PROCESS_STATUS has crossed the bus for
   /// drain_quiet_s, and at the latest after drain_s. drain_quiet_s 0 waits the whole drain_s.

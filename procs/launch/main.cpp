@@ -35,7 +35,8 @@ int main(int argc, char** argv) {
     const auto plan = omnislam::launch::loadPlan(file, overrides, url, log_dir, log_file, no_log);
     char self[PATH_MAX] = {0};
     const ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
-    const std::string bin_dir = n > 0 ? std::filesystem::path(std::string(self, static_cast<size_t>(n))).parent_path().string() : ".";
+    const std::string bin_dir =
+        n > 0 ? std::filesystem::path(std::string(self, static_cast<size_t>(n))).parent_path().string() : ".";
     return omnislam::launch::runPlan(plan, bin_dir);
   });
 }

@@ -30,8 +30,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr double kRecorderStartS = 20.0;  ///< longest wait for a recorder to say it records
-constexpr double kLoggerGraceS = 5.0;  ///< the logger's least SIGINT-to-SIGKILL grace (Run::finish)
-constexpr int kMessagesPerBatch = 1000;  ///< bus messages handled between two passes over the children
+constexpr double kLoggerGraceS = 5.0;     ///< the logger's least SIGINT-to-SIGKILL grace (Run::finish)
+constexpr int kMessagesPerBatch = 1000;   ///< bus messages handled between two passes over the children
 
 /// What the drain counts: messages but PROCESS_STATUS (published once a second by every process,
 /// busy or idle), and when the last one came.
@@ -93,8 +93,8 @@ bool drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus, LaunchSta
       if (!c.exited || c.reported) continue;
       if (!c.is_logger && (!failed(c.status) || !c.required)) continue;  // reported at the end, as before
       c.reported = true;
-      sup.print("launch", (c.is_logger ? plan.log_tool + " died" : "process " + c.name + " died") + " during the drain (" +
-                              describe(c.status) + "): stopping now" +
+      sup.print("launch", (c.is_logger ? plan.log_tool + " died" : "process " + c.name + " died") +
+                              " during the drain (" + describe(c.status) + "): stopping now" +
                               (c.is_logger ? ", the rest of the run is not recorded" : ""));
       return false;
     }
@@ -102,8 +102,7 @@ bool drainUntilQuiet(Supervisor& sup, const Plan& plan, lcm::LCM* bus, LaunchSta
     // What waits on the bus, in batches: a bus that never empties must not keep the launcher from
     // drain_s, a stop request and the children (it did, until the flood ended by itself).
     int handled = 0;
-    while (handled < kMessagesPerBatch && Clock::now() < until && !lcmio::stopRequested() &&
-           bus->handleTimeout(0) > 0)
+    while (handled < kMessagesPerBatch && Clock::now() < until && !lcmio::stopRequested() && bus->handleTimeout(0) > 0)
       ++handled;
     busy = handled == kMessagesPerBatch;
     if (Clock::now() - activity.last >= quiet) {
@@ -181,7 +180,8 @@ class Run {
     sup_.children.push_back(lg);
     sup_.print("launch", "recording every channel into " + plan_.log_file + " (" + plan_.log_tool + "), pid " +
                              std::to_string(lg.pid));
-    waitUntilRecording(Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kRecorderStartS)));
+    waitUntilRecording(Clock::now() +
+                       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kRecorderStartS)));
     // A recorder that has ended records nothing (it could not write the file): the run stops
     // before it starts. Its error line used to pass for the start, and the run went on unrecorded.
     if (logger().exited && !lcmio::stopRequested()) {
@@ -286,12 +286,13 @@ class Run {
       reason_ = c.name + " finished the scenario";
       return;
     }
-    const std::string how = bad ? "process " + c.name + " died: " + describe(c.status)
-                                : c.name + " finished (exit code 0)";
+    const std::string how =
+        bad ? "process " + c.name + " died: " + describe(c.status) : c.name + " finished (exit code 0)";
     const RestartDecision d = c.restart->onExit(bad, c.ends_run, false, nowS());
     if (d.kind == RestartDecision::Kind::kRestart) {
       c.restart_pending = true;
-      c.restart_at = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(d.delay_s));
+      c.restart_at =
+          Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(d.delay_s));
       say(how + "; restart " + std::to_string(d.number) + " of " + std::to_string(d.limit) + " (within " +
           seconds(c.restart->options().window_s) + " s) in " + seconds(d.delay_s) + " s");
       updateDetail();
@@ -299,8 +300,11 @@ class Run {
     }
     if (d.kind == RestartDecision::Kind::kExhausted) {
       // After a normal exit (restart: always) it is left ended, as a normal exit without restarts is.
-      say(how + "; restarts exhausted (" + std::to_string(d.limit) + " within " + seconds(c.restart->options().window_s) +
-          " s)" + (!bad ? ": left ended" : c.required ? ": stopping the run" : ": not required, left dead"));
+      say(how + "; restarts exhausted (" + std::to_string(d.limit) + " within " +
+          seconds(c.restart->options().window_s) + " s)" +
+          (!bad         ? ": left ended"
+           : c.required ? ": stopping the run"
+                        : ": not required, left dead"));
       if (bad && c.required) {
         rc_ = 1;
         reason_ = c.name + " died, its restarts exhausted";

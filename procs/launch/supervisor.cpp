@@ -59,7 +59,6 @@ bool groupAlive(const Child& c) {
   return false;
 }
 
-
 }  // namespace
 
 Child spawn(const std::string& name, const std::vector<std::string>& argv, const std::string& url,
@@ -194,8 +193,8 @@ void Supervisor::take(Child& c, const char* data, size_t n) {
   }
   c.partial.erase(0, start);
   while (c.partial.size() > kMaxLineBytes) {
-    line(c, c.partial.substr(0, kMaxLineBytes) + " [cut: line longer than " + std::to_string(kMaxLineBytes) +
-                " bytes]");
+    line(c,
+         c.partial.substr(0, kMaxLineBytes) + " [cut: line longer than " + std::to_string(kMaxLineBytes) + " bytes]");
     c.partial.erase(0, kMaxLineBytes);
   }
 }
@@ -270,6 +269,5 @@ void Supervisor::stop(bool loggers, double grace_s) {
   }
   for (int i = 0; i < 40; ++i) pump(50);
 }
-
 
 }  // namespace omnislam::launch

@@ -27,8 +27,8 @@ struct Child {
   bool ready = false;      ///< it has printed that line
   bool exited = false;
   int status = 0;
-  bool reported = false;      ///< its end has been dealt with (reported, restart decided)
-  bool group_killed = false;  ///< processes it started outlived it and had to be killed
+  bool reported = false;                   ///< its end has been dealt with (reported, restart decided)
+  bool group_killed = false;               ///< processes it started outlived it and had to be killed
   std::shared_ptr<RestartPolicy> restart;  ///< shared: a Child is copied into the supervisor
   bool restart_pending = false;            ///< exited; to be started again at restart_at
   std::chrono::steady_clock::time_point restart_at;

@@ -59,7 +59,8 @@ std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::strin
     if (s.utime < 0 || s.utime > kMaxCsvUtime)
       fail("utime " + std::to_string(s.utime) + " outside 0.." + std::to_string(kMaxCsvUtime));
     if (!out.empty() && s.utime <= out.back().utime)
-      fail("utime " + std::to_string(s.utime) + " does not increase (previous " + std::to_string(out.back().utime) + ")");
+      fail("utime " + std::to_string(s.utime) + " does not increase (previous " + std::to_string(out.back().utime) +
+           ")");
     out.push_back(s);
   }
   if (!header) throw std::invalid_argument(source + ": empty file (no header 'utime,v_mps,omega_radps')");

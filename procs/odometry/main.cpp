@@ -46,37 +46,40 @@ int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed, cons
   lcmio::PoseStreamCheck truth_check;
   lcmio::InputOptions truth_opt;
   truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
-  node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& p) {
-    const bool new_timeline = seq > 0 && p.utime <= last_utime;
-    // Checked before anything changes: a refused pose (thrown) leaves the integration, the check
-    // and the channel's time order as they were (docs/user/messages.md, "Plausibility").
-    lcmio::PoseStreamCheck check = new_timeline ? lcmio::PoseStreamCheck{} : truth_check;
-    if (auto why = check.admit(p.utime, p.x_m, p.y_m, p.theta_rad, plausible))
-      throw lcmio::Refused("seq " + std::to_string(p.seq) + " utime " + std::to_string(p.utime) + ": " + *why);
-    if (check.jumpsTaken() != truth_check.jumpsTaken() && !new_timeline)
-      std::cerr << node.tag() << "GROUND_TRUTH_POSE: " << check.lastJump() << std::endl;
-    truth_check = check;
-    if (new_timeline) {
-      // The node took a new timeline (the simulation run again, a truth log replayed again): a new
-      // run, as a new odometry process would see it. Integrating the jump back to the start as one
-      // step would "drive" metres in negative time, with a velocity from a negative dt.
-      odo = sim::OdometrySimulator(world.odometry_noise, seed);
-      seq = 0;
-      std::cerr << node.tag() << "GROUND_TRUTH_POSE started a new timeline at utime " << p.utime
-                << ": the odometry starts again (pose, noise draws and seq)" << std::endl;
-    }
-    const Pose2 now = odo.step(Pose2{p.x_m, p.y_m, p.theta_rad});
-    double v = 0.0, w = 0.0;
-    if (seq > 0) {
-      const double dt = (p.utime - last_utime) * 1e-6;
-      const Pose2 d = last.between(now);
-      v = d.x_m / dt;
-      w = d.theta_rad / dt;
-    }
-    published += node.publish(channels::kOdometry, makeMsg(p.utime, seq++, now, v, w)) ? 1 : 0;
-    last = now;
-    last_utime = p.utime;
-  }, truth_opt);
+  node.subscribe<pose_t>(
+      channels::kGroundTruthPose,
+      [&](const pose_t& p) {
+        const bool new_timeline = seq > 0 && p.utime <= last_utime;
+        // Checked before anything changes: a refused pose (thrown) leaves the integration, the check
+        // and the channel's time order as they were (docs/user/messages.md, "Plausibility").
+        lcmio::PoseStreamCheck check = new_timeline ? lcmio::PoseStreamCheck{} : truth_check;
+        if (auto why = check.admit(p.utime, p.x_m, p.y_m, p.theta_rad, plausible))
+          throw lcmio::Refused("seq " + std::to_string(p.seq) + " utime " + std::to_string(p.utime) + ": " + *why);
+        if (check.jumpsTaken() != truth_check.jumpsTaken() && !new_timeline)
+          std::cerr << node.tag() << "GROUND_TRUTH_POSE: " << check.lastJump() << std::endl;
+        truth_check = check;
+        if (new_timeline) {
+          // The node took a new timeline (the simulation run again, a truth log replayed again): a new
+          // run, as a new odometry process would see it. Integrating the jump back to the start as one
+          // step would "drive" metres in negative time, with a velocity from a negative dt.
+          odo = sim::OdometrySimulator(world.odometry_noise, seed);
+          seq = 0;
+          std::cerr << node.tag() << "GROUND_TRUTH_POSE started a new timeline at utime " << p.utime
+                    << ": the odometry starts again (pose, noise draws and seq)" << std::endl;
+        }
+        const Pose2 now = odo.step(Pose2{p.x_m, p.y_m, p.theta_rad});
+        double v = 0.0, w = 0.0;
+        if (seq > 0) {
+          const double dt = (p.utime - last_utime) * 1e-6;
+          const Pose2 d = last.between(now);
+          v = d.x_m / dt;
+          w = d.theta_rad / dt;
+        }
+        published += node.publish(channels::kOdometry, makeMsg(p.utime, seq++, now, v, w)) ? 1 : 0;
+        last = now;
+        last_utime = p.utime;
+      },
+      truth_opt);
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
   const auto& nz = world.odometry_noise;
   if (nz.model == sim::OdometryModel::kTranslateRotate) {

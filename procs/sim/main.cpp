@@ -76,8 +76,8 @@ void waitForConsumers(lcmio::Node& node, const std::string& wait_for, double wai
   status_opt.track_sequence = false;
   // Shared with the handler: the node keeps the subscription after this function returns.
   auto seen_ptr = std::make_shared<std::set<std::string>>();
-  node.subscribe<process_status_t>(channels::kProcessStatus,
-                                   [seen_ptr](const process_status_t& st) { seen_ptr->insert(st.name); }, status_opt);
+  node.subscribe<process_status_t>(
+      channels::kProcessStatus, [seen_ptr](const process_status_t& st) { seen_ptr->insert(st.name); }, status_opt);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_timeout_s);
   auto all_seen = [&] {
     for (const auto& n : wanted)
@@ -155,7 +155,8 @@ int main(int argc, char** argv) {
   cli.add_option("--duration", duration_s, "stop after this many simulated seconds (0 = whole trajectory)")
       ->check(omnislam::app::FiniteRange(0.0, 1e6));
   cli.add_option("--wait-for", wait_for, "comma-separated process names to wait for (PROCESS_STATUS) before starting");
-  cli.add_option("--wait-timeout", wait_timeout_s, "seconds to wait for them")->check(omnislam::app::FiniteRange(0.0, 600.0));
+  cli.add_option("--wait-timeout", wait_timeout_s, "seconds to wait for them")
+      ->check(omnislam::app::FiniteRange(0.0, 600.0));
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
 
   return app::runMain("omnislam-sim", [&]() -> int {
@@ -164,10 +165,11 @@ int main(int argc, char** argv) {
     const std::vector<sim::RoomLine> room_lines = world.room ? world.room->lines() : std::vector<sim::RoomLine>{};
     const double end_s = duration_s > 0 ? std::min(duration_s, traj.duration_s()) : traj.duration_s();
     lcmio::Node node(name, app::lcmUrl(url));
-    std::cerr << node.tag() << "world '" << world.name << "': " << (world.room ? room_lines.size() : world.lights.size())
-              << (world.room ? " vertical lines" : " lights") << ", trajectory "
-              << traj.length_m() << " m in " << traj.duration_s() << " s (running " << end_s << " s at "
-              << speedup << "x), truth at " << world.truth_rate_hz << " Hz" << std::endl;
+    std::cerr << node.tag() << "world '" << world.name
+              << "': " << (world.room ? room_lines.size() : world.lights.size())
+              << (world.room ? " vertical lines" : " lights") << ", trajectory " << traj.length_m() << " m in "
+              << traj.duration_s() << " s (running " << end_s << " s at " << speedup << "x), truth at "
+              << world.truth_rate_hz << " Hz" << std::endl;
 
     waitForConsumers(node, wait_for, wait_timeout_s);
     if (lcmio::stopRequested()) return app::kOk;

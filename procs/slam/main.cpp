@@ -57,8 +57,10 @@ int runLive(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark>
   lcmio::InputOptions feat_opt;
   feat_opt.require_increasing_utime = false;
   feat_opt.queue_capacity = 200;
-  node.subscribe<odometry_t>(channels::kOdometry, [&](const odometry_t& m) { rt.onOdometry(m, emit); }, odo_opt);
-  node.subscribe<features_t>(channels::kOmniFeatures, [&](const features_t& m) { rt.onFeatures(m, emit); }, feat_opt);
+  node.subscribe<odometry_t>(
+      channels::kOdometry, [&](const odometry_t& m) { rt.onOdometry(m, emit); }, odo_opt);
+  node.subscribe<features_t>(
+      channels::kOmniFeatures, [&](const features_t& m) { rt.onFeatures(m, emit); }, feat_opt);
   node.setDetail(rt.detail());
   node.publishStatus();
   node.spin({}, [&] { node.setDetail(rt.detail()); });
@@ -97,19 +99,26 @@ int main(int argc, char** argv) {
   auto* seed_opt = cli.add_option("--seed", seed, "filter seed (overrides the config's seed)")->check(app::SeedRange());
   cli.add_option("--replay", replay, "offline: read this LCM log instead of the bus");
   cli.add_option("--out", out, "offline: write the input events and the outputs to this LCM log");
-  cli.add_option("--set", sets, "override a config key: --set filter.resample_ess_fraction=1.0 (repeatable; needs --config)");
-  cli.add_option("--save-map", save_map, "write the best particle's map here on exit (atomic; overrides map.save_path)");
+  cli.add_option("--set", sets,
+                 "override a config key: --set filter.resample_ess_fraction=1.0 (repeatable; needs --config)");
+  cli.add_option("--save-map", save_map,
+                 "write the best particle's map here on exit (atomic; overrides map.save_path)");
   cli.add_option("--load-map", load_map, "start from this saved map (overrides map.load_path)");
   std::string checkpoint;
   double checkpoint_interval_s = 0.0;
-  cli.add_option("--checkpoint", checkpoint, "checkpoint file: resume from it when it exists, write it every "
+  cli.add_option("--checkpoint", checkpoint,
+                 "checkpoint file: resume from it when it exists, write it every "
                  "--checkpoint-interval s of data and at SIGINT/SIGTERM (overrides checkpoint.path)");
-  cli.add_option("--checkpoint-interval", checkpoint_interval_s, "seconds of data between checkpoints (overrides "
-                 "checkpoint.interval_s)")->check(CLI::Range(0.001, 1e6));
+  cli.add_option("--checkpoint-interval", checkpoint_interval_s,
+                 "seconds of data between checkpoints (overrides "
+                 "checkpoint.interval_s)")
+      ->check(CLI::Range(0.001, 1e6));
   cli.add_flag("--localise", localise, "localisation only: keep the loaded map fixed (needs a map to load)");
-  cli.add_option("--association", association, "override filter.association")->check(CLI::IsMember(slamproc::associationNames()));
+  cli.add_option("--association", association, "override filter.association")
+      ->check(CLI::IsMember(slamproc::associationNames()));
   cli.add_option("--particles", particles, "override filter.particles")->check(CLI::Range(1, 100000));
-  cli.add_flag("--progress", progress, "offline: print progress (frames, rate, time left) every 2 s (default when stderr is a terminal)");
+  cli.add_flag("--progress", progress,
+               "offline: print progress (frames, rate, time left) every 2 s (default when stderr is a terminal)");
   cli.add_flag("--no-progress", no_progress, "offline: no progress lines");
   cli.add_option("--url", url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", name, "process name in PROCESS_STATUS");
@@ -123,11 +132,11 @@ int main(int argc, char** argv) {
     if (!save_map.empty()) opt.save_map_path = save_map;
     if (!load_map.empty()) opt.load_map_path = load_map;
     if (localise) opt.localisation_only = true;
-    if (!association.empty())
-      opt.filter.association = slamproc::associationFromName(association);
+    if (!association.empty()) opt.filter.association = slamproc::associationFromName(association);
     if (particles > 0) opt.filter.num_particles = particles;
     if (!checkpoint.empty()) opt.checkpoint_path = checkpoint;
-    if (checkpoint_interval_s > 0.0) opt.checkpoint_interval_us = static_cast<int64_t>(std::llround(checkpoint_interval_s * 1e6));
+    if (checkpoint_interval_s > 0.0)
+      opt.checkpoint_interval_us = static_cast<int64_t>(std::llround(checkpoint_interval_s * 1e6));
     if (const std::string err = opt.validate(); !err.empty()) throw std::invalid_argument(err);
     checkOutputs(opt, out);
     std::vector<slam::Landmark> prior = slamproc::loadPriorMap(opt, "[" + name + "] ");

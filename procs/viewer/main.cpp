@@ -49,7 +49,8 @@ class PngWriter {
   bool enabled() const { return !dir_.empty(); }
   void write(const std::string& file, const cv::Mat& img) {
     const std::string path = dir_ + "/" + file;
-    if (!cv::imwrite(path, img, {cv::IMWRITE_PNG_COMPRESSION, 6})) throw std::runtime_error("cannot write '" + path + "'");
+    if (!cv::imwrite(path, img, {cv::IMWRITE_PNG_COMPRESSION, 6}))
+      throw std::runtime_error("cannot write '" + path + "'");
     ++written_;
   }
   int written() const { return written_; }
@@ -116,7 +117,8 @@ int runLive(const Settings& s) {
   node.subscribe<map_t>(channels::kSlamMap, [&](const map_t& m) { st.onSlamMap(m); });
   node.subscribe<particles_t>(channels::kSlamParticles, [&](const particles_t& m) { st.onParticles(m); });
   node.subscribe<associations_t>(channels::kSlamAssociations, [&](const associations_t& m) { st.onAssociations(m); });
-  node.subscribe<pose_t>(channels::kGroundTruthPose, [&](const pose_t& m) { st.onTruthPose(m); }, truth_opt);
+  node.subscribe<pose_t>(
+      channels::kGroundTruthPose, [&](const pose_t& m) { st.onTruthPose(m); }, truth_opt);
   node.subscribe<map_t>(channels::kGroundTruthMap, [&](const map_t& m) { st.onTruthMap(m); });
   node.subscribe<image_t>(channels::kOmniImage, [&](const image_t& m) {
     std::string why;
@@ -132,8 +134,7 @@ int runLive(const Settings& s) {
     cv::namedWindow(win, cv::WINDOW_NORMAL | cv::WINDOW_KEEPRATIO | cv::WINDOW_GUI_NORMAL);
     cv::resizeWindow(win, s.view.map_width_px + s.view.image_width_px, s.view.height_px);
   }
-  std::cerr << node.tag() << (window ? "window" : "headless") << " on "
-            << (s.url.empty() ? "$LCM_DEFAULT_URL" : s.url)
+  std::cerr << node.tag() << (window ? "window" : "headless") << " on " << (s.url.empty() ? "$LCM_DEFAULT_URL" : s.url)
             << (s.out_dir.empty() ? std::string() : ", PNG files into " + s.out_dir) << std::endl;
   const auto period = std::chrono::duration<double>(1.0 / s.fps);
   auto next_draw = std::chrono::steady_clock::now();
@@ -142,7 +143,8 @@ int runLive(const Settings& s) {
     // Drain what is queued before drawing: one message per loop would fall behind a fast bus
     // (truth at 50 Hz times the simulator's speed-up) and LCM would drop the rest.
     const auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(50);
-    while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < drain_until && node.lcm().handleTimeout(0) > 0) {
+    while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < drain_until &&
+           node.lcm().handleTimeout(0) > 0) {
     }
     node.setDetail(std::to_string(st.steps()) + " SLAM steps, " + std::to_string(v.written()) + " PNG files");
     if (!window) continue;
@@ -162,7 +164,8 @@ int runLive(const Settings& s) {
   if (window) cv::destroyAllWindows();
   const auto& c = node.counters();
   std::cerr << node.tag() << st.steps() << " SLAM steps, " << v.written() << " PNG files written; " << c.messages_in
-            << " messages in, " << c.decode_errors << " decode errors, " << c.rejected_inputs << " rejected" << std::endl;
+            << " messages in, " << c.decode_errors << " decode errors, " << c.rejected_inputs << " rejected"
+            << std::endl;
   if (png_failures > 0) {
     std::cerr << node.tag() << png_failures << " PNG FILES NOT WRITTEN (the first: " << first_png_failure << ")"
               << std::endl;
@@ -222,7 +225,8 @@ int runLog(const Settings& s) {
   d.on<map_t>(channels::kGroundTruthMap, [&](const map_t& m) { st.onTruthMap(m); });
   d.on<image_t>(channels::kOmniImage, [&](const image_t& m) {
     std::string why;
-    if (!st.onImage(m, &why)) d.reject(std::string(channels::kOmniImage) + ": frame seq " + std::to_string(m.seq) + ": " + why);
+    if (!st.onImage(m, &why))
+      d.reject(std::string(channels::kOmniImage) + ": frame seq " + std::to_string(m.seq) + ": " + why);
   });
   d.on<features_t>(channels::kOmniFeatures, [&](const features_t& m) { st.onFeatures(m); });
   const auto t0 = std::chrono::steady_clock::now();
@@ -239,15 +243,16 @@ int runLog(const Settings& s) {
       const double done = reader.result().shareRead();
       const double el = std::chrono::duration<double>(now - t0).count();
       std::fprintf(stderr, "[viewer] %lld SLAM steps, %.0f%% of the log, %.1f steps/s, about %.0f s left\n",
-                   static_cast<long long>(st.steps()), 100.0 * done, st.steps() / el, done > 0 ? el * (1.0 - done) / done : 0.0);
+                   static_cast<long long>(st.steps()), 100.0 * done, st.steps() / el,
+                   done > 0 ? el * (1.0 - done) / done : 0.0);
     }
   }
   const lcmio::LogReadResult& got = reader.result();
   v.writeFinal();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cerr << "[viewer] " << s.log << ": " << events << " events, " << st.steps() << " SLAM steps, " << v.written()
-            << " PNG files written to " << s.out_dir << " in " << wall << " s; " << d.decodeErrors() << " decode errors, "
-            << d.rejected() << " rejected" << std::endl;
+            << " PNG files written to " << s.out_dir << " in " << wall << " s; " << d.decodeErrors()
+            << " decode errors, " << d.rejected() << " rejected" << std::endl;
   if (st.steps() == 0) std::cerr << "[viewer] warning: no SLAM_POSE in the log" << std::endl;
   if (const auto problem = got.problem(s.log); problem && !lcmio::stopRequested())
     std::cerr << "[viewer] warning: " << *problem << std::endl;
@@ -257,13 +262,15 @@ int runLog(const Settings& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App cli{"omnislam-viewer: the SLAM map, particles, trajectories and the image with its features, live or to PNG"};
+  CLI::App cli{
+      "omnislam-viewer: the SLAM map, particles, trajectories and the image with its features, live or to PNG"};
   Settings s;
   cli.add_option("--url", s.url, "LCM URL (default: $LCM_DEFAULT_URL)");
   cli.add_option("--name", s.name, "process name in PROCESS_STATUS");
   cli.add_flag("--headless", s.headless, "no window: write PNG files into --out-dir");
   cli.add_option("--out-dir", s.out_dir, "folder for frame_<step>.png and final.png (created if missing)");
-  cli.add_option("--every", s.every, "write the view every N SLAM steps (0: only final.png)")->check(CLI::Range(0, 1000000));
+  cli.add_option("--every", s.every, "write the view every N SLAM steps (0: only final.png)")
+      ->check(CLI::Range(0, 1000000));
   cli.add_option("--log", s.log, "read this LCM log at full speed instead of the bus (needs --headless)")
       ->check(CLI::ExistingFile);
   cli.add_option("--fps", s.fps, "window redraws per second")->check(omnislam::app::FiniteRange(0.5, 60.0));
@@ -274,14 +281,18 @@ int main(int argc, char** argv) {
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);  // a bad flag: exit 2
   return app::runMain("omnislam-viewer", [&]() -> int {
     if (!s.log.empty() && !s.headless)
-      throw std::invalid_argument("--log needs --headless (to watch a log in the window, replay it with lcm-logplayer)");
+      throw std::invalid_argument(
+          "--log needs --headless (to watch a log in the window, replay it with lcm-logplayer)");
     if (s.headless && s.out_dir.empty()) throw std::invalid_argument("--headless needs --out-dir DIR");
     if (!s.out_dir.empty()) {
       std::error_code ec;
       fs::create_directories(s.out_dir, ec);
       if (!fs::is_directory(s.out_dir)) throw std::invalid_argument("--out-dir '" + s.out_dir + "' cannot be created");
     }
-    auto set = [](const char* var) { const char* v = std::getenv(var); return v && *v; };
+    auto set = [](const char* var) {
+      const char* v = std::getenv(var);
+      return v && *v;
+    };
     if (!s.headless && !set("DISPLAY") && !set("WAYLAND_DISPLAY"))
       throw std::invalid_argument("no display (DISPLAY is not set): use --headless --out-dir DIR, or xvfb-run");
     lcmio::installStopHandlers();

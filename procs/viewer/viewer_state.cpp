@@ -140,12 +140,14 @@ void ViewerState::addMaps(vision::SlamViewData& d) const {
     }
   }
   if (truth_map_)
-    for (const auto& l : truth_map_->landmarks) d.true_landmarks.emplace_back(l.position_m[0], l.position_m[1], l.position_m[2]);
+    for (const auto& l : truth_map_->landmarks)
+      d.true_landmarks.emplace_back(l.position_m[0], l.position_m[1], l.position_m[2]);
   if (particles_) {
-    const size_t n = std::min({particles_->x_m.size(), particles_->y_m.size(), particles_->theta_rad.size(),
-                               particles_->weight.size()});
+    const size_t n = std::min(
+        {particles_->x_m.size(), particles_->y_m.size(), particles_->theta_rad.size(), particles_->weight.size()});
     for (size_t i = 0; i < n; ++i)
-      d.particles.push_back({{particles_->x_m[i], particles_->y_m[i], particles_->theta_rad[i]}, particles_->weight[i]});
+      d.particles.push_back(
+          {{particles_->x_m[i], particles_->y_m[i], particles_->theta_rad[i]}, particles_->weight[i]});
   }
 }
 
@@ -153,7 +155,8 @@ void ViewerState::addMaps(vision::SlamViewData& d) const {
 void ViewerState::addStatusLines(vision::SlamViewData& d) const {
   if (pose_) {
     std::string l1 = "t " + fmt("%.1f s", relativeS(pose_->utime)) + "   step " + std::to_string(steps_) + "   " +
-                     std::to_string(pose_->num_particles) + " particles, ESS " + fmt("%.1f", pose_->effective_sample_size);
+                     std::to_string(pose_->num_particles) + " particles, ESS " +
+                     fmt("%.1f", pose_->effective_sample_size);
     d.info.push_back(l1);
     std::string l2 = "estimate x " + fmt("%.2f", pose_->x_m) + " m, y " + fmt("%.2f", pose_->y_m) + " m, heading " +
                      fmt("%.1f deg", pose_->theta_rad * 180.0 / M_PI);
@@ -208,8 +211,7 @@ void ViewerState::addFrame(vision::SlamViewData& d) const {
     if (a)
       d.image_caption += ": " + std::to_string(assoc) + " associated, " + std::to_string(cand) + " to candidates, " +
                          std::to_string(unused) + " not used";
-    else
-      d.image_caption += " (no associations for this frame)";
+    else d.image_caption += " (no associations for this frame)";
   }
 }
 

@@ -109,9 +109,11 @@ TEST(MrclamDiagnosticScripts, OdometryHeadingRecoversAKnownTurnScale) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   // 24 windows (the last odometry line ends the run), 8 of them straight and 16 turning; the drift
   // may print as +0.000 or -0.000 (rounding noise of the files' decimals).
-  EXPECT_TRUE(matches(r.output, R"(robot 1: 24 windows of 5 s; drift [+-]0\.000 rad/m, turn scale -0\.050;)")) << r.output;
+  EXPECT_TRUE(matches(r.output, R"(robot 1: 24 windows of 5 s; drift [+-]0\.000 rad/m, turn scale -0\.050;)"))
+      << r.output;
   EXPECT_TRUE(has(r.output, "0.000 after the fit")) << r.output;
-  EXPECT_TRUE(matches(r.output, R"(per 60 s block \(drift/turn scale\): [+-]0\.000/-0\.050 [+-]0\.000/-0\.050\n)")) << r.output;
+  EXPECT_TRUE(matches(r.output, R"(per 60 s block \(drift/turn scale\): [+-]0\.000/-0\.050 [+-]0\.000/-0\.050\n)"))
+      << r.output;
   // Straight windows have no error; turning ones 5 % of their turn: 0.075 and 0.050 rad, RMS 0.064.
   EXPECT_TRUE(has(r.output, "straight 8: RMS 0.000 rad")) << r.output;
   EXPECT_TRUE(has(r.output, "turning 16: RMS 0.064 rad")) << r.output;
@@ -121,7 +123,8 @@ TEST(MrclamDiagnosticScripts, OdometryHeadingRecoversAKnownTurnScale) {
 
 TEST(MrclamDiagnosticScripts, OdometryHeadingNamesTheBadLine) {
   t::TempDir d;
-  writeRobot(d, 20.0, 0.1, [](int) { return 0.1; }, 1.0);
+  writeRobot(
+      d, 20.0, 0.1, [](int) { return 0.1; }, 1.0);
   t::writeMrclamFile(d.file("Robot1_Odometry.dat"), "1000.0 0.1 0.1\n1000.1 0.1 x\n");
   const auto r = script("mrclam_odometry_heading.py", {d.path()});
   EXPECT_NE(r.exit_code, 0);
@@ -134,7 +137,8 @@ TEST(MrclamDiagnosticScripts, BearingCorrelationOfAlternatingResidualsIsMinusOne
   writeLandmarks(d, {{3.0, 1.0}});
   // The robot stands at the origin facing +x; 40 sightings 0.5 s apart, each residual 0.01 (a yaw
   // offset, removed as the robot's mean) + 0.005 (-1)^k: lag 0.5 s correlates -1, lag 1 s +1.
-  writeRobot(d, 30.0, 0.0, [](int) { return 0.0; }, 1.0);
+  writeRobot(
+      d, 30.0, 0.0, [](int) { return 0.0; }, 1.0);
   std::string meas;
   char line[120];
   const double truth = std::atan2(1.0, 3.0);
@@ -192,15 +196,17 @@ TEST(MrclamDiagnosticScripts, VisualRotationOfASpinInPlaceIsExact) {
   }
   writeLandmarks(d, ring);
   std::string meas;
-  writeRobot(d, 60.0, 0.0, [](int) { return 0.3; }, 0.95, &meas, 0.2, ring);
+  writeRobot(
+      d, 60.0, 0.0, [](int) { return 0.3; }, 0.95, &meas, 0.2, ring);
   meas = "1000.100 14 2.0 0.1\n" + meas;  // robot 2 in the view: not a landmark, left out
   t::writeMrclamFile(d.file("Robot1_Measurement.dat"), meas);
   // A bearing sigma far below the commanded rotation's makes the fused heading the visual one.
   const auto r = script("mrclam_visual_rotation.py", {d.path(), "--bearing-sigma-rad", "1e-6"});
   ASSERT_EQ(r.exit_code, 0) << r.output;
   // Each 0.2 s pair: commanded 0.06 rad, true 0.057 rad, so the commanded error is 0.003 rad.
-  EXPECT_TRUE(has(r.output, "robot 1: 299 turning frame pairs, rotation error RMS visual 0.0000 rad, commanded 0.0030 rad; "
-                            "100 % of the turning inside a measured pair"))
+  EXPECT_TRUE(has(r.output,
+                  "robot 1: 299 turning frame pairs, rotation error RMS visual 0.0000 rad, commanded 0.0030 rad; "
+                  "100 % of the turning inside a measured pair"))
       << r.output;
   // Over 5 s the commanded heading is 5 % of 1.5 rad off, the fused one exact (its first 0.2 s
   // before the first frame aside, which only the first window holds).
@@ -217,15 +223,17 @@ TEST(MrclamDiagnosticScripts, GroupObservabilityOfExactBearingsFromADrive) {
   const std::vector<std::pair<double, double>> lm = {{4.0, 1.0}};
   writeLandmarks(d, lm);
   std::string meas;
-  writeRobot(d, 120.0, 0.05, [](int) { return 0.01; }, 0.9, &meas, 0.5, lm);
+  writeRobot(
+      d, 120.0, 0.05, [](int) { return 0.01; }, 0.9, &meas, 0.5, lm);
   t::writeMrclamFile(d.file("Robot1_Measurement.dat"), meas);
   const auto r = script("mrclam_group_observability.py", {d.path()});
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(has(r.output, "1 landmarks in 1 groups (link 0.5 m): 1: 6 at (4.00, 1.00)")) << r.output;
   // The heading error grows by 0.001 rad/s: 0.57, 1.72 and 3.44 deg over 10, 30 and 60 s, in every
   // window, so the median is the 90th percentile.
-  EXPECT_TRUE(has(r.output, "dead reckoning heading error: 10 s median 0.6 / p90 0.6 deg, 30 s median 1.7 / "
-                            "p90 1.7 deg, 60 s median 3.4 / p90 3.4 deg"))
+  EXPECT_TRUE(has(r.output,
+                  "dead reckoning heading error: 10 s median 0.6 / p90 0.6 deg, 30 s median 1.7 / "
+                  "p90 1.7 deg, 60 s median 3.4 / p90 3.4 deg"))
       << r.output;
   // Exact bearings from the true poses cross at the landmark, the group's centre, in every window
   // with enough parallax (there are some).
@@ -246,7 +254,8 @@ TEST(MrclamDiagnosticScripts, GroupObservabilityCountsMissesVisitsAndPassingRobo
   t::TempDir d;
   // Landmarks 6 and 7 0.2 m apart form one group centred 3 m ahead; landmark 8 stands alone behind.
   writeLandmarks(d, {{3.0, 0.1}, {3.0, -0.1}, {-4.0, 0.0}});
-  writeRobot(d, 30.0, 0.0, [](int) { return 0.0; }, 1.0);  // standing at the origin facing +x
+  writeRobot(
+      d, 30.0, 0.0, [](int) { return 0.0; }, 1.0);  // standing at the origin facing +x
   // 60 frames 0.5 s apart. Landmark 6 is reported in frames k with k % 3 != 2, except k = 20..44:
   // 24 detections of 60 frames in view, misses in runs of 1 (k = 2, 5, ..., 17 and 47, ..., 56;
   // k = 59 is not closed by a detection) and one of 25 (20..44), which splits the sightings into two
@@ -272,13 +281,14 @@ TEST(MrclamDiagnosticScripts, GroupObservabilityCountsMissesVisitsAndPassingRobo
       << r.output;
   EXPECT_TRUE(has(r.output, "visits (gap 10 s): 2, per group 2 0; parallax per visit median 0.0 deg")) << r.output;
   // Runs [1 x 10, 25]: the 90th percentile is 1, the 99th 1 + 0.9 * 24 = 22.6.
-  EXPECT_TRUE(has(r.output,
-                  "detection in view: P_D 0.40 over 60 group-frames; miss runs 11, p90 1, p99 23, longest 25 frames"))
+  EXPECT_TRUE(
+      has(r.output, "detection in view: P_D 0.40 over 60 group-frames; miss runs 11, p90 1, p99 23, longest 25 frames"))
       << r.output;
   // Landmark 6 is 0.033 rad off the group's centre: 0.9 of the widened sigma, sqrt(1 deg^2 +
   // (0.1 m / 3 m)^2). Robot 2 is in the gate in 15 of its 60 sightings.
-  EXPECT_TRUE(has(r.output, "landmark sightings to their own group 100.0 %, to none 0.0 %; other robots' sightings "
-                            "inside a gate 25.0 %"))
+  EXPECT_TRUE(has(r.output,
+                  "landmark sightings to their own group 100.0 %, to none 0.0 %; other robots' sightings "
+                  "inside a gate 25.0 %"))
       << r.output;
   // Standing still: no heading error, and no window with parallax to triangulate from.
   EXPECT_TRUE(has(r.output, "10 s median 0.0 / p90 0.0 deg")) << r.output;

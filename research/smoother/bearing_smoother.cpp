@@ -17,15 +17,12 @@
 namespace omnislam::slam {
 namespace {
 
-bool finitePose(const Pose2& p) {
-  return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad);
-}
+bool finitePose(const Pose2& p) { return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad); }
 
 /// Normalised bearing error e (in sigmas), with the 1x3 pose and 1x2 landmark Jacobians of the raw
 /// angle error when non-null; std::nullopt where the azimuth is undefined.
 std::optional<double> bearingError(const Pose2& pose, const Eigen::Vector2d& l, const SmootherBearingFactor& f,
-                                   Eigen::Matrix<double, 1, 3>* J_pose,
-                                   Eigen::Matrix<double, 1, 2>* J_l) {
+                                   Eigen::Matrix<double, 1, 3>* J_pose, Eigen::Matrix<double, 1, 2>* J_l) {
   MeasJac Jp, Jl;
   const auto z = predictMeasurement(LandmarkKind::kVerticalLine, Eigen::Vector3d(l.x(), l.y(), 0.0), pose, f.p_CinR_m,
                                     J_pose ? &Jp : nullptr, J_l ? &Jl : nullptr);
@@ -74,9 +71,9 @@ double totalCost(const SmootherProblem& pb, const State& s, const Eigen::Matrix3
 }
 
 /// The normal equations H dx = -g of the re-weighted (IRLS) problem at s: H = J^T W J, g = J^T W r.
-void normalEquations(const SmootherProblem& pb, const State& s, const Layout& lay, int n, const Eigen::Matrix3d& prior_info,
-                     const std::vector<Eigen::Matrix3d>& odo_info, double c, Eigen::SparseMatrix<double>& H,
-                     Eigen::VectorXd& g) {
+void normalEquations(const SmootherProblem& pb, const State& s, const Layout& lay, int n,
+                     const Eigen::Matrix3d& prior_info, const std::vector<Eigen::Matrix3d>& odo_info, double c,
+                     Eigen::SparseMatrix<double>& H, Eigen::VectorXd& g) {
   std::vector<Eigen::Triplet<double>> trip;
   g = Eigen::VectorXd::Zero(n);
   auto add = [&](int row0, int col0, const auto& block) {
@@ -225,7 +222,10 @@ struct Solver {
   Eigen::VectorXd g;
 
   Solver(const SmootherProblem& p, const SmootherOptions& o)
-      : pb(p), opt(o), lay{static_cast<int>(p.poses.size())}, n(lay.landmark(static_cast<int>(p.landmarks_m.size()))),
+      : pb(p),
+        opt(o),
+        lay{static_cast<int>(p.poses.size())},
+        n(lay.landmark(static_cast<int>(p.landmarks_m.size()))),
         c(o.cauchy_scale) {
     prior_info = Eigen::Vector3d(1.0 / (opt.prior_sigma_xy_m * opt.prior_sigma_xy_m),
                                  1.0 / (opt.prior_sigma_xy_m * opt.prior_sigma_xy_m),
@@ -241,7 +241,8 @@ struct Solver {
     State t = s;
     for (size_t i = 0; i < t.poses.size(); ++i) {
       const int ip = lay.pose(static_cast<int>(i));
-      t.poses[i] = Pose2{t.poses[i].x_m + dx(ip), t.poses[i].y_m + dx(ip + 1), wrapAngle(t.poses[i].theta_rad + dx(ip + 2))};
+      t.poses[i] =
+          Pose2{t.poses[i].x_m + dx(ip), t.poses[i].y_m + dx(ip + 1), wrapAngle(t.poses[i].theta_rad + dx(ip + 2))};
     }
     for (size_t j = 0; j < t.landmarks.size(); ++j) t.landmarks[j] += dx.segment<2>(lay.landmark(static_cast<int>(j)));
     return t;
@@ -287,8 +288,9 @@ struct Solver {
     // prior) leaves a pivot at about the 1e-12 added above: its "covariance" would be ~1e12 and
     // indefinite. Refuse it rather than return it; 1e-9 is an sd of ~3e4 m or rad.
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9)) {
-      res.covariance_failure = "the information matrix is singular at the solution (a landmark or pose that the "
-                               "factors do not constrain, e.g. seen along a single ray): no covariance";
+      res.covariance_failure =
+          "the information matrix is singular at the solution (a landmark or pose that the "
+          "factors do not constrain, e.g. seen along a single ray): no covariance";
       return;
     }
     const int nl = static_cast<int>(pb.landmarks_m.size());

@@ -26,9 +26,9 @@
 namespace omnislam::slam {
 
 struct SmootherOptions {
-  int max_iterations = 100;          ///< Levenberg-Marquardt iterations, >= 1
-  double cauchy_scale = 3.0;         ///< robust kernel scale c in bearing sigmas, >= 0 (0: least squares)
-  double prior_sigma_xy_m = 1e-3;    ///< std of the first pose's position prior [m], > 0
+  int max_iterations = 100;             ///< Levenberg-Marquardt iterations, >= 1
+  double cauchy_scale = 3.0;            ///< robust kernel scale c in bearing sigmas, >= 0 (0: least squares)
+  double prior_sigma_xy_m = 1e-3;       ///< std of the first pose's position prior [m], > 0
   double prior_sigma_theta_rad = 1e-3;  ///< std of the first pose's heading prior [rad], > 0
   /// Initial Marquardt damping (relative to the diagonal), in (0, kMaxLambda): the solver gives up
   /// raising it at kMaxLambda, so a start there would never try a step.
@@ -46,7 +46,7 @@ struct SmootherOptions {
 struct SmootherOdometryFactor {
   int from = 0;
   int to = 0;
-  Pose2 increment;                                        ///< u = odom_from^-1 odom_to, in the `from` frame
+  Pose2 increment;                                           ///< u = odom_from^-1 odom_to, in the `from` frame
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  ///< Sigma_u [m^2, rad^2], positive definite
 };
 
@@ -63,13 +63,13 @@ struct SmootherBearingFactor {
 /// may be rank-deficient (e.g. only along a first ray, where a single azimuth leaves the depth free).
 struct SmootherLandmarkPrior {
   int landmark = 0;
-  Eigen::Vector2d mean_m = Eigen::Vector2d::Zero();              ///< in W [m]
-  Eigen::Matrix2d information = Eigen::Matrix2d::Zero();         ///< [1/m^2], symmetric positive semi-definite
+  Eigen::Vector2d mean_m = Eigen::Vector2d::Zero();       ///< in W [m]
+  Eigen::Matrix2d information = Eigen::Matrix2d::Zero();  ///< [1/m^2], symmetric positive semi-definite
 };
 
 struct SmootherProblem {
-  std::vector<Pose2> poses;                     ///< initial estimate; poses[0] is also the prior
-  std::vector<Eigen::Vector2d> landmarks_m;     ///< initial estimate
+  std::vector<Pose2> poses;                  ///< initial estimate; poses[0] is also the prior
+  std::vector<Eigen::Vector2d> landmarks_m;  ///< initial estimate
   std::vector<SmootherOdometryFactor> odometry;
   std::vector<SmootherBearingFactor> bearings;
   std::vector<SmootherLandmarkPrior> landmark_priors;
@@ -85,10 +85,10 @@ struct SmootherResult {
   std::vector<double> bearing_weights;  ///< kernel weight of each bearing factor at the solution, in [0, 1]
   double initial_cost = 0.0;            ///< cost (see the file header) at the initial estimate
   double final_cost = 0.0;
-  int iterations = 0;                   ///< Levenberg-Marquardt iterations run
-  bool converged = false;               ///< stopped by relative_tolerance (not by max_iterations)
-  std::string failure;                  ///< non-empty: the problem or options were invalid, or its initial cost
-                                        ///< not finite; nothing solved
+  int iterations = 0;      ///< Levenberg-Marquardt iterations run
+  bool converged = false;  ///< stopped by relative_tolerance (not by max_iterations)
+  std::string failure;     ///< non-empty: the problem or options were invalid, or its initial cost
+                           ///< not finite; nothing solved
   /// With SmootherOptions::compute_covariance: the joint covariance of (last pose (x, y, theta),
   /// landmark 0 (x, y), ..., landmark L-1) [m, rad], (3 + 2L) square: the inverse of the Gauss-Newton
   /// information at the solution (bearings with their kernel weights), marginalised onto those.
@@ -107,8 +107,7 @@ Eigen::Vector3d odometryResidual(const Pose2& a, const Pose2& b, const Pose2& in
 /// squared perpendicular distances. std::nullopt with fewer than two rays or when they are all
 /// parallel (the normal matrix's smaller eigenvalue below min_eigenvalue times the ray count).
 std::optional<Eigen::Vector2d> intersectRays2D(const std::vector<Eigen::Vector2d>& centres_m,
-                                               const std::vector<double>& directions_rad,
-                                               double min_eigenvalue = 1e-3);
+                                               const std::vector<double>& directions_rad, double min_eigenvalue = 1e-3);
 
 /// Minimises the cost of the file header from the problem's initial estimate. Deterministic.
 SmootherResult smoothBearingOnly(const SmootherProblem& problem, const SmootherOptions& options = {});

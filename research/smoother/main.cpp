@@ -27,8 +27,9 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   cli.add_option("--set", sets, "override a config key (repeatable), as omnislam-slam --set");
-  cli.add_option("--associations", source,
-                 "slam: the filter's (SLAM_ASSOCIATIONS); labels: the truth (GROUND_TRUTH_FEATURE_LABELS, diagnosis only)")
+  cli.add_option(
+         "--associations", source,
+         "slam: the filter's (SLAM_ASSOCIATIONS); labels: the truth (GROUND_TRUTH_FEATURE_LABELS, diagnosis only)")
       ->check(CLI::IsMember({"slam", "labels"}));
   cli.add_flag("--initial-from-odometry", opt.initial_from_odometry,
                "start from dead reckoning from the first SLAM_POSE instead of the filter's poses");
@@ -41,7 +42,8 @@ int main(int argc, char** argv) {
   cli.add_option("--min-parallax-deg", min_parallax_deg,
                  "--incremental: ... seen over at least this spread of directions at their crossing (default 7)")
       ->check(omnislam::app::FiniteRange(0.0, 179.0));
-  cli.add_option("--cauchy-scale", opt.smoother.cauchy_scale, "robust kernel scale in bearing sigmas (0: least squares)")
+  cli.add_option("--cauchy-scale", opt.smoother.cauchy_scale,
+                 "robust kernel scale in bearing sigmas (0: least squares)")
       ->check(omnislam::app::FiniteRange(0.0, 1000.0));
   cli.add_option("--max-iterations", opt.smoother.max_iterations, "Levenberg-Marquardt iterations")
       ->check(CLI::Range(1, 100000));
@@ -57,12 +59,13 @@ int main(int argc, char** argv) {
     for (const auto& p : rep.problems) std::cerr << "omnislam-smooth: skipped " << p << "\n";
     for (const auto& r : rep.restarts) std::cerr << "omnislam-smooth: warning: " << r << "\n";
     std::cerr << "omnislam-smooth: " << rep.poses << " poses, " << rep.odometry_factors << " odometry and "
-              << rep.bearing_factors << " bearing factors (" << rep.bearings_downweighted << " down-weighted below 0.5), "
-              << rep.landmarks << " landmarks (" << rep.unanchored_landmarks << " without an initial position, unused), "
-              << rep.frames_without_odometry << " frames without odometry (" << rep.frames_across_odometry_gap
-              << " across a gap over " << opt.max_odometry_gap_us / 1e6 << " s); " << rep.solves << " solve(s), the last: cost " << rep.result.initial_cost << " -> "
-              << rep.result.final_cost << " in " << rep.result.iterations << " iterations"
-              << (rep.result.converged ? "" : " (not converged)") << "\n";
+              << rep.bearing_factors << " bearing factors (" << rep.bearings_downweighted
+              << " down-weighted below 0.5), " << rep.landmarks << " landmarks (" << rep.unanchored_landmarks
+              << " without an initial position, unused), " << rep.frames_without_odometry
+              << " frames without odometry (" << rep.frames_across_odometry_gap << " across a gap over "
+              << opt.max_odometry_gap_us / 1e6 << " s); " << rep.solves << " solve(s), the last: cost "
+              << rep.result.initial_cost << " -> " << rep.result.final_cost << " in " << rep.result.iterations
+              << " iterations" << (rep.result.converged ? "" : " (not converged)") << "\n";
     return app::kOk;
   });
 }

@@ -111,7 +111,8 @@ slam::SmootherBearingFactor bearingFactor(const Ray& r, int landmark) {
 void requireSolved(const slam::SmootherResult& r) {
   if (!r.failure.empty()) throw std::invalid_argument("smoother: " + r.failure);
   bool finite = std::isfinite(r.initial_cost) && std::isfinite(r.final_cost);
-  for (const Pose2& p : r.poses) finite = finite && std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad);
+  for (const Pose2& p : r.poses)
+    finite = finite && std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad);
   for (const Eigen::Vector2d& l : r.landmarks_m) finite = finite && l.allFinite();
   if (!finite) {
     std::ostringstream o;
@@ -160,19 +161,21 @@ void reportSkipped(Counter& bad, SmoothLogReport& rep) {
 
 Inputs readInputs(const std::string& in_log, const SmoothLogOptions& opt, Counter& bad, SmoothLogReport& rep) {
   Inputs in;
-  const char* assoc_channel = opt.associations == AssociationSource::kSlam ? channels::kSlamAssociations
-                                                                            : channels::kGroundTruthFeatureLabels;
+  const char* assoc_channel =
+      opt.associations == AssociationSource::kSlam ? channels::kSlamAssociations : channels::kGroundTruthFeatureLabels;
   const lcmio::LogReadResult got = lcmio::forEachEvent(in_log, [&](const lcmio::LogEvent& ev) {
     const std::string& ch = ev.channel;
     if (ch == channels::kOdometry) {
-      if (const auto m = decodeValid<odometry_t>(ev, bad)) put(in.odo, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, ch, bad);
+      if (const auto m = decodeValid<odometry_t>(ev, bad))
+        put(in.odo, m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, ch, bad);
     } else if (ch == channels::kSlamPose) {
       if (const auto m = decodeValid<pose_t>(ev, bad)) put(in.slam_pose, m->utime, *m, ch, bad);
     } else if (ch == channels::kOmniFeatures) {
       if (const auto m = decodeValid<features_t>(ev, bad)) put(in.frames, m->utime, *m, ch, bad);
     } else if (ch == channels::kSlamMap) {
       if (const auto m = decodeValid<map_t>(ev, bad))
-        for (const auto& l : m->landmarks) in.last_map_position[l.id] = Eigen::Vector2d(l.position_m[0], l.position_m[1]);
+        for (const auto& l : m->landmarks)
+          in.last_map_position[l.id] = Eigen::Vector2d(l.position_m[0], l.position_m[1]);
     } else if (ch == assoc_channel) {
       if (opt.associations == AssociationSource::kSlam) {
         if (const auto m = decodeValid<associations_t>(ev, bad)) put(in.assoc, m->utime, m->landmark_id, ch, bad);
@@ -185,8 +188,9 @@ Inputs readInputs(const std::string& in_log, const SmoothLogOptions& opt, Counte
   reportSkipped(bad, rep);  // what the problem building below refuses is added at the end
   for (const auto& [channel, order] : bad.order)
     if (order.restarts() > 0)
-      rep.restarts.push_back(channel + ": " + std::to_string(order.restarts()) + " new timeline(s) accepted, the last: " +
-                             order.lastRestart() + "; a message at a utime already read replaces the earlier one");
+      rep.restarts.push_back(channel + ": " + std::to_string(order.restarts()) +
+                             " new timeline(s) accepted, the last: " + order.lastRestart() +
+                             "; a message at a utime already read replaces the earlier one");
   if (in.slam_pose.empty()) refuse(rep, in_log + ": no SLAM_POSE message");
   if (in.odo.size() < 2) refuse(rep, in_log + ": fewer than two ODOMETRY messages");
   return in;
@@ -195,7 +199,7 @@ Inputs readInputs(const std::string& in_log, const SmoothLogOptions& opt, Counte
 // The poses of the problem (one per SLAM_POSE) with their odometry factors.
 struct Graph {
   slam::SmootherProblem pb;
-  std::vector<int64_t> utimes;    ///< of the nodes
+  std::vector<int64_t> utimes;     ///< of the nodes
   std::map<int64_t, int> node_of;  ///< by utime
 };
 
@@ -222,10 +226,12 @@ Graph buildPoses(const Inputs& in, const std::string& in_log, const SmoothLogOpt
   for (size_t i = 1; i < gr.utimes.size(); ++i) {
     if (!odo_at[i - 1] || !odo_at[i]) continue;
     const Pose2 u = slam::odometryIncrement(*odo_at[i - 1], *odo_at[i]);
-    gr.pb.odometry.push_back({static_cast<int>(i - 1), static_cast<int>(i), u, slam::incrementCovariance(u, opt.motion)});
+    gr.pb.odometry.push_back(
+        {static_cast<int>(i - 1), static_cast<int>(i), u, slam::incrementCovariance(u, opt.motion)});
   }
   if (opt.initial_from_odometry) {
-    if (!odo_at[0]) refuse(rep, in_log + ": the first SLAM_POSE has no ODOMETRY around it (outside its span or in a gap)");
+    if (!odo_at[0])
+      refuse(rep, in_log + ": the first SLAM_POSE has no ODOMETRY around it (outside its span or in a gap)");
     for (size_t i = 1; i < gr.utimes.size(); ++i)
       if (odo_at[i]) gr.pb.poses[i] = gr.pb.poses[0].compose(odo_at[0]->between(*odo_at[i]));
   }
@@ -233,7 +239,8 @@ Graph buildPoses(const Inputs& in, const std::string& in_log, const SmoothLogOpt
 }
 
 // Bearings of associated vertical-line features, in frame order, with their landmark id.
-std::vector<std::pair<int64_t, Ray>> collectRays(const Inputs& in, const std::map<int64_t, int>& node_of, Counter& bad) {
+std::vector<std::pair<int64_t, Ray>> collectRays(const Inputs& in, const std::map<int64_t, int>& node_of,
+                                                 Counter& bad) {
   std::vector<std::pair<int64_t, Ray>> rays;
   for (const auto& [u, f] : in.frames) {
     const auto n = node_of.find(u);
@@ -264,8 +271,7 @@ std::vector<Pose2> solveBatch(const Inputs& in, const std::vector<std::pair<int6
   for (const auto& [id, rs] : by_id) {
     std::optional<Eigen::Vector2d> init;
     const auto known = in.last_map_position.find(id);
-    if (opt.associations == AssociationSource::kSlam && known != in.last_map_position.end())
-      init = known->second;
+    if (opt.associations == AssociationSource::kSlam && known != in.last_map_position.end()) init = known->second;
     else  // cross the rays from the initial poses
       init = crossRays(gr.pb.poses, rs, 0.0);
     if (!init) {
@@ -295,8 +301,8 @@ class Progress {
     last_report_ = now;
     std::ostringstream o;
     o << "incremental: frame " << i << " of " << frames << " (" << (100 * i / frames) << " %), "
-      << std::chrono::duration_cast<std::chrono::seconds>(now - start_).count() << " s; the last solve: "
-      << grown.poses.size() << " poses, " << grown.landmarks_m.size() << " landmarks";
+      << std::chrono::duration_cast<std::chrono::seconds>(now - start_).count()
+      << " s; the last solve: " << grown.poses.size() << " poses, " << grown.landmarks_m.size() << " landmarks";
     opt_.progress(o.str());
   }
 
@@ -383,10 +389,8 @@ std::vector<int32_t> summarise(const slam::SmootherProblem& pb, Counter& bad, Sm
   rep.landmarks = static_cast<int64_t>(pb.landmarks_m.size());
   std::vector<int32_t> inliers(pb.landmarks_m.size(), 0);
   for (size_t k = 0; k < pb.bearings.size(); ++k) {
-    if (rep.result.bearing_weights[k] < 0.5)
-      ++rep.bearings_downweighted;
-    else
-      ++inliers[static_cast<size_t>(pb.bearings[k].landmark)];
+    if (rep.result.bearing_weights[k] < 0.5) ++rep.bearings_downweighted;
+    else ++inliers[static_cast<size_t>(pb.bearings[k].landmark)];
   }
   reportSkipped(bad, rep);
   return inliers;

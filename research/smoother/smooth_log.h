@@ -34,9 +34,9 @@ struct SmoothLogOptions {
   /// re-solved; SLAM_POSE gets the frame's pose from that frame's solve (causal), SLAM_MAP the last
   /// solve's landmarks. Needs ODOMETRY over every frame. Independent of the filter's poses and map.
   bool incremental = false;
-  int min_rays = 5;                          ///< incremental: rays before a landmark is added, >= 2
+  int min_rays = 5;                            ///< incremental: rays before a landmark is added, >= 2
   double min_parallax_rad = 7.0 * M_PI / 180;  ///< incremental: their spread of directions at the crossing, >= 0
-  slam::MotionNoiseOptions motion;   ///< the filter's motion noise (from its SLAM config)
+  slam::MotionNoiseOptions motion;             ///< the filter's motion noise (from its SLAM config)
   /// A frame gets odometry only from samples around it at most this far apart (the SLAM config's
   /// pairing.max_odometry_gap_s, the filter's own rule); a frame across a longer gap gets none.
   int64_t max_odometry_gap_us = 2'000'000;
@@ -50,19 +50,19 @@ struct SmoothLogOptions {
 };
 
 struct SmoothLogReport {
-  int64_t poses = 0;               ///< SLAM_POSE frames smoothed
+  int64_t poses = 0;  ///< SLAM_POSE frames smoothed
   int64_t odometry_factors = 0;
   int64_t bearing_factors = 0;
   int64_t landmarks = 0;
   int64_t bearings_downweighted = 0;  ///< kernel weight below 0.5 at the solution (outliers)
-  int64_t skipped_messages = 0;    ///< undecodable messages or ones lcmio::validate refuses (reasons in `problems`)
+  int64_t skipped_messages = 0;       ///< undecodable messages or ones lcmio::validate refuses (reasons in `problems`)
   /// Associated but no initial position (batch: one ray or parallel rays; incremental: never
   /// min_rays rays crossing over min_parallax_rad): not used.
   int64_t unanchored_landmarks = 0;
   int64_t frames_without_odometry = 0;  ///< frames outside the ODOMETRY time span or across a gap: no odometry factor
   int64_t frames_across_odometry_gap = 0;  ///< of those, inside the span across a gap over max_odometry_gap_us
-  int64_t solves = 0;                  ///< smoother runs (1 in batch; one per frame when incremental)
-  std::vector<std::string> problems;    ///< one line per kind of skipped input, with its count
+  int64_t solves = 0;                      ///< smoother runs (1 in batch; one per frame when incremental)
+  std::vector<std::string> problems;       ///< one line per kind of skipped input, with its count
   /// One line per channel whose utimes started again (lcmio::UtimeOrder accepted a new timeline):
   /// two runs in one log, merged by utime.
   std::vector<std::string> restarts;

@@ -31,8 +31,10 @@ TEST(slam_BearingSmoother, OdometryJacobiansMatchCentralDifferences) {
   odometryResidual(a, b, u, &Ja, &Jb);
   const double h = 1e-6;
   for (int k = 0; k < 3; ++k) {
-    const Eigen::Vector3d da = (odometryResidual(perturbed(a, k, h), b, u) - odometryResidual(perturbed(a, k, -h), b, u)) / (2 * h);
-    const Eigen::Vector3d db = (odometryResidual(a, perturbed(b, k, h), u) - odometryResidual(a, perturbed(b, k, -h), u)) / (2 * h);
+    const Eigen::Vector3d da =
+        (odometryResidual(perturbed(a, k, h), b, u) - odometryResidual(perturbed(a, k, -h), b, u)) / (2 * h);
+    const Eigen::Vector3d db =
+        (odometryResidual(a, perturbed(b, k, h), u) - odometryResidual(a, perturbed(b, k, -h), u)) / (2 * h);
     EXPECT_LT((da - Ja.col(k)).norm(), 1e-7) << "d r / d a_" << k;
     EXPECT_LT((db - Jb.col(k)).norm(), 1e-7) << "d r / d b_" << k;
   }
@@ -110,7 +112,8 @@ Scene makeScene(double odo_noise_scale, double bearing_sigma, double outlier_fra
       const double az = wrapAngle(std::atan2(d.y(), d.x()) - x.theta_rad);
       if (d.norm() > 6.0) continue;
       double z = az + bearing_sigma * rng.normal();
-      if (rng.uniform01() < outlier_fraction) z = wrapAngle(az + (rng.uniform01() < 0.5 ? -1 : 1) * (0.1 + 0.4 * rng.uniform01()));
+      if (rng.uniform01() < outlier_fraction)
+        z = wrapAngle(az + (rng.uniform01() < 0.5 ? -1 : 1) * (0.1 + 0.4 * rng.uniform01()));
       pb.bearings.push_back({i, j, z, bearing_sigma > 0 ? bearing_sigma : 0.01, p_CinR});
     }
   }
@@ -162,8 +165,8 @@ TEST(slam_BearingSmoother, BeatsDeadReckoningOnNoisyData) {
   EXPECT_LT(sm, 0.25 * dr) << "smoothed " << sm << " m, dead reckoning " << dr << " m";
   // With the true noise models the minimum cost is chi-square distributed with (residuals - unknowns)
   // degrees of freedom: mean dof, standard deviation sqrt(2 dof).
-  const double dof = 3.0 * (1 + s.problem.odometry.size()) + s.problem.bearings.size() -
-                     3.0 * s.problem.poses.size() - 2.0 * s.problem.landmarks_m.size();
+  const double dof = 3.0 * (1 + s.problem.odometry.size()) + s.problem.bearings.size() - 3.0 * s.problem.poses.size() -
+                     2.0 * s.problem.landmarks_m.size();
   EXPECT_NEAR(r.final_cost, dof, 4.0 * std::sqrt(2.0 * dof)) << "sm " << sm << " dr " << dr;
   // The first pose is held by its prior.
   EXPECT_LT(std::hypot(r.poses[0].x_m - s.poses[0].x_m, r.poses[0].y_m - s.poses[0].y_m), 1e-2);
@@ -210,10 +213,12 @@ Eigen::VectorXd whitenedResiduals(const SmootherProblem& pb, const SmootherOptio
     const auto z = predictMeasurement(LandmarkKind::kVerticalLine, landmark(f.landmark), pose(f.pose), f.p_CinR_m);
     r.push_back(wrapAngle((*z)(0) - f.azimuth_rad) / f.sigma_rad);
   }
-  for (const auto& f : pb.landmark_priors) {  // information = sum lambda_i v_i v_i^T: r_i = sqrt(lambda_i) v_i^T (l - mean)
+  for (const auto& f :
+       pb.landmark_priors) {  // information = sum lambda_i v_i v_i^T: r_i = sqrt(lambda_i) v_i^T (l - mean)
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(f.information);
     const Eigen::Vector2d d = landmark(f.landmark).head<2>() - f.mean_m;
-    for (int i = 0; i < 2; ++i) r.push_back(std::sqrt(std::max(es.eigenvalues()(i), 0.0)) * es.eigenvectors().col(i).dot(d));
+    for (int i = 0; i < 2; ++i)
+      r.push_back(std::sqrt(std::max(es.eigenvalues()(i), 0.0)) * es.eigenvectors().col(i).dot(d));
   }
   return Eigen::Map<Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()));
 }
@@ -223,7 +228,8 @@ TEST(slam_BearingSmoother, CovarianceIsTheInverseOfTheNumericalInformation) {
   ASSERT_GE(s.problem.landmarks_m.size(), 2u);
   // Priors enter the information too: one along a direction only (rank 1), one full rank.
   const Eigen::Vector2d dir(std::cos(0.7), std::sin(0.7));
-  s.problem.landmark_priors.push_back({0, s.problem.landmarks_m[0] + Eigen::Vector2d(0.3, -0.2), dir * dir.transpose() / 0.25});
+  s.problem.landmark_priors.push_back(
+      {0, s.problem.landmarks_m[0] + Eigen::Vector2d(0.3, -0.2), dir * dir.transpose() / 0.25});
   s.problem.landmark_priors.push_back({1, s.problem.landmarks_m[1], Eigen::Matrix2d{{50.0, 10.0}, {10.0, 20.0}}});
   SmootherOptions o;
   o.cauchy_scale = 0.0;  // every weight 1: the information is J^T J of the whitened residuals
@@ -252,8 +258,10 @@ TEST(slam_BearingSmoother, CovarianceIsTheInverseOfTheNumericalInformation) {
   Eigen::MatrixXd expected(idx.size(), idx.size());
   for (size_t a = 0; a < idx.size(); ++a)
     for (size_t b = 0; b < idx.size(); ++b) expected(a, b) = full(idx[a], idx[b]);
-  EXPECT_LT((r.covariance - expected).norm(), 1e-4 * expected.norm()) << "smoother\n" << r.covariance.topLeftCorner<5, 5>()
-                                                                       << "\nbrute force\n" << expected.topLeftCorner<5, 5>();
+  EXPECT_LT((r.covariance - expected).norm(), 1e-4 * expected.norm())
+      << "smoother\n"
+      << r.covariance.topLeftCorner<5, 5>() << "\nbrute force\n"
+      << expected.topLeftCorner<5, 5>();
   EXPECT_TRUE(r.covariance.isApprox(r.covariance.transpose()));
   // Not requested: empty.
   o.compute_covariance = false;
@@ -329,8 +337,9 @@ TEST(slam_BearingSmoother, RefusesInvalidProblemsAndOptionsNamingTheCause) {
   {
     SmootherProblem p = s.problem;
     p.landmark_priors.push_back({0, Eigen::Vector2d::Zero(), Eigen::Matrix2d{{1.0, 0.0}, {0.0, -1.0}}});
-    EXPECT_NE(smoothBearingOnly(p).failure.find("landmark prior 0: information is not symmetric positive semi-definite"),
-              std::string::npos);
+    EXPECT_NE(
+        smoothBearingOnly(p).failure.find("landmark prior 0: information is not symmetric positive semi-definite"),
+        std::string::npos);
   }
   SmootherOptions o;
   o.cauchy_scale = -1.0;

@@ -1,7 +1,7 @@
 // omnislam-smooth end to end on a synthetic recorded run with known answers: a robot circling five
-// vertical-line landmarks (initial map 0.36 m off), drifting odometry, a filter estimate 0.3 m off; the smoothed copy of the
-// log must be near the truth, keep every other channel, and refuse or count bad input; the
-// incremental mode must publish causal poses (the same whether or not the run goes on).
+// vertical-line landmarks (initial map 0.36 m off), drifting odometry, a filter estimate 0.3 m off; the smoothed copy
+// of the log must be near the truth, keep every other channel, and refuse or count bad input; the incremental mode must
+// publish causal poses (the same whether or not the run goes on).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -38,7 +38,8 @@ double truthTheta(double t) { return std::remainder(0.1 * t + M_PI / 2, 2 * M_PI
 /// The five landmarks as a map: ids id0 + j, each moved by offset_m.
 map_t landmarkMap(int64_t id0, const Eigen::Vector2d& offset_m) {
   std::vector<std::pair<int64_t, Eigen::Vector2d>> pts;
-  for (size_t j = 0; j < kLandmarks.size(); ++j) pts.emplace_back(id0 + static_cast<int64_t>(j), kLandmarks[j] + offset_m);
+  for (size_t j = 0; j < kLandmarks.size(); ++j)
+    pts.emplace_back(id0 + static_cast<int64_t>(j), kLandmarks[j] + offset_m);
   return t::makeLineMap(pts);
 }
 
@@ -86,7 +87,8 @@ void writeRun(const std::string& path, bool garbage, bool with_slam_pose = true,
     for (size_t j = 0; j < kLandmarks.size(); ++j) {
       feature_t ft{};
       ft.kind = feature_t::KIND_VERTICAL_LINE;
-      ft.azimuth_rad = std::remainder(std::atan2(kLandmarks[j].y() - y, kLandmarks[j].x() - x) - th + kSigmaRad * n01(rng), 2 * M_PI);
+      ft.azimuth_rad = std::remainder(
+          std::atan2(kLandmarks[j].y() - y, kLandmarks[j].x() - x) - th + kSigmaRad * n01(rng), 2 * M_PI);
       ft.covariance[0][0] = kSigmaRad * kSigmaRad;
       f.features.push_back(ft);
       a.landmark_id.push_back(100 + static_cast<int64_t>(j));
@@ -99,7 +101,8 @@ void writeRun(const std::string& path, bool garbage, bool with_slam_pose = true,
     w.write(u, channels::kGroundTruthPose, t::makePose(u, x, y, th));
     if (with_slam_pose) {
       // Starts at the truth (the known start pose, which the smoother's prior holds), then drifts off.
-      pose_t p = t::makePose(u, x + 0.3 * std::sin(0.3 * t), y + 0.3 * std::sin(0.2 * t), th + 0.05 * std::sin(0.1 * t));
+      pose_t p =
+          t::makePose(u, x + 0.3 * std::sin(0.3 * t), y + 0.3 * std::sin(0.2 * t), th + 0.05 * std::sin(0.1 * t));
       p.input_seq = fseq;
       w.write(u, channels::kSlamPose, p);
       w.write(u, channels::kSlamAssociations, a);
@@ -131,7 +134,7 @@ void expectLandmarksNearTruth(const map_t& map, int64_t id0) {
 }
 
 t::RunResult smooth(const std::string& in, const std::string& out, const std::vector<std::string>& extra) {
-  std::vector<std::string> argv{t::binPath("omnislam-smooth"), in, "--out", out, "--config",
+  std::vector<std::string> argv{t::binPath("omnislam-smooth"),           in, "--out", out, "--config",
                                 t::sourcePath("config/slam/mrclam.yaml")};
   argv.insert(argv.end(), extra.begin(), extra.end());
   return t::run(argv, 60.0);
@@ -233,7 +236,8 @@ TEST(Smooth, CountsAnUndecodableMessageAndRefusesBadFlagsAndLogs) {
   writeRun(in, true);
   const auto r = smooth(in, out, {});
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("skipped ODOMETRY: undecodable (shorter than a fingerprint) (1)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("skipped ODOMETRY: undecodable (shorter than a fingerprint) (1)"), std::string::npos)
+      << r.output;
 
   // Inputs are kept by utime: a repeated message would silently replace the first. It is counted.
   const std::string repeated = dir.file("repeated.lcm");
@@ -285,8 +289,9 @@ TEST(Smooth, ARestartedTimelineIsReported) {
   }
   const auto r = smooth(in, out, {});
   EXPECT_NE(r.output.find("warning: SLAM_POSE: 1 new timeline(s) accepted"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("SLAM_POSE: utime already read before its timeline restarted, replaced by this later message"),
-            std::string::npos)
+  EXPECT_NE(
+      r.output.find("SLAM_POSE: utime already read before its timeline restarted, replaced by this later message"),
+      std::string::npos)
       << r.output;
 }
 
@@ -329,8 +334,9 @@ TEST(Smooth, ARefusalNamesTheSkippedInput) {
   }
   const auto r = smooth(in, out, {});
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("fewer than two ODOMETRY messages (skipped: ODOMETRY: utime duplicated, out of order or jumping"),
-            std::string::npos)
+  EXPECT_NE(
+      r.output.find("fewer than two ODOMETRY messages (skipped: ODOMETRY: utime duplicated, out of order or jumping"),
+      std::string::npos)
       << r.output;
 }
 

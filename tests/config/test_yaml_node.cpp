@@ -36,8 +36,9 @@ TEST(YamlNode, GettersCheckTypeAndRangeAndNameTheKey) {
   // Open ends: the end itself is refused and the message prints the range as it is.
   EXPECT_DOUBLE_EQ(a.getDouble("b", 0, 3.5, Node::Open::kLow), 3.5);
   EXPECT_DOUBLE_EQ(a.getDouble("b", 3.5, 10, Node::Open::kHigh), 3.5);
-  EXPECT_NE(errorOf([&] { a.getDouble("b", 3.5, 10, Node::Open::kLow); }).find("must be a number in (3.5, 10], got 3.5"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf([&] { a.getDouble("b", 3.5, 10, Node::Open::kLow); }).find("must be a number in (3.5, 10], got 3.5"),
+      std::string::npos);
   EXPECT_NE(errorOf([&] { a.getDouble("b", 0, 3.5, Node::Open::kHigh); }).find("must be a number in [0, 3.5), got 3.5"),
             std::string::npos);
   EXPECT_DOUBLE_EQ(a.getDouble("missing", 0, 1, 1.0, Node::Open::kHigh), 1.0);  // a default is not checked
@@ -46,7 +47,9 @@ TEST(YamlNode, GettersCheckTypeAndRangeAndNameTheKey) {
   EXPECT_NE(errorOf([&] { a.getDouble("nothere", 0, 1); }).find("'a.nothere' is missing"), std::string::npos);
   EXPECT_NE(errorOf([&] { a.getEnum("c", {"x", "y"}); }).find("one of {x, y}"), std::string::npos);
   EXPECT_NE(errorOf([&] { a.getDoubles("list", 3, 0, 9); }).find("a list of 3 numbers"), std::string::npos);
-  EXPECT_NE(errorOf([&] { a.rejectUnknownKeys({"b", "c", "n", "flag"}); }).find("'a.list' is not a known key"),
+  EXPECT_NE(errorOf([&] {
+              a.rejectUnknownKeys({"b", "c", "n", "flag"});
+            }).find("'a.list' is not a known key"),
             std::string::npos);
 }
 
@@ -57,7 +60,8 @@ TEST(YamlNode, InvalidYamlAndMissingFilesAreConfigErrors) {
   EXPECT_NE(errorOf([] { Node::loadString("- 1\n- 2\n", "seq.yaml"); }).find("top level must be a map"),
             std::string::npos);
   // yaml-cpp's nesting guard said only "bad file".
-  const std::string deep = errorOf([] { Node::loadString("a: " + std::string(3000, '[') + std::string(3000, ']'), "deep.yaml"); });
+  const std::string deep =
+      errorOf([] { Node::loadString("a: " + std::string(3000, '[') + std::string(3000, ']'), "deep.yaml"); });
   EXPECT_NE(deep.find("deep.yaml: not valid YAML: nested too deeply (the parser stops at "), std::string::npos) << deep;
   EXPECT_NE(deep.find(" levels) at line 1"), std::string::npos) << deep;
 }
@@ -65,8 +69,9 @@ TEST(YamlNode, InvalidYamlAndMissingFilesAreConfigErrors) {
 // A key given twice in one map: yaml-cpp keeps both and lookups return the first, so an override
 // appended at the end of a file would be silently ignored.
 TEST(YamlNode, AKeyGivenTwiceIsRefusedWithBothLines) {
-  EXPECT_NE(errorOf([] { Node::loadString("rate: 50\nname: x\nrate: 1000\n", "w.yaml"); })
-                .find("w.yaml: key 'rate' is given twice (lines 1 and 3)"),
+  EXPECT_NE(errorOf([] {
+              Node::loadString("rate: 50\nname: x\nrate: 1000\n", "w.yaml");
+            }).find("w.yaml: key 'rate' is given twice (lines 1 and 3)"),
             std::string::npos);
   const std::string nested =
       errorOf([] { Node::loadString("a:\n  list:\n    - {x: 1, y: 2}\n    - {x: 1, x: 2}\n", "n.yaml"); });
@@ -112,10 +117,12 @@ TEST(YamlNode, AKeyWithNoValueAndASecondDocumentAreRefused) {
                               "take its default, where it has one) (line 1)"),
             std::string::npos)
       << with_default;
-  EXPECT_NE(errorOf([&] { root.getDouble("particles", 0, 1, 0.5); }).find("'particles' has no value"), std::string::npos);
+  EXPECT_NE(errorOf([&] { root.getDouble("particles", 0, 1, 0.5); }).find("'particles' has no value"),
+            std::string::npos);
   EXPECT_NE(errorOf([&] { root.getBool("particles", true); }).find("'particles' has no value"), std::string::npos);
   EXPECT_NE(errorOf([&] { root.getString("particles", "x"); }).find("'particles' has no value"), std::string::npos);
-  EXPECT_NE(errorOf([&] { root.getEnum("particles", {"a"}, "a"); }).find("'particles' has no value"), std::string::npos);
+  EXPECT_NE(errorOf([&] { root.getEnum("particles", {"a"}, "a"); }).find("'particles' has no value"),
+            std::string::npos);
   EXPECT_NE(errorOf([&] { root.optChild("motion"); }).find("'motion' has no value (a map of keys is required"),
             std::string::npos);
   EXPECT_NE(errorOf([&] { root.items("list"); }).find("'list' has no value (a list is required"), std::string::npos);
@@ -169,14 +176,14 @@ TEST(WorldConfig, ALightIdUsedTwiceIsRefused) {
   std::string w = text.str();
   const std::string grid_y = "    y_m: [-5.5, -1.0, 3.5, 8.0]\n";
   ASSERT_NE(w.find(grid_y), std::string::npos);
-  const std::string twice = std::string(w).replace(w.find(grid_y), grid_y.size(),
-                                                   grid_y + "  list: [{id: 2, x_m: 1.0, y_m: 1.0}]\n");
+  const std::string twice =
+      std::string(w).replace(w.find(grid_y), grid_y.size(), grid_y + "  list: [{id: 2, x_m: 1.0, y_m: 1.0}]\n");
   const std::string e = errorOf([&] { omnislam::config::parseWorld(Node::loadString(twice, "w.yaml")); });
   EXPECT_NE(e.find("w.yaml: key 'lights.list"), std::string::npos) << e;
   EXPECT_NE(e.find("light id 2 is used twice"), std::string::npos) << e;
   // Without an id the listed light continues the numbering (17): accepted.
-  const std::string next = std::string(w).replace(w.find(grid_y), grid_y.size(),
-                                                  grid_y + "  list: [{x_m: 1.0, y_m: 1.0}]\n");
+  const std::string next =
+      std::string(w).replace(w.find(grid_y), grid_y.size(), grid_y + "  list: [{x_m: 1.0, y_m: 1.0}]\n");
   EXPECT_EQ(omnislam::config::parseWorld(Node::loadString(next, "w.yaml")).lights.back().id, 17);
 }
 
@@ -194,10 +201,14 @@ TEST(WorldConfig, MoreLightsThanAMapCarriesAreRefusedBeforeTheGridIsBuilt) {
   // parseLights is reached through parseWorld; only the lights' own error is looked for.
   std::string e = errorOf([&] { omnislam::config::parseWorld(Node::loadString(world(10000, 10000, ""), "w.yaml")); });
   EXPECT_NE(e.find("w.yaml: key 'lights.grid.x_m': a grid of 10000 x 10000 lights, more than 100000"),
-            std::string::npos) << e;
-  e = errorOf([&] { omnislam::config::parseWorld(Node::loadString(world(1000, 100, "  list: [{x_m: 1, y_m: 1}]\n"), "w.yaml")); });
+            std::string::npos)
+      << e;
+  e = errorOf([&] {
+    omnislam::config::parseWorld(Node::loadString(world(1000, 100, "  list: [{x_m: 1, y_m: 1}]\n"), "w.yaml"));
+  });
   EXPECT_NE(e.find("w.yaml: key 'lights.list': 100000 lights in the grid and 1 in the list, more than 100000"),
-            std::string::npos) << e;
+            std::string::npos)
+      << e;
   // 100 000 exactly is not refused by this check (the error, if any, is about another key).
   e = errorOf([&] { omnislam::config::parseWorld(Node::loadString(world(1000, 100, ""), "w.yaml")); });
   EXPECT_EQ(e.find("more than 100000"), std::string::npos) << e;
@@ -219,8 +230,8 @@ TEST(YamlNode, AMissingFileIsNamedByItsKey) {
   const std::string dir = ::testing::TempDir();
   const std::string present = dir + "/present_" + std::to_string(getpid()) + ".yaml";
   std::ofstream(present) << "x: 1\n";
-  const Node root = Node::loadString("camera:\n  world: " + present + "\n  missing: /nonexistent/w.yaml\n  dir: " + dir + "\n",
-                                     "features.yaml");
+  const Node root = Node::loadString(
+      "camera:\n  world: " + present + "\n  missing: /nonexistent/w.yaml\n  dir: " + dir + "\n", "features.yaml");
   const Node cam = root.child("camera");
   EXPECT_EQ(cam.getExistingFile("world"), present);
   EXPECT_EQ(errorOf([&] { cam.getExistingFile("missing"); }),

@@ -50,8 +50,8 @@ inline RoundTripStats pixelRoundTrip(const camera::CameraModel& cam) {
       if (back) s.worst_px = std::max(s.worst_px, (*back - px).norm());
     }
   }
-  std::printf("%s %dx%d: %ld valid pixels, worst project(unproject) %.3g px, worst |norm-1| %.3g\n",
-              cam.name().c_str(), cam.widthPx(), cam.heightPx(), s.valid, s.worst_px, s.worst_norm);
+  std::printf("%s %dx%d: %ld valid pixels, worst project(unproject) %.3g px, worst |norm-1| %.3g\n", cam.name().c_str(),
+              cam.widthPx(), cam.heightPx(), s.valid, s.worst_px, s.worst_norm);
   return s;
 }
 
@@ -68,8 +68,8 @@ inline RoundTripStats directionRoundTrip(const camera::CameraModel& cam, double 
       if (!px) continue;
       ++s.valid;
       const auto back = cam.unproject(*px);
-      EXPECT_TRUE(back.has_value()) << cam.name() << ": project valid but unproject not, zeta " << zeta
-                                    << " phi " << phi << " px " << px->transpose();
+      EXPECT_TRUE(back.has_value()) << cam.name() << ": project valid but unproject not, zeta " << zeta << " phi "
+                                    << phi << " px " << px->transpose();
       if (back) s.worst_rad = std::max(s.worst_rad, std::atan2(back->cross(d).norm(), back->dot(d)));
     }
   }

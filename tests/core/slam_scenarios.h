@@ -35,7 +35,7 @@ struct Segment {
   double length_m, curvature;  // curvature 0 for straight, 1/r for a left arc
 };
 inline const std::vector<Segment> kLoop{{18.0, 0.0}, {kPi / 2, 1.0}, {7.0, 0.0}, {kPi / 2, 1.0},
-                                 {18.0, 0.0}, {kPi / 2, 1.0}, {7.0, 0.0}, {kPi / 2, 1.0}};
+                                        {18.0, 0.0}, {kPi / 2, 1.0}, {7.0, 0.0}, {kPi / 2, 1.0}};
 
 inline double loopLength() {
   double L = 0.0;
@@ -126,7 +126,7 @@ struct RunFigures {
 };
 
 inline RunFigures runHall(AssociationMethod method, std::uint64_t filter_seed, std::uint64_t sim_seed,
-                   FastSlam* out_filter = nullptr, FastSlamOptions o = FastSlamOptions{}) {
+                          FastSlam* out_filter = nullptr, FastSlamOptions o = FastSlamOptions{}) {
   const auto frames = simulateHall(sim_seed);
   o.association = method;
   FastSlam local(o, filter_seed);
@@ -203,10 +203,10 @@ inline void print(const char* name, const RunFigures& r) {
   std::cout << "[hall " << name << "] steps " << r.steps << ", " << r.seconds << " s; landmarks " << r.num_landmarks
             << " (matched " << r.num_matched << "/16, duplicates " << r.num_duplicates << ", spurious "
             << r.num_spurious << "); map error mean " << r.map_mean_err_m << " m, max " << r.map_max_err_m
-            << " m; pose error final " << r.final_pos_err_m << " m / " << r.final_theta_err_rad
-            << " rad, rms " << r.rms_pos_err_m << " m, max " << r.max_pos_err_m << " m / " << r.max_theta_err_rad
-            << " rad; odometry-only final error " << r.odom_final_pos_err_m << " m; associations "
-            << r.num_associations << ", inconsistent " << r.num_inconsistent << "\n";
+            << " m; pose error final " << r.final_pos_err_m << " m / " << r.final_theta_err_rad << " rad, rms "
+            << r.rms_pos_err_m << " m, max " << r.max_pos_err_m << " m / " << r.max_theta_err_rad
+            << " rad; odometry-only final error " << r.odom_final_pos_err_m << " m; associations " << r.num_associations
+            << ", inconsistent " << r.num_inconsistent << "\n";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -299,7 +299,8 @@ inline LineRun runLines(FastSlamOptions o, std::uint64_t seed, bool odometry_noi
     }
     f.step(prev, odom, z);
     const Pose2 m = f.meanPose();
-    r.max_theta_err_deg = std::max(r.max_theta_err_deg, std::abs(wrapAngle(m.theta_rad - truth.theta_rad)) * 180.0 / kPi);
+    r.max_theta_err_deg =
+        std::max(r.max_theta_err_deg, std::abs(wrapAngle(m.theta_rad - truth.theta_rad)) * 180.0 / kPi);
   }
   const Pose2 m = f.meanPose();
   r.final_pos_err_m = std::hypot(m.x_m - truth.x_m, m.y_m - truth.y_m);

@@ -28,8 +28,14 @@ EucmParams make(double fx, double fy, double cx, double cy, double alpha, double
 }
 
 // Basalt's EUCM unit-test calibrations: EuRoC (752 x 480) and TUM VI (512 x 512).
-EucmParams euroc() { return make(460.76484651566468, 459.4051018049483, 365.8937161309615, 249.33499869752445, 0.5903365915227143, 1.127468196965374, 752, 480); }
-EucmParams tumVi() { return make(191.14799816648748, 191.13150946585135, 254.95857715233118, 256.8815466235898, 0.6291060871161842, 1.0418067403139693, 512, 512); }
+EucmParams euroc() {
+  return make(460.76484651566468, 459.4051018049483, 365.8937161309615, 249.33499869752445, 0.5903365915227143,
+              1.127468196965374, 752, 480);
+}
+EucmParams tumVi() {
+  return make(191.14799816648748, 191.13150946585135, 254.95857715233118, 256.8815466235898, 0.6291060871161842,
+              1.0418067403139693, 512, 512);
+}
 // alpha < 0.5: beyond 180 deg.
 EucmParams wide() { return make(150.0, 149.2, 640.5, 479.5, 0.42, 0.9, 1280, 960); }
 
@@ -96,7 +102,8 @@ TEST(camera_Eucm, OneToOneOverTheWholeParameterRange) {
       const EucmCamera cam(p);
       SCOPED_TRACE("alpha " + std::to_string(alpha) + " beta " + std::to_string(beta));
       EXPECT_GE(cam.maxZenithRad(), deg2rad(85.0));  // alpha = 1: the radius flattens towards 90 deg
-      EXPECT_LT(omnislam::testing::directionRoundTrip(cam, cam.maxZenithRad() * (1.0 - 1e-9), 200, 36).worst_rad, 1e-12);
+      EXPECT_LT(omnislam::testing::directionRoundTrip(cam, cam.maxZenithRad() * (1.0 - 1e-9), 200, 36).worst_rad,
+                1e-12);
     }
   }
 }

@@ -86,7 +86,8 @@ TEST(camera_KannalaBrandt, JacobiansMatchCentralDifferences) {
   omnislam::testing::expectJacobiansAt(KannalaBrandtCamera(tumVi()), {0.6, 512.0});  // near the image edge
   // Near the edge of the field of view (the 220-degree lens: 108.9 deg lands inside the image).
   const KannalaBrandtCamera wide(wide220());
-  for (const double phi : {0.3, 1.9, -2.4}) omnislam::testing::expectJacobiansAtDirection(wide, wide.maxZenithRad() - 0.02, phi);
+  for (const double phi : {0.3, 1.9, -2.4})
+    omnislam::testing::expectJacobiansAtDirection(wide, wide.maxZenithRad() - 0.02, phi);
   // Exactly on the axis: the first-order limit, equal to the derivative along x and y.
   const KannalaBrandtCamera cam(tumVi());
   Eigen::Matrix<double, 2, 3> J;

@@ -117,9 +117,9 @@ TEST(camera_FisheyeLut, PixelsStraddlingTheAzimuthCutKeepAShortRange) {
     EXPECT_LT(e->azimuth_halfrange_rad, 0.01) << col;
     EXPECT_NEAR(std::abs(e->azimuth_rad), kPi, 0.01) << col;
   }
-  EXPECT_FALSE(lut.lookup(0, 0).has_value());      // corner: never hit, reported invalid
-  EXPECT_FALSE(lut.lookup(-1, 10).has_value());    // outside the image
-  EXPECT_FALSE(lut.lookup(640, 10).has_value());   // outside the image
+  EXPECT_FALSE(lut.lookup(0, 0).has_value());     // corner: never hit, reported invalid
+  EXPECT_FALSE(lut.lookup(-1, 10).has_value());   // outside the image
+  EXPECT_FALSE(lut.lookup(640, 10).has_value());  // outside the image
   EXPECT_TRUE(lut.lookup(Eigen::Vector2d(319.6, 240.4)).has_value());
   // The optical-axis pixel: zenith ~0 whatever its (meaningless) azimuth.
   EXPECT_LT(lut.lookup(320, 240)->zenith_rad, 0.01);

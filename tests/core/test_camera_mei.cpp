@@ -53,7 +53,7 @@ TEST(camera_Mei, JacobiansMatchCentralDifferences) {
     omnislam::testing::expectJacobiansAtDirection(cam, 1.9, phi);   // 109 deg off the axis
     omnislam::testing::expectJacobiansAtDirection(cam, 1e-3, phi);  // near the optical axis
   }
-  omnislam::testing::expectJacobiansAt(cam, {0.2, 0.3});      // image corner, near the edge of the view
+  omnislam::testing::expectJacobiansAt(cam, {0.2, 0.3});  // image corner, near the edge of the view
   omnislam::testing::expectJacobiansAt(cam, {1279.1, 958.9});
   // Exactly on the axis the projection Jacobian is still defined (no special case needed).
   Eigen::Matrix<double, 2, 3> J;

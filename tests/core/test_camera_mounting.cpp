@@ -99,10 +99,10 @@ TEST(camera_MountingFull, RotationAndJacobiansOfATiltedMounting) {
   const Eigen::Matrix3d R = rotationCameraToRobot(m);
   EXPECT_LT((R * R.transpose() - Eigen::Matrix3d::Identity()).norm(), 1e-15);
   EXPECT_NEAR(R.determinant(), 1.0, 1e-15);
-  const Eigen::Matrix3d ref = (Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()) *
-                               Eigen::AngleAxisd(0.25, Eigen::Vector3d::UnitY()) *
-                               Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitX()))
-                                  .toRotationMatrix();
+  const Eigen::Matrix3d ref =
+      (Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.25, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
   EXPECT_LT((R - ref).norm(), 1e-15);
   const Eigen::Vector3d d_C(0.3, -0.5, 0.8), d_R0(0.4, 0.1, -0.9);
   Eigen::Matrix3d J_dR_dC, J_dC_dR, J_pC_pR;

@@ -87,8 +87,10 @@ TEST(camera_PajdlaBakstein, AxesFollowTheConventions) {
   const Eigen::Vector2d c = cam.project(Eigen::Vector3d::UnitZ()).value();
   EXPECT_NEAR((c - Eigen::Vector2d(p.u0_px, p.v0_px)).norm(), 0.0, 1e-12);
   const double r90 = cam.radiusPx(kPi / 2);
-  EXPECT_NEAR((cam.project(Eigen::Vector3d::UnitX()).value() - Eigen::Vector2d(p.u0_px + r90, p.v0_px)).norm(), 0, 1e-9);
-  EXPECT_NEAR((cam.project(Eigen::Vector3d::UnitY()).value() - Eigen::Vector2d(p.u0_px, p.v0_px + r90)).norm(), 0, 1e-9);
+  EXPECT_NEAR((cam.project(Eigen::Vector3d::UnitX()).value() - Eigen::Vector2d(p.u0_px + r90, p.v0_px)).norm(), 0,
+              1e-9);
+  EXPECT_NEAR((cam.project(Eigen::Vector3d::UnitY()).value() - Eigen::Vector2d(p.u0_px, p.v0_px + r90)).norm(), 0,
+              1e-9);
   EXPECT_NEAR((cam.unproject({p.u0_px + r90, p.v0_px}).value() - Eigen::Vector3d::UnitX()).norm(), 0, 1e-12);
   EXPECT_NEAR((cam.unproject({p.u0_px, p.v0_px - r90}).value() + Eigen::Vector3d::UnitY()).norm(), 0, 1e-12);
   EXPECT_NEAR((cam.unproject({p.u0_px, p.v0_px}).value() - Eigen::Vector3d::UnitZ()).norm(), 0, 1e-15);
@@ -207,7 +209,7 @@ TEST(camera_PajdlaBakstein, UnprojectJacobianMatchesCentralDifferences) {
   const PajdlaBaksteinCamera cam_beta(p);
   for (const PajdlaBaksteinCamera* c : {&cam, &cam_beta}) {
     const Eigen::Vector2d centre(c->params().u0_px, c->params().v0_px);
-    expectUnprojectJacobian(*c, centre);                                // the centre pixel
+    expectUnprojectJacobian(*c, centre);                                 // the centre pixel
     expectUnprojectJacobian(*c, centre + Eigen::Vector2d(1e-6, -2e-6));  // zeta ~ 1e-8
     for (const double phi : {-2.9, -0.7, 0.0, 1.0, 2.2}) {
       for (const double r : {0.4, 17.0, 120.0, 200.0, c->maxRadiusPx() - 0.01}) {

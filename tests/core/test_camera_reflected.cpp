@@ -65,7 +65,7 @@ TEST(camera_Reflected, RoundTripsAndJacobians) {
   EXPECT_EQ(px_stats.valid, 1280L * 960L);
   EXPECT_LT(px_stats.worst_px, 1e-6);
   for (const Eigen::Vector2d& px : {Eigen::Vector2d(700.3, 500.2), Eigen::Vector2d(1100.0, 200.0),
-                                   Eigen::Vector2d(641.3, 479.0), Eigen::Vector2d(0.3, 0.2)}) {
+                                    Eigen::Vector2d(641.3, 479.0), Eigen::Vector2d(0.3, 0.2)}) {
     omnislam::testing::expectJacobiansAt(cam, px);
   }
   // Analytic Jacobians are the inner ones with the z column / row negated.

@@ -27,9 +27,11 @@ const char* const kGoodText =
     "\n"
     "5 -2.063866e+02 0.000000e+00 2.165610e-03 -4.495456e-06 1.810639e-08 \n"
     "\n"
-    "#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used by world2cam\n"
+    "#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used by "
+    "world2cam\n"
     "\n"
-    "12 293.052431 151.538629 -11.130942 27.892086 7.952091 -1.062672 10.373416 1.171771 -6.054173 0.762221 3.136665 0.865190 \n"
+    "12 293.052431 151.538629 -11.130942 27.892086 7.952091 -1.062672 10.373416 1.171771 -6.054173 0.762221 3.136665 "
+    "0.865190 \n"
     "\n"
     "#center: \"row\" and \"column\", starting from 0 (C convention)\n"
     "\n"
@@ -168,8 +170,7 @@ TEST(camera_OcamCalibParser, ParsesTheFormatWithRowColumnCentre) {
   EXPECT_EQ(p.height_px, 480);  // "height width"
   EXPECT_EQ(p.width_px, 748);
   // Windows line ends and no comments are fine too.
-  const OcamCalibParseResult crlf =
-      parseOcamCalib("3 -100 0 0.001\r\n2 150 100\r\n10.5 20.5\r\n1 0 0\r\n30 40\r\n");
+  const OcamCalibParseResult crlf = parseOcamCalib("3 -100 0 0.001\r\n2 150 100\r\n10.5 20.5\r\n1 0 0\r\n30 40\r\n");
   ASSERT_TRUE(crlf.params.has_value()) << crlf.error;
   EXPECT_EQ(crlf.params->width_px, 40);
   EXPECT_DOUBLE_EQ(crlf.params->xc_row_px, 10.5);
@@ -185,13 +186,15 @@ TEST(camera_OcamCalibParser, MalformedTextNamesTheLineAndField) {
   expectParseError("", "missing data line for field 'pol'");
   expectParseError("# only a comment\n", "missing data line for field 'pol'");
   expectParseError("3 -100 0 0.001\n2 150 100\n10 20\n1 0 0\n", "missing data line for field 'size'");
-  expectParseError("3 -100 0\n2 150 100\n10 20\n1 0 0\n30 40\n", "line 1 (pol): the count says 3 coefficients, found 2");
+  expectParseError("3 -100 0\n2 150 100\n10 20\n1 0 0\n30 40\n",
+                   "line 1 (pol): the count says 3 coefficients, found 2");
   expectParseError("#c\n\n3 -100 0 0.001\n2 150 abc\n10 20\n1 0 0\n30 40\n",
                    "line 4 (invpol): coefficient 1 'abc' is not a number");
   expectParseError("x -100\n2 150 100\n10 20\n1 0 0\n30 40\n", "line 1 (pol): the coefficient count 'x'");
   expectParseError("3 -100 0 0.001\n2 150 100\n10\n1 0 0\n30 40\n", "line 3 (centre): expected 2 numbers");
   expectParseError("3 -100 0 0.001\n2 150 100\n10 20\n1 0 0 7\n30 40\n", "line 4 (affine): expected 3 numbers");
-  expectParseError("3 -100 0 0.001\n2 150 100\n10 20\n1 0 0\n30 -40\n", "line 5 (size): expected two positive integers");
+  expectParseError("3 -100 0 0.001\n2 150 100\n10 20\n1 0 0\n30 -40\n",
+                   "line 5 (size): expected two positive integers");
   expectParseError("3 -100 0 0.001\n2 150 100\n10 20\n1 0 0\n30 40.5\n", "line 5 (size)");
   expectParseError("3 -100 0 0.001\n2 150 100\n10 20\n1 0 0\n30 40\n1 2\n", "line 6: unexpected data");
   expectParseError("3 -100 0 0.001\n2 150 100\n1,5 20\n1 0 0\n30 40\n", "line 3 (centre): '1,5' is not a number");
@@ -223,9 +226,10 @@ TEST(camera_Scaramuzza, RealCalibrationFileMatchesOcamCalibsOwnFunctions) {
         ASSERT_LT((ours - Eigen::Vector2d(col, row)).norm(), 1e-6);
       }
     }
-    std::printf("  |unproject - cam2world| worst %.3g; OCamCalib world2cam(cam2world) round trip worst %.3g px "
-                "(ours: < 1e-6 px)\n",
-                worst_dir, worst_w2c);
+    std::printf(
+        "  |unproject - cam2world| worst %.3g; OCamCalib world2cam(cam2world) round trip worst %.3g px "
+        "(ours: < 1e-6 px)\n",
+        worst_dir, worst_w2c);
     EXPECT_LT(worst_dir, 1e-12);
     denseRoundTrip(cam, 748L * 480L);
   }
@@ -276,9 +280,9 @@ TEST(camera_Scaramuzza, SyntheticRoundTripsAndJacobians) {
   const Eigen::Vector2d centre(cam.params().yc_col_px, cam.params().xc_row_px);
   expectJacobians(cam, centre);                                // on the centre ray
   expectJacobians(cam, centre + Eigen::Vector2d(1e-6, 2e-6));  // ~1e-8 rad off it
-  for (const Eigen::Vector2d& px : {Eigen::Vector2d(10.0, 15.0), Eigen::Vector2d(600.0, 400.0),
-                                    Eigen::Vector2d(330.0, 250.0), Eigen::Vector2d(5.0, 470.0),
-                                    Eigen::Vector2d(639.0, 1.0), Eigen::Vector2d(100.0, 300.0)}) {
+  for (const Eigen::Vector2d& px :
+       {Eigen::Vector2d(10.0, 15.0), Eigen::Vector2d(600.0, 400.0), Eigen::Vector2d(330.0, 250.0),
+        Eigen::Vector2d(5.0, 470.0), Eigen::Vector2d(639.0, 1.0), Eigen::Vector2d(100.0, 300.0)}) {
     expectJacobians(cam, px);
   }
   // Bearings -> pixels -> bearings over the valid off-centre angles.
@@ -324,8 +328,12 @@ TEST(camera_Scaramuzza, ValidRegionByRadiusAndElevation) {
       const auto d_full = full.unproject(px);
       ASSERT_TRUE(d_full.has_value());
       const double el = std::asin(d_full->z());
-      const double rho = (Eigen::Matrix2d() << 1.0, p.e, p.d, p.c).finished().inverse()
-                             .operator*(px - Eigen::Vector2d(p.yc_col_px, p.xc_row_px)).norm();
+      const double rho = (Eigen::Matrix2d() << 1.0, p.e, p.d, p.c)
+                             .finished()
+                             .inverse()
+                             .
+                             operator*(px - Eigen::Vector2d(p.yc_col_px, p.xc_row_px))
+                             .norm();
       const bool inside = rho >= 40.0 && rho <= 220.0 && el >= p.min_elevation_rad && el <= p.max_elevation_rad;
       ASSERT_EQ(d.has_value(), inside) << px.transpose() << " rho " << rho << " el " << rad2deg(el);
       ASSERT_EQ(cam.project(*d_full).has_value(), inside) << px.transpose();

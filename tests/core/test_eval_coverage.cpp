@@ -71,7 +71,7 @@ TEST(EvalCoverage, RepeatedFramesCountOnceAndPosesOffFramesAnswerNothing) {
   auto frames = every(0, 1, 11);
   const auto again = every(5, 1, 6);
   frames.insert(frames.end(), again.begin(), again.end());
-  auto poses = every(0, 1, 6);              // frames 0..5 answered
+  auto poses = every(0, 1, 6);                     // frames 0..5 answered
   const auto odometry_only = every(5.5, 0.5, 20);  // 5.5 .. 15 s, only 6, 7, ..., 10 fall on frames
   poses.insert(poses.end(), odometry_only.begin(), odometry_only.end());
   const Coverage c = coverage(frames, poses, {}, {});

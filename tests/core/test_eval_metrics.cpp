@@ -119,7 +119,8 @@ TEST(EvalMetrics, MatchingByGroupsEqualsOneDenseAssignment) {
     for (int c = 0; c < clusters; ++c) {
       const Eigen::Vector3d centre(8.0 * u(rng), 8.0 * u(rng), 2.0 * u(rng));
       for (int k = 0; k < 1 + trial % 4; ++k) truth.push_back(centre + Eigen::Vector3d(u(rng), u(rng), 0.3 * u(rng)));
-      for (int k = 0; k < 1 + (trial / 4) % 5; ++k) est.push_back(centre + Eigen::Vector3d(u(rng), u(rng), 0.3 * u(rng)));
+      for (int k = 0; k < 1 + (trial / 4) % 5; ++k)
+        est.push_back(centre + Eigen::Vector3d(u(rng), u(rng), 0.3 * u(rng)));
     }
     const double gate = 0.5 + 0.1 * (trial % 10);
     const bool planar = trial % 2 == 0;

@@ -48,9 +48,11 @@ void checkJacobians(const Case& k, double rel_tol) {
     const double scale_p = std::max(1.0, Jp.row(r).cwiseAbs().maxCoeff());
     const double scale_l = std::max(1.0, Jl.row(r).cwiseAbs().maxCoeff());
     EXPECT_LT((Jp - Np).row(r).cwiseAbs().maxCoeff(), rel_tol * scale_p) << "J_z_pose row " << r << "\n"
-                                                                         << Jp << "\nnum\n" << Np;
+                                                                         << Jp << "\nnum\n"
+                                                                         << Np;
     EXPECT_LT((Jl - Nl).row(r).cwiseAbs().maxCoeff(), rel_tol * scale_l) << "J_z_landmark row " << r << "\n"
-                                                                         << Jl << "\nnum\n" << Nl;
+                                                                         << Jl << "\nnum\n"
+                                                                         << Nl;
   }
 }
 
@@ -230,11 +232,19 @@ double logGaussianByLlt(const MeasVec& r, const MeasMat& S, double* m2_out) {
 TEST(slam_BearingModel, OneDimensionalLogGaussianIsTheLltFormBitForBit) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<std::pair<double, double>> cases = {
-      {0.0, 1e-4}, {-0.0, 1e-4}, {0.3, 0.0}, {0.3, -1e-6}, {0.0, std::nan("")}, {0.1, std::nan("")},
-      {std::nan(""), 1e-4}, {1e-300, 1e-300}, {2.0, 1e300}, {0.0, std::numeric_limits<double>::infinity()},
-      {0.5, std::numeric_limits<double>::denorm_min()}};
-  for (int i = 0; i < 20000; ++i) cases.emplace_back(u(rng) * std::pow(10.0, 3.0 * u(rng)), std::pow(10.0, 6.0 * u(rng)));
+  std::vector<std::pair<double, double>> cases = {{0.0, 1e-4},
+                                                  {-0.0, 1e-4},
+                                                  {0.3, 0.0},
+                                                  {0.3, -1e-6},
+                                                  {0.0, std::nan("")},
+                                                  {0.1, std::nan("")},
+                                                  {std::nan(""), 1e-4},
+                                                  {1e-300, 1e-300},
+                                                  {2.0, 1e300},
+                                                  {0.0, std::numeric_limits<double>::infinity()},
+                                                  {0.5, std::numeric_limits<double>::denorm_min()}};
+  for (int i = 0; i < 20000; ++i)
+    cases.emplace_back(u(rng) * std::pow(10.0, 3.0 * u(rng)), std::pow(10.0, 6.0 * u(rng)));
   for (const auto& [r0, s00] : cases) {
     MeasVec r(1);
     r << r0;
@@ -243,7 +253,8 @@ TEST(slam_BearingModel, OneDimensionalLogGaussianIsTheLltFormBitForBit) {
     double m2 = -1.0, m2_ref = -1.0;
     const double lg = logGaussian(r, S, &m2);
     const double ref = logGaussianByLlt(r, S, &m2_ref);
-    EXPECT_TRUE(sameBits(lg, ref) || (std::isnan(lg) && std::isnan(ref))) << "r " << r0 << " S " << s00 << ": " << lg << " vs " << ref;
+    EXPECT_TRUE(sameBits(lg, ref) || (std::isnan(lg) && std::isnan(ref)))
+        << "r " << r0 << " S " << s00 << ": " << lg << " vs " << ref;
     EXPECT_TRUE(sameBits(m2, m2_ref) || (std::isnan(m2) && std::isnan(m2_ref))) << "r " << r0 << " S " << s00;
   }
 }

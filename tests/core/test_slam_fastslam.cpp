@@ -62,8 +62,7 @@ TEST(slam_FastSlam, OptionsValidate) {
   EXPECT_NE(o.validate().find("num_particles must be in [1, "), std::string::npos) << o.validate();
   o = FastSlamOptions{};
   o.perception.detection_probability = 1.0;
-  EXPECT_NE(o.validate().find("perception.detection_probability must be in [0, 1)"), std::string::npos)
-      << o.validate();
+  EXPECT_NE(o.validate().find("perception.detection_probability must be in [0, 1)"), std::string::npos) << o.validate();
   o = FastSlamOptions{};
   o.candidates.nz_min = 1;
   EXPECT_NE(o.validate().find("candidates.nz_min"), std::string::npos);
@@ -119,7 +118,8 @@ TEST(slam_FastSlam, LocalisesWithPriorMapAndAssociatesById) {
     }
     const StepResult r = f.step(odom, odom_next, z);
     ASSERT_EQ(r.landmark_of_measurement.size(), z.size());
-    for (std::size_t i = 0; i < z.size(); ++i) EXPECT_EQ(r.landmark_of_measurement[i], static_cast<std::int64_t>(ids[i]));
+    for (std::size_t i = 0; i < z.size(); ++i)
+      EXPECT_EQ(r.landmark_of_measurement[i], static_cast<std::int64_t>(ids[i]));
     EXPECT_EQ(r.num_associated, 6);
     EXPECT_EQ(r.num_new_candidates, 0);
     truth = truth_next;
@@ -612,7 +612,8 @@ TwoParticleStep twoParticleStep(FastSlamOptions o, std::uint64_t seed, const Eig
     MeasJac Hx, Hm;
     const auto zhat = predictMeasurement(LandmarkKind::kPoint3D, L.p_LinW_m, x_t, kCam, &Hx, &Hm);
     const MeasMat Qt = measurementCovariance(z, o.inflate_azimuth_near_zenith) + Hm * L.cov_LinW_m2 * Hm.transpose();
-    out.log_n.push_back(zhat ? logGaussian(innovation(measurementVector(z), *zhat), Qt) : -std::numeric_limits<double>::infinity());
+    out.log_n.push_back(zhat ? logGaussian(innovation(measurementVector(z), *zhat), Qt)
+                             : -std::numeric_limits<double>::infinity());
   }
   out.w = f.weightsBeforeResampling();
   // The sampled poses are reported before resampling.
@@ -708,4 +709,3 @@ TEST(slam_FastSlam, ParticleSetBeforeResamplingIsReported) {
     }));
   }
 }
-

@@ -234,8 +234,8 @@ TEST(StateEnvelope, RoundTripAndEveryDamageRefusedWithItsReason) {
     }
   }
   // Truncated anywhere, also inside the header.
-  for (std::size_t n : {std::size_t{0}, std::size_t{7}, std::size_t{19}, std::size_t{23}, sealed.size() / 2,
-                        sealed.size() - 1}) {
+  for (std::size_t n :
+       {std::size_t{0}, std::size_t{7}, std::size_t{19}, std::size_t{23}, sealed.size() / 2, sealed.size() - 1}) {
     const std::vector<std::uint8_t> b(sealed.begin(), sealed.begin() + static_cast<long>(n));
     EXPECT_NE(reasonOf(b).find("truncated"), std::string::npos) << n << ": " << reasonOf(b);
   }

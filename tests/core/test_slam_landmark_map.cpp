@@ -142,9 +142,9 @@ TEST(slam_LandmarkMap, CopySharesThenSeparatesOnWrite) {
   b.apply({e}, {});
   EXPECT_NE(a.rootNode(), b.rootNode());
   EXPECT_NE(b.cellStorage(k0), c0);
-  EXPECT_EQ(a.cellStorage(k0), c0);             // a unchanged
-  EXPECT_EQ(b.cellStorage(k1), c1);             // untouched cell still shared
-  EXPECT_EQ(a.rootUseCount(), 1);               // b now owns its own root (path copy)
+  EXPECT_EQ(a.cellStorage(k0), c0);  // a unchanged
+  EXPECT_EQ(b.cellStorage(k1), c1);  // untouched cell still shared
+  EXPECT_EQ(a.rootUseCount(), 1);    // b now owns its own root (path copy)
   EXPECT_EQ(a.cellUseCount(k0), 1);
   EXPECT_EQ(asMap(a).at(0).counter, 0);
   EXPECT_EQ(asMap(b).at(0).counter, 99);

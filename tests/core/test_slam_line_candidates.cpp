@@ -105,7 +105,7 @@ TEST(LineCandidates, LikelihoodWithoutEstimateUsesTheRaySegmentInRange) {
   const MeasVec z_other = MeasVec::Constant(1, -kPi / 4);  // crosses the ray at (0.15, 0)
   const double ll_free = candidateLogLikelihood(c, z_other, q(), now, Eigen::Vector3d::Zero());
   const double ll_range = candidateLogLikelihood(c, z_other, q(), now, Eigen::Vector3d::Zero(), 0.8, 8.0);
-  EXPECT_GT(ll_free, 0.0);              // a perfect match without a range
+  EXPECT_GT(ll_free, 0.0);               // a perfect match without a range
   EXPECT_LT(ll_range, ll_free - 100.0);  // far from any point 0.8-8 m along the ray
   // The true landmark's measurement still matches with the range.
   const MeasVec z_true = azimuthTo({3.0, 0.0, 0.0}, now);

@@ -168,8 +168,8 @@ TEST(slam_MotionModel, TranslateThenRotateCovarianceMatchesSampling) {
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) {
         const double tol = 0.02 * std::sqrt(S(r, r) * S(c, c)) + 1e-10;  // ~ sampling error at n = 2e5
-        EXPECT_NEAR(cov(r, c), S(r, c), tol) << "u = (" << u.x_m << ", " << u.y_m << ", " << u.theta_rad
-                                             << ") entry " << r << c;
+        EXPECT_NEAR(cov(r, c), S(r, c), tol)
+            << "u = (" << u.x_m << ", " << u.y_m << ", " << u.theta_rad << ") entry " << r << c;
       }
     }
     EXPECT_NEAR(mean.x(), u.x_m, 1e-3);

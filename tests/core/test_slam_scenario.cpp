@@ -41,7 +41,7 @@ TEST(slam_Scenario, HallHungarian) {
   EXPECT_EQ(r.num_spurious, 0);
   EXPECT_LE(r.map_mean_err_m, 0.48);
   EXPECT_LE(r.map_max_err_m, 1.05);
-  EXPECT_LE(r.final_pos_err_m, 0.3);   // back at the start, the loop is closed
+  EXPECT_LE(r.final_pos_err_m, 0.3);  // back at the start, the loop is closed
   EXPECT_LE(r.max_theta_err_rad, 0.087);
   EXPECT_LE(r.rms_pos_err_m, 0.5);
   EXPECT_LT(r.final_pos_err_m, r.odom_final_pos_err_m);
@@ -62,8 +62,9 @@ TEST(slam_Scenario, HallHungarianSeveralFilterSeeds) {
 }
 
 TEST(slam_Scenario, HallMaximumLikelihood) {
-  // The ML baseline maps the hall as well as the Hungarian method (the same bars; measured: 16/16, map mean 0.11-0.27 m). The paper's finding that
-  // ML loses loop closures does not reproduce in this hall (docs/results/slam-results.md, "Hungarian vs ML").
+  // The ML baseline maps the hall as well as the Hungarian method (the same bars; measured: 16/16, map mean 0.11-0.27
+  // m). The paper's finding that ML loses loop closures does not reproduce in this hall (docs/results/slam-results.md,
+  // "Hungarian vs ML").
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const RunFigures r = runHall(AssociationMethod::kMaximumLikelihood, seed, 2024);
     print(("ML seed " + std::to_string(seed)).c_str(), r);

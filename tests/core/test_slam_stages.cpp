@@ -62,7 +62,7 @@ TEST(slam_Stages, HierarchicalAssociationLevel1IsTheBruteForceMinimumAndFeedsThe
     }
     const stages::MapLevelInput level1{cost, cost_new, stages::HungarianAssociation{}};
     const stages::CandidateLevelInput level2{no_candidates, no_measurements, options, stages::HungarianAssociation{},
-                                             false, nullptr};
+                                             false,         nullptr};
     int calls = 0;
     const Pose2 proposed{1.0, 2.0, 0.5};
     const auto propose = [&](const stages::MapAssociation& l1) {
@@ -153,8 +153,8 @@ TEST(slam_Stages, OptionsMapToOneVariant) {
   o.association = AssociationMethod::kMaximumLikelihood;
   EXPECT_TRUE(std::holds_alternative<stages::FastSlam1>(stages::filterVariantOf(o)));
   EXPECT_TRUE(std::holds_alternative<stages::WeightMarginal>(stages::weightingOf(stages::filterVariantOf(o))));
-  EXPECT_TRUE(std::holds_alternative<stages::MaximumLikelihoodAssociation>(
-      stages::associationOf(stages::filterVariantOf(o))));
+  EXPECT_TRUE(
+      std::holds_alternative<stages::MaximumLikelihoodAssociation>(stages::associationOf(stages::filterVariantOf(o))));
 
   o.association_predictive = true;
   try {
@@ -210,9 +210,11 @@ double exactObservationWeight(const Eigen::Matrix3d& cov, WeightTerm form, const
 // exactly +dim/2 (residual 0: -1/2 (0 - 2)), whatever their covariances, under every FastSLAM weighting.
 TEST(slam_Stages, ConsistencyWeightTermDoesNotRewardAConfidentMap) {
   const Eigen::Matrix3d sure = Eigen::Matrix3d::Identity() * 1e-4, unsure = Eigen::Matrix3d::Identity() * 1e-2;
-  for (const stages::Weighting& w : {stages::Weighting{stages::WeightAlg4{}}, stages::Weighting{stages::WeightAtPredictedPose{}},
-                                     stages::Weighting{stages::WeightMarginal{}}}) {
-    EXPECT_GT(exactObservationWeight(sure, WeightTerm::kDensity, w), exactObservationWeight(unsure, WeightTerm::kDensity, w) + 1.0);
+  for (const stages::Weighting& w :
+       {stages::Weighting{stages::WeightAlg4{}}, stages::Weighting{stages::WeightAtPredictedPose{}},
+        stages::Weighting{stages::WeightMarginal{}}}) {
+    EXPECT_GT(exactObservationWeight(sure, WeightTerm::kDensity, w),
+              exactObservationWeight(unsure, WeightTerm::kDensity, w) + 1.0);
     EXPECT_NEAR(exactObservationWeight(sure, WeightTerm::kConsistency, w), 1.0, 1e-9);
     EXPECT_NEAR(exactObservationWeight(unsure, WeightTerm::kConsistency, w), 1.0, 1e-9);
   }
@@ -268,5 +270,6 @@ TEST(slam_Stages, UnexplainedMeasurementsCostTheGatesConsistencyTerm) {
   o.weight_term = WeightTerm::kConsistency;
   EXPECT_DOUBLE_EQ(stages::unexplainedWeight(a, Z, o), -0.5 * (o.p_new_mahalanobis_sq - 1.0));
   a.candidate_of_leftover.clear();  // no level 2 (localisation only): every leftover is unexplained
-  EXPECT_DOUBLE_EQ(stages::unexplainedWeight(a, Z, o), -0.5 * (o.p_new_mahalanobis_sq - 2.0) - 0.5 * (o.p_new_mahalanobis_sq - 1.0));
+  EXPECT_DOUBLE_EQ(stages::unexplainedWeight(a, Z, o),
+                   -0.5 * (o.p_new_mahalanobis_sq - 2.0) - 0.5 * (o.p_new_mahalanobis_sq - 1.0));
 }

@@ -85,18 +85,24 @@ TEST(slam_CrossPoint, DepthsAloneAreCrossPointsDepthsBitForBit) {
       case 0:  // random directions
         b2 = Eigen::Vector3d(u(rng), u(rng), u(rng));
         break;
-      case 1: case 2: {  // a parallax near the threshold (both sides, within a few per cent)
+      case 1:
+      case 2: {  // a parallax near the threshold (both sides, within a few per cent)
         const Eigen::Vector3d axis = b1.unitOrthogonal();
         const double angle = (std::isfinite(t) && t > 0.0 ? t : 1e-6) * (1.0 + 0.05 * u(rng));
         b2 = Eigen::AngleAxisd(angle, axis) * b1 * (0.5 + std::abs(u(rng)));
         break;
       }
       case 3:  // near the factors of 2 of the quick test
-        b2 = Eigen::AngleAxisd((std::isfinite(t) && t > 0.0 ? t : 1e-6) * (u(rng) > 0 ? 2.0 : 0.5) * (1.0 + 1e-9 * u(rng)),
-                               b1.unitOrthogonal()) * b1;
+        b2 = Eigen::AngleAxisd(
+                 (std::isfinite(t) && t > 0.0 ? t : 1e-6) * (u(rng) > 0 ? 2.0 : 0.5) * (1.0 + 1e-9 * u(rng)),
+                 b1.unitOrthogonal()) *
+             b1;
         break;
       default:  // parallel, anti-parallel, zero, non-finite
-        b2 = (i / 5) % 4 == 0 ? b1 : (i / 5) % 4 == 1 ? Eigen::Vector3d(-b1) : (i / 5) % 4 == 2 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(nan, 0, 1);
+        b2 = (i / 5) % 4 == 0   ? b1
+             : (i / 5) % 4 == 1 ? Eigen::Vector3d(-b1)
+             : (i / 5) % 4 == 2 ? Eigen::Vector3d::Zero()
+                                : Eigen::Vector3d(nan, 0, 1);
     }
     if (i % 7 == 0) b1 = -b1;
     const auto full = crossPointOfRays(c1, b1, c2, b2, t);
@@ -118,9 +124,7 @@ TEST(slam_CrossPoint, DepthsAloneAreCrossPointsDepthsBitForBit) {
 
 const Eigen::Vector3d kCam(0.0, 0.0, 1.8);
 
-MeasMat q(double sigma_rad, int dim = 2) {
-  return MeasMat(MeasMat::Identity(dim, dim) * sigma_rad * sigma_rad);
-}
+MeasMat q(double sigma_rad, int dim = 2) { return MeasMat(MeasMat::Identity(dim, dim) * sigma_rad * sigma_rad); }
 
 // A candidate fed with exact bearings of X from poses along +x every `step_m`.
 Candidate candidateAlongX(const Eigen::Vector3d& X, int n, double step_m, double x0 = 0.0,
@@ -186,10 +190,10 @@ TEST(slam_Candidate, ThresholdsNzMinAndNcrossValid) {
   // The newest ray must take part in a valid cross-point: append a ray from a pose back at the start.
   Candidate c2 = candidateAlongX(X, 6, 0.5);
   const Pose2 T{0.0, 0.0, 0.0};
-  c2.observations.push_back(
-      makeObservation(LandmarkKind::kPoint3D, T, kCam, *predictMeasurement(LandmarkKind::kPoint3D, X, T, kCam), q(0.005)));
-  c2.observations.push_back(
-      makeObservation(LandmarkKind::kPoint3D, T, kCam, *predictMeasurement(LandmarkKind::kPoint3D, X, T, kCam), q(0.005)));
+  c2.observations.push_back(makeObservation(LandmarkKind::kPoint3D, T, kCam,
+                                            *predictMeasurement(LandmarkKind::kPoint3D, X, T, kCam), q(0.005)));
+  c2.observations.push_back(makeObservation(LandmarkKind::kPoint3D, T, kCam,
+                                            *predictMeasurement(LandmarkKind::kPoint3D, X, T, kCam), q(0.005)));
   c2.num_associated = 8;
   const CandidateEvaluation ev = evaluateCandidate(c2, CandidateOptions{}, 64.0);
   EXPECT_GE(ev.num_valid, 5);
@@ -206,8 +210,8 @@ TEST(slam_Candidate, ValidityBelowCameraAndOutlier) {
   // One ray 3 degrees off: every cross-point fails c) (its probability is below P_new).
   Candidate c = candidateAlongX(Eigen::Vector3d(2.0, 3.0, 6.5), 6, 0.5);
   c.observations[2].z(0) += deg2rad(3.0);
-  c.observations[2] = makeObservation(LandmarkKind::kPoint3D, c.observations[2].T_WtoR, kCam, c.observations[2].z,
-                                      c.observations[2].Q);
+  c.observations[2] =
+      makeObservation(LandmarkKind::kPoint3D, c.observations[2].T_WtoR, kCam, c.observations[2].z, c.observations[2].Q);
   EXPECT_EQ(evaluateCandidate(c, CandidateOptions{}, 64.0).num_valid, 0);
   // With a looser P_new (Mahalanobis^2 < 1e4) the same candidate is valid again.
   EXPECT_GT(evaluateCandidate(c, CandidateOptions{}, 1e4).num_valid, 0);

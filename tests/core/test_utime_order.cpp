@@ -32,7 +32,8 @@ TEST(UtimeOrder, RefusesDuplicatesAndSmallStepsBackWithTheirReason) {
 }
 
 TEST(UtimeOrder, AStrayFarFutureStampDoesNotLockTheStream) {
-  for (const int64_t stray : {kT0 + 61'000'000, int64_t{9'000'000'000'000'000'000}, std::numeric_limits<int64_t>::max()}) {
+  for (const int64_t stray :
+       {kT0 + 61'000'000, int64_t{9'000'000'000'000'000'000}, std::numeric_limits<int64_t>::max()}) {
     UtimeOrder o;
     int64_t t = kT0;
     for (; t < kT0 + 10 * kStep; t += kStep) ASSERT_FALSE(o.admit(t));
@@ -56,7 +57,8 @@ TEST(UtimeOrder, ANewTimelineIsTakenAfterTheConfirmingMessages) {
   EXPECT_NE(second->find("this is 2"), std::string::npos) << *second;
   EXPECT_FALSE(back.admit(kT0 + 2 * kStep, opt));
   EXPECT_EQ(back.restarts(), 1);
-  EXPECT_NE(back.lastRestart().find("time restarted at utime 1700000000040000"), std::string::npos) << back.lastRestart();
+  EXPECT_NE(back.lastRestart().find("time restarted at utime 1700000000040000"), std::string::npos)
+      << back.lastRestart();
   EXPECT_FALSE(back.admit(kT0 + 3 * kStep, opt)) << "the new timeline goes on";
   // Ahead: a clock set forward by an hour.
   UtimeOrder ahead;

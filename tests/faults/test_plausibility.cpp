@@ -28,7 +28,8 @@ TEST(PoseStreamCheck, OneImplausiblePoseIsRefusedAndTheStreamGoesOn) {
     const auto why = c.admit(kT0 + k * kStep - kStep / 2, bad_x, 1.0, 0.1, opt);
     ASSERT_TRUE(why);
     EXPECT_NE(why->find(bad_x > opt.max_coordinate_m ? "outside the workspace" : "faster than max_speed_mps"),
-              std::string::npos) << *why;
+              std::string::npos)
+        << *why;
     for (; k < 100; ++k) EXPECT_FALSE(c.admit(kT0 + k * kStep, xAt(k), 1.0, 0.1, opt)) << "good pose " << k;
     EXPECT_EQ(c.jumpsTaken(), 0);
     EXPECT_EQ(c.strays(), bad_x > opt.max_coordinate_m ? 0 : 1);

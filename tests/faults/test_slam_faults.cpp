@@ -83,8 +83,8 @@ void feed(SlamDriver& d, Fed& fed, int64_t t0, int64_t t1, int64_t& oseq, int64_
 TEST(SlamTimeFaults, OneStrayStampOnEitherStreamIsRefusedAndResetsNothing) {
   for (const bool live_waits : {false, true}) {
     for (const bool on_frames : {false, true}) {
-      for (const int64_t offset : {int64_t{100'000'000}, int64_t{1'000'000'000'000}, int64_t{-30'000'000},
-                                   int64_t{10'000'000}}) {
+      for (const int64_t offset :
+           {int64_t{100'000'000}, int64_t{1'000'000'000'000}, int64_t{-30'000'000}, int64_t{10'000'000}}) {
         SCOPED_TRACE(std::string(on_frames ? "OMNI_FEATURES" : "ODOMETRY") + " offset " + std::to_string(offset) +
                      (live_waits ? " live waits" : ""));
         SlamProcessOptions o;

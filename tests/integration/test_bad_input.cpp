@@ -45,9 +45,7 @@ std::string worldWith(const std::string& from, const std::string& to) {
 
 /// Listens on the bus and keeps the latest status and message counts per channel.
 struct Listener {
-  explicit Listener(const std::string& url) : lcm(url) {
-    lcm.subscribeFunction(".*", &Listener::onAny, this);
-  }
+  explicit Listener(const std::string& url) : lcm(url) { lcm.subscribeFunction(".*", &Listener::onAny, this); }
   static void onAny(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Listener* self) {
     ++self->counts[channel];
     if (channel == channels::kProcessStatus) {
@@ -216,7 +214,8 @@ TEST(BadConfig, MalformedWorldFileStopsEveryProcessNamingTheKey) {
       const auto r = t::run(cmd, 10.0);
       EXPECT_EQ(r.exit_code, 2) << cmd[0] << " with " << c.to << ":\n" << r.output;
       EXPECT_NE(r.output.find(c.must_name), std::string::npos)
-          << cmd[0] << " with '" << c.to << "' must name " << c.must_name << ", said:\n" << r.output;
+          << cmd[0] << " with '" << c.to << "' must name " << c.must_name << ", said:\n"
+          << r.output;
       EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << "one clear line:\n" << r.output;
     }
   }
@@ -307,21 +306,24 @@ TEST(BadConfig, MalformedWheelCsvNamesFileAndLine) {
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,abc,0.0\n", ":3: non-numeric"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1\n", ":3: expected 3 columns"},
       // A trailing comma is a fourth, empty column.
-      {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1,0.0,\n", ":3: expected 3 columns (utime,v_mps,omega_radps), got 4"},
+      {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1,0.0,\n",
+       ":3: expected 3 columns (utime,v_mps,omega_radps), got 4"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0,5\n", ":2: expected 3 columns"},
       // Finite but beyond any robot: the integrated pose became infinite.
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n2000,1e308,0.0\n", ":3: v_mps must be in [-100, 100]"},
       {"utime,v_mps,omega_radps\n1000,0.1,-100.5\n", ":2: v_mps must be in [-100, 100] and omega_radps in [-100, 100]"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n1000,0.1,0.0\n", ":3: utime 1000 does not increase"},
       {"utime,v_mps,omega_radps\n1000,nan,0.0\n", ":2: non-finite"},
-      {"utime,v_mps,omega_radps\n-5000000,0.1,0.0\n-4000000,0.1,0.0\n", ":2: utime -5000000 outside 0..4000000000000000"},
+      {"utime,v_mps,omega_radps\n-5000000,0.1,0.0\n-4000000,0.1,0.0\n",
+       ":2: utime -5000000 outside 0..4000000000000000"},
       {"utime,v_mps,omega_radps\n1000,0.1,0.0\n9223372036854775807,0.1,0.0\n", ":3: utime 9223372036854775807 outside"},
   };
   // A UTF-8 byte-order mark before the header is not an error (the header check quoted it).
   {
     const std::string path = dir.file("bom.csv");
     writeFile(path, "\xEF\xBB\xBFutime,v_mps,omega_radps\n1000,0.1,0.0\n2000,0.1,0.0\n");
-    const auto r = t::run({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", path, "--url", "memq://"}, 10.0);
+    const auto r =
+        t::run({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", path, "--url", "memq://"}, 10.0);
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("2 wheel samples"), std::string::npos) << r.output;
   }
@@ -329,14 +331,16 @@ TEST(BadConfig, MalformedWheelCsvNamesFileAndLine) {
   {
     const std::string path = dir.file("cr.csv");
     writeFile(path, "utime,v_mps,omega_radps\r1000,0.1,0.0\r2000,0.1,0.0\r\n3000,0.1,0.0\r");
-    const auto r = t::run({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", path, "--url", "memq://"}, 10.0);
+    const auto r =
+        t::run({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", path, "--url", "memq://"}, 10.0);
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("3 wheel samples"), std::string::npos) << r.output;
   }
   for (const auto& c : cases) {
     const std::string path = dir.file("wheels.csv");
     writeFile(path, c.text);
-    const auto r = t::run({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", path, "--url", "memq://"}, 10.0);
+    const auto r =
+        t::run({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", path, "--url", "memq://"}, 10.0);
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find(c.must_say), std::string::npos) << "must say '" << c.must_say << "', said:\n" << r.output;
     EXPECT_NE(r.output.find("wheels.csv"), std::string::npos) << r.output;

@@ -73,7 +73,8 @@ TEST(Calibrate, BadInputIsRefusedWithAMessage) {
     std::string expect;
   };
   const std::vector<Case> cases = {
-      {{"--images", few, "--square-m", "1", "--out", out}, "--corners COLSxROWS (inner corners) or --squares COLSxROWS"},
+      {{"--images", few, "--square-m", "1", "--out", out},
+       "--corners COLSxROWS (inner corners) or --squares COLSxROWS"},
       {{"--images", few, "--corners", "6x9", "--squares", "7x10", "--square-m", "1", "--out", out}, "excludes"},
       {{"--images", few, "--corners", "6by9", "--square-m", "1", "--out", out}, "'6by9' is not COLSxROWS"},
       {{"--images", few, "--corners", "1x9", "--square-m", "1", "--out", out}, "must be in [2, 100]"},

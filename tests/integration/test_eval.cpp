@@ -71,8 +71,9 @@ void makeLogs(const std::string& slam_path, const std::string& truth_path, bool 
     const double c = std::cos(0.2), s = std::sin(0.2);
     return Eigen::Vector3d(c * p.x() - s * p.y() + 0.3, s * p.x() + c * p.y() - 0.4, p.z());
   };
-  slam.write(2, channels::kSlamMap, mapOf({toSlam(lights[0]), toSlam(lights[1] + Eigen::Vector3d(0.5, 0, 0)), toSlam(lights[0] + Eigen::Vector3d(0, 0.3, 0)),
-               toSlam({40, 40, 6.5})}));
+  slam.write(2, channels::kSlamMap,
+             mapOf({toSlam(lights[0]), toSlam(lights[1] + Eigen::Vector3d(0.5, 0, 0)),
+                    toSlam(lights[0] + Eigen::Vector3d(0, 0.3, 0)), toSlam({40, 40, 6.5})}));
   if (extra) extra(slam);
 }
 
@@ -145,10 +146,11 @@ TEST(Eval, ARunCutInTheMiddleOfTheSlamOutputIsIncomplete) {
   cutSlamOutput(dir.file("run.lcm"), dir.file("cut.lcm"), 6'000'000);
   const auto cut = t::run({t::binPath("omnislam-eval"), dir.file("cut.lcm"), "--json", "--no-tum"}, 30);
   EXPECT_EQ(cut.exit_code, 3) << cut.output;
-  EXPECT_NE(cut.output.find("omnislam-eval: INCOMPLETE RUN: the SLAM answered 6 of 11 frames (54.5 % < --min-answered "
-                            "90.0 %); its poses cover 50.0 % of the frames' span of 10.00 s (< --min-span 90.0 %): they "
-                            "start 0.00 s after it and end 5.00 s before it"),
-            std::string::npos)
+  EXPECT_NE(
+      cut.output.find("omnislam-eval: INCOMPLETE RUN: the SLAM answered 6 of 11 frames (54.5 % < --min-answered "
+                      "90.0 %); its poses cover 50.0 % of the frames' span of 10.00 s (< --min-span 90.0 %): they "
+                      "start 0.00 s after it and end 5.00 s before it"),
+      std::string::npos)
       << cut.output;
   EXPECT_NE(cut.output.find("\"complete\": false"), std::string::npos) << cut.output;
   EXPECT_EQ(jsonNumber(cut.output, "frames"), 11) << cut.output;
@@ -232,12 +234,14 @@ TEST(Eval, NoComparedPoseIsAnErrorNotAZeroAte) {
   {
     lcmio::LogWriter log(dir.file("after.lcm"));
     for (int k = 0; k < 10; ++k) log.write(k, channels::kSlamPose, t::makePose(1'000'000 + k * 100'000, k, 0, 0));
-    for (int k = 0; k < 10; ++k) log.write(k, channels::kGroundTruthPose, t::makePose(5'000'000 + k * 100'000, k, 0, 0));
+    for (int k = 0; k < 10; ++k)
+      log.write(k, channels::kGroundTruthPose, t::makePose(5'000'000 + k * 100'000, k, 0, 0));
   }
   {
     lcmio::LogWriter log(dir.file("sparse.lcm"));
     for (int k = 0; k < 10; ++k) log.write(k, channels::kSlamPose, t::makePose(1'050'000 + k * 500'000, k, 0, 0));
-    for (int k = 0; k < 10; ++k) log.write(k, channels::kGroundTruthPose, t::makePose(1'000'000 + k * 500'000, k, 0, 0));
+    for (int k = 0; k < 10; ++k)
+      log.write(k, channels::kGroundTruthPose, t::makePose(1'000'000 + k * 500'000, k, 0, 0));
   }
   for (const char* name : {"after.lcm", "sparse.lcm"})
     for (const bool align : {false, true}) {
@@ -408,7 +412,8 @@ TEST(Eval, LandmarkMatchingSolvesGroupsAndRefusesOneTooLarge) {
 TEST(Eval, WithoutFramesThePosesAreCheckedAgainstTheTruthsSpan) {
   t::TempDir dir;
   writeLine(dir.file("half.lcm"), [](lcmio::LogWriter& log) {
-    for (int k = 11; k <= 20; ++k) log.write(0, channels::kGroundTruthPose, t::makePose(1'000'000 + k * 100'000, k, 0, 0));
+    for (int k = 11; k <= 20; ++k)
+      log.write(0, channels::kGroundTruthPose, t::makePose(1'000'000 + k * 100'000, k, 0, 0));
   });
   const auto r = t::run({t::binPath("omnislam-eval"), dir.file("half.lcm"), "--json", "--no-tum"}, 30);
   EXPECT_EQ(r.exit_code, 3) << r.output;

@@ -69,7 +69,8 @@ TEST(GenWorld, SameSeedSameBytesAndTheLogDecodesInUtimeOrder) {
   EXPECT_EQ(count[channels::kGroundTruthPose], count[channels::kOdometry]);
   EXPECT_EQ(count[channels::kOmniFeatures], count[channels::kGroundTruthFeatureLabels]);
   const std::string info = t::readFile(d.file("a.json"));
-  EXPECT_NE(info.find("\"frames\": " + std::to_string(count[channels::kOmniFeatures]) + ","), std::string::npos) << info;
+  EXPECT_NE(info.find("\"frames\": " + std::to_string(count[channels::kOmniFeatures]) + ","), std::string::npos)
+      << info;
   EXPECT_GT(count[channels::kOmniFeatures], 100);
   EXPECT_GT(count[channels::kGroundTruthMap], 0);
 

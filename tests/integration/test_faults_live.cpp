@@ -63,28 +63,37 @@ TEST(FaultsLive, StrayStampsAndImplausibleTruthAreRefusedCountedAndChangeNothing
   // not multiples of 50, so that no fault lands on an image's time.
   t::TempDir dir;
   const std::string log = dir.file("faults.lcm"), url = t::privateUdpUrl(48);
-  std::vector<std::string> argv{t::binPath("omnislam-launch"), t::sourcePath("config/launch/sports_hall_slam.yaml"),
-                                "--url", url, "--log-file", log};
+  std::vector<std::string> argv{t::binPath("omnislam-launch"),
+                                t::sourcePath("config/launch/sports_hall_slam.yaml"),
+                                "--url",
+                                url,
+                                "--log-file",
+                                log};
   for (const auto& s : kSets) argv.insert(argv.end(), {"--set", s});
   t::Child launch(argv);
   struct Fault {
     std::string channel, skip;
     std::vector<std::string> args;
   };
-  const std::vector<Fault> faults{
-      {"ODOMETRY", "1010", {"--utime-offset-s", "100"}},       {"ODOMETRY", "2510", {"--utime-offset-s", "1e6"}},
-      {"ODOMETRY", "4010", {"--utime-offset-s", "-30"}},       {"OMNI_IMAGE", "30", {"--utime-offset-s", "100"}},
-      {"OMNI_IMAGE", "60", {"--utime-offset-s", "1e6"}},       {"OMNI_IMAGE", "90", {"--utime-offset-s", "-30"}},
-      {"OMNI_FEATURES", "40", {"--utime-offset-s", "100"}},    {"OMNI_FEATURES", "70", {"--utime-offset-s", "1e6"}},
-      {"OMNI_FEATURES", "100", {"--utime-offset-s", "-30"}},   {"GROUND_TRUTH_POSE", "1510", {"--utime-offset-s", "100"}},
-      {"GROUND_TRUTH_POSE", "3010", {"--utime-offset-s", "1e6"}}, {"GROUND_TRUTH_POSE", "4510", {"--utime-offset-s", "-30"}},
-      {"GROUND_TRUTH_POSE", "5510", {"--set", "x=1e300", "--utime-offset-s", "0.5"}},
-      {"GROUND_TRUTH_POSE", "6010", {"--set", "x=nan"}},
-      {"GROUND_TRUTH_POSE", "6510", {"--set", "x=1e6", "--utime-offset-s", "0.5"}}};
+  const std::vector<Fault> faults{{"ODOMETRY", "1010", {"--utime-offset-s", "100"}},
+                                  {"ODOMETRY", "2510", {"--utime-offset-s", "1e6"}},
+                                  {"ODOMETRY", "4010", {"--utime-offset-s", "-30"}},
+                                  {"OMNI_IMAGE", "30", {"--utime-offset-s", "100"}},
+                                  {"OMNI_IMAGE", "60", {"--utime-offset-s", "1e6"}},
+                                  {"OMNI_IMAGE", "90", {"--utime-offset-s", "-30"}},
+                                  {"OMNI_FEATURES", "40", {"--utime-offset-s", "100"}},
+                                  {"OMNI_FEATURES", "70", {"--utime-offset-s", "1e6"}},
+                                  {"OMNI_FEATURES", "100", {"--utime-offset-s", "-30"}},
+                                  {"GROUND_TRUTH_POSE", "1510", {"--utime-offset-s", "100"}},
+                                  {"GROUND_TRUTH_POSE", "3010", {"--utime-offset-s", "1e6"}},
+                                  {"GROUND_TRUTH_POSE", "4510", {"--utime-offset-s", "-30"}},
+                                  {"GROUND_TRUTH_POSE", "5510", {"--set", "x=1e300", "--utime-offset-s", "0.5"}},
+                                  {"GROUND_TRUTH_POSE", "6010", {"--set", "x=nan"}},
+                                  {"GROUND_TRUTH_POSE", "6510", {"--set", "x=1e6", "--utime-offset-s", "0.5"}}};
   std::vector<std::unique_ptr<t::Child>> injectors;
   for (const Fault& f : faults) {
-    std::vector<std::string> a{t::binPath("omnislam-inject"), "--url", url, "--channel", f.channel, "--skip", f.skip,
-                               "--timeout-s", "90"};
+    std::vector<std::string> a{
+        t::binPath("omnislam-inject"), "--url", url, "--channel", f.channel, "--skip", f.skip, "--timeout-s", "90"};
     a.insert(a.end(), f.args.begin(), f.args.end());
     injectors.push_back(std::make_unique<t::Child>(a));
   }

@@ -46,9 +46,9 @@ constexpr double kDurationS = 60.0;
 class FeaturesPipeline : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    run_ = std::make_unique<t::LaunchedRun>("config/launch/sports_hall_features.yaml", 11,
-                                            std::vector<std::string>{"duration=" + std::to_string(kDurationS),
-                                                                     "speedup=20", "seed=5"});
+    run_ = std::make_unique<t::LaunchedRun>(
+        "config/launch/sports_hall_features.yaml", 11,
+        std::vector<std::string>{"duration=" + std::to_string(kDurationS), "speedup=20", "seed=5"});
     log_ = run_->log;
   }
   static void TearDownTestSuite() { run_.reset(); }
@@ -114,7 +114,8 @@ TEST_F(FeaturesPipeline, PublishedBearingsMatchTheTruth) {
       double best = 1e9;
       const feature_t* bf = nullptr;
       for (const auto& x : f.features) {
-        const double ang = std::acos(std::clamp(unitOf({x.azimuth_rad, x.elevation_rad}).dot(d_R.normalized()), -1.0, 1.0));
+        const double ang =
+            std::acos(std::clamp(unitOf({x.azimuth_rad, x.elevation_rad}).dot(d_R.normalized()), -1.0, 1.0));
         if (ang < best) best = ang, bf = &x;
       }
       if (!bf || best > deg2rad(1.0)) continue;
@@ -216,11 +217,13 @@ TEST(FeaturesProcess, BadImagesAreCountedAndSkipped) {
 // and a CSV of the features.
 TEST(FeaturesProcess, OfflineRunOnTheVmrImagesWritesAnnotatedImages) {
   const std::string vmr = t::datasetPath("omni-images/ocamcalib-vmr");
-  if (!std::filesystem::exists(vmr + "/VMRImage0.jpg")) GTEST_SKIP() << "VMR images not found in " << vmr << "; skipped";
+  if (!std::filesystem::exists(vmr + "/VMRImage0.jpg"))
+    GTEST_SKIP() << "VMR images not found in " << vmr << "; skipped";
   t::TempDir out;
-  const auto r = t::run({t::binPath("omnislam-features"), "--config", t::sourcePath("config/features/vertical_lines.yaml"),
-                         "--images", vmr, "--annotate", out.path()},
-                        60.0);
+  const auto r =
+      t::run({t::binPath("omnislam-features"), "--config", t::sourcePath("config/features/vertical_lines.yaml"),
+              "--images", vmr, "--annotate", out.path()},
+             60.0);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("10 images processed, 0 skipped"), std::string::npos) << r.output;
   for (int i = 0; i < 10; ++i)
@@ -277,16 +280,20 @@ TEST(FeaturesProcess, BadConfigStopsWithExitCodeTwoNamingTheKey) {
     std::string yaml, key;
   };
   const std::vector<Case> cases = {
-      {"detector: ceiling_lights\ncamera: {model: world, world: " + world + "}\nceiling_lights: {threshold_grey: 300}\n",
+      {"detector: ceiling_lights\ncamera: {model: world, world: " + world +
+           "}\nceiling_lights: {threshold_grey: 300}\n",
        "ceiling_lights.threshold_grey"},
       {"detector: ceiling_lights\ncamera: {model: world, world: " + world + "}\nceiling_lights: {sigma_floor: 1}\n",
        "sigma_floor"},
       // A key of the former fixed-threshold detector: named, with what replaced it.
-      {"detector: ceiling_lights\ncamera: {model: world, world: " + world + "}\nceiling_lights: {background_grey: 12}\n",
+      {"detector: ceiling_lights\ncamera: {model: world, world: " + world +
+           "}\nceiling_lights: {background_grey: 12}\n",
        "key 'ceiling_lights.background_grey' was removed: the background is now measured around each blob"},
-      {"detector: ceiling_lights\ncamera: {model: world, world: " + world + "}\nceiling_lights: {noise_sigma_grey: fast}\n",
+      {"detector: ceiling_lights\ncamera: {model: world, world: " + world +
+           "}\nceiling_lights: {noise_sigma_grey: fast}\n",
        "ceiling_lights.noise_sigma_grey"},
-      {"detector: ceiling_lights\ncamera: {model: world, world: " + world + "}\nceiling_lights: {background_window_px: 30}\n",
+      {"detector: ceiling_lights\ncamera: {model: world, world: " + world +
+           "}\nceiling_lights: {background_window_px: 30}\n",
        "ceiling_lights.background_window_px"},
       {"detector: edges\ncamera: {model: world, world: " + world + "}\n", "detector"},
       {"detector: vertical_lines\ncamera: {model: centre_only, width_px: 640, height_px: 480, mounting: {z_m: 1}}\n"
@@ -294,7 +301,8 @@ TEST(FeaturesProcess, BadConfigStopsWithExitCodeTwoNamingTheKey) {
        "vertical_lines.r_max_px"},
       // A panorama of 400 million pixels: refused at start, not an allocation of gigabytes.
       {"detector: vertical_lines\ncamera: {model: centre_only, width_px: 640, height_px: 480, mounting: {z_m: 1}}\n"
-       "vertical_lines: {centre_u_px: 320, centre_v_px: 240, r_min_px: 50, r_max_px: 200, columns: 20000, rows: 20000}\n",
+       "vertical_lines: {centre_u_px: 320, centre_v_px: 240, r_min_px: 50, r_max_px: 200, columns: 20000, rows: "
+       "20000}\n",
        "key 'vertical_lines.rows': rows x (columns + 2 pad_columns) = 20000 x 20048 = 400960000 pixels, more than "
        "16777216"},
       // The rows follow the radii when not given: the radius is named.

@@ -45,14 +45,14 @@ TEST(FullDisk, TheRecorderSaysSoAtOnceTheRunStopsAndTheLossIsCountedExactly) {
   std::ofstream(launch) << "name: fulldisk\nstop_grace_s: 2\ndrain_s: 0.5\nprocesses:\n"
                         << "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '60', --period, '0.02']}\n";
   t::Child launcher({t::binPath("omnislam-launch"), launch, "--log-file", log, "--url", t::privateUdpUrl(36)});
-  ASSERT_TRUE(launcher.waitForOutput("[record] WRITE FAILED, recording stopped: writing LCM log '" + log +
-                                         "' failed: No space left on device",
-                                     40))
+  ASSERT_TRUE(launcher.waitForOutput(
+      "[record] WRITE FAILED, recording stopped: writing LCM log '" + log + "' failed: No space left on device", 40))
       << launcher.output();
   const auto failed_seen = std::chrono::steady_clock::now();
-  ASSERT_TRUE(launcher.waitForOutput("omnislam-record died (exit code 1): the run is not being recorded; stopping it "
-                                     "now, without the drain",
-                                     5))
+  ASSERT_TRUE(
+      launcher.waitForOutput("omnislam-record died (exit code 1): the run is not being recorded; stopping it "
+                             "now, without the drain",
+                             5))
       << launcher.output();
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - failed_seen).count(), 1.0)
       << launcher.output();

@@ -30,7 +30,8 @@ TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
   // process lagged. The test checks the pipeline and the paper's figures, not how fast a loaded
   // machine runs it.
   const std::string stall_s = "250";
-  t::LaunchedRun run("config/launch/sports_hall_slam.yaml", 13, {"speedup=25", "odometry_only_after_s=" + stall_s, "seed=2", "slam_seed=2"}, 180.0);
+  t::LaunchedRun run("config/launch/sports_hall_slam.yaml", 13,
+                     {"speedup=25", "odometry_only_after_s=" + stall_s, "seed=2", "slam_seed=2"}, 180.0);
   ASSERT_EQ(run.result.exit_code, 0) << run.result.output;
   EXPECT_EQ(run.result.output.find("died"), std::string::npos) << run.result.output;
   const size_t num_frames = t::expectEveryFrameAnswered(run.log);
@@ -59,11 +60,11 @@ TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
   const std::string cfg = t::sourcePath("config/slam/sports_hall.yaml");
   const std::string out1 = run.dir.file("replay1.lcm"), out2 = run.dir.file("replay2.lcm");
   for (const auto& out : {out1, out2}) {
-    const auto r = t::run({t::binPath("omnislam-slam"), "--config", cfg, "--seed", "2", "--replay", run.log, "--out", out,
-                           "--no-progress", "--set", "output.odometry_only_after_s=" + stall_s, "--set",
-                           "pairing.max_wait_s=" + stall_s, "--set", "pairing.odometry_buffer_s=" + stall_s, "--set",
-                           "pairing.max_pending_frames=1000"},
-                          120);
+    const auto r = t::run(
+        {t::binPath("omnislam-slam"), "--config", cfg, "--seed", "2", "--replay", run.log, "--out", out,
+         "--no-progress", "--set", "output.odometry_only_after_s=" + stall_s, "--set", "pairing.max_wait_s=" + stall_s,
+         "--set", "pairing.odometry_buffer_s=" + stall_s, "--set", "pairing.max_pending_frames=1000"},
+        120);
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
   const auto outputs = [](const std::string& log) {

@@ -136,10 +136,12 @@ TEST(HostileImages, BombsAreRefusedOfflineWithoutDecodingThem) {
   EXPECT_NE(bombs.output.find("20 images processed, 20 skipped (0 corrupt or truncated)"), std::string::npos)
       << bombs.output;
   for (int i = 0; i < kBombs; ++i)
-    EXPECT_NE(bombs.output.find("bomb" + seq2(i) + ".png: 8192x8192, 1 channel, 16-bit PNG: would decode into "
+    EXPECT_NE(bombs.output.find("bomb" + seq2(i) +
+                                ".png: 8192x8192, 1 channel, 16-bit PNG: would decode into "
                                 "134217728 bytes, beyond the limit of 67108864; skipped"),
               std::string::npos)
-        << i << "\n" << bombs.output;
+        << i << "\n"
+        << bombs.output;
   std::cout << "offline, 20 frames: peak " << base.peak_mb << " MB, CPU " << base.cpu_s << " s; with 20 bombs: peak "
             << bombs.peak_mb << " MB, CPU " << bombs.cpu_s << " s (the bombs: +" << bombs.cpu_s - base.cpu_s
             << " s CPU)\n";

@@ -88,13 +88,17 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
   } clock;
   bus.subscribe(channels::kOdometry, &Clock::onOdometry, &clock);
   const auto simSeconds = [&] { return clock.first < 0 ? -1.0 : (clock.last - clock.first) * 1e-6; };
-  ASSERT_TRUE(t::handleUntil(bus, [&] { return simSeconds() >= 230.0; }, 120.0)) << sim.output();
+  ASSERT_TRUE(t::handleUntil(
+      bus, [&] { return simSeconds() >= 230.0; }, 120.0))
+      << sim.output();
   features->signal(SIGKILL);
   features->wait(5);
-  ASSERT_TRUE(t::handleUntil(bus, [&] { return simSeconds() >= 240.0; }, 60.0));
+  ASSERT_TRUE(t::handleUntil(
+      bus, [&] { return simSeconds() >= 240.0; }, 60.0));
   features = std::make_unique<t::Child>(
       std::vector<std::string>{t::binPath("omnislam-features"), "--config", feat_a, "--url", url});
-  ASSERT_TRUE(t::handleUntil(bus, [&] { return simSeconds() >= 280.0; }, 60.0));
+  ASSERT_TRUE(t::handleUntil(
+      bus, [&] { return simSeconds() >= 280.0; }, 60.0));
   // Swap: the second configuration starts, then the first one stops.
   t::Child features_b({t::binPath("omnislam-features"), "--config", feat_b, "--url", url, "--name", "features_b"});
   struct Status {
@@ -104,7 +108,9 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
     }
   } status;
   bus.subscribe(channels::kProcessStatus, &Status::onStatus, &status);
-  ASSERT_TRUE(t::handleUntil(bus, [&] { return status.b_running; }, 30.0)) << features_b.output();
+  ASSERT_TRUE(t::handleUntil(
+      bus, [&] { return status.b_running; }, 30.0))
+      << features_b.output();
   features->signal(SIGINT);
   const auto fa = features->wait(10);
   EXPECT_EQ(fa.exit_code, 0) << fa.output;
@@ -200,10 +206,10 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
       prev = *p;
     }
   });
-  std::cout << "odometry-only poses in the outage: " << odo_only_in_gap << ", frames answered after it: "
-            << frames_after << ", odometry-only onsets: " << onsets << ", largest gap between SLAM_POSEs: "
-            << max_silence_us * 1e-6 << " s, largest frame latency at an onset: " << max_latency_us * 1e-6
-            << " s of simulated time\n";
+  std::cout << "odometry-only poses in the outage: " << odo_only_in_gap
+            << ", frames answered after it: " << frames_after << ", odometry-only onsets: " << onsets
+            << ", largest gap between SLAM_POSEs: " << max_silence_us * 1e-6
+            << " s, largest frame latency at an onset: " << max_latency_us * 1e-6 << " s of simulated time\n";
   ASSERT_GT(n_poses, 250u);
   EXPECT_GE(onsets, 1) << "the outage starts odometry-only poses";
   // From 3 s after the last frame (233 s + its latency) to the restarted process's first frame
@@ -318,10 +324,10 @@ TEST(KillSwap, SlamCarriesOnThroughAKilledAndASwappedFeaturesProcess) {
   for (const auto& e : std::filesystem::directory_iterator(dir.path()))
     EXPECT_EQ(e.path().string().find(".tmp."), std::string::npos) << e.path();
   const std::string out = dir.file("localise.lcm");
-  const auto loc = t::run({t::binPath("omnislam-slam"), "--config", t::sourcePath("config/slam/sports_hall.yaml"),
-                           "--seed", "4", "--replay", log, "--out", out, "--load-map", map, "--localise",
-                           "--no-progress"},
-                          120);
+  const auto loc =
+      t::run({t::binPath("omnislam-slam"), "--config", t::sourcePath("config/slam/sports_hall.yaml"), "--seed", "4",
+              "--replay", log, "--out", out, "--load-map", map, "--localise", "--no-progress"},
+             120);
   ASSERT_EQ(loc.exit_code, 0) << loc.output;
   const auto loc_maps = lcmio::readChannel<map_t>(out, channels::kSlamMap);
   ASSERT_GE(loc_maps.size(), 10u) << loc.output;

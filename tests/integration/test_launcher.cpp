@@ -46,7 +46,9 @@ TEST(Launcher, ReportsAProcessThatDiesAndStopsTheOthers) {
                                "  - {name: sleeper, cmd: [sleep, '60']}\n"
                                "  - {name: crasher, cmd: [sh, -c, 'echo about to fail; sleep 0.3; exit 3']}\n");
   t::RunResult r;
-  const double s = secondsOf([&] { r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 30); });
+  const double s = secondsOf([&] {
+    r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 30);
+  });
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("crasher | about to fail"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("process crasher died: exit code 3"), std::string::npos) << r.output;
@@ -93,26 +95,27 @@ TEST(Launcher, SigintStopsEveryProcessCleanly) {
 
 TEST(Launcher, RecordsTheBusWithLcmLoggerOrOmnislamRecord) {
   for (const std::string tool : {"lcm-logger", "omnislam-record"}) {
-  t::TempDir dir;
-  const std::string path = dir.file("launch.yaml");
-  std::ofstream(path) << "name: unit\nlogger: {tool: " << tool << "}\nprocesses:\n"
-                      << "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '1.5', --period, '0.1'], ends_run: true}\n";
-  const std::string log = dir.file("rec.lcm");
-  const auto r = t::run({t::binPath("omnislam-launch"), path, "--log-file", log, "--url", t::privateUdpUrl(4)}, 30);
-  EXPECT_NE(r.output.find("(" + tool + ")"), std::string::npos) << r.output;
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  ASSERT_TRUE(std::filesystem::exists(log)) << r.output;
-  const auto stat = t::run({t::binPath("omnislam-logstat"), log}, 10);
-  // The sample publisher covers every channel of the contract, each decodable by its type.
-  namespace ch = omnislam::channels;
-  for (const char* c : {ch::kOmniImage, ch::kOmniFeatures, ch::kOdometry, ch::kSlamPose, ch::kSlamMap,
-                        ch::kSlamParticles, ch::kSlamAssociations, ch::kGroundTruthPose, ch::kGroundTruthMap,
-                        ch::kProcessStatus, ch::kGroundTruthFeatureLabels}) {
-    const std::vector<std::string> row = t::wordsOfLine(stat.output, c);  // channel type messages gaps bad ...
-    ASSERT_GE(row.size(), 5u) << c << " not recorded: " << stat.output;
-    EXPECT_NE(row[1], "?") << c;
-    EXPECT_EQ(row[4], "0") << c << ": undecodable events";
-  }
+    t::TempDir dir;
+    const std::string path = dir.file("launch.yaml");
+    std::ofstream(path)
+        << "name: unit\nlogger: {tool: " << tool << "}\nprocesses:\n"
+        << "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '1.5', --period, '0.1'], ends_run: true}\n";
+    const std::string log = dir.file("rec.lcm");
+    const auto r = t::run({t::binPath("omnislam-launch"), path, "--log-file", log, "--url", t::privateUdpUrl(4)}, 30);
+    EXPECT_NE(r.output.find("(" + tool + ")"), std::string::npos) << r.output;
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    ASSERT_TRUE(std::filesystem::exists(log)) << r.output;
+    const auto stat = t::run({t::binPath("omnislam-logstat"), log}, 10);
+    // The sample publisher covers every channel of the contract, each decodable by its type.
+    namespace ch = omnislam::channels;
+    for (const char* c : {ch::kOmniImage, ch::kOmniFeatures, ch::kOdometry, ch::kSlamPose, ch::kSlamMap,
+                          ch::kSlamParticles, ch::kSlamAssociations, ch::kGroundTruthPose, ch::kGroundTruthMap,
+                          ch::kProcessStatus, ch::kGroundTruthFeatureLabels}) {
+      const std::vector<std::string> row = t::wordsOfLine(stat.output, c);  // channel type messages gaps bad ...
+      ASSERT_GE(row.size(), 5u) << c << " not recorded: " << stat.output;
+      EXPECT_NE(row[1], "?") << c;
+      EXPECT_EQ(row[4], "0") << c << ": undecodable events";
+    }
   }
 }
 
@@ -123,7 +126,8 @@ TEST(Launcher, TheDrainWaitsUntilTheBusIsQuiet) {
   const auto launch = [](const t::TempDir& dir, const std::string& drain, const std::string& duration,
                          const std::string& scenario = "exit 0") {
     const std::string path = dir.file("launch.yaml");
-    std::ofstream(path) << "name: unit\nstop_grace_s: 5\n" << drain << "processes:\n"
+    std::ofstream(path) << "name: unit\nstop_grace_s: 5\n"
+                        << drain << "processes:\n"
                         << "  - {name: scenario, cmd: [sh, -c, '" << scenario << "'], ends_run: true}\n"
                         << "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '" << duration
                         << "', --period, '0.05']}\n";
@@ -206,7 +210,8 @@ TEST(Launcher, SigintDuringTheDrainStopsTheRunAndKeepsTheRecording) {
   EXPECT_GT(at, r.output.find("stopping: scenario finished")) << r.output;
   const long rounds = std::stol(r.output.substr(at + 10));
   EXPECT_GT(rounds, 1) << r.output;
-  const std::vector<std::string> row = t::wordsOfLine(t::run({t::binPath("omnislam-logstat"), log}, 10).output, "SLAM_POSE");
+  const std::vector<std::string> row =
+      t::wordsOfLine(t::run({t::binPath("omnislam-logstat"), log}, 10).output, "SLAM_POSE");
   ASSERT_GE(row.size(), 3u) << "no SLAM_POSE in the recording";
   EXPECT_EQ(row[2], std::to_string(rounds)) << "SLAM_POSE messages recorded against rounds published";
 }
@@ -236,7 +241,8 @@ TEST(Launcher, ARequiredProcessDyingDuringTheDrainEndsItAtOnce) {
   EXPECT_EQ(r.output.find("ended badly while stopping"), std::string::npos) << "reported twice\n" << r.output;
   EXPECT_NE(r.output.find("done with errors"), std::string::npos) << r.output;
   // The others were stopped in order and the recording closed.
-  const std::vector<std::string> row = t::wordsOfLine(t::run({t::binPath("omnislam-logstat"), log}, 10).output, "SLAM_POSE");
+  const std::vector<std::string> row =
+      t::wordsOfLine(t::run({t::binPath("omnislam-logstat"), log}, 10).output, "SLAM_POSE");
   EXPECT_GE(row.size(), 3u) << "no SLAM_POSE in the recording";
 }
 
@@ -252,8 +258,8 @@ TEST(Launcher, AChildThatFloodsItsOutputDoesNotWedgeTheLauncher) {
   const std::string out = dir.file("out.txt");
   t::RunResult r;
   const double s = secondsOf([&] {
-    r = t::run({"sh", "-c", "exec \"$0\" \"$@\" > " + out + " 2>&1", t::binPath("omnislam-launch"), file,
-                "--no-log", "--url", "memq://"},
+    r = t::run({"sh", "-c", "exec \"$0\" \"$@\" > " + out + " 2>&1", t::binPath("omnislam-launch"), file, "--no-log",
+                "--url", "memq://"},
                15);
   });
   EXPECT_FALSE(r.timed_out) << "the launcher did not end";
@@ -269,16 +275,16 @@ TEST(Launcher, AChildThatFloodsItsOutputDoesNotWedgeTheLauncher) {
 // by as much): a line is printed once it reaches 64 KiB, saying that it was cut.
 TEST(Launcher, ALineWithoutNewlineIsCutAt64KiB) {
   t::TempDir dir;
-  const auto file = launchFile(dir,
-                               "  - {name: w, cmd: [sh, -c, 'head -c 150000 /dev/zero | tr \"\\\\000\" x; echo; echo next'],"
-                               " ends_run: true}\n");
+  const auto file =
+      launchFile(dir,
+                 "  - {name: w, cmd: [sh, -c, 'head -c 150000 /dev/zero | tr \"\\\\000\" x; echo; echo next'],"
+                 " ends_run: true}\n");
   const auto r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 15);
   EXPECT_EQ(r.exit_code, 0) << r.output.substr(0, 2000);
   // 150000 bytes: two pieces of 65536 with the note, then the rest as the line.
   const std::string piece = "w      | " + std::string(65536, 'x') + " [cut: line longer than 65536 bytes]\n";
   const std::string rest = "w      | " + std::string(150000 - 2 * 65536, 'x') + "\n";
-  EXPECT_NE(r.output.find(piece + piece + rest + "w      | next\n"), std::string::npos)
-      << r.output.substr(0, 2000);
+  EXPECT_NE(r.output.find(piece + piece + rest + "w      | next\n"), std::string::npos) << r.output.substr(0, 2000);
 }
 
 // The launcher prefixes its own lines with 'launch' and the recorder's with 'logger': a process of
@@ -286,7 +292,8 @@ TEST(Launcher, ALineWithoutNewlineIsCutAt64KiB) {
 TEST(Launcher, AProcessMayNotTakeTheLaunchersOrTheRecordersName) {
   t::TempDir dir;
   for (const std::string name : {"logger", "launch"}) {
-    const auto file = launchFile(dir, "  - {name: a, cmd: [sleep, '1']}\n  - {name: " + name + ", cmd: [sleep, '1']}\n");
+    const auto file =
+        launchFile(dir, "  - {name: a, cmd: [sleep, '1']}\n  - {name: " + name + ", cmd: [sleep, '1']}\n");
     const auto r = t::run({t::binPath("omnislam-launch"), file, "--no-log"}, 10);
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find("processes[1].name' '" + name + "' is reserved"), std::string::npos) << r.output;
@@ -341,8 +348,7 @@ TEST(Launcher, StoppingAProcessStopsTheProcessesItStarted) {
   }
   EXPECT_EQ(r.output.find("fg       | after"), std::string::npos) << r.output;
   // The background sleep ignores SIGINT: killed after the grace, which makes the run fail.
-  EXPECT_NE(r.output.find("processes bg started did not stop within 2 s: killing them"), std::string::npos)
-      << r.output;
+  EXPECT_NE(r.output.find("processes bg started did not stop within 2 s: killing them"), std::string::npos) << r.output;
   EXPECT_EQ(r.exit_code, 1) << r.output;
 }
 
@@ -403,7 +409,8 @@ TEST(Launcher, TheLoggerGetsTimeToCloseTheRecordingWhateverStopGraceSays) {
   omnislam::lcmio::forEachEvent(log, [&](const omnislam::lcmio::LogEvent&) { ++in_file; });
   EXPECT_GT(in_file, 0);
   EXPECT_NE(r.output.find("[record] " + std::to_string(in_file) + " events"), std::string::npos)
-      << in_file << " events in the file\n" << r.output;
+      << in_file << " events in the file\n"
+      << r.output;
 }
 
 TEST(Launcher, BadLaunchFilesNameTheKey) {
@@ -449,8 +456,9 @@ TEST(Launcher, ADeadRecorderStopsTheRunAtOnceWithoutTheDrain) {
 TEST(Launcher, AMissingProgramStopsTheRunBeforeAnythingStarts) {
   t::TempDir dir;
   const std::string marker = dir.file("started");
-  const auto file = launchFile(dir, "  - {name: first, cmd: [sh, -c, 'touch " + marker + "; sleep 5']}\n"
-                                    "  - {name: typo, cmd: [omnislam-featurez, --config, x.yaml]}\n");
+  const auto file = launchFile(dir, "  - {name: first, cmd: [sh, -c, 'touch " + marker +
+                                        "; sleep 5']}\n"
+                                        "  - {name: typo, cmd: [omnislam-featurez, --config, x.yaml]}\n");
   const auto r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 20);
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("process 'typo': program 'omnislam-featurez' not found"), std::string::npos) << r.output;
@@ -474,9 +482,8 @@ TEST(Launcher, ARecorderThatFailsToStartStopsTheRunBeforeAnythingStarts) {
     const std::string path = dir.file("launch.yaml");
     std::ofstream(path) << "name: unit\nlogger: {tool: " << tool << "}\nprocesses:\n"
                         << "  - {name: w, cmd: [sh, -c, 'echo working; sleep 1'], ends_run: true}\n";
-    const auto r = t::run({t::binPath("omnislam-launch"), path, "--log-file", "/proc/nope.lcm", "--url",
-                           t::privateUdpUrl(41)},
-                          30);
+    const auto r = t::run(
+        {t::binPath("omnislam-launch"), path, "--log-file", "/proc/nope.lcm", "--url", t::privateUdpUrl(41)}, 30);
     EXPECT_EQ(r.exit_code, 1) << tool << "\n" << r.output;
     EXPECT_NE(r.output.find("ended before it started recording"), std::string::npos) << tool << "\n" << r.output;
     EXPECT_EQ(r.output.find("started w"), std::string::npos) << tool << "\n" << r.output;
@@ -511,8 +518,9 @@ TEST(Launcher, AStopWhileWaitingForTheRecorderStartsNothing) {
 TEST(Launcher, VariablesResolveAtAnyDepthAndACycleIsRefused) {
   t::TempDir dir;
   const std::string nested = dir.file("nested.yaml");
-  std::ofstream(nested) << "name: unit\nstop_grace_s: 2\ndrain_s: 0.2\nvariables:\n  a: \"${b}/x\"\n"
-                        << "  b: \"${config_dir}/y\"\nprocesses:\n  - {name: e, cmd: [echo, 'arg=${a}'], ends_run: true}\n";
+  std::ofstream(nested)
+      << "name: unit\nstop_grace_s: 2\ndrain_s: 0.2\nvariables:\n  a: \"${b}/x\"\n"
+      << "  b: \"${config_dir}/y\"\nprocesses:\n  - {name: e, cmd: [echo, 'arg=${a}'], ends_run: true}\n";
   auto r = t::run({t::binPath("omnislam-launch"), nested, "--no-log"}, 20);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("arg=" + std::filesystem::path(dir.path()).lexically_normal().string() + "/y/x"),

@@ -160,7 +160,8 @@ TEST(Logstat, SpansAreNeverNegativeAndOddChannelNamesKeepTheirRows) {
   EXPECT_NE(row.find("       2 "), std::string::npos) << row;  // its message count
   EXPECT_NE(r.output.find("ODOMETRY\\x00X"), std::string::npos) << r.output;
   size_t odometry_rows = 0;
-  for (size_t p = r.output.find("\nODOMETRY "); p != std::string::npos; p = r.output.find("\nODOMETRY ", p + 1)) ++odometry_rows;
+  for (size_t p = r.output.find("\nODOMETRY "); p != std::string::npos; p = r.output.find("\nODOMETRY ", p + 1))
+    ++odometry_rows;
   EXPECT_EQ(odometry_rows, 1u) << r.output;
 }
 
@@ -183,14 +184,18 @@ TEST(Logstat, SeveralPartsAreOneRecordingAndTheGapBetweenThemIsCounted) {
   {
     lcmio::LogWriter log(part1);
     for (int64_t seq = 0; seq < 10; ++seq) log.write(5'000'000 + seq * 20'000, channels::kOdometry, odometry(seq));
-    log.write(5'200'000, channels::kProcessStatus, status("odometry", 0, process_status_t::STATE_RUNNING, 1, 0, "", ""));
-    log.write(5'200'000, channels::kProcessStatus, status("features", 4, process_status_t::STATE_RUNNING, 1, 0, "", ""));
+    log.write(5'200'000, channels::kProcessStatus,
+              status("odometry", 0, process_status_t::STATE_RUNNING, 1, 0, "", ""));
+    log.write(5'200'000, channels::kProcessStatus,
+              status("features", 4, process_status_t::STATE_RUNNING, 1, 0, "", ""));
   }
   {
     lcmio::LogWriter log(part2);  // seqs 10..16 lost; odometry's status 1 and 2 lost; features restarted
-    log.write(5'540'000, channels::kProcessStatus, status("features", 0, process_status_t::STATE_RUNNING, 1, 0, "", ""));
+    log.write(5'540'000, channels::kProcessStatus,
+              status("features", 0, process_status_t::STATE_RUNNING, 1, 0, "", ""));
     for (int64_t seq = 17; seq < 20; ++seq) log.write(5'000'000 + seq * 20'000, channels::kOdometry, odometry(seq));
-    log.write(6'000'000, channels::kProcessStatus, status("odometry", 3, process_status_t::STATE_RUNNING, 1, 0, "", ""));
+    log.write(6'000'000, channels::kProcessStatus,
+              status("odometry", 3, process_status_t::STATE_RUNNING, 1, 0, "", ""));
   }
   const auto r = t::run({t::binPath("omnislam-logstat"), part1, part2}, 10);
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -199,9 +204,10 @@ TEST(Logstat, SeveralPartsAreOneRecordingAndTheGapBetweenThemIsCounted) {
   ASSERT_GE(row.size(), 4u) << r.output;
   EXPECT_EQ(row[2], "13") << r.output;
   EXPECT_EQ(row[3], "7") << r.output;
-  EXPECT_NE(r.output.find("gap between " + part1 + " and " + part2 +
-                          ": 0.340 s unrecorded by the recorders' clocks; 9 messages lost by seq: ODOMETRY 7 PROCESS_STATUS 2; "
-                          "seq restarted across it (a publisher restarted, its losses there are not counted): PROCESS_STATUS"),
+  EXPECT_NE(r.output.find(
+                "gap between " + part1 + " and " + part2 +
+                ": 0.340 s unrecorded by the recorders' clocks; 9 messages lost by seq: ODOMETRY 7 PROCESS_STATUS 2; "
+                "seq restarted across it (a publisher restarted, its losses there are not counted): PROCESS_STATUS"),
             std::string::npos)
       << r.output;
   // One file alone: no gap line, and the same table as before.

@@ -129,7 +129,8 @@ TEST(MutationFlood, EveryProcessStaysUpCountsWhatItRefusesAndStopsCleanly) {
     argv.insert(argv.end(), {"--url", url});
     procs.push_back({name, std::make_unique<t::Child>(argv)});
   };
-  start("features", {t::binPath("omnislam-features"), "--config", t::sourcePath("config/features/ceiling_lights.yaml")});
+  start("features",
+        {t::binPath("omnislam-features"), "--config", t::sourcePath("config/features/ceiling_lights.yaml")});
   start("lines", {t::binPath("omnislam-features"), "--config", t::sourcePath("config/features/room_lines.yaml"),
                   "--name", "lines"});
   start("slam", {t::binPath("omnislam-slam"), "--config", t::sourcePath("config/slam/sports_hall.yaml"), "--save-map",
@@ -178,7 +179,9 @@ TEST(MutationFlood, EveryProcessStaysUpCountsWhatItRefusesAndStopsCleanly) {
     bus.publish(m.channel, m.bytes.data(), static_cast<unsigned>(m.bytes.size()));
     std::this_thread::sleep_for(std::chrono::microseconds(2000));
   }
-  ASSERT_TRUE(t::handleUntil(bus, [&] { return slam_poses > 0; }, 10.0)) << "the SLAM process answered no frame";
+  ASSERT_TRUE(t::handleUntil(
+      bus, [&] { return slam_poses > 0; }, 10.0))
+      << "the SLAM process answered no frame";
 
   // The flood: 4000 messages, 60 % the recording in order (so the processes have a real state to
   // corrupt), 40 % drawn at random; each message mutated (or not) as above. Images are paced.
@@ -189,7 +192,7 @@ TEST(MutationFlood, EveryProcessStaysUpCountsWhatItRefusesAndStopsCleanly) {
     // Every 20th message an image or a status, which the recording holds few of (1 Hz), so that the
     // features processes and the simulator (a status listener) get their share of damage.
     const std::vector<size_t>& rare = k % 40 == 0 ? images : statuses;
-    const Message& m = k % 20 == 0 ? source[rare[mut.below(rare.size())]]
+    const Message& m = k % 20 == 0        ? source[rare[mut.below(rare.size())]]
                        : mut.unit() < 0.6 ? source[in_order++ % source.size()]
                                           : source[mut.below(source.size())];
     std::string kind;
@@ -224,7 +227,8 @@ TEST(MutationFlood, EveryProcessStaysUpCountsWhatItRefusesAndStopsCleanly) {
     EXPECT_EQ(r.output.find("fatal"), std::string::npos) << p.name << ":\n" << r.output;
   }
   const std::string slam_out = procs[2].child->output();
-  EXPECT_TRUE(std::filesystem::exists(dir.file("map.yaml"))) << slam_out.substr(slam_out.size() > 3000 ? slam_out.size() - 3000 : 0);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("map.yaml")))
+      << slam_out.substr(slam_out.size() > 3000 ? slam_out.size() - 3000 : 0);
   EXPECT_TRUE(std::filesystem::exists(dir.file("view/final.png")));
 }
 

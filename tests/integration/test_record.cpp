@@ -42,7 +42,8 @@ TEST(Record, StopsSoonAfterSigintWhileTheBusStaysBusy) {
   lcmio::forEachEvent(path, [&](const lcmio::LogEvent&) { ++in_file; });
   EXPECT_GT(in_file, 0);
   EXPECT_NE(r.output.find("[record] " + std::to_string(in_file) + " events"), std::string::npos)
-      << in_file << " events in the file; said:\n" << r.output;
+      << in_file << " events in the file; said:\n"
+      << r.output;
 }
 
 // A recorder killed with SIGKILL (a launcher's last resort, the OOM killer, a crash) cannot flush

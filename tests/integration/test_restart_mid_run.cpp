@@ -31,7 +31,7 @@ using omnislam::testing::jsonNumber;
 namespace {
 
 struct KilledRun {
-  t::RunResult result;   ///< the launcher's
+  t::RunResult result;       ///< the launcher's
   double killed_at_s = 0.0;  ///< simulated time of the kill
 };
 
@@ -58,7 +58,8 @@ KilledRun killMidRun(const std::string& process, int port_offset, const std::str
   } clock;
   bus.subscribe(channels::kOdometry, &Clock::onOdometry, &clock);
   const auto simSeconds = [&] { return clock.first < 0 ? -1.0 : (clock.last - clock.first) * 1e-6; };
-  EXPECT_TRUE(t::handleUntil(bus, [&] { return simSeconds() >= 160.0 || !launcher.alive(); }, 120.0))
+  EXPECT_TRUE(t::handleUntil(
+      bus, [&] { return simSeconds() >= 160.0 || !launcher.alive(); }, 120.0))
       << launcher.output();
   EXPECT_TRUE(launcher.alive()) << launcher.output();
   std::smatch m;
@@ -69,8 +70,8 @@ KilledRun killMidRun(const std::string& process, int port_offset, const std::str
   }
   EXPECT_EQ(kill(static_cast<pid_t>(std::stol(m[1])), SIGKILL), 0);
   out.killed_at_s = simSeconds();
-  EXPECT_TRUE(launcher.waitForOutput(
-      "process " + process + " died: killed by signal 9 (SIGKILL, Killed); restart 1 of 5", 5))
+  EXPECT_TRUE(
+      launcher.waitForOutput("process " + process + " died: killed by signal 9 (SIGKILL, Killed); restart 1 of 5", 5))
       << launcher.output();
   out.result = launcher.wait(150);
   EXPECT_FALSE(out.result.timed_out) << out.result.output;
@@ -99,8 +100,8 @@ TEST(RestartFeatures, AFeaturesProcessKilledMidRunIsRestartedAndTheRunMeetsItsBa
     images += ev.channel == channels::kOmniImage;
     frames += ev.channel == channels::kOmniFeatures;
   });
-  std::cout << "features killed at " << run.killed_at_s << " s of simulated time; " << frames
-            << " feature frames for " << images << " images (the rest published while no features process ran)\n";
+  std::cout << "features killed at " << run.killed_at_s << " s of simulated time; " << frames << " feature frames for "
+            << images << " images (the rest published while no features process ran)\n";
   EXPECT_GT(frames, images / 2);
   expectBars(log);
 }
@@ -116,8 +117,8 @@ TEST(RestartSlam, ASlamProcessKilledMidRunResumesFromItsCheckpointAndTheRunMeets
     frames += ev.channel == channels::kOmniFeatures;
     poses += ev.channel == channels::kSlamPose;
   });
-  std::cout << "SLAM killed at " << run.killed_at_s << " s of simulated time; " << poses << " SLAM poses for "
-            << frames << " feature frames\n";
+  std::cout << "SLAM killed at " << run.killed_at_s << " s of simulated time; " << poses << " SLAM poses for " << frames
+            << " feature frames\n";
   expectBars(log);
 }
 

@@ -30,9 +30,9 @@ constexpr double kDurationS = 100.0;  // covers the first 18 m straight and the 
 class SimPipeline : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    run_ = std::make_unique<t::LaunchedRun>("config/launch/sports_hall.yaml", 1,
-                                            std::vector<std::string>{"duration=" + std::to_string(kDurationS),
-                                                                     "speedup=25", "seed=7"});
+    run_ = std::make_unique<t::LaunchedRun>(
+        "config/launch/sports_hall.yaml", 1,
+        std::vector<std::string>{"duration=" + std::to_string(kDurationS), "speedup=25", "seed=7"});
     log_ = run_->log;
   }
   static void TearDownTestSuite() { run_.reset(); }

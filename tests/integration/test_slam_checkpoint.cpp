@@ -36,9 +36,25 @@ namespace fs = std::filesystem;
 namespace {
 
 std::vector<std::string> replayArgs(const std::string& log, const std::string& out, const std::string& ckpt) {
-  return {t::binPath("omnislam-slam"), "--config", t::sourcePath("config/slam/sports_hall.yaml"), "--seed", "1",
-          "--replay", log, "--out", out, "--no-progress", "--checkpoint", ckpt, "--checkpoint-interval", "5",
-          "--set", "pairing.max_wait_s=15", "--set", "pairing.odometry_buffer_s=15", "--set",
+  return {t::binPath("omnislam-slam"),
+          "--config",
+          t::sourcePath("config/slam/sports_hall.yaml"),
+          "--seed",
+          "1",
+          "--replay",
+          log,
+          "--out",
+          out,
+          "--no-progress",
+          "--checkpoint",
+          ckpt,
+          "--checkpoint-interval",
+          "5",
+          "--set",
+          "pairing.max_wait_s=15",
+          "--set",
+          "pairing.odometry_buffer_s=15",
+          "--set",
           "pairing.max_pending_frames=1000"};
 }
 
@@ -100,8 +116,9 @@ TEST(SlamCheckpoint, ReplayInterruptedAndResumedWritesTheTailOfTheUninterruptedO
     const auto r = t::run(replayArgs(hallFixture(), out, ckpt), 120);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     std::smatch m;
-    ASSERT_TRUE(std::regex_search(r.output, m, std::regex("resumed from checkpoint .*: utime ([0-9]+), ([0-9]+) frames "
-                                                          "processed, 10 particles, ([0-9]+) landmarks")))
+    ASSERT_TRUE(std::regex_search(r.output, m,
+                                  std::regex("resumed from checkpoint .*: utime ([0-9]+), ([0-9]+) frames "
+                                             "processed, 10 particles, ([0-9]+) landmarks")))
         << r.output;
     const std::size_t frames_before = std::stoul(m[2]);
     std::cout << (sig == SIGKILL ? "killed" : "stopped") << " after " << frames_before << " of 151 frames\n";
@@ -110,7 +127,8 @@ TEST(SlamCheckpoint, ReplayInterruptedAndResumedWritesTheTailOfTheUninterruptedO
     const Split got = split(out);
     EXPECT_TRUE(got.inputs == want.inputs) << "every input event is copied, also those before the checkpoint";
     ASSERT_EQ(got.outputs.size(), want.outputs.size() - 4 * frames_before);
-    EXPECT_TRUE(std::equal(got.outputs.begin(), got.outputs.end(), want.outputs.end() - static_cast<long>(got.outputs.size())))
+    EXPECT_TRUE(
+        std::equal(got.outputs.begin(), got.outputs.end(), want.outputs.end() - static_cast<long>(got.outputs.size())))
         << "the resumed replay's outputs differ from the uninterrupted replay's";
     EXPECT_FALSE(fs::exists(ckpt));
   }
@@ -145,7 +163,10 @@ TEST(SlamCheckpoint, UnusableCheckpointsStopTheProgramAtStartWithTheReason) {
       {write("text", {'h', 'e', 'l', 'l', 'o', '\n'}), "truncated", {}, hallFixture()},
       {write("magic", std::vector<uint8_t>(bytes.size(), 'x')), "wrong magic", {}, hallFixture()},
       {write("version", version), "format version 7, this program reads version 1", {}, hallFixture()},
-      {write("particles", bytes), "written with other options: 'filter: particles=10 ", {"--particles", "20"}, hallFixture()},
+      {write("particles", bytes),
+       "written with other options: 'filter: particles=10 ",
+       {"--particles", "20"},
+       hallFixture()},
       {write("otherlog", bytes), "of another log", {}, t::sourcePath("tests/data/regression/room.lcm")},
   };
   for (const Case& c : cases) {
@@ -169,11 +190,25 @@ TEST(SlamCheckpoint, LiveSlamKilledMidRunResumesAndTheRunMeetsItsBars) {
   const std::string log = dir.file("run.lcm"), ckpt = dir.file("slam.ckpt");
   // 10 s of wall time at 25x before a stalled input counts as dead (as it_test_full_system).
   const std::string stall_s = "250";
-  const std::vector<std::string> slam_argv{
-      t::binPath("omnislam-slam"), "--config", t::sourcePath("config/slam/sports_hall.yaml"), "--seed", "2", "--url", url,
-      "--checkpoint", ckpt, "--checkpoint-interval", "10", "--set", "output.odometry_only_after_s=" + stall_s, "--set",
-      "pairing.max_wait_s=" + stall_s, "--set", "pairing.odometry_buffer_s=" + stall_s, "--set",
-      "pairing.max_pending_frames=1000"};
+  const std::vector<std::string> slam_argv{t::binPath("omnislam-slam"),
+                                           "--config",
+                                           t::sourcePath("config/slam/sports_hall.yaml"),
+                                           "--seed",
+                                           "2",
+                                           "--url",
+                                           url,
+                                           "--checkpoint",
+                                           ckpt,
+                                           "--checkpoint-interval",
+                                           "10",
+                                           "--set",
+                                           "output.odometry_only_after_s=" + stall_s,
+                                           "--set",
+                                           "pairing.max_wait_s=" + stall_s,
+                                           "--set",
+                                           "pairing.odometry_buffer_s=" + stall_s,
+                                           "--set",
+                                           "pairing.max_pending_frames=1000"};
   t::Child rec({t::binPath("omnislam-record"), "-f", log, "--url", url});
   t::Child cap({t::binPath("omnislam-capture"), "--source", "sim", "--world", world, "--seed", "2", "--url", url});
   t::Child odo({t::binPath("omnislam-odometry"), "--source", "sim", "--world", world, "--seed", "2", "--url", url});
@@ -197,7 +232,8 @@ TEST(SlamCheckpoint, LiveSlamKilledMidRunResumesAndTheRunMeetsItsBars) {
   } seen;
   bus.subscribe(channels::kOdometry, &Seen::onOdometry, &seen);
   bus.subscribe(channels::kSlamPose, &Seen::onPose, &seen);
-  ASSERT_TRUE(t::handleUntil(bus, [&] { return seen.first >= 0 && (seen.last - seen.first) * 1e-6 >= 150.0; }, 120.0))
+  ASSERT_TRUE(t::handleUntil(
+      bus, [&] { return seen.first >= 0 && (seen.last - seen.first) * 1e-6 >= 150.0; }, 120.0))
       << sim.output();
   ASSERT_TRUE(fs::exists(ckpt)) << slam->output();
   slam->signal(SIGKILL);
@@ -219,7 +255,8 @@ TEST(SlamCheckpoint, LiveSlamKilledMidRunResumesAndTheRunMeetsItsBars) {
   // At most one checkpoint interval of the filter's steps lost: the state resumed is within 10 s of
   // data of the last pose the killed process had published.
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(sr.output, m, std::regex("resumed from checkpoint .*: utime ([0-9]+), ([0-9]+) frames")))
+  ASSERT_TRUE(
+      std::regex_search(sr.output, m, std::regex("resumed from checkpoint .*: utime ([0-9]+), ([0-9]+) frames")))
       << sr.output;
   const int64_t resumed_utime = std::stoll(m[1]);
   std::cout << "killed at " << (last_pose_before_kill - seen.first) * 1e-6 << " s (last pose), resumed at "

@@ -45,11 +45,11 @@ namespace {
 
 const std::string kWorld = t::sourcePath("config/worlds/sports_hall.yaml");
 const std::string kConfig = t::sourcePath("config/slam/sports_hall.yaml");
-constexpr double kDuration_s = 209.0;             // loop 1 of the world file: the whole hall, back at the start
-constexpr int64_t kOdoPeriod_us = 20'000;         // 50 Hz
-constexpr int64_t kFramePeriod_us = 1'000'000;    // 1 Hz
-constexpr int64_t kFeatureLatency_us = 150'000;   // features are logged after the odometry around them
-const Eigen::Vector3d kCam_m(0.0, 0.0, 1.8);      // optical centre in the robot frame
+constexpr double kDuration_s = 209.0;            // loop 1 of the world file: the whole hall, back at the start
+constexpr int64_t kOdoPeriod_us = 20'000;        // 50 Hz
+constexpr int64_t kFramePeriod_us = 1'000'000;   // 1 Hz
+constexpr int64_t kFeatureLatency_us = 150'000;  // features are logged after the odometry around them
+const Eigen::Vector3d kCam_m(0.0, 0.0, 1.8);     // optical centre in the robot frame
 
 std::vector<Eigen::Vector3d> hallLights() {
   std::vector<Eigen::Vector3d> out;
@@ -170,14 +170,14 @@ TEST(SlamReplay, SameSeedGivesByteIdenticalOutputAndBoundedPoseError) {
   writeLog(in, events);
 
   const auto t_start = std::chrono::steady_clock::now();
-  const auto r1 = t::run({t::binPath("omnislam-slam"), "--replay", in, "--out", dir.file("out1.lcm"), "--config",
-                          kConfig, "--seed", "5"},
-                         60.0);
+  const auto r1 = t::run(
+      {t::binPath("omnislam-slam"), "--replay", in, "--out", dir.file("out1.lcm"), "--config", kConfig, "--seed", "5"},
+      60.0);
   const double replay_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   ASSERT_EQ(r1.exit_code, 0) << r1.output;
-  const auto r2 = t::run({t::binPath("omnislam-slam"), "--replay", in, "--out", dir.file("out2.lcm"), "--config",
-                          kConfig, "--seed", "5"},
-                         60.0);
+  const auto r2 = t::run(
+      {t::binPath("omnislam-slam"), "--replay", in, "--out", dir.file("out2.lcm"), "--config", kConfig, "--seed", "5"},
+      60.0);
   ASSERT_EQ(r2.exit_code, 0) << r2.output;
   const std::string b1 = t::readFile(dir.file("out1.lcm")), b2 = t::readFile(dir.file("out2.lcm"));
   ASSERT_FALSE(b1.empty());
@@ -249,9 +249,8 @@ TEST(SlamReplay, SameSeedGivesByteIdenticalOutputAndBoundedPoseError) {
   }
   std::cout << "[ replay   ] " << frames << " frames: pose error max " << max_err << " m, final " << final_err
             << " m (dead reckoning max " << max_dr_err << " m, final " << syn.dead_reckoning_final_error_m
-            << " m), heading error max "
-            << max_theta_err << " rad; map " << final_map.num_landmarks << " landmarks, " << matched
-            << "/16 lights within 1 m, mean error " << (matched ? map_err_sum / matched : 0.0) << " m\n";
+            << " m), heading error max " << max_theta_err << " rad; map " << final_map.num_landmarks << " landmarks, "
+            << matched << "/16 lights within 1 m, mean error " << (matched ? map_err_sum / matched : 0.0) << " m\n";
   // Bearings carry no scale: far from the start the pose inherits the scale of the map built from
   // the first metres' odometry (docs/design/slam-core.md); back at the start the error is small again.
   EXPECT_LT(max_err, 0.8);
@@ -263,9 +262,9 @@ TEST(SlamReplay, SameSeedGivesByteIdenticalOutputAndBoundedPoseError) {
   EXPECT_LE(map_err_sum / std::max(matched, 1), 0.48);  // the paper's Table I mean map error
 
   // Another seed: still every frame answered, but different particles.
-  const auto r3 = t::run({t::binPath("omnislam-slam"), "--replay", in, "--out", dir.file("out3.lcm"), "--config",
-                          kConfig, "--seed", "6"},
-                         60.0);
+  const auto r3 = t::run(
+      {t::binPath("omnislam-slam"), "--replay", in, "--out", dir.file("out3.lcm"), "--config", kConfig, "--seed", "6"},
+      60.0);
   ASSERT_EQ(r3.exit_code, 0) << r3.output;
   EXPECT_NE(t::readFile(dir.file("out3.lcm")), b1);
 }
@@ -398,7 +397,8 @@ TEST(SlamReplay, BadConfigAndFlagsStopWithAMessageNamingTheKey) {
   EXPECT_EQ(std::filesystem::file_size(dir.file("in.lcm")), 9u);
   // An output that cannot be written is refused at start, not after the work (and the map lost at
   // exit): nothing is read, nothing is written.
-  for (const std::string& bad : std::vector<std::string>{"/proc/omnislam-no-such-folder/map.yaml", "/proc/map.yaml", dir.path()}) {
+  for (const std::string& bad :
+       std::vector<std::string>{"/proc/omnislam-no-such-folder/map.yaml", "/proc/map.yaml", dir.path()}) {
     r = t::run({t::binPath("omnislam-slam"), "--config", kConfig, "--replay", dir.file("in.lcm"), "--out",
                 dir.file("never.lcm"), "--save-map", bad},
                10.0);

@@ -32,7 +32,6 @@ struct Collector {
   std::vector<Msg> got;
 };
 
-
 TEST(CaptureDir, PublishesTheFolderInNameOrderAndSkipsUnreadableFiles) {
   t::TempDir dir;
   for (int i = 0; i < 3; ++i) {
@@ -43,9 +42,10 @@ TEST(CaptureDir, PublishesTheFolderInNameOrderAndSkipsUnreadableFiles) {
   const std::string url = t::privateUdpUrl(5);
   lcm::LCM lcm(url);
   Collector<image_t> images(lcm, channels::kOmniImage);
-  t::Child cap({t::binPath("omnislam-capture"), "--source", "dir", "--dir", dir.path(), "--rate-hz", "2",
-                "--speedup", "0", "--start-utime", "5000000", "--url", url, "--format", "png"});
-  t::handleUntil(lcm, [&] { return images.got.size() >= 3; }, 10.0);
+  t::Child cap({t::binPath("omnislam-capture"), "--source", "dir", "--dir", dir.path(), "--rate-hz", "2", "--speedup",
+                "0", "--start-utime", "5000000", "--url", url, "--format", "png"});
+  t::handleUntil(
+      lcm, [&] { return images.got.size() >= 3; }, 10.0);
   const auto r = cap.wait(10.0);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   ASSERT_EQ(images.got.size(), 3u) << r.output;
@@ -82,7 +82,8 @@ TEST(OdometryCsv, IntegratesRecordedWheelData) {
   Collector<odometry_t> odo(lcm, channels::kOdometry);
   t::Child p({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", dir.file("wheels.csv"), "--speedup", "20",
               "--url", url});
-  t::handleUntil(lcm, [&] { return static_cast<int>(odo.got.size()) >= n; }, 10.0);
+  t::handleUntil(
+      lcm, [&] { return static_cast<int>(odo.got.size()) >= n; }, 10.0);
   const auto r = p.wait(10.0);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   ASSERT_EQ(static_cast<int>(odo.got.size()), n) << r.output;
@@ -126,10 +127,13 @@ TEST(CaptureDir, AlphaIsDroppedARefusedImageIsNotPublishedAndTheLastStatusTellsT
     Collector<process_status_t> status(lcm, channels::kProcessStatus);
     t::Child cap({t::binPath("omnislam-capture"), "--source", "dir", "--dir", dir.path(), "--speedup", "0",
                   "--start-utime", "1000000", "--url", url, "--format", "bgr"});
-    t::handleUntil(lcm, [&] {
-      const auto* st = lastStatusOf(status.got, "capture");
-      return st && st->state == process_status_t::STATE_FINISHED;
-    }, 10.0);
+    t::handleUntil(
+        lcm,
+        [&] {
+          const auto* st = lastStatusOf(status.got, "capture");
+          return st && st->state == process_status_t::STATE_FINISHED;
+        },
+        10.0);
     const auto r = cap.wait(10.0);
     EXPECT_EQ(r.exit_code, 0) << r.output;
     ASSERT_EQ(images.got.size(), 4u) << r.output;
@@ -156,9 +160,10 @@ TEST(CaptureDir, AlphaIsDroppedARefusedImageIsNotPublishedAndTheLastStatusTellsT
     lcm::LCM lcm(url);
     Collector<image_t> images(lcm, channels::kOmniImage);
     Collector<process_status_t> status(lcm, channels::kProcessStatus);
-    t::Child cap({t::binPath("omnislam-capture"), "--source", "dir", "--dir", dir.path(), "--rate-hz", "1",
-                  "--speedup", "1e-300", "--start-utime", "1000000", "--url", url});
-    ASSERT_TRUE(t::handleUntil(lcm, [&] { return !images.got.empty(); }, 10.0));
+    t::Child cap({t::binPath("omnislam-capture"), "--source", "dir", "--dir", dir.path(), "--rate-hz", "1", "--speedup",
+                  "1e-300", "--start-utime", "1000000", "--url", url});
+    ASSERT_TRUE(t::handleUntil(
+        lcm, [&] { return !images.got.empty(); }, 10.0));
     t::handleFor(lcm, 1.0);
     EXPECT_EQ(images.got.size(), 1u) << "the second image is due in 1e300 s, not at once";
     cap.signal(SIGINT);
@@ -181,7 +186,8 @@ TEST(OdometryCsv, AStopPartWayIsNotReportedAsFinished) {
   Collector<process_status_t> status(lcm, channels::kProcessStatus);
   t::Child p({t::binPath("omnislam-odometry"), "--source", "csv", "--csv", dir.file("w.csv"), "--speedup", "1e-300",
               "--url", url});
-  ASSERT_TRUE(t::handleUntil(lcm, [&] { return !odo.got.empty(); }, 10.0));
+  ASSERT_TRUE(t::handleUntil(
+      lcm, [&] { return !odo.got.empty(); }, 10.0));
   t::handleFor(lcm, 0.5);
   EXPECT_EQ(odo.got.size(), 1u) << "the second row is due in 1e300 s";
   p.signal(SIGINT);
@@ -226,14 +232,18 @@ TEST(SimSources, ANewTruthTimelineIsANewRunForCaptureAndOdometry) {
   const std::string world = t::sourcePath("config/worlds/sports_hall.yaml");
   t::Child cap({t::binPath("omnislam-capture"), "--source", "sim", "--world", world, "--url", url});
   t::Child od({t::binPath("omnislam-odometry"), "--source", "sim", "--world", world, "--url", url});
-  ASSERT_TRUE(t::handleUntil(lcm, [&] {
-    bool c = false, o = false;
-    for (const auto& st : status.got) {
-      c = c || st.name == "capture";
-      o = o || st.name == "odometry";
-    }
-    return c && o;
-  }, 10.0)) << "both processes announce themselves once subscribed";
+  ASSERT_TRUE(t::handleUntil(
+      lcm,
+      [&] {
+        bool c = false, o = false;
+        for (const auto& st : status.got) {
+          c = c || st.name == "capture";
+          o = o || st.name == "odometry";
+        }
+        return c && o;
+      },
+      10.0))
+      << "both processes announce themselves once subscribed";
   constexpr int64_t kStart = 1'700'000'000'000'000;  // the world's start_utime
   int64_t seq = 0;
   const auto run = [&](int64_t n_samples) {  // 50 Hz truth along x at 0.27 m/s
@@ -248,13 +258,15 @@ TEST(SimSources, ANewTruthTimelineIsANewRunForCaptureAndOdometry) {
     }
   };
   run(301);  // 0..6 s: images at 0, 1, ..., 6 s
-  ASSERT_TRUE(t::handleUntil(lcm, [&] { return images.got.size() >= 7 && odo.got.size() >= 301; }, 10.0))
+  ASSERT_TRUE(t::handleUntil(
+      lcm, [&] { return images.got.size() >= 7 && odo.got.size() >= 301; }, 10.0))
       << images.got.size() << " images, " << odo.got.size() << " odometry";
   const size_t first_images = images.got.size(), first_odo = odo.got.size();
   // The same 6 s again (a step back of 5 s or more is a new timeline): the node takes it at its
   // third message.
   run(301);
-  t::handleUntil(lcm, [&] { return images.got.size() >= first_images + 7 && odo.got.size() >= first_odo + 299; }, 10.0);
+  t::handleUntil(
+      lcm, [&] { return images.got.size() >= first_images + 7 && odo.got.size() >= first_odo + 299; }, 10.0);
   cap.signal(SIGINT);
   od.signal(SIGINT);
   const auto rc = cap.wait(10.0), ro = od.wait(10.0);
@@ -282,9 +294,11 @@ TEST(SimSources, ANewTruthTimelineIsANewRunForCaptureAndOdometry) {
   ASSERT_TRUE(sc && so);
   EXPECT_EQ(sc->state, process_status_t::STATE_STOPPING);
   // (The node appends the new timeline it took on its input.)
-  EXPECT_EQ(sc->detail, "stopped after " + std::to_string(images.got.size()) + " images [inputs restarted: 0 seq, 1 utime]");
+  EXPECT_EQ(sc->detail,
+            "stopped after " + std::to_string(images.got.size()) + " images [inputs restarted: 0 seq, 1 utime]");
   EXPECT_EQ(so->state, process_status_t::STATE_STOPPING);
-  EXPECT_EQ(so->detail, "stopped after " + std::to_string(odo.got.size()) + " messages [inputs restarted: 0 seq, 1 utime]");
+  EXPECT_EQ(so->detail,
+            "stopped after " + std::to_string(odo.got.size()) + " messages [inputs restarted: 0 seq, 1 utime]");
 }
 
 }  // namespace

@@ -46,16 +46,18 @@ size_t count(const std::string& text, const std::string& what) {
 
 TEST(Supervise, AProcessKilledBySigkillIsRestartedAndTheRestartIsOnTheStatusChannel) {
   t::TempDir dir;
-  const auto file = launchFile(dir, "",
-                               "  - {name: victim, cmd: [sh, -c, 'echo up; exec sleep 60'], restart: on_failure}\n"
-                               "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '60', --period, '0.2']}\n");
+  const auto file =
+      launchFile(dir, "",
+                 "  - {name: victim, cmd: [sh, -c, 'echo up; exec sleep 60'], restart: on_failure}\n"
+                 "  - {name: samples, cmd: [omnislam-publish-samples, --duration, '60', --period, '0.2']}\n");
   const std::string log = dir.file("run.lcm");
   t::Child launcher({t::binPath("omnislam-launch"), file, "--log-file", log, "--url", t::privateUdpUrl(31)});
   ASSERT_TRUE(launcher.waitForOutput("victim  | up", 20)) << launcher.output();
   const pid_t victim = pidAfter(launcher.output(), "started victim");
   ASSERT_GT(victim, 0) << launcher.output();
   ASSERT_EQ(kill(victim, SIGKILL), 0);
-  const std::string line = "process victim died: killed by signal 9 (SIGKILL, Killed); restart 1 of 5 (within 60 s) in 0.5 s";
+  const std::string line =
+      "process victim died: killed by signal 9 (SIGKILL, Killed); restart 1 of 5 (within 60 s) in 0.5 s";
   const auto t0 = std::chrono::steady_clock::now();
   ASSERT_TRUE(launcher.waitForOutput(line, 5)) << launcher.output();
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0) << "said at once";
@@ -97,11 +99,18 @@ TEST(Supervise, ExhaustedRestartsStopARequiredProcesssRunAndLeaveAnOtherDead) {
   const auto r = t::run({t::binPath("omnislam-launch"), file, "--no-log", "--url", "memq://"}, 30);
   EXPECT_EQ(r.exit_code, 1) << r.output;
   // The doubling delay, then the limit.
-  EXPECT_NE(r.output.find("process crasher died: exit code 3; restart 1 of 3 (within 60 s) in 0.1 s"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("process crasher died: exit code 3; restart 2 of 3 (within 60 s) in 0.2 s"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("process crasher died: exit code 3; restart 3 of 3 (within 60 s) in 0.4 s"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("process crasher died: exit code 3; restart 1 of 3 (within 60 s) in 0.1 s"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("process crasher died: exit code 3; restart 2 of 3 (within 60 s) in 0.2 s"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("process crasher died: exit code 3; restart 3 of 3 (within 60 s) in 0.4 s"),
+            std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("process crasher died: exit code 3; restarts exhausted (3 within 60 s): stopping the run"),
-            std::string::npos) << r.output;
+            std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("stopping: crasher died, its restarts exhausted"), std::string::npos) << r.output;
   EXPECT_EQ(count(r.output, "crasher | up"), 4u) << r.output;
   EXPECT_NE(r.output.find("done with errors"), std::string::npos) << r.output;
@@ -113,7 +122,8 @@ TEST(Supervise, ExhaustedRestartsStopARequiredProcesssRunAndLeaveAnOtherDead) {
                                 "  - {name: scenario, cmd: [sleep, '2'], ends_run: true}\n");
   const auto r2 = t::run({t::binPath("omnislam-launch"), file2, "--no-log", "--url", "memq://"}, 30);
   EXPECT_EQ(r2.exit_code, 0) << r2.output;
-  EXPECT_NE(r2.output.find("restarts exhausted (2 within 60 s): not required, left dead"), std::string::npos) << r2.output;
+  EXPECT_NE(r2.output.find("restarts exhausted (2 within 60 s): not required, left dead"), std::string::npos)
+      << r2.output;
   EXPECT_NE(r2.output.find("stopping: scenario finished the scenario"), std::string::npos) << r2.output;
 }
 
@@ -126,7 +136,8 @@ TEST(Supervise, NeverIsTheDefaultAndAlwaysRestartsANormalExit) {
   ASSERT_EQ(kill(pidAfter(launcher.output(), "started victim"), SIGKILL), 0);
   const auto r = launcher.wait(20);
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find("process victim died: killed by signal 9 (SIGKILL, Killed)\n"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("process victim died: killed by signal 9 (SIGKILL, Killed)\n"), std::string::npos)
+      << r.output;
   EXPECT_EQ(r.output.find("restart"), std::string::npos) << r.output;
 
   // always: a normal exit is restarted, the end of the scenario is not; exhausted, it is left ended.
@@ -136,8 +147,11 @@ TEST(Supervise, NeverIsTheDefaultAndAlwaysRestartsANormalExit) {
                                 "  - {name: scenario, cmd: [sleep, '2'], ends_run: true, restart: always}\n");
   const auto r2 = t::run({t::binPath("omnislam-launch"), file2, "--no-log", "--url", "memq://"}, 30);
   EXPECT_EQ(r2.exit_code, 0) << r2.output;
-  EXPECT_NE(r2.output.find("ticker finished (exit code 0); restart 1 of 2 (within 60 s) in 0.05 s"), std::string::npos) << r2.output;
-  EXPECT_NE(r2.output.find("ticker finished (exit code 0); restarts exhausted (2 within 60 s): left ended"), std::string::npos) << r2.output;
+  EXPECT_NE(r2.output.find("ticker finished (exit code 0); restart 1 of 2 (within 60 s) in 0.05 s"), std::string::npos)
+      << r2.output;
+  EXPECT_NE(r2.output.find("ticker finished (exit code 0); restarts exhausted (2 within 60 s): left ended"),
+            std::string::npos)
+      << r2.output;
   EXPECT_EQ(count(r2.output, "ticker   | tick"), 3u) << r2.output;
   EXPECT_NE(r2.output.find("stopping: scenario finished the scenario"), std::string::npos) << r2.output;
   EXPECT_EQ(r2.output.find("scenario finished (exit code 0); restart"), std::string::npos) << r2.output;
@@ -172,8 +186,10 @@ TEST(Supervise, AKilledRecorderUnderStopStopsTheRunWithinASecond) {
   t::TempDir dir;
   RecorderKill run(dir, "stop", 32);
   ASSERT_TRUE(run.killRecorder()) << run.launcher.output();
-  ASSERT_TRUE(run.launcher.waitForOutput("omnislam-record died (killed by signal 9 (SIGKILL, Killed)): the run is not "
-                                         "being recorded; stopping it now, without the drain", 5))
+  ASSERT_TRUE(
+      run.launcher.waitForOutput("omnislam-record died (killed by signal 9 (SIGKILL, Killed)): the run is not "
+                                 "being recorded; stopping it now, without the drain",
+                                 5))
       << run.launcher.output();
   EXPECT_LT(run.sinceKill(), 1.0) << run.launcher.output();
   const auto r = run.launcher.wait(20);
@@ -184,50 +200,55 @@ TEST(Supervise, AKilledRecorderUnderStopStopsTheRunWithinASecond) {
 
 TEST(Supervise, AKilledRecorderUnderRestartGoesOnInASecondPartAndLogstatShowsTheGap) {
   for (const std::string tool : {"omnislam-record", "lcm-logger"}) {
-  SCOPED_TRACE(tool);
-  t::TempDir dir;
-  RecorderKill run(dir, "restart", 33, tool);
-  ASSERT_TRUE(run.killRecorder()) << run.launcher.output();
-  const std::string part2 = dir.file("run.part2.lcm");
-  ASSERT_TRUE(run.launcher.waitForOutput(tool + " died (killed by signal 9 (SIGKILL, Killed)): the run is not being recorded; "
-                                         "restarting it into " + part2 + " (restart 1 of 3)", 5))
-      << run.launcher.output();
-  EXPECT_LT(run.sinceKill(), 1.0) << run.launcher.output();
-  ASSERT_TRUE(run.launcher.waitForOutput("recording again into " + part2, 20)) << run.launcher.output();
-  const auto r = run.launcher.wait(40);
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("log: " + run.log + "\n"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("log: " + part2 + "\n"), std::string::npos) << r.output;
-  ASSERT_TRUE(std::filesystem::exists(part2));
+    SCOPED_TRACE(tool);
+    t::TempDir dir;
+    RecorderKill run(dir, "restart", 33, tool);
+    ASSERT_TRUE(run.killRecorder()) << run.launcher.output();
+    const std::string part2 = dir.file("run.part2.lcm");
+    ASSERT_TRUE(
+        run.launcher.waitForOutput(tool +
+                                       " died (killed by signal 9 (SIGKILL, Killed)): the run is not being recorded; "
+                                       "restarting it into " +
+                                       part2 + " (restart 1 of 3)",
+                                   5))
+        << run.launcher.output();
+    EXPECT_LT(run.sinceKill(), 1.0) << run.launcher.output();
+    ASSERT_TRUE(run.launcher.waitForOutput("recording again into " + part2, 20)) << run.launcher.output();
+    const auto r = run.launcher.wait(40);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("log: " + run.log + "\n"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("log: " + part2 + "\n"), std::string::npos) << r.output;
+    ASSERT_TRUE(std::filesystem::exists(part2));
 
-  // Every image the publisher sent is either in one of the parts or counted as lost by logstat,
-  // and the loss is said at the gap between the parts.
-  std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("published ([0-9]+) rounds"))) << r.output;
-  const long rounds = std::stol(m[1]);
-  const auto stat = t::run({t::binPath("omnislam-logstat"), run.log, part2}, 20);
-  ASSERT_EQ(stat.exit_code, 0) << stat.output;
-  const auto row = t::wordsOfLine(stat.output, channels::kOmniImage);  // channel type messages gaps ...
-  ASSERT_GE(row.size(), 4u) << stat.output;
-  const long recorded = std::stol(row[2]), lost = std::stol(row[3]);
-  if (tool == "omnislam-record") {
-    EXPECT_EQ(recorded + lost, rounds) << stat.output;
-  } else {
-    // lcm-logger 1.3.1 also loses the last messages of a run, with or without a kill (measured: 199
-    // of 204 images of this publisher without any fault): a loss after the last recorded message has
-    // no later seq to show it, so only the bound holds for it.
-    EXPECT_LE(recorded + lost, rounds) << stat.output;
-  }
-  // The gap line counts what every channel lost between the parts. A short gap may fall between two
-  // images (measured: 0.020 s, 9 messages of other channels lost, no image), so the loss is asserted
-  // over all channels, and the images lost there are bounded by the images lost in all.
-  ASSERT_TRUE(std::regex_search(stat.output, m, std::regex("gap between " + run.log + " and " + part2 +
-                                                           ": [0-9.]+ s unrecorded[^;\\n]*; ([0-9]+) messages lost by seq")))
-      << stat.output;
-  EXPECT_GT(std::stol(m[1]), 0) << "a SIGKILLed recorder loses at least the gap: " << stat.output;
-  if (std::regex_search(stat.output, m, std::regex("gap between [^\\n]* OMNI_IMAGE ([0-9]+)"))) {
-    EXPECT_LE(std::stol(m[1]), lost) << stat.output;
-  }
+    // Every image the publisher sent is either in one of the parts or counted as lost by logstat,
+    // and the loss is said at the gap between the parts.
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(r.output, m, std::regex("published ([0-9]+) rounds"))) << r.output;
+    const long rounds = std::stol(m[1]);
+    const auto stat = t::run({t::binPath("omnislam-logstat"), run.log, part2}, 20);
+    ASSERT_EQ(stat.exit_code, 0) << stat.output;
+    const auto row = t::wordsOfLine(stat.output, channels::kOmniImage);  // channel type messages gaps ...
+    ASSERT_GE(row.size(), 4u) << stat.output;
+    const long recorded = std::stol(row[2]), lost = std::stol(row[3]);
+    if (tool == "omnislam-record") {
+      EXPECT_EQ(recorded + lost, rounds) << stat.output;
+    } else {
+      // lcm-logger 1.3.1 also loses the last messages of a run, with or without a kill (measured: 199
+      // of 204 images of this publisher without any fault): a loss after the last recorded message has
+      // no later seq to show it, so only the bound holds for it.
+      EXPECT_LE(recorded + lost, rounds) << stat.output;
+    }
+    // The gap line counts what every channel lost between the parts. A short gap may fall between two
+    // images (measured: 0.020 s, 9 messages of other channels lost, no image), so the loss is asserted
+    // over all channels, and the images lost there are bounded by the images lost in all.
+    ASSERT_TRUE(std::regex_search(stat.output, m,
+                                  std::regex("gap between " + run.log + " and " + part2 +
+                                             ": [0-9.]+ s unrecorded[^;\\n]*; ([0-9]+) messages lost by seq")))
+        << stat.output;
+    EXPECT_GT(std::stol(m[1]), 0) << "a SIGKILLed recorder loses at least the gap: " << stat.output;
+    if (std::regex_search(stat.output, m, std::regex("gap between [^\\n]* OMNI_IMAGE ([0-9]+)"))) {
+      EXPECT_LE(std::stol(m[1]), lost) << stat.output;
+    }
   }
 }
 

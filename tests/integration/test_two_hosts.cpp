@@ -44,9 +44,9 @@ class TwoHosts : public ::testing::Test {
   std::vector<lcmio::LogEvent> samplesAcross(const std::string& url, const std::string& log) {
     t::Child rec(hosts_->in(1, {t::binPath("omnislam-record"), "-f", log, "--url", url}));
     EXPECT_TRUE(rec.waitForOutput("recording", 20)) << rec.output();
-    const auto pub = t::run(hosts_->in(0, {t::binPath("omnislam-publish-samples"), "--url", url, "--period", "0.1",
-                                           "--duration", "1"}),
-                            30);
+    const auto pub = t::run(
+        hosts_->in(0, {t::binPath("omnislam-publish-samples"), "--url", url, "--period", "0.1", "--duration", "1"}),
+        30);
     EXPECT_EQ(pub.exit_code, 0) << pub.output;
     rec.signal(SIGINT);
     const auto r = rec.wait(20);
@@ -82,14 +82,14 @@ TEST_F(TwoHosts, Ttl0StaysOnItsHostAndTtl1Crosses) {
 TEST_F(TwoHosts, SportsHallWithTheSlamOnTheOtherHost) {
   t::TempDir dir;
   const std::string log = dir.file("run.lcm"), url = hosts_->url(1), stall_s = "250";
-  t::Child host_b(hosts_->in(1, {t::binPath("omnislam-launch"), t::sourcePath("config/launch/two_hosts_slam.yaml"),
-                                 "--url", url, "--log-file", log, "--set", "slam_seed=2", "--set",
-                                 "odometry_only_after_s=" + stall_s}));
+  t::Child host_b(
+      hosts_->in(1, {t::binPath("omnislam-launch"), t::sourcePath("config/launch/two_hosts_slam.yaml"), "--url", url,
+                     "--log-file", log, "--set", "slam_seed=2", "--set", "odometry_only_after_s=" + stall_s}));
   ASSERT_TRUE(host_b.waitForOutput("started slam", 30)) << host_b.output();
-  const auto host_a = t::run(hosts_->in(0, {t::binPath("omnislam-launch"),
-                                            t::sourcePath("config/launch/two_hosts_sensors.yaml"), "--url", url,
-                                            "--set", "speedup=25", "--set", "seed=2"}),
-                             150);
+  const auto host_a =
+      t::run(hosts_->in(0, {t::binPath("omnislam-launch"), t::sourcePath("config/launch/two_hosts_sensors.yaml"),
+                            "--url", url, "--set", "speedup=25", "--set", "seed=2"}),
+             150);
   EXPECT_EQ(host_a.exit_code, 0) << host_a.output;
   EXPECT_NE(host_a.output.find("stopping: sim finished the scenario"), std::string::npos) << host_a.output;
   EXPECT_TRUE(host_b.alive()) << host_b.output();

@@ -175,7 +175,8 @@ TEST(Viewer, HeadlessFromALogWritesEveryNthStepAndTheFinalView) {
       if (k == 2) write(channels::kSlamMap, std::vector<uint8_t>(37, 0xab));  // garbage
     }
   }
-  const auto r = t::run({t::binPath("omnislam-viewer"), "--headless", "--log", log, "--out-dir", out, "--every", "2"}, 60);
+  const auto r =
+      t::run({t::binPath("omnislam-viewer"), "--headless", "--log", log, "--out-dir", out, "--every", "2"}, 60);
   ASSERT_FALSE(r.timed_out) << r.output;
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("6 SLAM steps"), std::string::npos) << r.output;
@@ -193,11 +194,16 @@ TEST(Viewer, HeadlessFromALogWritesEveryNthStepAndTheFinalView) {
   const auto whole = fs::file_size(log);
   {
     std::ofstream app(log, std::ios::binary | std::ios::app);
-    const char head[6] = {static_cast<char>(0xed), static_cast<char>(0xa1), static_cast<char>(0xda),
-                          static_cast<char>(0x01), 0, 0};  // an event's sync word, then nothing
+    const char head[6] = {static_cast<char>(0xed),
+                          static_cast<char>(0xa1),
+                          static_cast<char>(0xda),
+                          static_cast<char>(0x01),
+                          0,
+                          0};  // an event's sync word, then nothing
     app.write(head, sizeof head);
   }
-  const auto cut = t::run({t::binPath("omnislam-viewer"), "--headless", "--log", log, "--out-dir", dir.file("png2")}, 60);
+  const auto cut =
+      t::run({t::binPath("omnislam-viewer"), "--headless", "--log", log, "--out-dir", dir.file("png2")}, 60);
   ASSERT_EQ(cut.exit_code, 0) << cut.output;
   EXPECT_NE(cut.output.find("6 SLAM steps"), std::string::npos) << cut.output;
   EXPECT_NE(cut.output.find("the 6 bytes after its first"), std::string::npos) << cut.output;
@@ -225,7 +231,9 @@ TEST(Viewer, LiveHeadlessDrawsTheBusCountsGarbageAndWritesTheFinalViewOnSigterm)
   StatusListener bus(url);
   ASSERT_TRUE(bus.lcm.good());
   t::Child viewer({t::binPath("omnislam-viewer"), "--headless", "--url", url, "--out-dir", out, "--every", "1"});
-  ASSERT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status.count("viewer") > 0; }, 10)) << viewer.output();
+  ASSERT_TRUE(t::handleUntil(
+      bus.lcm, [&] { return bus.status.count("viewer") > 0; }, 10))
+      << viewer.output();
   int64_t published = 0;
   auto publishStep = [&](int k) {
     for (const auto& [ch, data] : makeStep(k).events) {
@@ -239,21 +247,28 @@ TEST(Viewer, LiveHeadlessDrawsTheBusCountsGarbageAndWritesTheFinalViewOnSigterm)
   const std::vector<uint8_t> garbage(53, 0x5a);
   bus.lcm.publish(channels::kSlamMap, garbage.data(), static_cast<unsigned>(garbage.size()));
   ++published;
-  EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status["viewer"].decode_errors >= 1; }, 5))
-      << "the viewer does not count the garbage SLAM_MAP\n" << viewer.output();
+  EXPECT_TRUE(t::handleUntil(
+      bus.lcm, [&] { return bus.status["viewer"].decode_errors >= 1; }, 5))
+      << "the viewer does not count the garbage SLAM_MAP\n"
+      << viewer.output();
   EXPECT_TRUE(viewer.alive()) << viewer.output();
   for (int k = 2; k < 4; ++k) publishStep(k);
   // Steps 1..3 are complete (step 4 is still open): frame_000001..3.
-  EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return fs::exists(out + "/frame_000003.png"); }, 10)) << viewer.output();
+  EXPECT_TRUE(t::handleUntil(
+      bus.lcm, [&] { return fs::exists(out + "/frame_000003.png"); }, 10))
+      << viewer.output();
   // Every message handled (its status counts them) before SIGTERM: wait for that, not a fixed pause.
-  EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status["viewer"].messages_in >= published; }, 20))
-      << bus.status["viewer"].messages_in << " of " << published << " messages handled\n" << viewer.output();
+  EXPECT_TRUE(t::handleUntil(
+      bus.lcm, [&] { return bus.status["viewer"].messages_in >= published; }, 20))
+      << bus.status["viewer"].messages_in << " of " << published << " messages handled\n"
+      << viewer.output();
   viewer.signal(SIGTERM);
   const auto r = viewer.wait(15);
   ASSERT_FALSE(r.timed_out) << r.output;
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("decode error"), std::string::npos) << r.output;
-  for (const char* f : {"frame_000001.png", "frame_000002.png", "frame_000003.png"}) EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
+  for (const char* f : {"frame_000001.png", "frame_000002.png", "frame_000003.png"})
+    EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
   expectFullView(out + "/frame_000003.png");
   expectFullView(out + "/final.png");
 }
@@ -268,7 +283,9 @@ TEST(Viewer, AFrameThatCannotBeWrittenIsReportedAndLaterPosesStillApply) {
   StatusListener bus(url);
   ASSERT_TRUE(bus.lcm.good());
   t::Child viewer({t::binPath("omnislam-viewer"), "--headless", "--url", url, "--out-dir", out, "--every", "1"});
-  ASSERT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status.count("viewer") > 0; }, 10)) << viewer.output();
+  ASSERT_TRUE(t::handleUntil(
+      bus.lcm, [&] { return bus.status.count("viewer") > 0; }, 10))
+      << viewer.output();
   int64_t published = 0;
   for (int k = 0; k < 6; ++k)
     for (const auto& [ch, data] : makeStep(k).events) {
@@ -276,9 +293,13 @@ TEST(Viewer, AFrameThatCannotBeWrittenIsReportedAndLaterPosesStillApply) {
       ++published;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
-  EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return fs::exists(out + "/frame_000005.png"); }, 10)) << viewer.output();
-  EXPECT_TRUE(t::handleUntil(bus.lcm, [&] { return bus.status["viewer"].messages_in >= published; }, 20))
-      << bus.status["viewer"].messages_in << " of " << published << " messages handled\n" << viewer.output();
+  EXPECT_TRUE(t::handleUntil(
+      bus.lcm, [&] { return fs::exists(out + "/frame_000005.png"); }, 10))
+      << viewer.output();
+  EXPECT_TRUE(t::handleUntil(
+      bus.lcm, [&] { return bus.status["viewer"].messages_in >= published; }, 20))
+      << bus.status["viewer"].messages_in << " of " << published << " messages handled\n"
+      << viewer.output();
   EXPECT_EQ(bus.status["viewer"].rejected_inputs, 0) << "a good pose was refused\n" << viewer.output();
   viewer.signal(SIGTERM);
   const auto r = viewer.wait(15);
@@ -302,10 +323,12 @@ TEST(Viewer, BadFlagsStopWithExitCodeTwo) {
   const auto log_window = t::run({t::binPath("omnislam-viewer"), "--log", log}, 10);
   EXPECT_EQ(log_window.exit_code, 2) << log_window.output;
   EXPECT_NE(log_window.output.find("--headless"), std::string::npos) << log_window.output;
-  const auto bad_value = t::run({t::binPath("omnislam-viewer"), "--headless", "--out-dir", dir.file("o"), "--every", "-1"}, 10);
+  const auto bad_value =
+      t::run({t::binPath("omnislam-viewer"), "--headless", "--out-dir", dir.file("o"), "--every", "-1"}, 10);
   EXPECT_EQ(bad_value.exit_code, 2) << bad_value.output;
   EXPECT_NE(bad_value.output.find("--every"), std::string::npos) << bad_value.output;
-  const auto no_display = t::run({t::binPath("omnislam-viewer"), "--url", t::privateUdpUrl(15)}, 10, {"DISPLAY=", "WAYLAND_DISPLAY="});
+  const auto no_display =
+      t::run({t::binPath("omnislam-viewer"), "--url", t::privateUdpUrl(15)}, 10, {"DISPLAY=", "WAYLAND_DISPLAY="});
   EXPECT_EQ(no_display.exit_code, 2) << no_display.output;
   EXPECT_NE(no_display.output.find("--headless"), std::string::npos) << no_display.output;
 }

@@ -112,7 +112,8 @@ int parseSeed(const std::string& value, std::uint64_t& seed) {
 // CLI11 reads "-1" into a uint64_t as 2^64 - 1 without a word: a user asking for seed -1 got
 // seed 18446744073709551615. Seeds take what the config files' `seed` keys take.
 TEST(SeedRange, RefusesNegativeFractionalAndTooLargeAcceptsTheBounds) {
-  for (const char* bad : {"-1", "-0", "1.5", "1e3", "", " 1", "0x10", "9223372036854775808", "99999999999999999999", "seven"}) {
+  for (const char* bad :
+       {"-1", "-0", "1.5", "1e3", "", " 1", "0x10", "9223372036854775808", "99999999999999999999", "seven"}) {
     std::uint64_t seed = 5;
     EXPECT_EQ(parseSeed(bad, seed), app::kBadConfig) << "'" << bad << "'";
     EXPECT_EQ(seed, 5u) << bad;

@@ -125,7 +125,7 @@ TEST(Decode, LyingArrayCountsAreRefusedBeforeAnyAllocation) {
         << v << ": " << refusal(sampleFeatures(), features_count, v);
   }
   EXPECT_EQ(refusal(sampleFeatures(), features_count, 1), "corrupt");  // fits, but bytes are left over
-  const size_t image_size = 8 + 2 * 8 + (4 + 4) + 3 * 4 + 1;  // camera_name "cam"
+  const size_t image_size = 8 + 2 * 8 + (4 + 4) + 3 * 4 + 1;           // camera_name "cam"
   EXPECT_EQ(refusal(sampleImage(), image_size, -8), "size -8 outside 0..8 (what the 8 bytes left hold)");
   EXPECT_EQ(refusal(sampleImage(), image_size, 9), "size 9 outside 0..8 (what the 8 bytes left hold)");
   const size_t counted = 8 + 3 * 8;  // map, particles, associations, labels: utime, seq, *_seq

@@ -113,7 +113,9 @@ TEST(LogFiles, ATruncatedOrCorruptTailIsNamedNotTakenForTheEnd) {
   EXPECT_GT(cut.unreadable(), 0);
   ASSERT_TRUE(cut.problem("cut.lcm"));
   EXPECT_NE(cut.problem("cut.lcm")->find("cut.lcm: "), std::string::npos);
-  EXPECT_NE(cut.problem("cut.lcm")->find("the 50 bytes after its first 99 events (from byte 9900 of 9950)"), std::string::npos) << *cut.problem("cut.lcm");
+  EXPECT_NE(cut.problem("cut.lcm")->find("the 50 bytes after its first 99 events (from byte 9900 of 9950)"),
+            std::string::npos)
+      << *cut.problem("cut.lcm");
   // A damaged sync word in the middle: the events after it are not read, and that is said.
   fs::copy_file(d.file("full.lcm"), d.file("junk.lcm"));
   {
@@ -129,9 +131,7 @@ TEST(LogFiles, ATruncatedOrCorruptTailIsNamedNotTakenForTheEnd) {
   EXPECT_TRUE(junk.problem("junk.lcm"));
 }
 
-void writeBytes(const std::string& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary) << bytes;
-}
+void writeBytes(const std::string& path, const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; }
 
 // LCM 1.3.1's reader allocates data length + 1 bytes unchecked: 2^31 - 1 overflows, and it reads
 // into a null pointer on this 72-byte file. Our reader (logstat, eval, viewer --log and slam
@@ -159,7 +159,8 @@ TEST(LogFiles, LengthsThatRunPastTheFileStopReadingWithAReason) {
   lcmio::LogReadResult lng;
   EXPECT_EQ(count(d.file("long.lcm"), &lng), 0);
   ASSERT_TRUE(lng.problem("long.lcm"));
-  EXPECT_NE(lng.problem("long.lcm")->find("not followed by another event"), std::string::npos) << *lng.problem("long.lcm");
+  EXPECT_NE(lng.problem("long.lcm")->find("not followed by another event"), std::string::npos)
+      << *lng.problem("long.lcm");
 }
 
 // A data length that covers the next two events exactly and ends at a third's header: the two
@@ -171,12 +172,14 @@ TEST(LogFiles, EventsSwallowedByACorruptLengthAreCountedByTheirNumbers) {
              rawLogEvent(0, "A", "zero" + e1 + e2, 4 + static_cast<int64_t>(e1.size() + e2.size())) +
                  rawLogEvent(3, "A", "three"));
   std::vector<int64_t> numbers;
-  const auto r = lcmio::forEachEvent(d.file("swallow.lcm"), [&](const lcmio::LogEvent& e) { numbers.push_back(e.event_number); });
+  const auto r =
+      lcmio::forEachEvent(d.file("swallow.lcm"), [&](const lcmio::LogEvent& e) { numbers.push_back(e.event_number); });
   EXPECT_EQ(numbers, (std::vector<int64_t>{0, 3}));
   EXPECT_EQ(r.missing_event_numbers, 2);
   EXPECT_EQ(r.unreadable(), 0);
   ASSERT_TRUE(r.problem("swallow.lcm"));
-  EXPECT_NE(r.problem("swallow.lcm")->find("2 event numbers are missing"), std::string::npos) << *r.problem("swallow.lcm");
+  EXPECT_NE(r.problem("swallow.lcm")->find("2 event numbers are missing"), std::string::npos)
+      << *r.problem("swallow.lcm");
   // Corrupted numbers far apart or negative: counted without overflow, every event still read.
   const int64_t most = std::numeric_limits<int64_t>::max();
   writeBytes(d.file("numbers.lcm"), rawLogEvent(most, "A", "a") + rawLogEvent(-5, "A", "b") + rawLogEvent(0, "A", "c") +

@@ -149,8 +149,8 @@ TEST(LcmioSequence, StepsAtTheBoundsAndASaturatingCount) {
   const int64_t kMax = lcmio::kMaxSequenceGap, kHuge = std::numeric_limits<int64_t>::max();
   EXPECT_EQ(lcmio::sequenceStep(5, 6).missed, 0);
   EXPECT_FALSE(lcmio::sequenceStep(5, 6).restart);
-  EXPECT_TRUE(lcmio::sequenceStep(5, 5).restart);   // a duplicate
-  EXPECT_TRUE(lcmio::sequenceStep(5, 4).restart);   // a step back
+  EXPECT_TRUE(lcmio::sequenceStep(5, 5).restart);            // a duplicate
+  EXPECT_TRUE(lcmio::sequenceStep(5, 4).restart);            // a step back
   EXPECT_EQ(lcmio::sequenceStep(5, 6 + kMax).missed, kMax);  // the largest gap counted as missed
   EXPECT_FALSE(lcmio::sequenceStep(5, 6 + kMax).restart);
   EXPECT_TRUE(lcmio::sequenceStep(5, 7 + kMax).restart);
@@ -174,13 +174,19 @@ TEST(LcmioNode, AStrayFutureStampDoesNotLockAChannelAndARestartIsTaken) {
   lcmio::InputOptions status_opt;
   status_opt.require_increasing_utime = false;
   status_opt.track_sequence = false;
-  node.subscribe<process_status_t>(channels::kProcessStatus, [&](const process_status_t& s) { status.push_back(s); },
-                                   status_opt);
+  node.subscribe<process_status_t>(
+      channels::kProcessStatus, [&](const process_status_t& s) { status.push_back(s); }, status_opt);
   lcm::LCM& bus = node.lcm();
   const int64_t t0 = 1'700'000'000'000'000;
-  const std::vector<std::pair<int64_t, int64_t>> sent{
-      {t0, 0}, {t0 + 20'000, 1}, {4'000'000'000'000'000'000, 2}, {t0 + 40'000, 3}, {t0 + 60'000, 4},
-      {t0 - 100'000'000, 0}, {t0 - 99'980'000, 1}, {t0 - 99'960'000, 2}, {t0 - 99'940'000, 3}};
+  const std::vector<std::pair<int64_t, int64_t>> sent{{t0, 0},
+                                                      {t0 + 20'000, 1},
+                                                      {4'000'000'000'000'000'000, 2},
+                                                      {t0 + 40'000, 3},
+                                                      {t0 + 60'000, 4},
+                                                      {t0 - 100'000'000, 0},
+                                                      {t0 - 99'980'000, 1},
+                                                      {t0 - 99'960'000, 2},
+                                                      {t0 - 99'940'000, 3}};
   for (const auto& [u, q] : sent) {
     auto m = odo(u, q);
     bus.publish(channels::kOdometry, &m);
@@ -205,7 +211,8 @@ TEST(LcmioNode, PublishesStatusWithItsCounters) {
   lcmio::InputOptions opt;
   opt.require_increasing_utime = false;
   opt.track_sequence = false;
-  node.subscribe<process_status_t>(channels::kProcessStatus, [&](const process_status_t& s) { got.push_back(s); }, opt);
+  node.subscribe<process_status_t>(
+      channels::kProcessStatus, [&](const process_status_t& s) { got.push_back(s); }, opt);
   node.reject("X", "a reason");
   node.publishStatus();
   while (node.lcm().handleTimeout(0) > 0) {

@@ -121,8 +121,7 @@ TEST(Validate, CovariancesEnumsAndWeightsAsTheContractDefinesThem) {
   EXPECT_NE(lcmio::validate(m).value_or("").find("landmark 0: unknown kind 7"), std::string::npos);
   m.landmarks[0].kind = feature_t::KIND_VERTICAL_LINE;
   m.landmarks[0].covariance[1][1] = -0.5;
-  EXPECT_NE(lcmio::validate(m).value_or("").find("landmark 0: covariance has a negative variance"),
-            std::string::npos);
+  EXPECT_NE(lcmio::validate(m).value_or("").find("landmark 0: covariance has a negative variance"), std::string::npos);
   m.landmarks[0].covariance[1][1] = 0.5;
   EXPECT_FALSE(lcmio::validate(m).has_value());
   m.num_candidates = -1;

@@ -52,9 +52,9 @@ TEST(MrclamEndToEnd, ShortStretchOfRobot3) {
             << jsonNumber(j, "landmarks_spurious") << ", association precision " << jsonNumber(j, "assoc_precision")
             << " recall " << jsonNumber(j, "assoc_recall") << std::endl;
   // Bounds. Measured 2026-11-22 (docs/results/mrclam.md): SLAM 0.87 m aligned (FastSLAM 2.0 before: 1.15 m),
-  // dead reckoning 0.50 m, 4 landmarks matched, 2 spurious. The ATE bound is a guard against divergence and regressions at
-  // today's level, NOT issue 7's bar (0.4 m over whole runs), which the filter does not meet yet;
-  // the spurious bound is the issue's (at most 5).
+  // dead reckoning 0.50 m, 4 landmarks matched, 2 spurious. The ATE bound is a guard against divergence and regressions
+  // at today's level, NOT issue 7's bar (0.4 m over whole runs), which the filter does not meet yet; the spurious bound
+  // is the issue's (at most 5).
   EXPECT_LT(slam_ate, 1.5);
   EXPECT_LE(jsonNumber(j, "landmarks_spurious"), 5);
 }

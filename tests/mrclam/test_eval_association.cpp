@@ -4,7 +4,6 @@
 // known answers; plus the pure functions behind them.
 #include <gtest/gtest.h>
 
-
 #include <cmath>
 #include <regex>
 
@@ -38,7 +37,8 @@ int64_t utimeOf(int k) { return 1'000'000 + static_cast<int64_t>(k) * 100'000; }
 // number of entries (left out, counted).
 void makeLog(const std::string& path) {
   lcmio::LogWriter log(path);
-  log.write(utimeOf(0), channels::kGroundTruthMap, t::makeLineMap({{6, {1.0, 1.1}}, {7, {2.0, -1.0}}, {8, {3.0, 1.0}}}));
+  log.write(utimeOf(0), channels::kGroundTruthMap,
+            t::makeLineMap({{6, {1.0, 1.1}}, {7, {2.0, -1.0}}, {8, {3.0, 1.0}}}));
   for (int k = 0; k <= 110; ++k) {
     const int64_t u = utimeOf(k);
     log.write(u, channels::kGroundTruthPose, t::makePose(u, 0.1 * k, 0.0, 0.0));
@@ -169,8 +169,8 @@ TEST(EvalAssociation, WithoutLabelsNoAssociationKeys) {
 
 TEST(EvalAssociationMetrics, ScoreAssociations) {
   const std::map<int64_t, int64_t> truth_of{{100, 6}, {101, 7}};
-  const auto s = eval::scoreAssociations({{100, 101, 102, -2}, {101, -1}, {100}}, {{6, 6, 7, 7}, {7, -1}, {6, 8}},
-                                         truth_of);
+  const auto s =
+      eval::scoreAssociations({{100, 101, 102, -2}, {101, -1}, {100}}, {{6, 6, 7, 7}, {7, -1}, {6, 8}}, truth_of);
   EXPECT_EQ(s.frames, 2);
   EXPECT_EQ(s.frames_mismatched, 1);
   EXPECT_EQ(s.features, 6);

@@ -138,12 +138,14 @@ TEST(MrclamRunScript, RunsEndToEndOnASmallDatasetAndNamesAFailingStep) {
   // One seed: the per-run table with robot 1's row; exact odometry, so dead reckoning is near zero.
   auto r = script(with({"--out", out.file("one")}));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("MRCLAM " + std::filesystem::path(data.path()).filename().string() + ", config mrclam.yaml, seed 1"),
+  EXPECT_NE(r.output.find("MRCLAM " + std::filesystem::path(data.path()).filename().string() +
+                          ", config mrclam.yaml, seed 1"),
             std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("| 1 | " + std::to_string(frames) + " | 0.00 / 0.00 | "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("/4 | "), std::string::npos) << r.output;  // matched out of the dataset's 4 landmarks
-  for (const char* f : {"robot1.lcm", "robot1.yaml", "robot1.slam.lcm", "robot1.eval.json", "robot1.eval-aligned.json"}) {
+  for (const char* f :
+       {"robot1.lcm", "robot1.yaml", "robot1.slam.lcm", "robot1.eval.json", "robot1.eval-aligned.json"}) {
     EXPECT_TRUE(std::filesystem::exists(out.file(std::string("one/") + f))) << f;
   }
 
@@ -157,7 +159,8 @@ TEST(MrclamRunScript, RunsEndToEndOnASmallDatasetAndNamesAFailingStep) {
   // A step that fails stops the script with the step's name and the end of its messages.
   r = script(with({"--out", out.file("bad"), "--slam-args", "--set filter.particles=0"}));
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find("run-mrclam.sh: omnislam-slam, robot 1, seed 1 failed (exit 2)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("run-mrclam.sh: omnislam-slam, robot 1, seed 1 failed (exit 2)"), std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("filter.particles"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("| robot |"), std::string::npos) << r.output;
 

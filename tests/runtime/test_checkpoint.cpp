@@ -1,7 +1,7 @@
-// Checkpoints of the SLAM process (common/runtime/include/omnislam/runtime/checkpoint.h): a driver resumed from a checkpoint
-// taken after any message (a frame waiting for odometry, messages held for a jump, after an input
-// restart) publishes exactly what the driver that never stopped publishes, byte for byte, with the
-// same counts; the options and the file are checked; the already-processed rule and the schedule.
+// Checkpoints of the SLAM process (common/runtime/include/omnislam/runtime/checkpoint.h): a driver resumed from a
+// checkpoint taken after any message (a frame waiting for odometry, messages held for a jump, after an input restart)
+// publishes exactly what the driver that never stopped publishes, byte for byte, with the same counts; the options and
+// the file are checked; the already-processed rule and the schedule.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -167,7 +167,8 @@ TEST(Checkpoint, ResumedDriverPublishesExactlyWhatTheUninterruptedOneDoes) {
     std::vector<std::vector<uint8_t>> out;
     for (std::size_t i = cut; i < msgs.size(); ++i) append(feed(after, msgs[i]), out);
     append(after.finish(), out);
-    const std::vector<std::vector<uint8_t>> tail(ref_out.begin() + static_cast<long>(outputs_before[cut]), ref_out.end());
+    const std::vector<std::vector<uint8_t>> tail(ref_out.begin() + static_cast<long>(outputs_before[cut]),
+                                                 ref_out.end());
     ASSERT_EQ(out.size(), tail.size());
     EXPECT_TRUE(out == tail) << "outputs after the resume differ from the uninterrupted run's";
     EXPECT_EQ(after.summary(), ref.summary());

@@ -1,5 +1,5 @@
-// Saved maps (common/runtime/include/omnislam/runtime/map_file.h): exact round trip, atomic replacement, and every malformed
-// file refused with a message naming the file and the key.
+// Saved maps (common/runtime/include/omnislam/runtime/map_file.h): exact round trip, atomic replacement, and every
+// malformed file refused with a message naming the file and the key.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -127,9 +127,11 @@ TEST(MapFile, MalformedFilesNameFileAndKey) {
       {head + "  - {id: 1, kind: point3d, type: 1, counter: 1, position_m: [0, .nan, 0], " + good_cov + "}\n",
        "position_m"},
       {head + "  - {id: 1, kind: point3d, type: 1, counter: 1, position_m: [0, 0], " + good_cov + "}\n", "position_m"},
-      {head + "  - {id: 1, kind: point3d, type: 1, counter: 1, position_m: [0, 0, 0], covariance_m2: [1, 0, 0, 0, -1, 0, 0, 0, 1]}\n",
+      {head + "  - {id: 1, kind: point3d, type: 1, counter: 1, position_m: [0, 0, 0], covariance_m2: [1, 0, 0, 0, -1, "
+              "0, 0, 0, 1]}\n",
        "covariance_m2"},
-      {head + "  - {id: 1, kind: point3d, type: 1, counter: 1, position_m: [0, 0, 0], covariance_m2: [1, 0.5, 0, 0, 1, 0, 0, 0, 1]}\n",
+      {head + "  - {id: 1, kind: point3d, type: 1, counter: 1, position_m: [0, 0, 0], covariance_m2: [1, 0.5, 0, 0, 1, "
+              "0, 0, 0, 1]}\n",
        "covariance_m2"},
       {head + "  - {id: 1, kind: point3d, type: 1, counter: 1, position_m: [0, 0, 0], " + good_cov + "}\n" +
            "  - {id: 1, kind: point3d, type: 1, counter: 1, position_m: [1, 0, 0], " + good_cov + "}\n",

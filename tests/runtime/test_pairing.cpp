@@ -1,5 +1,5 @@
-// Pairing of feature frames with odometry (common/runtime/include/omnislam/runtime/pairing.h): interpolation at a utime, the
-// bounded wait in stream time, gaps, duplicates, out-of-order messages and restarts.
+// Pairing of feature frames with odometry (common/runtime/include/omnislam/runtime/pairing.h): interpolation at a
+// utime, the bounded wait in stream time, gaps, duplicates, out-of-order messages and restarts.
 #include <gtest/gtest.h>
 
 #include <cmath>

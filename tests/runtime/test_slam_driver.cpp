@@ -1,6 +1,6 @@
-// The SLAM process's shared code path (common/runtime/include/omnislam/runtime/slam_driver.h): message conversion, outputs
-// stamped with the frame's utime and answering its seq, determinism, and degraded input that
-// never corrupts the filter.
+// The SLAM process's shared code path (common/runtime/include/omnislam/runtime/slam_driver.h): message conversion,
+// outputs stamped with the frame's utime and answering its seq, determinism, and degraded input that never corrupts the
+// filter.
 #include <gtest/gtest.h>
 
 #include <sstream>
@@ -245,13 +245,13 @@ TEST(SlamDriver, ImplausibleOdometryAndCameraPositionsAreRefusedAndTheRunGoesOn)
   auto r = d.onOdometry(far);
   ASSERT_EQ(r.refused.size(), 1u);
   EXPECT_EQ(r.refused[0].channel, "ODOMETRY");
-  EXPECT_EQ(r.refused[0].reason,
-            "seq 1000 pose (1e+300 m, " + [&] {
-              std::ostringstream o;
-              o.precision(6);
-              o << far.y_m << " m, " << far.theta_rad;
-              return o.str();
-            }() + " rad) outside the workspace (|x|, |y| <= 10000 m)");
+  EXPECT_EQ(
+      r.refused[0].reason, "seq 1000 pose (1e+300 m, " + [&] {
+        std::ostringstream o;
+        o.precision(6);
+        o << far.y_m << " m, " << far.theta_rad;
+        return o.str();
+      }() + " rad) outside the workspace (|x|, |y| <= 10000 m)");
   odometry_t spun = odo(kT0 + 10'040'000, 1001);
   spun.theta_rad = 1e15;
   EXPECT_EQ(d.onOdometry(spun).refused.size(), 1u);
@@ -262,8 +262,9 @@ TEST(SlamDriver, ImplausibleOdometryAndCameraPositionsAreRefusedAndTheRunGoesOn)
   high.camera_position_m[2] = 1e10;
   r = d.onFeatures(high);
   ASSERT_EQ(r.refused.size(), 1u);
-  EXPECT_EQ(r.refused[0].reason, "frame seq 1000: camera_position_m 1e+10 m from the robot's origin, more than "
-                                 "plausibility.max_camera_offset_m 10");
+  EXPECT_EQ(r.refused[0].reason,
+            "frame seq 1000: camera_position_m 1e+10 m from the robot's origin, more than "
+            "plausibility.max_camera_offset_m 10");
   EXPECT_EQ(d.stats().implausible, 4);
   EXPECT_NE(d.summary().find("implausible 4;"), std::string::npos) << d.summary();
   EXPECT_EQ(d.stats().frames_processed, processed);

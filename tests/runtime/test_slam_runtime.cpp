@@ -95,7 +95,8 @@ struct Poses {
 };
 
 std::string tempPath(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("omnislam_test_slam_runtime_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("omnislam_test_slam_runtime_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   return (dir / name).string();
 }
@@ -132,10 +133,13 @@ TEST(SlamRuntime, AResumedRuntimeRefusesOnItsChannelWhatTheCheckpointHeld) {
   {
     SlamRuntime first(opt, {}, "[test] ");
     EXPECT_LT(first.resume().events, 0) << "no file yet: starts afresh";
-    for (const Message& m : in) std::visit([&](const auto& x) {
-      if constexpr (std::is_same_v<std::decay_t<decltype(x)>, odometry_t>) first.onOdometry(x, ignore);
-      else first.onFeatures(x, ignore);
-    }, m);
+    for (const Message& m : in)
+      std::visit(
+          [&](const auto& x) {
+            if constexpr (std::is_same_v<std::decay_t<decltype(x)>, odometry_t>) first.onOdometry(x, ignore);
+            else first.onFeatures(x, ignore);
+          },
+          m);
     ASSERT_TRUE(first.writeCheckpointNow());
   }
   SlamRuntime second(opt, {}, "[test] ");

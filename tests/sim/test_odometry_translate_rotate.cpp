@@ -130,9 +130,9 @@ TEST(OdometryTranslateRotate, WheelModelIsUnchanged) {
       const Pose2 d = last.between(truth);
       const double dist = std::hypot(d.x_m, d.y_m), ds = d.x_m >= 0.0 ? dist : -dist;
       const double sd = nz.distance_sigma_m_per_sqrt_m * std::sqrt(dist);
-      const double sr = std::sqrt(nz.rotation_sigma_rad_per_sqrt_rad * nz.rotation_sigma_rad_per_sqrt_rad *
-                                      std::abs(d.theta_rad) +
-                                  nz.heading_sigma_rad_per_sqrt_m * nz.heading_sigma_rad_per_sqrt_m * dist);
+      const double sr =
+          std::sqrt(nz.rotation_sigma_rad_per_sqrt_rad * nz.rotation_sigma_rad_per_sqrt_rad * std::abs(d.theta_rad) +
+                    nz.heading_sigma_rad_per_sqrt_m * nz.heading_sigma_rad_per_sqrt_m * dist);
       const double ds_odo = ds * (1.0 + k_scale) + sd * n01(rng);
       const double dth_odo = d.theta_rad + drift * dist + sr * n01(rng);
       ref = ref.compose(Pose2{ds_odo * std::cos(0.5 * dth_odo), ds_odo * std::sin(0.5 * dth_odo), dth_odo});
@@ -167,7 +167,8 @@ trajectory: {start: {x_m: 0, y_m: 0}, segments: [{straight_m: 1.0}]}
       EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
     }
   };
-  fails("odometry_noise: {model: translate_rotate, err_tran_m_per_sqrt_m: 1.5}\n", "odometry_noise.err_tran_m_per_sqrt_m");
+  fails("odometry_noise: {model: translate_rotate, err_tran_m_per_sqrt_m: 1.5}\n",
+        "odometry_noise.err_tran_m_per_sqrt_m");
   fails("odometry_noise: {model: translate_rotate, err_drift_rad_per_sqrt_m: -0.1}\n",
         "odometry_noise.err_drift_rad_per_sqrt_m");
   fails("odometry_noise: {model: translate_rotate, scale_error_sigma: 0.01}\n", "scale_error_sigma");

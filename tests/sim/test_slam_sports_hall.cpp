@@ -71,9 +71,9 @@ RunFigures runHall(uint64_t seed, slam::AssociationMethod method) {
       slam::BearingMeasurement m;
       m.azimuth_rad = wrapAngle(b.azimuth_rad + sigma_rad * n01(rng) / std::max(0.05, std::cos(b.elevation_rad)));
       m.elevation_rad = b.elevation_rad + sigma_rad * n01(rng);
-      m.cov_rad2 = Eigen::Vector2d(std::pow(sigma_rad / std::max(0.05, std::cos(b.elevation_rad)), 2),
-                                   sigma_rad * sigma_rad)
-                       .asDiagonal();
+      m.cov_rad2 =
+          Eigen::Vector2d(std::pow(sigma_rad / std::max(0.05, std::cos(b.elevation_rad)), 2), sigma_rad * sigma_rad)
+              .asDiagonal();
       m.p_CinR_m = Eigen::Vector3d(w.camera.mounting.x_m, w.camera.mounting.y_m, w.camera.mounting.z_m);
       z.push_back(m);
     }
@@ -120,10 +120,11 @@ TEST(SlamSportsHall, HungarianMeetsThePapersFiguresOnTenSeeds) {
   int failures = 0;
   for (uint64_t seed = 1; seed <= 10; ++seed) {
     const RunFigures h = runHall(seed, slam::AssociationMethod::kHungarian);
-    std::printf("seed %2llu hungarian: map mean %.3f max %.3f m, matched %d spurious %d, final pos %.3f m "
-                "(max %.3f, dead reckoning %.3f), max heading %.3f rad\n",
-                static_cast<unsigned long long>(seed), h.map_mean_m, h.map_max_m, h.matched, h.spurious,
-                h.final_pos_err_m, h.max_pos_err_m, h.dead_reckoning_final_err_m, h.max_heading_err_rad);
+    std::printf(
+        "seed %2llu hungarian: map mean %.3f max %.3f m, matched %d spurious %d, final pos %.3f m "
+        "(max %.3f, dead reckoning %.3f), max heading %.3f rad\n",
+        static_cast<unsigned long long>(seed), h.map_mean_m, h.map_max_m, h.matched, h.spurious, h.final_pos_err_m,
+        h.max_pos_err_m, h.dead_reckoning_final_err_m, h.max_heading_err_rad);
     EXPECT_EQ(h.matched, 16) << "seed " << seed;
     EXPECT_EQ(h.spurious, 0) << "seed " << seed;
     EXPECT_LE(h.map_mean_m, 0.48) << "seed " << seed;

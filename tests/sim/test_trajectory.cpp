@@ -50,8 +50,8 @@ TEST(Trajectory, PosesAgreeWithIntegratedVelocities) {
   double max_speed = 0;
   for (double t = 0; t < traj.duration_s(); t += dt) {
     const auto s = traj.at(t + 0.5 * dt);  // mid-point velocities
-    p = p.compose(Pose2{s.v_mps * dt * std::cos(0.5 * s.omega_radps * dt), s.v_mps * dt * std::sin(0.5 * s.omega_radps * dt),
-                        s.omega_radps * dt});
+    p = p.compose(Pose2{s.v_mps * dt * std::cos(0.5 * s.omega_radps * dt),
+                        s.v_mps * dt * std::sin(0.5 * s.omega_radps * dt), s.omega_radps * dt});
     max_speed = std::max(max_speed, s.v_mps);
   }
   const Pose2 end = traj.at(traj.duration_s()).pose;

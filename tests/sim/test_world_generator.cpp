@@ -34,7 +34,8 @@ TEST(WorldGenerator, SameSeedSameBytesOtherSeedOtherWorld) {
     EXPECT_NE(a, worldToYaml(generateWorld(f, 8).world)) << worldFamilyName(f);
   }
   // Families draw from their own streams: seed 7 of two families are not the same hall.
-  EXPECT_NE(generateWorld(WorldFamily::kHalls, 7).params.hall_x_m, generateWorld(WorldFamily::kIrregular, 7).params.hall_x_m);
+  EXPECT_NE(generateWorld(WorldFamily::kHalls, 7).params.hall_x_m,
+            generateWorld(WorldFamily::kIrregular, 7).params.hall_x_m);
 }
 
 TEST(WorldGenerator, FileReadsBackToTheSameWorld) {
@@ -46,7 +47,8 @@ TEST(WorldGenerator, FileReadsBackToTheSameWorld) {
       ASSERT_EQ(r.lights.size(), w.lights.size());
       ASSERT_EQ(r.segments.size(), w.segments.size());
       ASSERT_TRUE(r.hall.has_value());
-      for (size_t i = 0; i < w.segments.size(); ++i) EXPECT_NEAR(r.segments[i].angle_rad, w.segments[i].angle_rad, 1e-12);
+      for (size_t i = 0; i < w.segments.size(); ++i)
+        EXPECT_NEAR(r.segments[i].angle_rad, w.segments[i].angle_rad, 1e-12);
     }
 }
 
@@ -65,9 +67,9 @@ Range rangeOf(WorldFamily f) {
 
 void expectTrajectoryInside(const World& w, double margin, const std::string& what) {
   const Trajectory t(w.trajectory_options, w.segments);
-  EXPECT_LE(w.trajectory_options.speed_mps, 0.30 + 1e-12) << what;   // paper 000: <= 0.30 m/s
+  EXPECT_LE(w.trajectory_options.speed_mps, 0.30 + 1e-12) << what;  // paper 000: <= 0.30 m/s
   EXPECT_GE(w.trajectory_options.speed_mps, 0.15 - 1e-12) << what;
-  EXPECT_LE(t.maxYawRate_radps(), 0.52 + 1e-9) << what;              // paper 000: <= 0.52 rad/s
+  EXPECT_LE(t.maxYawRate_radps(), 0.52 + 1e-9) << what;  // paper 000: <= 0.52 rad/s
   int outside = 0;
   for (double s = 0.0; s <= t.duration_s(); s += 0.1) {
     const Pose2 p = t.at(s).pose;

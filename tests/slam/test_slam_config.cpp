@@ -1,5 +1,5 @@
-// The SLAM process config (config/slam/*.yaml, common/config/include/omnislam/config/slam_config.h): the shipped file loads
-// with the paper's values, and every mistake names its key.
+// The SLAM process config (config/slam/*.yaml, common/config/include/omnislam/config/slam_config.h): the shipped file
+// loads with the paper's values, and every mistake names its key.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -130,7 +130,8 @@ TEST(SlamConfig, MistakesNameTheKey) {
        "key 'filter.perception.azimuth_half_width_deg' must be a number in (0, 180], got 0"},
       {"max_wait_s: 2.0", "max_wait_s: -1", "pairing.max_wait_s"},
       {"restart_confirm_messages: 2", "restart_confirm_messages: 0", "pairing.restart_confirm_messages"},
-      {"odometry_buffer_s: 10.0", "odometry_buffer_s: 1.0", "key 'pairing.odometry_buffer_s' must be >= max_wait_s (2 s), got 1 s"},
+      {"odometry_buffer_s: 10.0", "odometry_buffer_s: 1.0",
+       "key 'pairing.odometry_buffer_s' must be >= max_wait_s (2 s), got 1 s"},
       {"trans_sigma_per_sqrt_m: 0.05", "trans_sigm_per_sqrt_m: 0.05", "trans_sigm_per_sqrt_m"},
       {"source: fixed", "source: gps", "start_pose.source"},
       {"y_m: -3.25", "y_m: south", "start_pose.y_m"},
@@ -266,8 +267,8 @@ TEST(SlamConfig, PresetsSetDefaultsAndKeysOverride) {
 }
 
 // The options tables drive the parser and the core's validation alike: every numeric key accepts
-// its upper bound (its lower one when the upper is open), stored in the member's units, and refuses a value beyond it with its key named;
-// the core refuses the member beyond its range with the field named; every default is in range.
+// its upper bound (its lower one when the upper is open), stored in the member's units, and refuses a value beyond it
+// with its key named; the core refuses the member beyond its range with the field named; every default is in range.
 // `companion` (a "key: value" of the same section) is written beside every other key: a value that
 // other keys constrain (ncross_valid needs enough pairs of max_observations) is tested against it.
 template <class S, class Get>
@@ -281,8 +282,10 @@ void expectTableDrivesParserAndCore(const std::string& section, const std::vecto
     const double edge = f.bounds == slam::options::Bounds::kHighOpen ? f.lo : f.hi;
     std::ostringstream ok, bad;
     const std::string with = companion.empty() || companion.rfind(f.key, 0) == 0 ? "" : ", " + companion;
-    ok << "filter: {" << section << f.key << ": " << edge << with << "}" << std::string(section.empty() ? "" : "}") << "\n";
-    bad << "filter: {" << section << f.key << ": " << (f.hi + 1.0) * 2.0 << with << "}" << std::string(section.empty() ? "" : "}") << "\n";
+    ok << "filter: {" << section << f.key << ": " << edge << with << "}" << std::string(section.empty() ? "" : "}")
+       << "\n";
+    bad << "filter: {" << section << f.key << ": " << (f.hi + 1.0) * 2.0 << with << "}"
+        << std::string(section.empty() ? "" : "}") << "\n";
     const SlamProcessOptions o = parseSlamOptions(config::Node::loadString(ok.str(), "x"));
     const S& parsed = member_of(o);
     EXPECT_NEAR(f.value(parsed), edge, 1e-9 * std::max(1.0, std::abs(edge))) << f.key;
@@ -302,11 +305,18 @@ void expectTableDrivesParserAndCore(const std::string& section, const std::vecto
 
 TEST(SlamConfig, OptionsTablesDriveParserAndCore) {
   namespace opt = slam::options;
-  expectTableDrivesParserAndCore("", opt::fastSlamFields(), [](const SlamProcessOptions& o) -> const slam::FastSlamOptions& { return o.filter; });
-  expectTableDrivesParserAndCore("motion: {", opt::motionFields(), [](const SlamProcessOptions& o) -> const slam::MotionNoiseOptions& { return o.filter.motion; });
-  expectTableDrivesParserAndCore("perception: {", opt::perceptionFields(), [](const SlamProcessOptions& o) -> const slam::PerceptionOptions& { return o.filter.perception; });
-  expectTableDrivesParserAndCore("candidates: {", opt::candidateFields(), [](const SlamProcessOptions& o) -> const slam::CandidateOptions& { return o.filter.candidates; },
-                                 "max_observations: 1000");
+  expectTableDrivesParserAndCore("", opt::fastSlamFields(),
+                                 [](const SlamProcessOptions& o) -> const slam::FastSlamOptions& { return o.filter; });
+  expectTableDrivesParserAndCore(
+      "motion: {", opt::motionFields(),
+      [](const SlamProcessOptions& o) -> const slam::MotionNoiseOptions& { return o.filter.motion; });
+  expectTableDrivesParserAndCore(
+      "perception: {", opt::perceptionFields(),
+      [](const SlamProcessOptions& o) -> const slam::PerceptionOptions& { return o.filter.perception; });
+  expectTableDrivesParserAndCore(
+      "candidates: {", opt::candidateFields(),
+      [](const SlamProcessOptions& o) -> const slam::CandidateOptions& { return o.filter.candidates; },
+      "max_observations: 1000");
 }
 
 }  // namespace

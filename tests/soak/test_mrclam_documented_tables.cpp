@@ -68,8 +68,7 @@ TEST(SoakMrclam, RunScriptReproducesTheDocumentedTables) {
   EXPECT_TRUE(first == t::readFile(again)) << "two replays of robot 4 with seed 1 differ";
 
   // "Over seeds": seeds 1-10.
-  r = t::run({"bash", script, "--data", data, "--out", d.file("seeds"), "--seeds", "1 2 3 4 5 6 7 8 9 10"}, 1200,
-             env);
+  r = t::run({"bash", script, "--data", data, "--out", d.file("seeds"), "--seeds", "1 2 3 4 5 6 7 8 9 10"}, 1200, env);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::cout << r.output;
   expectRowsDocumented(r.output, doc, true);

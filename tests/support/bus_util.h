@@ -25,7 +25,8 @@ inline bool handleUntil(lcm::LCM& lcm, const std::function<bool()>& pred, double
 
 /// Handles `lcm` for s seconds.
 inline void handleFor(lcm::LCM& lcm, double s) {
-  handleUntil(lcm, [] { return false; }, s);
+  handleUntil(
+      lcm, [] { return false; }, s);
 }
 
 /// Publishes 200-byte messages on channel FLOOD as fast as `threads` threads can, from the

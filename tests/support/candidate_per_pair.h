@@ -17,8 +17,8 @@ namespace omnislam::testing {
 
 using namespace omnislam::slam;
 
-inline double candidateLogLikelihoodPerPair(const Candidate& c, const CandidateObservation& now,
-                                            double min_range_m, double max_range_m) {
+inline double candidateLogLikelihoodPerPair(const Candidate& c, const CandidateObservation& now, double min_range_m,
+                                            double max_range_m) {
   const double ninf = -std::numeric_limits<double>::infinity();
   const MeasVec& z = now.z;
   const MeasMat& Q = now.Q;

@@ -39,12 +39,13 @@ class NetnsPair {
     removeStale();
     if (!ip({"netns", "add", ns_[0]})) return;
     made_ = true;
-    if (!ip({"netns", "add", ns_[1]}) ||
-        !ip({"link", "add", veth_[0], "type", "veth", "peer", "name", veth_[1]}))
+    if (!ip({"netns", "add", ns_[1]}) || !ip({"link", "add", veth_[0], "type", "veth", "peer", "name", veth_[1]}))
       return;
     for (int k = 0; k < 2; ++k)
-      if (!ip({"link", "set", veth_[k], "netns", ns_[k]}) || !ip({"-n", ns_[k], "addr", "add", addr_[k] + "/30", "dev", veth_[k]}) ||
-          !ip({"-n", ns_[k], "link", "set", "lo", "up"}) || !ip({"-n", ns_[k], "link", "set", veth_[k], "multicast", "on"}) ||
+      if (!ip({"link", "set", veth_[k], "netns", ns_[k]}) ||
+          !ip({"-n", ns_[k], "addr", "add", addr_[k] + "/30", "dev", veth_[k]}) ||
+          !ip({"-n", ns_[k], "link", "set", "lo", "up"}) ||
+          !ip({"-n", ns_[k], "link", "set", veth_[k], "multicast", "on"}) ||
           !ip({"-n", ns_[k], "link", "set", veth_[k], "up"}) ||
           !ip({"-n", ns_[k], "route", "add", "224.0.0.0/4", "dev", veth_[k]}))
         return;

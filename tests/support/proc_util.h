@@ -154,8 +154,7 @@ class Child {
   /// ended or the time ran out first.
   bool waitForOutput(const std::string& text, double timeout_s) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (output().find(text) == std::string::npos && !done_ && std::chrono::steady_clock::now() < deadline)
-      poll(20);
+    while (output().find(text) == std::string::npos && !done_ && std::chrono::steady_clock::now() < deadline) poll(20);
     return output().find(text) != std::string::npos;
   }
 
@@ -210,8 +209,8 @@ struct LaunchedRun {
   LaunchedRun(const std::string& launch_file_rel, int url_salt, const std::vector<std::string>& sets,
               double timeout_s = 120.0)
       : log(dir.file("run.lcm")) {
-    std::vector<std::string> argv{binPath("omnislam-launch"), sourcePath(launch_file_rel), "--url",
-                                  privateUdpUrl(url_salt), "--log-file", log};
+    std::vector<std::string> argv{
+        binPath("omnislam-launch"), sourcePath(launch_file_rel), "--url", privateUdpUrl(url_salt), "--log-file", log};
     for (const auto& s : sets) {
       argv.push_back("--set");
       argv.push_back(s);

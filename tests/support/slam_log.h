@@ -46,7 +46,8 @@ inline map_t makeLineMap(const std::vector<std::pair<int64_t, Eigen::Vector2d>>&
 /// The poses of one pose_t channel (SLAM_POSE, GROUND_TRUTH_POSE) of a log, in log order.
 inline std::vector<eval::TimedPose> timedPoses(const std::string& log, const std::string& channel) {
   std::vector<eval::TimedPose> out;
-  for (const auto& p : lcmio::readChannel<pose_t>(log, channel)) out.push_back({p.utime, Pose2{p.x_m, p.y_m, p.theta_rad}});
+  for (const auto& p : lcmio::readChannel<pose_t>(log, channel))
+    out.push_back({p.utime, Pose2{p.x_m, p.y_m, p.theta_rad}});
   return out;
 }
 

@@ -24,12 +24,17 @@ const cv::Matx33d kK(400.5, 0.25, 640.1, 0.0, 401.5, 480.2, 0.0, 0.0, 1.0);
 /// An omnidir file with the keys omni_calibration.cpp (opencv_contrib, ccalib samples) writes.
 void writeOmnidir(const std::string& path, bool with_size) {
   cv::FileStorage fs(path, cv::FileStorage::WRITE);
-  fs << "calibration_time" << "Thu Nov 26 2026";
+  fs << "calibration_time"
+     << "Thu Nov 26 2026";
   fs << "nFrames" << 9 << "flags" << 0;
   fs << "camera_matrix" << cv::Mat(kK);
   fs << "distortion_coefficients" << (cv::Mat_<double>(1, 4) << -0.3, 0.1, 1e-3, -2e-3);
   fs << "xi" << 0.96;
-  fs << "used_imgs" << "[" << "1.jpg" << "2.jpg" << "]";
+  fs << "used_imgs"
+     << "["
+     << "1.jpg"
+     << "2.jpg"
+     << "]";
   fs << "rms" << 0.4;
   if (with_size) fs << "image_width" << 1280 << "image_height" << 960;
 }
@@ -50,7 +55,8 @@ std::string errorOf(const std::function<void()>& f) {
 }
 
 const char* const kOcamText =
-    "#polynomial coefficients for the DIRECT mapping function (ocam_model.ss in MATLAB). These are used by cam2world\n\n"
+    "#polynomial coefficients for the DIRECT mapping function (ocam_model.ss in MATLAB). These are used by "
+    "cam2world\n\n"
     "5 -2.063866e+02 0.000000e+00 2.165610e-03 -4.495456e-06 1.810639e-08\n\n"
     "#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB).\n\n"
     "3 293.05 151.54 -11.13\n\n#center: \"row\" and \"column\", starting from 0 (C convention)\n\n"
@@ -113,18 +119,19 @@ TEST(CalibrationFiles, FisheyeFileHasNoXi) {
 TEST(CalibrationFiles, KalibrModels) {
   t::TempDir dir;
   const std::string path = dir.file("camchain.yaml");
-  writeText(path,
-            "cam0:\n  cam_overlaps: [1]\n  camera_model: omni\n  distortion_coeffs: [-0.28, 0.07, 0.0002, 1.7e-05]\n"
-            "  distortion_model: radtan\n  intrinsics: [1.1, 458.6, 457.3, 367.2, 248.4]\n  resolution: [752, 480]\n"
-            "  rostopic: /cam0/image_raw\n"
-            "cam1:\n  T_cn_cnm1:\n  - [1.0, 0.0, 0.0, 0.1]\n  - [0.0, 1.0, 0.0, 0.0]\n  - [0.0, 0.0, 1.0, 0.0]\n"
-            "  - [0.0, 0.0, 0.0, 1.0]\n  camera_model: pinhole\n  distortion_model: equidistant\n"
-            "  distortion_coeffs: [0.01, 0.02, 0.03, 0.04]\n  intrinsics: [300, 301, 320, 240]\n  resolution: [640, 480]\n"
-            "cam2:\n  camera_model: ds\n  distortion_model: none\n  distortion_coeffs: []\n"
-            "  intrinsics: [-0.2, 0.6, 350, 351, 640, 400]\n  resolution: [1280, 800]\n"
-            "cam3:\n  camera_model: eucm\n  distortion_model: none\n  intrinsics: [0.6, 1.1, 350, 351, 640, 400]\n"
-            "cam4:\n  camera_model: omni\n  distortion_model: none\n  distortion_coeffs: []\n"
-            "  intrinsics: [0.9, 300, 300, 320, 240]\n  resolution: [640, 480]\n");
+  writeText(
+      path,
+      "cam0:\n  cam_overlaps: [1]\n  camera_model: omni\n  distortion_coeffs: [-0.28, 0.07, 0.0002, 1.7e-05]\n"
+      "  distortion_model: radtan\n  intrinsics: [1.1, 458.6, 457.3, 367.2, 248.4]\n  resolution: [752, 480]\n"
+      "  rostopic: /cam0/image_raw\n"
+      "cam1:\n  T_cn_cnm1:\n  - [1.0, 0.0, 0.0, 0.1]\n  - [0.0, 1.0, 0.0, 0.0]\n  - [0.0, 0.0, 1.0, 0.0]\n"
+      "  - [0.0, 0.0, 0.0, 1.0]\n  camera_model: pinhole\n  distortion_model: equidistant\n"
+      "  distortion_coeffs: [0.01, 0.02, 0.03, 0.04]\n  intrinsics: [300, 301, 320, 240]\n  resolution: [640, 480]\n"
+      "cam2:\n  camera_model: ds\n  distortion_model: none\n  distortion_coeffs: []\n"
+      "  intrinsics: [-0.2, 0.6, 350, 351, 640, 400]\n  resolution: [1280, 800]\n"
+      "cam3:\n  camera_model: eucm\n  distortion_model: none\n  intrinsics: [0.6, 1.1, 350, 351, 640, 400]\n"
+      "cam4:\n  camera_model: omni\n  distortion_model: none\n  distortion_coeffs: []\n"
+      "  intrinsics: [0.9, 300, 300, 320, 240]\n  resolution: [640, 480]\n");
   const CameraCalibration c0 = readCalibrationFile(path);  // the first camera
   EXPECT_EQ(c0.format, CalibrationFormat::kKalibr);
   const auto& m = std::get<MeiIntrinsics>(c0.intrinsics);
@@ -261,7 +268,8 @@ TEST(CalibrationFiles, UnknownFormatListsTheAccepted) {
 /// A FileStorage YAML with the given lines after the header.
 std::string opencvYaml(const std::string& lines) { return "%YAML:1.0\n---\n" + lines; }
 const std::string kKYaml =
-    "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 400., 0., 640., 0., 400., 480., 0., 0., 1. ]\n";
+    "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 400., 0., 640., 0., 400., 480., 0., "
+    "0., 1. ]\n";
 const std::string kDYaml =
     "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 4\n   dt: d\n   data: [ 0., 0., 0., 0. ]\n";
 
@@ -278,22 +286,30 @@ TEST(CalibrationFiles, MalformedOpenCvFilesNameTheKey) {
       {opencvYaml(kKYaml + kDYaml + "xi: -0.5\n"), "key 'xi' must be a number >= 0, found -0.5"},
       {opencvYaml(kKYaml + kDYaml + "xi: .nan\n"), "key 'xi' must be a number >= 0"},
       {opencvYaml(kKYaml + kDYaml + "xi: one\n"), "key 'xi'"},
-      {opencvYaml("camera_matrix: !!opencv-matrix\n   rows: 2\n   cols: 3\n   dt: d\n   data: [ 1., 0., 1., 0., 1., 1. ]\n" +
-                  kDYaml + "xi: 1.0\n"),
+      {opencvYaml(
+           "camera_matrix: !!opencv-matrix\n   rows: 2\n   cols: 3\n   dt: d\n   data: [ 1., 0., 1., 0., 1., 1. ]\n" +
+           kDYaml + "xi: 1.0\n"),
        "key 'camera_matrix' must be a 3x3 matrix, found 2x3"},
-      {opencvYaml("camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ -4., 0., 6., 0., 4., 4., 0., 0., 1. ]\n" +
+      {opencvYaml("camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ -4., 0., 6., 0., 4., "
+                  "4., 0., 0., 1. ]\n" +
                   kDYaml + "xi: 1.0\n"),
        "key 'camera_matrix': fx and fy must be > 0, found -4, 4"},
-      {opencvYaml("camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 4., 0., 6., 1., 4., 4., 0., 0., 1. ]\n" +
+      {opencvYaml("camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 4., 0., 6., 1., 4., "
+                  "4., 0., 0., 1. ]\n" +
                   kDYaml + "xi: 1.0\n"),
        "key 'camera_matrix' must be [fx s cx; 0 fy cy; 0 0 1]"},
-      {opencvYaml(kKYaml + "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 3\n   dt: d\n   data: [ 0., 0., 0. ]\n" +
-                  "xi: 1.0\n"),
+      {opencvYaml(
+           kKYaml +
+           "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 3\n   dt: d\n   data: [ 0., 0., 0. ]\n" +
+           "xi: 1.0\n"),
        "key 'distortion_coefficients' must be a 1x4 matrix (or its transpose), found 1x3"},
-      {opencvYaml(kKYaml + "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ 0., 0., 0., 0., 0. ]\n"),
+      {opencvYaml(kKYaml + "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ 0., "
+                           "0., 0., 0., 0. ]\n"),
        "a pinhole calibration (cv::calibrateCamera)"},
-      {opencvYaml(kKYaml + kDYaml + "xi: 1.0\nimage_width: 640\n"), "key 'image_height' must be an integer in [1, 16384]"},
-      {opencvYaml(kKYaml + kDYaml + "xi: 1.0\nimage_width: 0\nimage_height: 480\n"), "key 'image_width' must be an integer"},
+      {opencvYaml(kKYaml + kDYaml + "xi: 1.0\nimage_width: 640\n"),
+       "key 'image_height' must be an integer in [1, 16384]"},
+      {opencvYaml(kKYaml + kDYaml + "xi: 1.0\nimage_width: 0\nimage_height: 480\n"),
+       "key 'image_width' must be an integer"},
       {opencvYaml("rms: 0.4\n"), "key 'camera_matrix' is missing"},
   };
   for (const Case& c : cases) {
@@ -304,12 +320,14 @@ TEST(CalibrationFiles, MalformedOpenCvFilesNameTheKey) {
   }
   // Explicit formats: an omnidir file needs xi; without it, it is a fisheye file.
   writeText(path, opencvYaml(kKYaml + kDYaml));
-  EXPECT_NE(errorOf([&] { readCalibrationFile(path, {CalibrationFormat::kOpencvOmnidir, ""}); })
-                .find("is an OpenCV fisheye FileStorage file, not an OpenCV omnidir (Mei) FileStorage file"),
+  EXPECT_NE(errorOf([&] {
+              readCalibrationFile(path, {CalibrationFormat::kOpencvOmnidir, ""});
+            }).find("is an OpenCV fisheye FileStorage file, not an OpenCV omnidir (Mei) FileStorage file"),
             std::string::npos);
   writeText(path, opencvYaml(kKYaml + "xi: 1.0\n"));
-  EXPECT_NE(errorOf([&] { readCalibrationFile(path, {CalibrationFormat::kOpencvOmnidir, ""}); })
-                .find("key 'distortion_coefficients' is missing"),
+  EXPECT_NE(errorOf([&] {
+              readCalibrationFile(path, {CalibrationFormat::kOpencvOmnidir, ""});
+            }).find("key 'distortion_coefficients' is missing"),
             std::string::npos);
 }
 
@@ -356,10 +374,15 @@ TEST(CalibrationFiles, MalformedKalibrFilesNameTheKeyAndLine) {
   }
   // Given as Kalibr explicitly, broken YAML is named as such; a missing camera is named.
   writeText(path, "cam0:\n  camera_model: omni\n  intrinsics: [1, 2\n");
-  EXPECT_NE(errorOf([&] { readCalibrationFile(path, {CalibrationFormat::kKalibr, ""}); }).find("not valid YAML"),
+  EXPECT_NE(errorOf([&] {
+              readCalibrationFile(path, {CalibrationFormat::kKalibr, ""});
+            }).find("not valid YAML"),
             std::string::npos);
-  writeText(path, "cam0:\n  camera_model: eucm\n  distortion_model: none\n  intrinsics: [0.5, 1, 350, 351, 640, 400]\n");
-  EXPECT_NE(errorOf([&] { readCalibrationFile(path, {std::nullopt, "cam3"}); }).find("has no camera 'cam3'"),
+  writeText(path,
+            "cam0:\n  camera_model: eucm\n  distortion_model: none\n  intrinsics: [0.5, 1, 350, 351, 640, 400]\n");
+  EXPECT_NE(errorOf([&] {
+              readCalibrationFile(path, {std::nullopt, "cam3"});
+            }).find("has no camera 'cam3'"),
             std::string::npos);
 }
 

@@ -97,7 +97,8 @@ TEST(CameraModelsVsOpenCV, MeiProjectEqualsOmnidirProjectPoints) {
                                Kof(p.fx_px, p.fy_px, p.cx_px, p.cy_px, p.skew_px), p.xi, D);
     ASSERT_EQ(theirs.size(), ours.size());
     const double worst = worstDifferencePx(theirs, ours);
-    std::printf("Mei xi=%.2f vs cv::omnidir::projectPoints: %zu points, worst difference %.3g px\n", p.xi, ours.size(), worst);
+    std::printf("Mei xi=%.2f vs cv::omnidir::projectPoints: %zu points, worst difference %.3g px\n", p.xi, ours.size(),
+                worst);
     EXPECT_LE(worst, 1e-6);
   }
 }
@@ -114,7 +115,8 @@ TEST(CameraModelsVsOpenCV, KannalaBrandtProjectEqualsFisheyeProjectPoints) {
                                Kof(p.fx_px, p.fy_px, p.cx_px, p.cy_px, 0.0), D, p.skew_px / p.fx_px);
     ASSERT_EQ(theirs.size(), ours.size());
     const double worst = worstDifferencePx(theirs, ours);
-    std::printf("Kannala-Brandt vs cv::fisheye::projectPoints: %zu points, worst difference %.3g px\n", ours.size(), worst);
+    std::printf("Kannala-Brandt vs cv::fisheye::projectPoints: %zu points, worst difference %.3g px\n", ours.size(),
+                worst);
     EXPECT_LE(worst, 1e-6);
   }
 }
@@ -142,7 +144,8 @@ TEST(CameraModelsVsOpenCV, MeiUnprojectEqualsOmnidirUndistortPointsWhereItConver
       }
     }
     std::vector<cv::Vec2d> und;
-    cv::omnidir::undistortPoints(pixels, und, K, D, cv::Mat(1, 1, CV_64F, cv::Scalar(p.xi)), cv::Mat::eye(3, 3, CV_64F));
+    cv::omnidir::undistortPoints(pixels, und, K, D, cv::Mat(1, 1, CV_64F, cv::Scalar(p.xi)),
+                                 cv::Mat::eye(3, 3, CV_64F));
     std::vector<cv::Vec3d> rays;
     for (const cv::Vec2d& m : und) rays.emplace_back(m[0], m[1], 1.0);
     std::vector<cv::Vec2d> back;
@@ -155,8 +158,10 @@ TEST(CameraModelsVsOpenCV, MeiUnprojectEqualsOmnidirUndistortPointsWhereItConver
       const Eigen::Vector3d theirs = Eigen::Vector3d(und[i][0], und[i][1], 1.0).normalized();
       worst_rad = std::max(worst_rad, std::atan2(theirs.cross(ours[i]).norm(), theirs.dot(ours[i])));
     }
-    std::printf("Mei xi=%.2f vs cv::omnidir::undistortPoints: OpenCV converged on %ld of %zu pixels (up to 80 deg), "
-                "worst angle %.3g rad\n", p.xi, converged, pixels.size(), worst_rad);
+    std::printf(
+        "Mei xi=%.2f vs cv::omnidir::undistortPoints: OpenCV converged on %ld of %zu pixels (up to 80 deg), "
+        "worst angle %.3g rad\n",
+        p.xi, converged, pixels.size(), worst_rad);
     EXPECT_GT(converged, static_cast<long>(pixels.size() / 2));
     EXPECT_LE(worst_rad, 1e-11);
   }
@@ -180,8 +185,8 @@ TEST(CameraModelsVsOpenCV, KannalaBrandtUnprojectEqualsFisheyeUndistortPoints) {
     }
   }
   std::vector<cv::Vec2d> und;
-  cv::fisheye::undistortPoints(pixels, und, Kof(p.fx_px, p.fy_px, p.cx_px, p.cy_px, 0.0), cv::Vec4d(p.k1, p.k2, p.k3, p.k4),
-                               cv::noArray(), cv::noArray(),
+  cv::fisheye::undistortPoints(pixels, und, Kof(p.fx_px, p.fy_px, p.cx_px, p.cy_px, 0.0),
+                               cv::Vec4d(p.k1, p.k2, p.k3, p.k4), cv::noArray(), cv::noArray(),
                                cv::TermCriteria(cv::TermCriteria::MAX_ITER + cv::TermCriteria::EPS, 50, 1e-14));
   double worst_rad = 0.0;
   for (size_t i = 0; i < pixels.size(); ++i) {

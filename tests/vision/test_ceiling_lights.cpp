@@ -138,10 +138,11 @@ TEST(CeilingLights, SportsHallDetectionRateAndBearingRms) {
       worst_deg = std::max(worst_deg, rad2deg(ang));
       nees += e.dot(f.covariance.inverse() * e);
       nees_tuned += e.dot(lights_tuned[static_cast<size_t>(best)].covariance.inverse() * e);
-      const double s2_noise = f.sigma_px * f.sigma_px - det.options().pixel_sigma_floor_px * det.options().pixel_sigma_floor_px;
+      const double s2_noise =
+          f.sigma_px * f.sigma_px - det.options().pixel_sigma_floor_px * det.options().pixel_sigma_floor_px;
       for (size_t k = 0; k < floors.size(); ++k) {
-        const auto cov = camera::bearingCovarianceFromPixel(
-            cam, Eigen::Vector2d(f.blob.u_px, f.blob.v_px), std::sqrt(s2_noise + floors[k] * floors[k]));
+        const auto cov = camera::bearingCovarianceFromPixel(cam, Eigen::Vector2d(f.blob.u_px, f.blob.v_px),
+                                                            std::sqrt(s2_noise + floors[k] * floors[k]));
         if (cov) nees_floor[k] += e.dot(cov->inverse() * e);
       }
     }
@@ -149,13 +150,13 @@ TEST(CeilingLights, SportsHallDetectionRateAndBearingRms) {
   }
   const double rate = static_cast<double>(found) / predicted;
   const double rms_deg = rad2deg(std::sqrt(ss / found));
-  std::cout << "sports hall, " << frames << " frames: lights in view " << predicted << ", detected " << found
-            << " (" << 100.0 * rate << " %), missed " << missed_edge;
+  std::cout << "sports hall, " << frames << " frames: lights in view " << predicted << ", detected " << found << " ("
+            << 100.0 * rate << " %), missed " << missed_edge;
   if (missed_edge) std::cout << " at zenith " << min_missed_zenith << ".." << worst_missed_zenith << " deg";
-  std::cout << "; bearing error RMS " << rms_deg << " deg, worst " << worst_deg << " deg; mean NEES "
-            << nees / found << " with the library's default sigma floor 0.3 px, " << nees_tuned / found
-            << " with the config's " << tuned.pixel_sigma_floor_px << " px (2 expected); features not matched to a light "
-            << unmatched << " (false blobs rendered " << false_blobs << ")\nmean NEES by sigma floor [px]:";
+  std::cout << "; bearing error RMS " << rms_deg << " deg, worst " << worst_deg << " deg; mean NEES " << nees / found
+            << " with the library's default sigma floor 0.3 px, " << nees_tuned / found << " with the config's "
+            << tuned.pixel_sigma_floor_px << " px (2 expected); features not matched to a light " << unmatched
+            << " (false blobs rendered " << false_blobs << ")\nmean NEES by sigma floor [px]:";
   for (size_t k = 0; k < floors.size(); ++k) std::cout << " " << floors[k] << ": " << nees_floor[k] / found << ";";
   std::cout << "\n";
   double worst_light_rate = 1.0;
@@ -182,9 +183,9 @@ TEST(CeilingLights, ElongatedAndTinyBlobsAreFilteredRoundOnesKept) {
   const camera::PajdlaBaksteinCamera cam;
   const vision::CeilingLightDetector det(cam, {});
   cv::Mat img(480, 640, CV_8U, cv::Scalar(12));
-  cv::line(img, {200, 100}, {260, 100}, cv::Scalar(200), 2);  // a 60 x 2 px streak: not a lamp
+  cv::line(img, {200, 100}, {260, 100}, cv::Scalar(200), 2);    // a 60 x 2 px streak: not a lamp
   cv::circle(img, {400, 300}, 5, cv::Scalar(200), cv::FILLED);  // a lamp
-  img.at<uint8_t>(50, 320) = 200;                                // a single hot pixel (< min_area 2? = 1 px)
+  img.at<uint8_t>(50, 320) = 200;                               // a single hot pixel (< min_area 2? = 1 px)
   const auto lights = det.detect(img);
   ASSERT_EQ(lights.size(), 1u);
   EXPECT_NEAR(lights[0].blob.u_px, 400.0, 0.05);
@@ -254,7 +255,8 @@ TEST(CeilingLights, LampsNearTheRimOfTheFieldOfView) {
       const auto lights = det.detect(renderer.render(T, {L}, rng));
       const Eigen::Vector2d truth = truthBearing(T, world.camera.mounting, L.p_LinW_m);
       for (const auto& f : lights) {
-        const double e = std::hypot(wrapAngle(f.azimuth_rad - truth.x()) * std::cos(truth.y()), f.elevation_rad - truth.y());
+        const double e =
+            std::hypot(wrapAngle(f.azimuth_rad - truth.x()) * std::cos(truth.y()), f.elevation_rad - truth.y());
         if (e < deg2rad(1.0)) {
           ++found;
           ss += e * e;

@@ -130,13 +130,13 @@ TEST(FisheyeTubes, AllThreeTubesFoundWithStableAzimuthAndFewFalseBlobs) {
     false_published.push_back(falses);
     std::cout << name << ": tubes " << found.size() << ", false blobs " << falses << " (+" << falses_cut
               << " cut by the border, not published); black " << det.lastFrameStatistics().black_grey << " median "
-              << det.lastFrameStatistics().median_grey << " noise " << det.lastFrameStatistics().noise_sigma_grey
-              << ";" << line.str() << "\n";
+              << det.lastFrameStatistics().median_grey << " noise " << det.lastFrameStatistics().noise_sigma_grey << ";"
+              << line.str() << "\n";
   }
   std::vector<int> sorted = false_published;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  std::cout << "all three tubes in " << frames_all_three << " of 17 frames; median false blobs " << sorted[sorted.size() / 2]
-            << "\n";
+  std::cout << "all three tubes in " << frames_all_three << " of 17 frames; median false blobs "
+            << sorted[sorted.size() / 2] << "\n";
   EXPECT_GE(frames_all_three, 16);  // >= 90 % of 17
   EXPECT_LE(sorted[sorted.size() / 2], 2);
   for (const auto& [t, v] : az) {
@@ -203,28 +203,31 @@ TEST(LampCriteria, SaturatedWindowAndPaperAreRefusedATubeKeptWithItsAxis) {
   for (double ceiling : {40.0, 120.0}) {
     cv::theRNG().state = 11;
     cv::Mat img = frame(40.0);
-    cv::rectangle(img, {60, 200}, {180, 280}, cv::Scalar(255), cv::FILLED);            // window
-    cv::rectangle(img, {420, 330}, {520, 400}, cv::Scalar(200), cv::FILLED);           // paper
+    cv::rectangle(img, {60, 200}, {180, 280}, cv::Scalar(255), cv::FILLED);   // window
+    cv::rectangle(img, {420, 330}, {520, 400}, cv::Scalar(200), cv::FILLED);  // paper
     for (int r = 0; r < 6; ++r) cv::line(img, {425, 340 + 10 * r}, {515, 340 + 10 * r}, cv::Scalar(30), 2);
-    cv::rectangle(img, {250, 100}, {400, 140}, cv::Scalar(ceiling), cv::FILLED);        // lit ceiling
+    cv::rectangle(img, {250, 100}, {400, 140}, cv::Scalar(ceiling), cv::FILLED);  // lit ceiling
     cv::RotatedRect tube({325.0f, 120.0f}, {90.0f, 5.0f}, 20.0f);
     cv::Point2f c[4];
     tube.points(c);
     std::vector<cv::Point> poly(c, c + 4);
     cv::fillConvexPoly(img, poly, cv::Scalar(255), cv::LINE_AA);
     const auto lights = det.detect(img);
-    for (const auto& L : lights) std::cout << "  light (" << L.blob.u_px << ", " << L.blob.v_px << ") area " << L.blob.area_px << " contrast " << L.blob.surround_contrast << "\n";
+    for (const auto& L : lights)
+      std::cout << "  light (" << L.blob.u_px << ", " << L.blob.v_px << ") area " << L.blob.area_px << " contrast "
+                << L.blob.surround_contrast << "\n";
     const vision::CeilingLight* tube_light = nullptr;
     int corners = 0;
     for (const auto& L : lights) {
       const cv::Point2d p(L.blob.u_px, L.blob.v_px);
       EXPECT_FALSE(p.x > 410 && p.x < 530 && p.y > 320 && p.y < 410) << "a blob on the paper";
       if (std::hypot(p.x - 325.0, p.y - 120.0) < 5.0) tube_light = &L;
-      else if ((std::min(std::abs(p.x - 60), std::abs(p.x - 180)) < 8 && std::min(std::abs(p.y - 200), std::abs(p.y - 280)) < 8) ||
-               (std::min(std::abs(p.x - 250), std::abs(p.x - 400)) < 8 && std::min(std::abs(p.y - 100), std::abs(p.y - 140)) < 8))
+      else if ((std::min(std::abs(p.x - 60), std::abs(p.x - 180)) < 8 &&
+                std::min(std::abs(p.y - 200), std::abs(p.y - 280)) < 8) ||
+               (std::min(std::abs(p.x - 250), std::abs(p.x - 400)) < 8 &&
+                std::min(std::abs(p.y - 100), std::abs(p.y - 140)) < 8))
         ++corners;  // the limitation: a convex corner of a bright area
-      else
-        ADD_FAILURE() << "unexpected blob at " << p;
+      else ADD_FAILURE() << "unexpected blob at " << p;
     }
     EXPECT_LE(corners, 8);
     ASSERT_NE(tube_light, nullptr) << "ceiling grey " << ceiling;

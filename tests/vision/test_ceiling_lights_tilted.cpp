@@ -23,7 +23,8 @@ cv::Mat oneLamp(const camera::CameraModel& cam, cv::Point at) {
 }
 
 // (az, el) in R of pixel px through the camera and the mounting.
-Eigen::Vector2d robotAngles(const camera::CameraModel& cam, const camera::CameraMounting& m, const Eigen::Vector2d& px) {
+Eigen::Vector2d robotAngles(const camera::CameraModel& cam, const camera::CameraMounting& m,
+                            const Eigen::Vector2d& px) {
   return camera::azimuthElevation(camera::directionCameraToRobot(m, *cam.unproject(px)));
 }
 
@@ -51,7 +52,9 @@ TEST(CeilingLightsTilted, CovarianceIsTheRobotFramesAgainstCentralDifferences) {
       J.col(k) = diff / (2 * h);
     }
     const Eigen::Matrix2d expected = L.sigma_px * L.sigma_px * J * J.transpose();
-    EXPECT_LT((L.covariance - expected).norm(), 1e-6 * expected.norm()) << at << "\n" << L.covariance << "\n" << expected;
+    EXPECT_LT((L.covariance - expected).norm(), 1e-6 * expected.norm()) << at << "\n"
+                                                                        << L.covariance << "\n"
+                                                                        << expected;
     const Eigen::Vector2d ae = robotAngles(cam, m, px);
     EXPECT_NEAR(L.azimuth_rad, ae.x(), 1e-12);
     EXPECT_NEAR(L.elevation_rad, ae.y(), 1e-12);

@@ -57,8 +57,9 @@ TEST(VisionEdgeInputs, APanoramaOfMoreThanTwoToTheTwentyFourPixelsIsRefused) {
   EXPECT_FALSE(validate(o).has_value()) << *validate(o);
   o.rows = 4097;
   ASSERT_TRUE(validate(o).has_value());
-  EXPECT_EQ(*validate(o), "rows x (columns + 2 pad_columns) = 4097 x 4096 = 16781312 pixels, more than 16777216 "
-                          "(4096 x 4096); lower columns or rows");
+  EXPECT_EQ(*validate(o),
+            "rows x (columns + 2 pad_columns) = 4097 x 4096 = 16781312 pixels, more than 16777216 "
+            "(4096 x 4096); lower columns or rows");
   o.rows = 20000, o.columns = 20000;
   EXPECT_TRUE(validate(o).has_value());
   // With rows 0 the count follows the radii: 1091 rows x 20047 columns.

@@ -57,8 +57,9 @@ const std::string kLines = "detector: vertical_lines\nvertical_lines: {r_min_px:
 TEST(FeaturesCameraConfig, AutoAndExplicitFormats) {
   t::TempDir dir;
   writeOmnidir(dir.file("omni.yaml"));
-  const std::string cam = "  file: omni.yaml\n  optics: catadioptric\n  width_px: 1280\n  height_px: 960\n"
-                          "  mounting: {z_m: 1.0}\n";
+  const std::string cam =
+      "  file: omni.yaml\n  optics: catadioptric\n  width_px: 1280\n  height_px: 960\n"
+      "  mounting: {z_m: 1.0}\n";
   for (const char* model : {"auto", "opencv_omnidir"}) {
     const auto det = detectorOf(dir, kLights + "camera:\n  model: " + model + "\n" + cam);
     EXPECT_NE(det->describe().find("OpenCV omnidir (Mei) calibration"), std::string::npos) << det->describe();
@@ -132,8 +133,9 @@ TEST(FeaturesCameraConfig, KalibrCameraAndSizeAgreement) {
 TEST(FeaturesCameraConfig, MountingRollPitch) {
   t::TempDir dir;
   writeOmnidir(dir.file("omni.yaml"));
-  const std::string cam = "camera:\n  model: auto\n  file: omni.yaml\n  optics: dioptric\n  width_px: 1280\n"
-                          "  height_px: 960\n";
+  const std::string cam =
+      "camera:\n  model: auto\n  file: omni.yaml\n  optics: dioptric\n  width_px: 1280\n"
+      "  height_px: 960\n";
   const auto det =
       detectorOf(dir, kLights + cam + "  mounting: {z_m: 1.0, yaw_deg: 10, pitch_deg: 20, roll_deg: -30}\n");
   EXPECT_DOUBLE_EQ(det->mounting().yaw_rad, deg2rad(10.0));
@@ -145,10 +147,10 @@ TEST(FeaturesCameraConfig, MountingRollPitch) {
   EXPECT_NE(m.find("key 'camera.mounting.pitch_deg' and 'roll_deg' tilt the optical axis 0.56"), std::string::npos)
       << m;
   EXPECT_NE(m.find("vertical_lines needs at most 0.5 deg"), std::string::npos) << m;
-  EXPECT_THROW(features::verticalLineOptions(config::Node::loadString(
-                   kLines + "camera: {model: centre_only, width_px: 640, height_px: 480, "
-                            "mounting: {z_m: 1, roll_deg: 2}}\n",
-                   "lines.yaml")),
+  EXPECT_THROW(features::verticalLineOptions(
+                   config::Node::loadString(kLines + "camera: {model: centre_only, width_px: 640, height_px: 480, "
+                                                     "mounting: {z_m: 1, roll_deg: 2}}\n",
+                                            "lines.yaml")),
                config::ConfigError);
 }
 
@@ -163,8 +165,8 @@ TEST(FeaturesCameraConfig, WorldMountingRollPitch) {
   // The lights renderer takes the whole rotation: world <- robot (yaw of the pose) <- camera.
   const Pose2 T{3.0, 1.0, 0.7};
   const Eigen::Matrix3d R = vision::cameraInWorld(T, w.camera.mounting).R_WfromC;
-  const Eigen::Matrix3d expect =
-      Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix() * camera::rotationCameraToRobot(w.camera.mounting);
+  const Eigen::Matrix3d expect = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                                 camera::rotationCameraToRobot(w.camera.mounting);
   EXPECT_LT((R - expect).norm(), 1e-15);
   EXPECT_NEAR(std::acos((R * Eigen::Vector3d::UnitZ()).z()), deg2rad(std::hypot(5.0, 2.0)), deg2rad(0.05));
 }

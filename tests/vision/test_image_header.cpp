@@ -28,16 +28,16 @@ struct Case {
 std::vector<Case> cases() {
   const std::vector<int> none, progressive{cv::IMWRITE_JPEG_PROGRESSIVE, 1}, binary{cv::IMWRITE_PXM_BINARY, 1},
       ascii{cv::IMWRITE_PXM_BINARY, 0};
-  return {{".png", CV_8UC1, none, ImageCodec::kPng},   {".png", CV_8UC3, none, ImageCodec::kPng},
-          {".png", CV_8UC4, none, ImageCodec::kPng},   {".png", CV_16UC1, none, ImageCodec::kPng},
-          {".png", CV_16UC3, none, ImageCodec::kPng},  {".png", CV_16UC4, none, ImageCodec::kPng},
-          {".jpg", CV_8UC1, none, ImageCodec::kJpeg},  {".jpg", CV_8UC3, none, ImageCodec::kJpeg},
+  return {{".png", CV_8UC1, none, ImageCodec::kPng},         {".png", CV_8UC3, none, ImageCodec::kPng},
+          {".png", CV_8UC4, none, ImageCodec::kPng},         {".png", CV_16UC1, none, ImageCodec::kPng},
+          {".png", CV_16UC3, none, ImageCodec::kPng},        {".png", CV_16UC4, none, ImageCodec::kPng},
+          {".jpg", CV_8UC1, none, ImageCodec::kJpeg},        {".jpg", CV_8UC3, none, ImageCodec::kJpeg},
           {".jpg", CV_8UC1, progressive, ImageCodec::kJpeg}, {".jpg", CV_8UC3, progressive, ImageCodec::kJpeg},
-          {".bmp", CV_8UC1, none, ImageCodec::kBmp},   {".bmp", CV_8UC3, none, ImageCodec::kBmp},
-          {".bmp", CV_8UC4, none, ImageCodec::kBmp},   {".pgm", CV_8UC1, binary, ImageCodec::kPnm},
-          {".pgm", CV_16UC1, binary, ImageCodec::kPnm}, {".ppm", CV_8UC3, binary, ImageCodec::kPnm},
-          {".ppm", CV_16UC3, binary, ImageCodec::kPnm}, {".pgm", CV_8UC1, ascii, ImageCodec::kPnm},
-          {".ppm", CV_8UC3, ascii, ImageCodec::kPnm},  {".pbm", CV_8UC1, binary, ImageCodec::kPnm}};
+          {".bmp", CV_8UC1, none, ImageCodec::kBmp},         {".bmp", CV_8UC3, none, ImageCodec::kBmp},
+          {".bmp", CV_8UC4, none, ImageCodec::kBmp},         {".pgm", CV_8UC1, binary, ImageCodec::kPnm},
+          {".pgm", CV_16UC1, binary, ImageCodec::kPnm},      {".ppm", CV_8UC3, binary, ImageCodec::kPnm},
+          {".ppm", CV_16UC3, binary, ImageCodec::kPnm},      {".pgm", CV_8UC1, ascii, ImageCodec::kPnm},
+          {".ppm", CV_8UC3, ascii, ImageCodec::kPnm},        {".pbm", CV_8UC1, binary, ImageCodec::kPnm}};
 }
 
 std::string name(const Case& c) {
@@ -88,7 +88,8 @@ TEST(ImageHeader, EveryTruncationIsRefusedOrReportedIncomplete) {
         continue;
       }
       if (ascii_pnm) continue;
-      EXPECT_TRUE(checkComplete(*r.header, buf.data(), n).has_value()) << name(c) << " prefix " << n << " of " << buf.size();
+      EXPECT_TRUE(checkComplete(*r.header, buf.data(), n).has_value())
+          << name(c) << " prefix " << n << " of " << buf.size();
       EXPECT_FALSE(decodeImageBytes(buf.data(), n).ok()) << name(c) << " prefix " << n;
     }
   }
@@ -117,7 +118,12 @@ TEST(ImageHeader, FuzzedBytesNeverCrashAndGiveSaneFigures) {
   std::mt19937 rng(20261126);
   const std::vector<std::vector<uint8_t>> signatures = {
       {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R'},
-      {0xFF, 0xD8, 0xFF}, {'B', 'M'}, {'P', '5'}, {'P', '6', ' '}, {'P', '4', '\n'}, {'P', '1'}};
+      {0xFF, 0xD8, 0xFF},
+      {'B', 'M'},
+      {'P', '5'},
+      {'P', '6', ' '},
+      {'P', '4', '\n'},
+      {'P', '1'}};
   for (int trial = 0; trial < 20000; ++trial) {
     std::vector<uint8_t> d(std::uniform_int_distribution<size_t>(0, 300)(rng));
     for (auto& b : d) b = static_cast<uint8_t>(rng());
@@ -134,7 +140,8 @@ TEST(ImageHeader, FuzzedBytesNeverCrashAndGiveSaneFigures) {
       auto d = good;
       const int edits = 1 + trial % 4;
       for (int e = 0; e < edits; ++e)
-        d[std::uniform_int_distribution<size_t>(0, std::min<size_t>(63, d.size() - 1))(rng)] = static_cast<uint8_t>(rng());
+        d[std::uniform_int_distribution<size_t>(0, std::min<size_t>(63, d.size() - 1))(rng)] =
+            static_cast<uint8_t>(rng());
       if (trial % 3 == 0) d.resize(std::uniform_int_distribution<size_t>(0, d.size())(rng));
       const auto r = readImageHeader(d.data(), d.size());
       expectSane(r, name(c) + " trial " + std::to_string(trial));
@@ -240,7 +247,9 @@ TEST(ImageHeader, ATruncatedJpegThatImdecodeAcceptsIsRefused) {
     const DecodedImage d = decodeImageBytes(cut.data(), cut.size());
     EXPECT_EQ(d.fault, ImageFault::kTruncated) << progressive;
     EXPECT_TRUE(isCorruption(d.fault));
-    EXPECT_EQ(d.error.rfind("truncated JPEG: no end-of-image marker (EOI) in its " + std::to_string(cut.size()) + " bytes", 0), 0u)
+    EXPECT_EQ(d.error.rfind(
+                  "truncated JPEG: no end-of-image marker (EOI) in its " + std::to_string(cut.size()) + " bytes", 0),
+              0u)
         << d.error;
     // Bytes after EOI (camera trailers) are allowed; the last byte of EOI missing is not.
     auto trailer = buf;
@@ -313,7 +322,8 @@ TEST(ImageHeader, OtherFormatsAndUnknownBytesAreRefusedWithAReason) {
             "not a PNG, JPEG, BMP or PGM/PPM/PBM image (unknown signature)");
   EXPECT_EQ(readImageHeader(nullptr, 0).error, "image of 0 bytes: no header");
   const uint8_t sos_first[] = {0xFF, 0xD8, 0xFF, 0xDA, 0, 2};
-  EXPECT_EQ(readImageHeader(sos_first, sizeof sos_first).error, "JPEG: marker 0xFFDA at byte 3 before any frame header");
+  EXPECT_EQ(readImageHeader(sos_first, sizeof sos_first).error,
+            "JPEG: marker 0xFFDA at byte 3 before any frame header");
 }
 
 // The stand-in for a header's image costs one row, whatever its height, and reads as zeros.

@@ -58,19 +58,21 @@ bool hasLineNear(const std::vector<vision::VerticalLine>& lines, double deg, dou
   return false;
 }
 
-std::string tempPath(const std::string& name) { return (fs::temp_directory_path() / ("omnislam_mask_" + name)).string(); }
+std::string tempPath(const std::string& name) {
+  return (fs::temp_directory_path() / ("omnislam_mask_" + name)).string();
+}
 
 }  // namespace
 
 TEST(ImageMask, AnnulusKeepsTheRingAndCombineIsAnd) {
   const cv::Mat a = vision::annulusMask({100.0, 50.0, 10.0, 30.0}, 200, 100);
   ASSERT_EQ(a.type(), CV_8UC1);
-  EXPECT_EQ(a.at<uint8_t>(50, 100), 0);        // centre: inside r_min
-  EXPECT_EQ(a.at<uint8_t>(50, 120), 255);      // r = 20
-  EXPECT_EQ(a.at<uint8_t>(50, 130), 255);      // r = 30: on r_max, kept
-  EXPECT_EQ(a.at<uint8_t>(50, 131), 0);        // r = 31
+  EXPECT_EQ(a.at<uint8_t>(50, 100), 0);    // centre: inside r_min
+  EXPECT_EQ(a.at<uint8_t>(50, 120), 255);  // r = 20
+  EXPECT_EQ(a.at<uint8_t>(50, 130), 255);  // r = 30: on r_max, kept
+  EXPECT_EQ(a.at<uint8_t>(50, 131), 0);    // r = 31
   cv::Mat half = cv::Mat::zeros(100, 200, CV_8U);
-  half.colRange(0, 100).setTo(7);              // any non-zero value = use
+  half.colRange(0, 100).setTo(7);  // any non-zero value = use
   const cv::Mat both = vision::combineMasks(a, half);
   EXPECT_EQ(both.at<uint8_t>(50, 80), 255);
   EXPECT_EQ(both.at<uint8_t>(50, 120), 0);
@@ -99,7 +101,8 @@ TEST(ImageMask, MaskFilesOfAnySupportedFormatAndTheirErrors) {
 
 TEST(ImageMask, NoLineFromMaskedPixelsNorAtTheMaskBorder) {
   // Bright background, a dark wedge from 80 to 100 deg (a support rod) and a radial edge at 30 deg.
-  const cv::Mat img = polarImage([](double a, double) { return (a > 80.0 && a < 100.0) ? 25 : (a > 30.0 ? 200 : 120); });
+  const cv::Mat img =
+      polarImage([](double a, double) { return (a > 80.0 && a < 100.0) ? 25 : (a > 30.0 ? 200 : 120); });
   const vision::VerticalLineDetector plain(options(), 640, 480);
   const auto all = plain.detect(img);
   ASSERT_TRUE(hasLineNear(all, 80.0) && hasLineNear(all, 100.0) && hasLineNear(all, 30.0));
@@ -137,13 +140,15 @@ TEST(ImageMask, ConfigKeysLoadTheMaskAndNameTheKeyOnErrors) {
   const std::string png = tempPath("cfg.png");
   ASSERT_TRUE(cv::imwrite(png, cv::Mat(480, 640, CV_8U, cv::Scalar(255))));
   auto config = [&](const std::string& camera_extra) {
-    return config::Node::loadString("detector: vertical_lines\ncamera:\n  model: centre_only\n  width_px: 640\n"
-                                    "  height_px: 480\n  mounting: {z_m: 0.5}\n" + camera_extra +
-                                        "vertical_lines: {centre_u_px: 320, centre_v_px: 240, r_min_px: 20, r_max_px: 230}\n",
-                                    "test.yaml");
+    return config::Node::loadString(
+        "detector: vertical_lines\ncamera:\n  model: centre_only\n  width_px: 640\n"
+        "  height_px: 480\n  mounting: {z_m: 0.5}\n" +
+            camera_extra + "vertical_lines: {centre_u_px: 320, centre_v_px: 240, r_min_px: 20, r_max_px: 230}\n",
+        "test.yaml");
   };
   EXPECT_TRUE(features::cameraMask(config("")).empty());
-  const cv::Mat m = features::cameraMask(config("  mask: " + png + "\n  mask_annulus: {centre_u_px: 320, centre_v_px: 240, "
+  const cv::Mat m = features::cameraMask(config("  mask: " + png +
+                                                "\n  mask_annulus: {centre_u_px: 320, centre_v_px: 240, "
                                                 "r_min_px: 50, r_max_px: 100}\n"));
   ASSERT_FALSE(m.empty());
   EXPECT_EQ(m.at<uint8_t>(240, 320 + 75), 255);
@@ -157,13 +162,17 @@ TEST(ImageMask, ConfigKeysLoadTheMaskAndNameTheKeyOnErrors) {
     return std::string("no error");
   };
   ASSERT_TRUE(cv::imwrite(png, cv::Mat(240, 320, CV_8U, cv::Scalar(255))));
-  EXPECT_NE(errorOf("  mask: " + png + "\n").find("camera.mask"), std::string::npos) << errorOf("  mask: " + png + "\n");
-  EXPECT_NE(errorOf("  mask_annulus: {centre_u_px: 320, centre_v_px: 240, r_min_px: 50, r_max_px: 40}\n").find("r_max_px"),
-            std::string::npos);
-  EXPECT_NE(errorOf("  mask_annulus: {centre_u_px: 320, centre_v_px: 240, r_min_px: 50, r_max_px: 90, r: 1}\n").find("r"),
-            std::string::npos);
-  EXPECT_NE(errorOf("  mask_annulus: {centre_u_px: 2000, centre_v_px: 240, r_min_px: 0, r_max_px: 10}\n").find("centre_u_px"),
-            std::string::npos);
+  EXPECT_NE(errorOf("  mask: " + png + "\n").find("camera.mask"), std::string::npos)
+      << errorOf("  mask: " + png + "\n");
+  EXPECT_NE(
+      errorOf("  mask_annulus: {centre_u_px: 320, centre_v_px: 240, r_min_px: 50, r_max_px: 40}\n").find("r_max_px"),
+      std::string::npos);
+  EXPECT_NE(
+      errorOf("  mask_annulus: {centre_u_px: 320, centre_v_px: 240, r_min_px: 50, r_max_px: 90, r: 1}\n").find("r"),
+      std::string::npos);
+  EXPECT_NE(
+      errorOf("  mask_annulus: {centre_u_px: 2000, centre_v_px: 240, r_min_px: 0, r_max_px: 10}\n").find("centre_u_px"),
+      std::string::npos);
   fs::remove(png);
 }
 

@@ -70,7 +70,8 @@ cv::Mat render(const Scene& s, double rot, double bu, double bv) {
       double g = 8.0;
       if (r >= 30 && r <= 300) g = sceneGrey(s, std::atan2(y - kCv, x - kCu), r, rot);
       const double cx = (x - bu) / 16.0 + 3.0, cy = (y - bv) / 16.0 + 3.0;
-      if (cx >= 0 && cx < 6 && cy >= 0 && cy < 6) g = ((static_cast<int>(cx) + static_cast<int>(cy)) % 2) ? 245.0 : 15.0;
+      if (cx >= 0 && cx < 6 && cy >= 0 && cy < 6)
+        g = ((static_cast<int>(cx) + static_cast<int>(cy)) % 2) ? 245.0 : 15.0;
       img.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(g);
     }
   return img;
@@ -98,8 +99,10 @@ TEST(PanoramaRotation, SyntheticSceneTurnedByKnownAnglesWithAMovingCheckerboard)
   ro.pad_columns = pano.options().pad_columns;
   // Reference with the board at the right; the turned images have it elsewhere.
   const cv::Mat ref = pano.unwarp(render(scene, 0.0, kCu + 170, kCv + 20));
-  const double cases[][3] = {{37.31, kCu - 150, kCv + 60}, {-123.456, kCu + 30, kCv - 170},
-                             {0.137, kCu - 60, kCv + 150}, {179.62, kCu + 170, kCv + 20},
+  const double cases[][3] = {{37.31, kCu - 150, kCv + 60},
+                             {-123.456, kCu + 30, kCv - 170},
+                             {0.137, kCu - 60, kCv + 150},
+                             {179.62, kCu + 170, kCv + 20},
                              {-2.08, kCu + 120, kCv - 120}};
   double worst = 0;
   for (const auto& c : cases) {
@@ -107,8 +110,8 @@ TEST(PanoramaRotation, SyntheticSceneTurnedByKnownAnglesWithAMovingCheckerboard)
     const auto r = vision::estimatePanoramaRotation(ref, img, ro, mask, mask);
     ASSERT_TRUE(r.has_value());
     const double err = rad2deg(wrapAngle(r->rotation_rad - deg2rad(c[0])));
-    std::cout << "true " << c[0] << " deg, estimated " << rad2deg(r->rotation_rad) << " deg (error " << err
-              << " deg), " << r->inliers << " of " << r->sectors_used << " sectors agree, score " << r->score << "\n";
+    std::cout << "true " << c[0] << " deg, estimated " << rad2deg(r->rotation_rad) << " deg (error " << err << " deg), "
+              << r->inliers << " of " << r->sectors_used << " sectors agree, score " << r->score << "\n";
     EXPECT_NEAR(err, 0.0, 0.05) << c[0];
     // A pure rotation about the centre: no image shift in the motion fit.
     const auto m = vision::fitPanoramaMotion(*r, pano);

@@ -107,8 +107,8 @@ TEST(RenderRoom, LineEdgeSitsAtTheProjectedAzimuthWithBothSidesColours) {
   // cabinet corner between two of its faces and a room corner, seen from poses where no other
   // edge is within ~3 px, at two heights.
   const std::vector<std::pair<std::string, Pose2>> cases = {
-      {"wall 0 panels 1|2", Pose2{1.5, 1.2, 0.3}},   {"wall 0 panels 7|8", Pose2{5.0, 1.0, -2.0}},
-      {"wall 1 panels 0|1", Pose2{6.0, 2.0, 1.0}},   {"wall 2 panels 5|6", Pose2{2.0, 2.8, 0.0}},
+      {"wall 0 panels 1|2", Pose2{1.5, 1.2, 0.3}},    {"wall 0 panels 7|8", Pose2{5.0, 1.0, -2.0}},
+      {"wall 1 panels 0|1", Pose2{6.0, 2.0, 1.0}},    {"wall 2 panels 5|6", Pose2{2.0, 2.8, 0.0}},
       {"box cabinet corner 2", Pose2{6.5, 1.5, 2.5}}, {"corner 1", Pose2{5.0, 3.0, 0.4}}};
   const double z_c = w.camera.mounting.z_m;
   int checked = 0;
@@ -153,8 +153,8 @@ TEST(RenderRoom, LineEdgeSitsAtTheProjectedAzimuthWithBothSidesColours) {
         (frac(m) < 0.5 ? s_lo : s_hi) = m;
       }
       const double offset_px = 0.5 * (s_lo + s_hi);
-      std::cout << what << " z=" << z << ": edge " << offset_px << " px from the projection at rho "
-                << rho << " px" << std::endl;
+      std::cout << what << " z=" << z << ": edge " << offset_px << " px from the projection at rho " << rho << " px"
+                << std::endl;
       EXPECT_LT(std::abs(offset_px), 0.15) << what;
       ++checked;
     }
@@ -175,8 +175,8 @@ TEST(RenderRoom, OutsideTheFieldOfViewIsBlackAndSeedsRepeat) {
   EXPECT_EQ(cv::norm(ia, ib, cv::NORM_INF), 0.0);
   EXPECT_GT(cv::norm(ia, ic, cv::NORM_L1), 0.0);
   // Corners, the centre (the camera's own reflection) and a pixel beyond 65 deg are black.
-  for (const auto& p : {cv::Point(0, 0), cv::Point(639, 479), cv::Point(320, 240), cv::Point(320, 240 - 30),
-                        cv::Point(320 + 238, 240)})
+  for (const auto& p :
+       {cv::Point(0, 0), cv::Point(639, 479), cv::Point(320, 240), cv::Point(320, 240 - 30), cv::Point(320 + 238, 240)})
     EXPECT_EQ(ia.at<cv::Vec3b>(p), cv::Vec3b(0, 0, 0)) << p;
   // Inside: colour everywhere (the room is closed).
   EXPECT_GT(ia.at<cv::Vec3b>(240, 320 + 150)[0] + ia.at<cv::Vec3b>(240, 320 + 150)[1], 40);

@@ -169,7 +169,8 @@ TEST(SlamView, ImagePanelMarksEachFeatureAtItsPixelInTheColourOfItsAssociation) 
   const cv::Point q1 = px(L.imageToView(f1.u_px, f1.v_px));
   int green = 0;
   for (int y = q1.y - 22; y <= q1.y - 4; ++y)
-    for (int x = q1.x + 10; x <= q1.x + 24; ++x) green += colourDistance(img, {x, y}, view_colours::kFeatAssociated) < 60;
+    for (int x = q1.x + 10; x <= q1.x + 24; ++x)
+      green += colourDistance(img, {x, y}, view_colours::kFeatAssociated) < 60;
   EXPECT_GT(green, 5);
   // Far from every feature the image is untouched.
   EXPECT_LE(colourDistance(img, px(L.imageToView(320, 240)), cv::Scalar(0, 0, 0)), 0);

@@ -47,19 +47,18 @@ cv::Mat sectorImage(const std::vector<Sector>& sectors, double cu, double cv_, d
           }
           for (int k = 0; k < 3; ++k) acc[k] += c[k];
         }
-      img.at<cv::Vec3b>(v, u) = cv::Vec3b(static_cast<uint8_t>(std::lround(acc[0] / 64)),
-                                          static_cast<uint8_t>(std::lround(acc[1] / 64)),
-                                          static_cast<uint8_t>(std::lround(acc[2] / 64)));
+      img.at<cv::Vec3b>(v, u) =
+          cv::Vec3b(static_cast<uint8_t>(std::lround(acc[0] / 64)), static_cast<uint8_t>(std::lround(acc[1] / 64)),
+                    static_cast<uint8_t>(std::lround(acc[2] / 64)));
     }
   return img;
 }
 
-const std::vector<Sector> kSectors = {{-177.3, {40, 40, 200}},  // red; its twin in the panorama's wrapped columns is dropped
-                                      {-60.0, {200, 200, 200}},
-                                      {10.0, {40, 160, 40}},  // green
-                                      {55.3, {220, 60, 60}},  // blue
-                                      {100.7, {150, 150, 150}},
-                                      {170.0, {30, 230, 230}}};
+const std::vector<Sector> kSectors = {
+    {-177.3, {40, 40, 200}},                          // red; its twin in the panorama's wrapped columns is dropped
+    {-60.0, {200, 200, 200}}, {10.0, {40, 160, 40}},  // green
+    {55.3, {220, 60, 60}},                            // blue
+    {100.7, {150, 150, 150}}, {170.0, {30, 230, 230}}};
 
 vision::VerticalLineOptions synthOptions() {
   vision::VerticalLineOptions o;

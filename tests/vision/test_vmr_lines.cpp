@@ -117,7 +117,8 @@ TEST(VmrImages, LinesFoundInAllTenImagesAgreeWithinHalfADegree) {
   // rows) matched in image k's panorama by normalised correlation of the horizontal gradient
   // (invalid pixels zeroed), within +-kSearch columns of the global rotation, parabola refined.
   // Uses image k's pixels only, not its detected lines.
-  const int pad = o.panorama.pad_columns, ncol = o.panorama.columns, kHalf = 32, kSearch = 24, kWrap = kHalf + kSearch + 2;
+  const int pad = o.panorama.pad_columns, ncol = o.panorama.columns, kHalf = 32, kSearch = 24,
+            kWrap = kHalf + kSearch + 2;
   std::vector<cv::Mat> grad;  // central columns, wrapped by kWrap on each side
   {
     cv::Mat me;
@@ -148,7 +149,8 @@ TEST(VmrImages, LinesFoundInAllTenImagesAgreeWithinHalfADegree) {
     }
     const int b = static_cast<int>(std::max_element(ncc.begin(), ncc.end()) - ncc.begin());
     if (b == 0 || b + 1 == static_cast<int>(ncc.size())) return std::nullopt;  // at the search edge
-    const double l = ncc[static_cast<size_t>(b - 1)], m = ncc[static_cast<size_t>(b)], r = ncc[static_cast<size_t>(b + 1)];
+    const double l = ncc[static_cast<size_t>(b - 1)], m = ncc[static_cast<size_t>(b)],
+                 r = ncc[static_cast<size_t>(b + 1)];
     const double den = l - 2 * m + r, off = den < 0 ? std::clamp(0.5 * (l - r) / den, -0.5, 0.5) : 0.0;
     return wrapAngle((s0 - kSearch + b + off) * col_rad);
   };
@@ -204,7 +206,7 @@ TEST(VmrImages, LinesFoundInAllTenImagesAgreeWithinHalfADegree) {
   }
   std::cout << in_all << " lines of image 0 found in all ten images; max - min of their ten azimuths: worst " << worst
             << " deg after the local rotation (" << over << " above " << kBound << " deg), worst " << worst_global
-            << " deg after the global rotation (" << over_global << " above " << kBound
-            << " deg); annotated images in " << out << "\n";
+            << " deg after the global rotation (" << over_global << " above " << kBound << " deg); annotated images in "
+            << out << "\n";
   EXPECT_GE(in_all, 10);
 }

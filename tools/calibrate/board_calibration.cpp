@@ -38,10 +38,8 @@ cv::Mat asMat(const std::vector<cv::Point2d>& p) { return cv::Mat(p, true).resha
 
 std::vector<cv::Point2d> project(const Calibration& c, const cv::Mat& obj, const cv::Vec3d& r, const cv::Vec3d& t) {
   std::vector<cv::Point2d> out;
-  if (c.model == LensModel::kOmnidir)
-    cv::omnidir::projectPoints(obj, out, r, t, c.K, c.xi, c.D);
-  else
-    cv::fisheye::projectPoints(obj, out, r, t, c.K, c.D, c.K(0, 1) / c.K(0, 0));
+  if (c.model == LensModel::kOmnidir) cv::omnidir::projectPoints(obj, out, r, t, c.K, c.xi, c.D);
+  else cv::fisheye::projectPoints(obj, out, r, t, c.K, c.D, c.K(0, 1) / c.K(0, 0));
   return out;
 }
 
@@ -160,7 +158,8 @@ void writeCalibration(const std::string& path, const Calibration& c, const std::
     extrinsics.push_back(cv::Mat(cv::Matx16d(r[0], r[1], r[2], t[0], t[1], t[2])));
   }
   fs << "calibration_time" << when << "nFrames" << static_cast<int>(used.size()) << "flags" << c.flags;
-  fs << "camera_matrix" << cv::Mat(c.K) << "distortion_coefficients" << cv::Mat(cv::Matx14d(c.D[0], c.D[1], c.D[2], c.D[3]));
+  fs << "camera_matrix" << cv::Mat(c.K) << "distortion_coefficients"
+     << cv::Mat(cv::Matx14d(c.D[0], c.D[1], c.D[2], c.D[3]));
   if (c.model == LensModel::kOmnidir) fs << "xi" << c.xi;
   fs << "used_imgs" << used << "extrinsic_parameters" << extrinsics << "rms" << c.rms_px;
   fs << "image_width" << c.image_size.width << "image_height" << c.image_size.height;
@@ -168,10 +167,8 @@ void writeCalibration(const std::string& path, const Calibration& c, const std::
 
 cv::Mat annotateView(const cv::Mat& image, const BoardView* view, const ViewResult* result, const BoardSpec& board) {
   cv::Mat out;
-  if (image.channels() == 1)
-    cv::cvtColor(image, out, cv::COLOR_GRAY2BGR);
-  else
-    out = image.clone();
+  if (image.channels() == 1) cv::cvtColor(image, out, cv::COLOR_GRAY2BGR);
+  else out = image.clone();
   const double scale = std::max(1.0, image.cols / 800.0);
   const auto text = [&](const std::string& s, const cv::Scalar& colour) {
     cv::putText(out, s, cv::Point(10, static_cast<int>(30 * scale)), cv::FONT_HERSHEY_SIMPLEX, 0.8 * scale, colour,
@@ -184,7 +181,8 @@ cv::Mat annotateView(const cv::Mat& image, const BoardView* view, const ViewResu
   std::vector<cv::Point2f> found(view->corners.begin(), view->corners.end());
   cv::drawChessboardCorners(out, board.inner_corners, found, true);
   if (!result || !result->used) {
-    text("corners found (" + std::string(view->detector) + "); view not used by the calibration", cv::Scalar(0, 165, 255));
+    text("corners found (" + std::string(view->detector) + "); view not used by the calibration",
+         cv::Scalar(0, 165, 255));
     return out;
   }
   for (const cv::Point2d& p : result->reprojected)

@@ -39,20 +39,20 @@ std::optional<BoardView> detectBoard(const cv::Mat& grey, const BoardSpec& board
 
 /// One view's calibration outcome.
 struct ViewResult {
-  bool used = false;                    ///< false: cv::omnidir dropped it at initialisation
-  double rms_px = 0.0;                  ///< sqrt(mean |corner - reprojection|^2)
+  bool used = false;                     ///< false: cv::omnidir dropped it at initialisation
+  double rms_px = 0.0;                   ///< sqrt(mean |corner - reprojection|^2)
   std::vector<cv::Point2d> reprojected;  ///< [px], the board's corners through the calibrated model
-  cv::Vec3d rvec, tvec;                 ///< board pose in the camera frame (Rodrigues [rad], [m])
+  cv::Vec3d rvec, tvec;                  ///< board pose in the camera frame (Rodrigues [rad], [m])
 };
 
 struct Calibration {
   LensModel model = LensModel::kOmnidir;
   cv::Size image_size;
-  cv::Matx33d K;      ///< [fx s cx; 0 fy cy; 0 0 1] [px]
-  cv::Vec4d D;        ///< omnidir: k1 k2 p1 p2; fisheye: k1 k2 k3 k4
-  double xi = 0.0;    ///< omnidir only
-  int flags = 0;      ///< the OpenCV calibration flags used
-  double rms_px = 0;  ///< over every corner of the used views, sqrt(mean |e|^2)
+  cv::Matx33d K;                  ///< [fx s cx; 0 fy cy; 0 0 1] [px]
+  cv::Vec4d D;                    ///< omnidir: k1 k2 p1 p2; fisheye: k1 k2 k3 k4
+  double xi = 0.0;                ///< omnidir only
+  int flags = 0;                  ///< the OpenCV calibration flags used
+  double rms_px = 0;              ///< over every corner of the used views, sqrt(mean |e|^2)
   std::vector<ViewResult> views;  ///< one per input view, in order
 };
 

@@ -32,7 +32,8 @@ CLI::Validator gridSize(int lo, int hi) {
           return "'" + s + "' is not COLSxROWS, e.g. 9x6";
         const int a = std::stoi(m[1]), b = std::stoi(m[2]);
         if (a < lo || a > hi || b < lo || b > hi)
-          return "'" + s + "': each of COLS and ROWS must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+          return "'" + s + "': each of COLS and ROWS must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                 "]";
         return {};
       },
       "COLSxROWS");
@@ -65,9 +66,9 @@ Found findBoards(const Options& o, const calib::BoardSpec& board) {
     if (grey.empty()) throw std::invalid_argument("cannot decode the image '" + p.string() + "'");
     if (f.size.empty()) f.size = grey.size();
     if (grey.size() != f.size)
-      throw std::invalid_argument("'" + p.string() + "' is " + std::to_string(grey.cols) + "x" + std::to_string(grey.rows) +
-                                  ", the first image " + std::to_string(f.size.width) + "x" +
-                                  std::to_string(f.size.height) + ": one camera, one image size");
+      throw std::invalid_argument("'" + p.string() + "' is " + std::to_string(grey.cols) + "x" +
+                                  std::to_string(grey.rows) + ", the first image " + std::to_string(f.size.width) +
+                                  "x" + std::to_string(f.size.height) + ": one camera, one image size");
     auto v = calib::detectBoard(grey, board);
     f.view_of_file.push_back(v ? static_cast<int>(f.views.size()) : -1);
     std::cout << p.filename().string() << ": " << (v ? std::string("board found (") + v->detector + ")" : "no board")
@@ -83,14 +84,16 @@ Found findBoards(const Options& o, const calib::BoardSpec& board) {
       if (f.view_of_file[i] < 0) failed += (failed.empty() ? "" : ", ") + f.files[i].filename().string();
     throw std::invalid_argument("boards found in " + std::to_string(f.views.size()) + " of " +
                                 std::to_string(f.files.size()) + " images, fewer than --min-boards " +
-                                std::to_string(o.min_boards) + "; no board of " + std::to_string(board.inner_corners.width) +
-                                "x" + std::to_string(board.inner_corners.height) + " inner corners in: " + failed);
+                                std::to_string(o.min_boards) + "; no board of " +
+                                std::to_string(board.inner_corners.width) + "x" +
+                                std::to_string(board.inner_corners.height) + " inner corners in: " + failed);
   }
   return f;
 }
 
 void report(const Found& f, const calib::Calibration& c, double seconds) {
-  std::printf("model %s, %d of %zu images used, %.1f s\n", c.model == calib::LensModel::kOmnidir ? "omnidir" : "fisheye",
+  std::printf("model %s, %d of %zu images used, %.1f s\n",
+              c.model == calib::LensModel::kOmnidir ? "omnidir" : "fisheye",
               static_cast<int>(std::count_if(c.views.begin(), c.views.end(), [](const auto& v) { return v.used; })),
               f.files.size(), seconds);
   std::printf("rms reprojection error %.4f px\n", c.rms_px);
@@ -100,12 +103,12 @@ void report(const Found& f, const calib::Calibration& c, double seconds) {
   std::printf("\n");
   for (size_t i = 0; i < f.files.size(); ++i) {
     const int v = f.view_of_file[i];
-    if (v < 0)
-      std::printf("  %-28s no board\n", f.files[i].filename().string().c_str());
+    if (v < 0) std::printf("  %-28s no board\n", f.files[i].filename().string().c_str());
     else if (!c.views[static_cast<size_t>(v)].used)
       std::printf("  %-28s not used (dropped at initialisation)\n", f.files[i].filename().string().c_str());
     else
-      std::printf("  %-28s rms %.4f px\n", f.files[i].filename().string().c_str(), c.views[static_cast<size_t>(v)].rms_px);
+      std::printf("  %-28s rms %.4f px\n", f.files[i].filename().string().c_str(),
+                  c.views[static_cast<size_t>(v)].rms_px);
   }
 }
 
@@ -149,10 +152,12 @@ int main(int argc, char** argv) {
   Options o;
   for (int i = 0; i < argc; ++i) o.command += (i ? " " : "") + std::string(i ? argv[i] : "omnislam-calibrate");
   cli.add_option("--images", o.images, "folder of checkerboard images (one camera, one size)")->required();
-  auto* corners = cli.add_option("--corners", o.corners, "board size in INNER corners (where 4 squares meet), COLSxROWS")
-                      ->check(gridSize(2, 100));
-  auto* squares = cli.add_option("--squares", o.squares, "board size in SQUARES, COLSxROWS (inner corners = squares - 1)")
-                      ->check(gridSize(3, 101));
+  auto* corners =
+      cli.add_option("--corners", o.corners, "board size in INNER corners (where 4 squares meet), COLSxROWS")
+          ->check(gridSize(2, 100));
+  auto* squares =
+      cli.add_option("--squares", o.squares, "board size in SQUARES, COLSxROWS (inner corners = squares - 1)")
+          ->check(gridSize(3, 101));
   corners->excludes(squares);
   cli.add_option("--square-m", o.square_m, "side of one square [m]")->required()->check(app::FiniteRange(1e-4, 10.0));
   cli.add_option("--model", o.model, "omnidir (Mei, catadioptric or wide fish-eye) or fisheye (Kannala-Brandt)")

@@ -46,7 +46,8 @@ bool newestMap(std::optional<int64_t>& newest, int64_t utime, const std::string&
     ++c.skipped[path + ": " + channel + ": older than one already read (the newest utime is kept)"];
     return false;
   }
-  if (newest && utime == *newest) ++c.skipped[path + ": " + channel + ": utime already read, replaced by this later message"];
+  if (newest && utime == *newest)
+    ++c.skipped[path + ": " + channel + ": utime already read, replaced by this later message"];
   newest = utime;
   return true;
 }
@@ -82,7 +83,7 @@ void readMap(const std::string& path, const lcmio::LogEvent& ev, bool slam, LogC
 /// Poses, odometry and features of a log being read, before they go into LogContent.
 struct PoseMaps {
   std::map<int64_t, Pose2> slam, truth, odom;
-  lcmio::UtimeOrder truth_order;      ///< the truth's time order (admitTruth)
+  lcmio::UtimeOrder truth_order;       ///< the truth's time order (admitTruth)
   lcmio::PoseStreamCheck truth_check;  ///< and its plausibility
   lcmio::UtimeOrder frame_order;       ///< the feature frames' time order (admitFrame)
 };

@@ -69,14 +69,13 @@ void optionalJson(std::ostream& o, const Scores& s) {
 std::string coverageText(const eval::Coverage& v) {
   std::ostringstream o;
   o << "  coverage: ";
-  if (v.frames > 0) o << v.frames_answered << " of " << v.frames << " frames answered (" << percent(v.answered_share) << "); ";
-  o << "poses cover " << percent(v.span_share) << " of the " << (v.reference_is_frames ? "frames'" : "truth's") << " span of "
-    << seconds(v.reference_span_s);
+  if (v.frames > 0)
+    o << v.frames_answered << " of " << v.frames << " frames answered (" << percent(v.answered_share) << "); ";
+  o << "poses cover " << percent(v.span_share) << " of the " << (v.reference_is_frames ? "frames'" : "truth's")
+    << " span of " << seconds(v.reference_span_s);
   if (v.truth_span_s > 0) {
-    if (v.truth_end_gap_s >= 0)
-      o << "; the truth ends " << seconds(v.truth_end_gap_s) << " after the last pose";
-    else
-      o << "; the last pose is " << seconds(-v.truth_end_gap_s) << " after the truth's end";
+    if (v.truth_end_gap_s >= 0) o << "; the truth ends " << seconds(v.truth_end_gap_s) << " after the last pose";
+    else o << "; the last pose is " << seconds(-v.truth_end_gap_s) << " after the truth's end";
   }
   o << (v.complete() ? "" : "  INCOMPLETE") << "\n";
   return o.str();
@@ -88,20 +87,21 @@ void tableMapLines(std::ostream& o, const Scores& s, const LogContent& c, double
     o << "  map: " << me.estimated << " estimated; no truth map (no GROUND_TRUTH_MAP)\n";
     return;
   }
-  o << "  map: " << me.estimated << " estimated, " << me.truth << " true, " << me.matched << " matched within " << gate_m
-    << " m, " << me.spurious << " spurious\n";
-  if (me.matched > 0)
-    o << "    landmark error mean " << me.mean_err_m << " m, max " << me.max_err_m << " m\n";
-  else
-    o << "    landmark error n/a (no landmark matched)\n";
+  o << "  map: " << me.estimated << " estimated, " << me.truth << " true, " << me.matched << " matched within "
+    << gate_m << " m, " << me.spurious << " spurious\n";
+  if (me.matched > 0) o << "    landmark error mean " << me.mean_err_m << " m, max " << me.max_err_m << " m\n";
+  else o << "    landmark error n/a (no landmark matched)\n";
 }
 
 void tableOptionalLines(std::ostream& o, const Scores& s) {
-  if (s.T) o << "  alignment: rotation " << s.T->theta_rad << " rad, translation (" << s.T->t_m.x() << ", " << s.T->t_m.y() << ") m\n";
+  if (s.T)
+    o << "  alignment: rotation " << s.T->theta_rad << " rad, translation (" << s.T->t_m.x() << ", " << s.T->t_m.y()
+      << ") m\n";
   const auto& dr = s.dr;
   if (dr.available)
     o << "  dead reckoning (ODOMETRY from the start pose): ATE RMSE " << dr.raw.ate_rmse_m << " m, max "
-      << dr.raw.ate_max_m << " m; aligned: RMSE " << dr.aligned.ate_rmse_m << " m, max " << dr.aligned.ate_max_m << " m\n";
+      << dr.raw.ate_max_m << " m; aligned: RMSE " << dr.aligned.ate_rmse_m << " m, max " << dr.aligned.ate_max_m
+      << " m\n";
   if (s.have_assoc) {
     const auto& as = s.as;
     o << "  association: precision " << ratioText(as.precision(), as.associated) << " (" << as.correct << "/"
@@ -123,11 +123,14 @@ std::string jsonReport(const Scores& s, const LogContent& c) {
     << ", \"landmark_mean_err_m\": " << me.mean_err_m << ", \"landmark_max_err_m\": " << me.max_err_m
     << ", \"landmarks_matched\": " << me.matched << ", \"landmarks_truth\": " << me.truth
     << ", \"landmarks_estimated\": " << me.estimated << ", \"landmarks_spurious\": " << me.spurious
-    << ", \"frames\": " << s.frames << ", \"frames_with_pose\": " << c.slam.size() << ", \"poses_compared\": " << te.pairs
-    << ", \"messages_skipped\": " << c.skippedTotal() << ", \"log_unreadable_bytes\": " << c.unreadable_bytes;
+    << ", \"frames\": " << s.frames << ", \"frames_with_pose\": " << c.slam.size()
+    << ", \"poses_compared\": " << te.pairs << ", \"messages_skipped\": " << c.skippedTotal()
+    << ", \"log_unreadable_bytes\": " << c.unreadable_bytes;
   coverageJson(o, s.coverage);
   o << ", \"aligned\": " << (s.T ? "true" : "false");
-  if (s.T) o << ", \"align_theta_rad\": " << s.T->theta_rad << ", \"align_tx_m\": " << s.T->t_m.x() << ", \"align_ty_m\": " << s.T->t_m.y();
+  if (s.T)
+    o << ", \"align_theta_rad\": " << s.T->theta_rad << ", \"align_tx_m\": " << s.T->t_m.x()
+      << ", \"align_ty_m\": " << s.T->t_m.y();
   o << ", \"map_available\": " << (c.have_slam_map && c.have_truth_map ? "true" : "false");
   optionalJson(o, s);
   o << "}\n";

@@ -33,9 +33,9 @@ constexpr int kIncomplete = 3;
 struct Options {
   std::string log, truth_log, tum_prefix, plot_prefix;
   bool json = false, align = false, no_tum = false, planar = false;
-  double gate_m = 2.0;                ///< landmark matching gate
-  eval::CoverageOptions coverage;     ///< minimum shares of a complete run (defaults 0.9, 0.9)
-  bool allow_incomplete = false;      ///< exit 0 (with a warning) for an incomplete run
+  double gate_m = 2.0;             ///< landmark matching gate
+  eval::CoverageOptions coverage;  ///< minimum shares of a complete run (defaults 0.9, 0.9)
+  bool allow_incomplete = false;   ///< exit 0 (with a warning) for an incomplete run
 };
 
 void addFlags(CLI::App& cli, Options& o) {
@@ -86,8 +86,8 @@ std::vector<eval::PosePair> pairsOf(const LogContent& c) {
     throw std::invalid_argument(
         "no SLAM_POSE could be compared: none of the " + std::to_string(c.slam.size()) + " poses (utime " +
         std::to_string(c.slam.front().utime) + ".." + std::to_string(c.slam.back().utime) +
-        ") lies between two GROUND_TRUTH_POSE at most 0.2 s apart (truth utime " + std::to_string(c.truth.front().utime) +
-        ".." + std::to_string(c.truth.back().utime) + ")");
+        ") lies between two GROUND_TRUTH_POSE at most 0.2 s apart (truth utime " +
+        std::to_string(c.truth.front().utime) + ".." + std::to_string(c.truth.back().utime) + ")");
   return pairs;
 }
 
@@ -99,7 +99,8 @@ eval::Rigid2D alignOntoTruth(std::vector<eval::PosePair>& pairs, LogContent& c) 
     from.emplace_back(p.estimate.x_m, p.estimate.y_m);
     to.emplace_back(p.truth.x_m, p.truth.y_m);
   }
-  if (const std::string why = eval::rigidFitProblem(from, to); !why.empty()) throw std::invalid_argument("--align: " + why);
+  if (const std::string why = eval::rigidFitProblem(from, to); !why.empty())
+    throw std::invalid_argument("--align: " + why);
   const auto T = eval::fitRigid2D(from, to);
   if (!T) throw std::invalid_argument("--align: the fitted transform is degenerate or not finite");
   for (auto& p : pairs) p.estimate = T->apply(p.estimate);
@@ -166,17 +167,22 @@ eval::AssociationScore associationScore(const LogContent& c, const eval::MapErro
 void requireFinite(const Scores& s) {
   const auto& te = s.te;
   const auto& me = s.me;
-  std::vector<std::pair<const char*, double>> figures{
-      {"ate_rmse_m", te.ate_rmse_m}, {"ate_max_m", te.ate_max_m}, {"heading_rmse_rad", te.heading_rmse_rad},
-      {"heading_max_rad", te.heading_max_rad}, {"landmark_mean_err_m", me.mean_err_m}, {"landmark_max_err_m", me.max_err_m}};
+  std::vector<std::pair<const char*, double>> figures{{"ate_rmse_m", te.ate_rmse_m},
+                                                      {"ate_max_m", te.ate_max_m},
+                                                      {"heading_rmse_rad", te.heading_rmse_rad},
+                                                      {"heading_max_rad", te.heading_max_rad},
+                                                      {"landmark_mean_err_m", me.mean_err_m},
+                                                      {"landmark_max_err_m", me.max_err_m}};
   for (double e : te.position_error_m) figures.push_back({"a position error", e});
   if (s.dr.available)
-    figures.insert(figures.end(), {{"dr_ate_rmse_m", s.dr.raw.ate_rmse_m}, {"dr_ate_max_m", s.dr.raw.ate_max_m},
+    figures.insert(figures.end(), {{"dr_ate_rmse_m", s.dr.raw.ate_rmse_m},
+                                   {"dr_ate_max_m", s.dr.raw.ate_max_m},
                                    {"dr_heading_rmse_rad", s.dr.raw.heading_rmse_rad},
                                    {"dr_ate_rmse_aligned_m", s.dr.aligned.ate_rmse_m},
                                    {"dr_ate_max_aligned_m", s.dr.aligned.ate_max_m}});
   for (const auto& [name, v] : figures)
-    if (!std::isfinite(v)) throw std::invalid_argument(std::string(name) + " is not finite: positions too large to compare");
+    if (!std::isfinite(v))
+      throw std::invalid_argument(std::string(name) + " is not finite: positions too large to compare");
 }
 
 /// Every figure of the evaluation (c's SLAM trajectory and map are aligned in place with --align).
@@ -215,7 +221,8 @@ int evaluate(const Options& o) {
     std::cerr << "omnislam-eval: warning: " << line << " (accepted: --allow-incomplete)" << std::endl;
     return app::kOk;
   }
-  std::cerr << "omnislam-eval: " << line << " (exit code " << kIncomplete << "; --allow-incomplete accepts it)" << std::endl;
+  std::cerr << "omnislam-eval: " << line << " (exit code " << kIncomplete << "; --allow-incomplete accepts it)"
+            << std::endl;
   return kIncomplete;
 }
 

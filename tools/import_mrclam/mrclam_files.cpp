@@ -132,14 +132,14 @@ Table readTable(const std::string& path, const std::vector<std::string>& names) 
         throw ParseError(at(path, n) + "column " + std::to_string(row.size() + 1) + " '" + name +
                          "' is not a number: '" + tok + "'");
       if (!std::isfinite(v))
-        throw ParseError(at(path, n) + "column " + std::to_string(row.size() + 1) + " '" + name +
-                         "' is not finite: '" + tok + "'");
+        throw ParseError(at(path, n) + "column " + std::to_string(row.size() + 1) + " '" + name + "' is not finite: '" +
+                         tok + "'");
       row.push_back(v);
     }
     if (row.size() < names.size())
       throw ParseError(at(path, n) + "missing column " + std::to_string(row.size() + 1) + " '" + names[row.size()] +
-                       "' (expected " + std::to_string(names.size()) + " columns, found " +
-                       std::to_string(row.size()) + ")");
+                       "' (expected " + std::to_string(names.size()) + " columns, found " + std::to_string(row.size()) +
+                       ")");
     t.rows.push_back(std::move(row));
     t.line_of_row.push_back(n);
   }

@@ -53,11 +53,11 @@ enum class DuplicateTimes {
 
 struct FileStats {
   std::string path;
-  int64_t lines = 0;                 ///< all lines read
-  int64_t comment_lines = 0;         ///< lines starting with '#'
-  int64_t blank_lines = 0;           ///< empty or whitespace-only lines
-  int64_t data_lines = 0;            ///< lines parsed as data
-  int64_t duplicates_replaced = 0;   ///< data lines replaced by a later line with the same time
+  int64_t lines = 0;                     ///< all lines read
+  int64_t comment_lines = 0;             ///< lines starting with '#'
+  int64_t blank_lines = 0;               ///< empty or whitespace-only lines
+  int64_t data_lines = 0;                ///< lines parsed as data
+  int64_t duplicates_replaced = 0;       ///< data lines replaced by a later line with the same time
   std::vector<int64_t> duplicate_lines;  ///< line numbers (1-based) of the replacing lines
 };
 

@@ -25,7 +25,6 @@ static_assert(lcmio::Limits{}.max_features == kMaxMeasurementsPerTime, "a frame'
 constexpr int kFirstLandmarkSubject = 6;  // Barcodes.dat: subjects 1-5 are robots, 6-20 landmarks
 constexpr int kRankMap = 0, kRankTruth = 1, kRankOdometry = 2, kRankFeatures = 3, kRankLabels = 4;
 
-
 template <class Msg>
 void add(ImportedLog& log, int64_t utime, int rank, const char* channel, const Msg& m) {
   if (auto why = lcmio::validate(m))
@@ -194,8 +193,7 @@ struct Subjects {
 
 // The label of one sighting (counted in r); nullopt when it is to be dropped (a robot sighting with
 // drop_robot_sightings).
-std::optional<int64_t> labelSighting(const Measurement& z, const ImportOptions& o, Subjects& subj,
-                                     ImportReport& r) {
+std::optional<int64_t> labelSighting(const Measurement& z, const ImportOptions& o, Subjects& subj, ImportReport& r) {
   const auto it = subj.subject_of_code.find(z.code);
   const int subject = it == subj.subject_of_code.end() ? 0 : it->second;  // 0: no subject has this code
   if (it == subj.subject_of_code.end()) {
@@ -294,8 +292,8 @@ void findStartPose(const ImportOptions& o, const std::vector<OdometrySample>& od
   for (const auto& e : log.events) {
     if (e.channel != channels::kOmniFeatures) continue;
     const double t = static_cast<double>(e.utime) * 1e-6;
-    const auto it =
-        std::lower_bound(odo.begin(), odo.end(), e.utime, [](const OdometrySample& s, int64_t u) { return toUtime(s.t_s) < u; });
+    const auto it = std::lower_bound(odo.begin(), odo.end(), e.utime,
+                                     [](const OdometrySample& s, int64_t u) { return toUtime(s.t_s) < u; });
     if (it == odo.end()) break;
     if (toUtime(it->t_s) != e.utime && (it == odo.begin() || it->t_s - (it - 1)->t_s > o.max_odometry_gap_s)) continue;
     log.report.start_pose = interpolatePose(truth, t);
@@ -355,16 +353,16 @@ std::string ImportReport::describe() const {
   if (frames_still_skipped > 0) s << "; " << frames_still_skipped << " frames of a still robot left out (diagnostic)";
   s << "\n";
   s << "  measurements: " << measurements << " = " << landmark_sightings << " of landmarks + " << robot_sightings
-    << " of other robots (" << (robot_sightings_dropped > 0 ? "dropped: " + std::to_string(robot_sightings_dropped)
-                                                           : std::string("kept as clutter"))
+    << " of other robots ("
+    << (robot_sightings_dropped > 0 ? "dropped: " + std::to_string(robot_sightings_dropped)
+                                    : std::string("kept as clutter"))
     << ") + " << unknown_code_sightings << " unknown barcodes (kept as clutter:";
   for (int c : unknown_codes) s << " " << c;
   s << ") + " << own_code_sightings << " of the robot's own barcode (kept as clutter)\n";
   if (start_pose)
-    s << "  start pose (truth at the first frame with odometry, utime " << start_frame_utime << "): x " << start_pose->x_m
-      << " m, y " << start_pose->y_m << " m, theta " << start_pose->theta_rad << " rad";
-  else
-    s << "  start pose: none (no frame within the odometry)";
+    s << "  start pose (truth at the first frame with odometry, utime " << start_frame_utime << "): x "
+      << start_pose->x_m << " m, y " << start_pose->y_m << " m, theta " << start_pose->theta_rad << " rad";
+  else s << "  start pose: none (no frame within the odometry)";
   return s.str();
 }
 
@@ -375,8 +373,9 @@ std::vector<slam::Landmark> truthLandmarks(const std::string& dataset_dir) {
     L.id = static_cast<std::uint64_t>(l.subject);
     L.kind = slam::LandmarkKind::kVerticalLine;
     L.p_LinW_m = Eigen::Vector3d(l.x_m, l.y_m, 0.0);
-    L.cov_LinW_m2 = Eigen::Vector3d(std::max(l.x_sigma_m * l.x_sigma_m, 1e-10), std::max(l.y_sigma_m * l.y_sigma_m, 1e-10), 1.0)
-                        .asDiagonal();
+    L.cov_LinW_m2 =
+        Eigen::Vector3d(std::max(l.x_sigma_m * l.x_sigma_m, 1e-10), std::max(l.y_sigma_m * l.y_sigma_m, 1e-10), 1.0)
+            .asDiagonal();
     out.push_back(L);
   }
   return out;

@@ -57,25 +57,25 @@ struct ImportOptions {
 struct ImportReport {
   FileStats odometry_file, measurement_file, groundtruth_file, landmark_file, barcode_file;
   int64_t odometry_messages = 0;
-  int64_t odometry_gaps = 0;          ///< odometry intervals longer than max_odometry_gap_s
+  int64_t odometry_gaps = 0;  ///< odometry intervals longer than max_odometry_gap_s
   double odometry_max_gap_s = 0.0;
-  double odometry_path_m = 0.0;       ///< integrated path length
+  double odometry_path_m = 0.0;  ///< integrated path length
   int64_t truth_poses = 0;
-  int64_t measurements = 0;           ///< rows read
-  int64_t features = 0;               ///< features written
-  int64_t frames = 0;                 ///< OMNI_FEATURES messages written
+  int64_t measurements = 0;  ///< rows read
+  int64_t features = 0;      ///< features written
+  int64_t frames = 0;        ///< OMNI_FEATURES messages written
   int64_t max_features_per_frame = 0;
-  int64_t landmark_sightings = 0;     ///< features of a true landmark
-  int64_t robot_sightings = 0;        ///< sightings of the other robots (kept or dropped)
+  int64_t landmark_sightings = 0;  ///< features of a true landmark
+  int64_t robot_sightings = 0;     ///< sightings of the other robots (kept or dropped)
   int64_t robot_sightings_dropped = 0;
-  int64_t own_code_sightings = 0;     ///< the robot's own barcode (impossible: kept as unknown clutter)
-  int64_t unknown_code_sightings = 0; ///< barcodes of no subject (misreads), kept as clutter
-  std::vector<int> unknown_codes;     ///< the distinct unknown barcodes
-  int64_t outside_stretch = 0;        ///< rows of the three time series outside --max-duration
+  int64_t own_code_sightings = 0;      ///< the robot's own barcode (impossible: kept as unknown clutter)
+  int64_t unknown_code_sightings = 0;  ///< barcodes of no subject (misreads), kept as clutter
+  std::vector<int> unknown_codes;      ///< the distinct unknown barcodes
+  int64_t outside_stretch = 0;         ///< rows of the three time series outside --max-duration
   double max_abs_bearing_rad = 0.0;
-  int64_t frames_before_odometry = 0; ///< frames before the first odometry sample (SLAM drops them)
-  int64_t frames_still_skipped = 0;   ///< frames left out by still_frame_m / still_frame_rad
-  double t0_s = 0.0, t_end_s = 0.0;   ///< first / last odometry time imported
+  int64_t frames_before_odometry = 0;  ///< frames before the first odometry sample (SLAM drops them)
+  int64_t frames_still_skipped = 0;    ///< frames left out by still_frame_m / still_frame_rad
+  double t0_s = 0.0, t_end_s = 0.0;    ///< first / last odometry time imported
   /// Truth at the first frame the SLAM process will process (its start pose), if any.
   std::optional<PoseSample> start_pose;
   int64_t start_frame_utime = 0;

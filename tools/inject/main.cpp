@@ -119,7 +119,8 @@ std::map<std::string, double> parseSets(const std::vector<std::string>& sets) {
     const std::string v = s.substr(eq + 1);
     char* end = nullptr;
     const double d = std::strtod(v.c_str(), &end);  // takes nan, inf, 1e300
-    if (v.empty() || end != v.c_str() + v.size()) throw std::invalid_argument("--set '" + s + "': VALUE is not a number");
+    if (v.empty() || end != v.c_str() + v.size())
+      throw std::invalid_argument("--set '" + s + "': VALUE is not a number");
     out[s.substr(0, eq)] = d;
   }
   return out;
@@ -138,12 +139,13 @@ int main(int argc, char** argv) {
   cli.add_option("--channel", channel, "channel to take the message from and publish it on")->required();
   cli.add_option("--type", type, "image | features | odometry | pose (default: from the channel name)")
       ->check(CLI::IsMember({"image", "features", "odometry", "pose"}));
-  CLI::Option* offset = cli.add_option("--utime-offset-s", alt.utime_offset_s,
-                                       "shift of the utime in seconds (e.g. 100, 1e6, -30)")
-                           ->check(app::FiniteRange(-1e9, 1e9));
-  cli.add_option("--set", sets, "FIELD=VALUE, repeatable: x, y, theta (pose, odometry), v, omega (odometry), camera_z "
-                                "(features); VALUE may be nan, inf, 1e300. Without --utime-offset-s the utime is "
-                                "moved 1 us ahead, so that it is no duplicate of the original");
+  CLI::Option* offset =
+      cli.add_option("--utime-offset-s", alt.utime_offset_s, "shift of the utime in seconds (e.g. 100, 1e6, -30)")
+          ->check(app::FiniteRange(-1e9, 1e9));
+  cli.add_option("--set", sets,
+                 "FIELD=VALUE, repeatable: x, y, theta (pose, odometry), v, omega (odometry), camera_z "
+                 "(features); VALUE may be nan, inf, 1e300. Without --utime-offset-s the utime is "
+                 "moved 1 us ahead, so that it is no duplicate of the original");
   cli.add_option("--skip", cap.skip, "real messages to let pass before the one taken")->check(CLI::Range(0, 100000000));
   cli.add_option("--timeout-s", timeout_s, "give up after this many seconds without the message (exit 1)")
       ->check(app::FiniteRange(0.1, 86400.0));
@@ -152,8 +154,10 @@ int main(int argc, char** argv) {
   offset_given = offset->count() > 0;
   return app::runMain("omnislam-inject", [&]() -> int {
     if (type.empty()) type = typeOfChannel(channel);
-    if (type.empty()) throw std::invalid_argument("--type: channel '" + channel + "' is not one of the contract's pose, "
-                                                  "odometry, image or features channels; name its type");
+    if (type.empty())
+      throw std::invalid_argument("--type: channel '" + channel +
+                                  "' is not one of the contract's pose, "
+                                  "odometry, image or features channels; name its type");
     alt.fields = parseSets(sets);
     if (!alt.fields.empty() && !offset_given) alt.utime_offset_s = 1e-6;
     lcm::LCM lcm(app::lcmUrl(url));

@@ -230,11 +230,11 @@ std::string formatStats(const std::map<std::string, ChannelStats>& stats) {
     if (name == channels::kProcessStatus) continue;  // several publishers: per process below
     if (s.seq_restarts > 0 || s.utime_not_after > 0)
       os << "  " << displayName(name) << ": " << s.seq_restarts << " seq restarts (not after the previous one, or over "
-         << lcmio::kMaxSequenceGap << " ahead of it), " << s.utime_not_after
-         << " utime not after the previous one\n";
+         << lcmio::kMaxSequenceGap << " ahead of it), " << s.utime_not_after << " utime not after the previous one\n";
   }
   for (const auto& [name, s] : stats)
-    if (s.undecodable > 0) os << "  " << displayName(name) << ": " << s.undecodable << " bad, the first: " << s.first_bad << "\n";
+    if (s.undecodable > 0)
+      os << "  " << displayName(name) << ": " << s.undecodable << " bad, the first: " << s.first_bad << "\n";
   return os.str();
 }
 
@@ -249,10 +249,11 @@ std::string formatProcesses(const std::map<std::string, ProcessSummary>& process
   for (const auto& [name, summary] : processes) {
     const process_status_t& p = summary.last;
     const std::string state = p.state >= 0 && p.state <= 4 ? kStates[p.state] : "state " + std::to_string(p.state);
-    std::snprintf(line, sizeof line, "%-21s %7d %-9s %8lld %10lld %10lld %7lld %8lld %8lld\n", displayName(name).c_str(), p.pid,
-                  state.c_str(), static_cast<long long>(summary.statuses), static_cast<long long>(p.messages_in),
-                  static_cast<long long>(p.messages_out), static_cast<long long>(p.decode_errors),
-                  static_cast<long long>(p.rejected_inputs), static_cast<long long>(p.sequence_gaps));
+    std::snprintf(line, sizeof line, "%-21s %7d %-9s %8lld %10lld %10lld %7lld %8lld %8lld\n",
+                  displayName(name).c_str(), p.pid, state.c_str(), static_cast<long long>(summary.statuses),
+                  static_cast<long long>(p.messages_in), static_cast<long long>(p.messages_out),
+                  static_cast<long long>(p.decode_errors), static_cast<long long>(p.rejected_inputs),
+                  static_cast<long long>(p.sequence_gaps));
     os << line;
     if (!p.detail.empty()) os << "  " << displayName(name) << " detail: " << p.detail << "\n";
     if (!p.last_error.empty()) os << "  " << displayName(name) << " last error: " << p.last_error << "\n";

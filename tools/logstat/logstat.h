@@ -13,17 +13,17 @@
 namespace omnislam::tools {
 
 struct ChannelStats {
-  std::string type;          ///< decoded type name, "?" if the channel is not in the contract
+  std::string type;  ///< decoded type name, "?" if the channel is not in the contract
   int64_t events = 0;
-  int64_t undecodable = 0;   ///< "bad": not decodable, or refused by lcmio::validate
-  std::string first_bad;     ///< the reason of the first bad message ("" if none)
+  int64_t undecodable = 0;  ///< "bad": not decodable, or refused by lcmio::validate
+  std::string first_bad;    ///< the reason of the first bad message ("" if none)
   int64_t first_seq = -1, last_seq = -1;
-  int64_t seq_gaps = 0;      ///< messages missing according to seq (per publisher name when known)
-  int64_t seq_restarts = 0;  ///< seq not after the previous one (a publisher restarted, or duplicates) or
-                             ///< more than lcmio::kMaxSequenceGap ahead of it (a corrupted or re-based seq)
+  int64_t seq_gaps = 0;         ///< messages missing according to seq (per publisher name when known)
+  int64_t seq_restarts = 0;     ///< seq not after the previous one (a publisher restarted, or duplicates) or
+                                ///< more than lcmio::kMaxSequenceGap ahead of it (a corrupted or re-based seq)
   int64_t utime_not_after = 0;  ///< utime not after the previous message's (duplicate or out of order)
   int64_t first_utime = 0, last_utime = 0;  ///< in log order
-  int64_t min_utime = 0, max_utime = 0;    ///< oldest and newest: the span is their difference
+  int64_t min_utime = 0, max_utime = 0;     ///< oldest and newest: the span is their difference
   int64_t bytes = 0;
 };
 
@@ -35,7 +35,7 @@ struct ProcessSummary {
 
 /// What was lost between two parts of one recording (a recorder restarted into NAME.part2.lcm).
 struct PartGap {
-  std::string before, after;  ///< the two files
+  std::string before, after;     ///< the two files
   int64_t last_log_utime = -1;   ///< the recorder's clock at the last event of `before` (-1: none)
   int64_t first_log_utime = -1;  ///< the recorder's clock at the first event of `after` (-1: none)
   /// Per channel, the messages missing by seq across the gap: counted at each publisher's first
@@ -49,7 +49,7 @@ struct PartGap {
 struct LogSummary {
   std::map<std::string, ChannelStats> channels;
   std::map<std::string, ProcessSummary> processes;
-  std::string unreadable;  ///< "" or why a log's tail could not be read (lcmio::LogReadResult::problem), per file
+  std::string unreadable;     ///< "" or why a log's tail could not be read (lcmio::LogReadResult::problem), per file
   std::vector<PartGap> gaps;  ///< between consecutive files, when several are read
 };
 

@@ -41,26 +41,29 @@ int main(int argc, char** argv) {
       std::filesystem::create_directories(export_dir);
       int n = 0, failed = 0;
       std::set<std::string> names;
-      for (const auto& path : paths) omnislam::lcmio::forEachEvent(path, [&](const omnislam::lcmio::LogEvent& ev) {
-        if (ev.channel != omnislam::channels::kOmniImage) return;
-        // Only what a process would accept: decodeImage trusts the sizes that validate checks.
-        const auto msg = omnislam::lcmio::decodeValid<omnislam::image_t>(ev);
-        if (!msg) return;  // counted as bad in the table
-        std::string why;
-        const auto img = omnislam::lcmio::decodeImage(*msg, &why);
-        char name[96];
-        std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(msg->seq));
-        if (!names.insert(name).second)  // a repeated seq: keep both, named by the log's event number
-          std::snprintf(name, sizeof name, "/frame_%06lld_event_%lld.png", static_cast<long long>(msg->seq),
-                        static_cast<long long>(ev.event_number));
-        if (!img || !cv::imwrite(export_dir + name, *img)) {
-          std::cerr << "omnislam-logstat: " << (img ? "cannot write " + export_dir + name : "image seq " +
-                                                  std::to_string(msg->seq) + ": " + why) << "\n";
-          ++failed;
-          return;
-        }
-        ++n;
-      });
+      for (const auto& path : paths)
+        omnislam::lcmio::forEachEvent(path, [&](const omnislam::lcmio::LogEvent& ev) {
+          if (ev.channel != omnislam::channels::kOmniImage) return;
+          // Only what a process would accept: decodeImage trusts the sizes that validate checks.
+          const auto msg = omnislam::lcmio::decodeValid<omnislam::image_t>(ev);
+          if (!msg) return;  // counted as bad in the table
+          std::string why;
+          const auto img = omnislam::lcmio::decodeImage(*msg, &why);
+          char name[96];
+          std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(msg->seq));
+          if (!names.insert(name).second)  // a repeated seq: keep both, named by the log's event number
+            std::snprintf(name, sizeof name, "/frame_%06lld_event_%lld.png", static_cast<long long>(msg->seq),
+                          static_cast<long long>(ev.event_number));
+          if (!img || !cv::imwrite(export_dir + name, *img)) {
+            std::cerr << "omnislam-logstat: "
+                      << (img ? "cannot write " + export_dir + name
+                              : "image seq " + std::to_string(msg->seq) + ": " + why)
+                      << "\n";
+            ++failed;
+            return;
+          }
+          ++n;
+        });
       std::cout << n << " images written to " << export_dir;
       if (failed > 0) std::cout << ", " << failed << " could not be (stderr)";
       std::cout << "\n";

@@ -76,7 +76,8 @@ int main(int argc, char** argv) {
       as.utime = utime, as.seq = k, as.input_seq = k, as.num_features = 1, as.landmark_id = {1};
       node.publish(channels::kSlamAssociations, as);
       feature_labels_t lb{};
-      lb.utime = utime, lb.seq = k, lb.features_seq = k, lb.num_features = 1, lb.landmark_id = {1}, lb.source_code = {1};
+      lb.utime = utime, lb.seq = k, lb.features_seq = k, lb.num_features = 1, lb.landmark_id = {1},
+      lb.source_code = {1};
       node.publish(channels::kGroundTruthFeatureLabels, lb);
       node.publishStatus();
       // Never past the end: --duration 1 --period 20 ran for 20 s.

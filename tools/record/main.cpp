@@ -139,10 +139,10 @@ Drain drainBus(lcm::LCM& bus) {
 void reportEnd(const omnislam::lcmio::LogWriter& log, const Recorder& rec, bool bus_failed, const Drain& drain) {
   std::cerr << "[record] " << log.events() << " events" << (rec.failures ? " in the file" : "") << ", "
             << log.bytes() / 1e6 << " MB"
-            << (rec.failures ? ", " + std::to_string(log.lost()) + " events lost with the write buffer, " +
-                                   std::to_string(rec.failures) + " WRITE FAILURES (the first: " +
-                                   rec.first_failure + ")"
-                             : "")
+            << (rec.failures
+                    ? ", " + std::to_string(log.lost()) + " events lost with the write buffer, " +
+                          std::to_string(rec.failures) + " WRITE FAILURES (the first: " + rec.first_failure + ")"
+                    : "")
             << (bus_failed ? "; stopped: LCM failed to receive" : "")
             << (drain.cut ? "; the bus was still busy at the stop: the drain ended after " +
                                 std::to_string(drain.messages) + " messages, the rest is not recorded"
@@ -153,7 +153,8 @@ void reportEnd(const omnislam::lcmio::LogWriter& log, const Recorder& rec, bool 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App cli{"omnislam-record: records an LCM bus into a log file (a flood can overflow UDP buffers: docs/user/lcm.md)"};
+  CLI::App cli{
+      "omnislam-record: records an LCM bus into a log file (a flood can overflow UDP buffers: docs/user/lcm.md)"};
   std::string url, path, channels = ".*";
   int queue = 20000;
   double flush_interval_s = 0.5;

@@ -22,7 +22,7 @@ int64_t seconds_us(const Node& n, const std::string& key, double lo, double hi, 
 }
 
 Node::Open openOf(slam::options::Bounds b) {
-  return b == slam::options::Bounds::kLowOpen ? Node::Open::kLow
+  return b == slam::options::Bounds::kLowOpen    ? Node::Open::kLow
          : b == slam::options::Bounds::kHighOpen ? Node::Open::kHigh
                                                  : Node::Open::kNone;
 }
@@ -60,7 +60,8 @@ void parseFields(const Node& n, S& s, const std::vector<slam::options::Field<S>>
 
 // The keys a section accepts: its table's and the names of its subsections.
 template <class S>
-std::vector<std::string> keysOf(const std::vector<slam::options::Field<S>>& table, std::vector<std::string> extra = {}) {
+std::vector<std::string> keysOf(const std::vector<slam::options::Field<S>>& table,
+                                std::vector<std::string> extra = {}) {
   for (const auto& f : table) extra.emplace_back(f.key);
   return extra;
 }
@@ -104,8 +105,8 @@ void parseFilter(const Node& n, slam::FastSlamOptions& f) {
 }
 
 void parsePairing(const Node& n, PairingOptions& p) {
-  n.rejectUnknownKeys({"max_wait_s", "max_odometry_gap_s", "odometry_buffer_s", "max_pending_frames",
-                       "restart_jump_s", "restart_confirm_messages", "max_forward_jump_s", "max_odometry_speed_mps",
+  n.rejectUnknownKeys({"max_wait_s", "max_odometry_gap_s", "odometry_buffer_s", "max_pending_frames", "restart_jump_s",
+                       "restart_confirm_messages", "max_forward_jump_s", "max_odometry_speed_mps",
                        "max_odometry_yaw_rate_degps"});
   p.max_wait_us = seconds_us(n, "max_wait_s", 0.0, 3600.0, p.max_wait_us);
   p.max_odometry_gap_us = seconds_us(n, "max_odometry_gap_s", 1e-6, 3600.0, p.max_odometry_gap_us);
@@ -130,7 +131,8 @@ void parsePairing(const Node& n, PairingOptions& p) {
 }
 
 void parsePlausibility(const Node& n, PlausibilityOptions& p) {
-  n.rejectUnknownKeys({"max_odometry_coordinate_m", "max_odometry_angle_rad", "max_camera_offset_m", "jump_confirm_messages"});
+  n.rejectUnknownKeys(
+      {"max_odometry_coordinate_m", "max_odometry_angle_rad", "max_camera_offset_m", "jump_confirm_messages"});
   p.max_odometry_coordinate_m = n.getDouble("max_odometry_coordinate_m", 1.0, 1e9, p.max_odometry_coordinate_m);
   p.max_odometry_angle_rad = n.getDouble("max_odometry_angle_rad", 4.0, 1e9, p.max_odometry_angle_rad);
   p.max_camera_offset_m = n.getDouble("max_camera_offset_m", 0.01, 1e3, p.max_camera_offset_m);
@@ -140,7 +142,8 @@ void parsePlausibility(const Node& n, PlausibilityOptions& p) {
 void parseRestart(const Node& n, RestartOptions& r) {
   n.rejectUnknownKeys({"reinit_from", "position_sigma_m", "heading_sigma_deg"});
   const std::string from = n.getEnum("reinit_from", {"last_estimate", "start_pose"}, "last_estimate");
-  r.reinit_from = from == "start_pose" ? RestartOptions::ReinitFrom::kStartPose : RestartOptions::ReinitFrom::kLastEstimate;
+  r.reinit_from =
+      from == "start_pose" ? RestartOptions::ReinitFrom::kStartPose : RestartOptions::ReinitFrom::kLastEstimate;
   r.position_sigma_m = n.getDouble("position_sigma_m", 0.0, 1e3, r.position_sigma_m);
   r.heading_sigma_rad = deg2rad(n.getDouble("heading_sigma_deg", 0.0, 180.0, rad2deg(r.heading_sigma_rad)));
 }
@@ -156,7 +159,8 @@ std::string SlamProcessOptions::validate() const {
   if (max_features_per_frame < 1 || max_features_per_frame > 4096) return "features.max_per_frame must be in [1, 4096]";
   if (odometry_only_after_us < 0) return "output.odometry_only_after_s must be >= 0";
   if (odometry_only_period_us <= 0) return "output.odometry_only_period_s must be > 0";
-  if (localisation_only && load_map_path.empty()) return "map.localisation_only needs map.load_path (a map to localise in)";
+  if (localisation_only && load_map_path.empty())
+    return "map.localisation_only needs map.load_path (a map to localise in)";
   if (!use_ceiling_lights && !use_vertical_lines) return "at least one feature kind must be used";
   if (checkpoint_interval_us < 1000 || checkpoint_interval_us > 1'000'000'000'000)
     return "checkpoint.interval_s must be in [0.001, 1e6]";
@@ -169,8 +173,8 @@ std::string SlamProcessOptions::validate() const {
 }
 
 SlamProcessOptions parseSlamOptions(const Node& root) {
-  root.rejectUnknownKeys(
-      {"seed", "start_pose", "features", "output", "pairing", "filter", "map", "checkpoint", "plausibility", "restart"});
+  root.rejectUnknownKeys({"seed", "start_pose", "features", "output", "pairing", "filter", "map", "checkpoint",
+                          "plausibility", "restart"});
   SlamProcessOptions o;
   o.seed = static_cast<std::uint64_t>(root.getInt("seed", 0, INT64_MAX, 1));
   if (auto s = root.optChild("start_pose")) {
@@ -262,15 +266,18 @@ std::string describe(const SlamProcessOptions& o) {
     << (o.use_vertical_lines ? "on" : "off") << ", sigma floor " << rad2deg(o.min_sigma_rad) << " deg; SLAM_MAP every "
     << o.map_every_n_frames << " frame(s)";
   if (!o.load_map_path.empty())
-    s << "\nmap: start from " << o.load_map_path << (o.localisation_only ? " (localisation only: fixed)" : " (updated)");
-  if (!o.save_map_path.empty()) s << (o.load_map_path.empty() ? "\n" : "; ") << "map: saved to " << o.save_map_path << " on exit";
+    s << "\nmap: start from " << o.load_map_path
+      << (o.localisation_only ? " (localisation only: fixed)" : " (updated)");
+  if (!o.save_map_path.empty())
+    s << (o.load_map_path.empty() ? "\n" : "; ") << "map: saved to " << o.save_map_path << " on exit";
   return s.str();
 }
 
 namespace {
 
 template <class S>
-void markdownRows(std::ostringstream& s, const std::string& section, const std::vector<slam::options::Field<S>>& table) {
+void markdownRows(std::ostringstream& s, const std::string& section,
+                  const std::vector<slam::options::Field<S>>& table) {
   const S defaults{};
   for (const auto& f : table) {
     s << "| `" << section << f.key << "` | `" << f.field << "` | " << f.unit << " | " << slam::options::rangeText(f)
@@ -284,11 +291,13 @@ std::string filterKeysMarkdown() {
   namespace opt = slam::options;
   std::ostringstream s;
   s << "| key | field | unit | range | default | meaning |\n|---|---|---|---|---|---|\n";
-  s << "| `filter.preset` | - | | " << [] {
-    std::string n;
-    for (const auto& p : slam::presetNames()) n += (n.empty() ? "" : ", ") + p;
-    return n;
-  }() << " | none (= recommended) | every key below at once; keys given beside it override it |\n";
+  s << "| `filter.preset` | - | | " <<
+      [] {
+        std::string n;
+        for (const auto& p : slam::presetNames()) n += (n.empty() ? "" : ", ") + p;
+        return n;
+      }()
+    << " | none (= recommended) | every key below at once; keys given beside it override it |\n";
   markdownRows(s, "filter.", opt::fastSlamFields());
   markdownRows(s, "filter.motion.", opt::motionFields());
   markdownRows(s, "filter.perception.", opt::perceptionFields());

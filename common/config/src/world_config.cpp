@@ -144,10 +144,12 @@ sim::CameraSetup parseCamera(const Node& n) {
       if (p.invpol.size() > 64) throw ConfigError(n.where("invpol") + " must have 1 to 64 coefficients");
     } else {
       p.invpol = {1.0};
-      if (auto err = camera::ScaramuzzaCamera::validate(p)) throw ConfigError(n.where("pol") + " (camera model): " + *err);
+      if (auto err = camera::ScaramuzzaCamera::validate(p))
+        throw ConfigError(n.where("pol") + " (camera model): " + *err);
       p.invpol = fitInvpol(p);
     }
-    if (auto err = camera::ScaramuzzaCamera::validate(p)) throw ConfigError(n.where("pol") + " (camera model): " + *err);
+    if (auto err = camera::ScaramuzzaCamera::validate(p))
+      throw ConfigError(n.where("pol") + " (camera model): " + *err);
     c.mounting = parseMounting(n);
     return c;
   }
@@ -165,7 +167,8 @@ sim::CameraSetup parseCamera(const Node& n) {
   p.width_px = static_cast<int>(n.getInt("width_px", 16, 8192, p.width_px));
   p.height_px = static_cast<int>(n.getInt("height_px", 16, 8192, p.height_px));
   p.max_zenith_rad = deg2rad(n.getDouble("max_zenith_deg", 1.0, 179.0, rad2deg(p.max_zenith_rad)));
-  if (auto err = camera::PajdlaBaksteinCamera::validate(p)) throw ConfigError(n.where("a_px") + " (camera model): " + *err);
+  if (auto err = camera::PajdlaBaksteinCamera::validate(p))
+    throw ConfigError(n.where("a_px") + " (camera model): " + *err);
   c.mounting = parseMounting(n);
   return c;
 }
@@ -245,9 +248,12 @@ void parseTrajectory(const Node& n, sim::World& w) {
     seg.rejectUnknownKeys({"straight_m", "arc_deg", "radius_m", "turn_deg"});
     sim::Segment g;
     const int kinds = seg.has("straight_m") + seg.has("arc_deg") + seg.has("turn_deg");
-    if (kinds != 1) throw ConfigError(seg.where("straight_m") + ": each segment needs exactly one of straight_m, arc_deg (with radius_m), turn_deg");
+    if (kinds != 1)
+      throw ConfigError(seg.where("straight_m") +
+                        ": each segment needs exactly one of straight_m, arc_deg (with radius_m), turn_deg");
     if (seg.has("radius_m") && !seg.has("arc_deg"))
-      throw ConfigError(seg.where("radius_m") + " belongs to an arc_deg segment (a turn_deg turns on the spot, a "
+      throw ConfigError(seg.where("radius_m") +
+                        " belongs to an arc_deg segment (a turn_deg turns on the spot, a "
                         "straight_m has no radius)");
     if (seg.has("straight_m")) {
       g.kind = sim::Segment::Kind::kStraight;
@@ -320,7 +326,8 @@ sim::World parseWorld(const Node& root) {
   w.truth_rate_hz = root.getDouble("truth_rate_hz", 20.0, 1000.0, w.truth_rate_hz);
   w.image_rate_hz = root.getDouble("image_rate_hz", 0.01, 100.0, w.image_rate_hz);
   if (root.has("lights") == root.has("room"))
-    throw ConfigError(root.where("lights") + " or 'room': a world needs exactly one of them (ceiling lights or a room)");
+    throw ConfigError(root.where("lights") +
+                      " or 'room': a world needs exactly one of them (ceiling lights or a room)");
   if (root.has("lights")) w.lights = parseLights(root.child("lights"));
   if (root.has("room")) w.room = parseRoom(root.child("room"));
   if (auto h = root.optChild("hall")) w.hall = parseHall(*h);
@@ -338,10 +345,12 @@ sim::World parseWorld(const Node& root) {
     } else {
       o->rejectUnknownKeys({"model", "distance_sigma_m_per_sqrt_m", "rotation_sigma_rad_per_sqrt_rad",
                             "heading_sigma_rad_per_sqrt_m", "scale_error_sigma", "heading_drift_sigma_rad_per_m"});
-      z.distance_sigma_m_per_sqrt_m = o->getDouble("distance_sigma_m_per_sqrt_m", 0.0, 1.0, z.distance_sigma_m_per_sqrt_m);
+      z.distance_sigma_m_per_sqrt_m =
+          o->getDouble("distance_sigma_m_per_sqrt_m", 0.0, 1.0, z.distance_sigma_m_per_sqrt_m);
       z.rotation_sigma_rad_per_sqrt_rad =
           o->getDouble("rotation_sigma_rad_per_sqrt_rad", 0.0, 1.0, z.rotation_sigma_rad_per_sqrt_rad);
-      z.heading_sigma_rad_per_sqrt_m = o->getDouble("heading_sigma_rad_per_sqrt_m", 0.0, 1.0, z.heading_sigma_rad_per_sqrt_m);
+      z.heading_sigma_rad_per_sqrt_m =
+          o->getDouble("heading_sigma_rad_per_sqrt_m", 0.0, 1.0, z.heading_sigma_rad_per_sqrt_m);
       z.scale_error_sigma = o->getDouble("scale_error_sigma", 0.0, 0.5, z.scale_error_sigma);
       z.heading_drift_sigma_rad_per_m =
           o->getDouble("heading_drift_sigma_rad_per_m", 0.0, 0.5, z.heading_drift_sigma_rad_per_m);
@@ -353,11 +362,10 @@ sim::World parseWorld(const Node& root) {
     // periods would put image times between samples.
     const double ratio = w.truth_rate_hz / w.image_rate_hz;
     if (std::abs(ratio - std::round(ratio)) > 1e-9)
-      throw ConfigError(root.where("image_rate_hz") + " must divide truth_rate_hz (" +
-                        std::to_string(w.truth_rate_hz) + ") a whole number of times");
+      throw ConfigError(root.where("image_rate_hz") + " must divide truth_rate_hz (" + std::to_string(w.truth_rate_hz) +
+                        ") a whole number of times");
   }
-  if (w.image_rate_hz > w.truth_rate_hz)
-    throw ConfigError(root.where("image_rate_hz") + " must be <= truth_rate_hz");
+  if (w.image_rate_hz > w.truth_rate_hz) throw ConfigError(root.where("image_rate_hz") + " must be <= truth_rate_hz");
   if (w.room && !(w.camera.mounting.z_m > 0.0 && w.camera.mounting.z_m < w.room->height_m)) {
     // Above the ceiling every ray hits the ceiling's plane from outside: blank images, no error.
     const Node cam = root.child("camera");

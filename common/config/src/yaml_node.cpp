@@ -192,10 +192,11 @@ void Node::failIfEmpty(const std::string& key, const char* required) const {
   if (!node_[key].IsNull()) return;
   // The line is the key's: an empty value's own mark is where the next line starts. (No YAML::Node
   // is assigned here: assigning to a handle that refers to a node rewrites that node.)
-  const std::string what = " has no value (" + std::string(required) +
-                           "; remove the key to take its default, where it has one)";
+  const std::string what =
+      " has no value (" + std::string(required) + "; remove the key to take its default, where it has one)";
   for (auto it = node_.begin(); it != node_.end(); ++it)
-    if (it->first.IsScalar() && it->first.Scalar() == key) throw ConfigError(where(key) + what + origin(key, it->first));
+    if (it->first.IsScalar() && it->first.Scalar() == key)
+      throw ConfigError(where(key) + what + origin(key, it->first));
   throw ConfigError(where(key) + what + origin(key, node_[key]));
 }
 

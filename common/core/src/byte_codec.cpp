@@ -130,7 +130,8 @@ void ByteReader::expectEnd(const char* what) const {
 
 // ---- envelope -------------------------------------------------------------------------------
 
-std::vector<std::uint8_t> sealState(const StateMagic& magic, std::uint32_t version, const std::vector<std::uint8_t>& payload) {
+std::vector<std::uint8_t> sealState(const StateMagic& magic, std::uint32_t version,
+                                    const std::vector<std::uint8_t>& payload) {
   ByteWriter w;
   w.bytes(reinterpret_cast<const std::uint8_t*>(magic.data()), magic.size());
   w.u32(version);

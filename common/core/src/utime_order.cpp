@@ -93,10 +93,9 @@ std::optional<std::string> UtimeOrder::admit(int64_t utime, const UtimeOrderOpti
     return accept(utime, true);
   }
   const bool ahead = step == TimeStep::kJumpAhead;
-  return "utime " + std::to_string(utime) + (ahead ? " jumps ahead of" : " jumps back from") + prev +
-         " by more than " + std::to_string(ahead ? jump_us : opt.restart_back_jump_us) +
-         " us (a stray, unless " + std::to_string(need) + " such messages come in a row; this is " +
-         std::to_string(pending_count_) + ")";
+  return "utime " + std::to_string(utime) + (ahead ? " jumps ahead of" : " jumps back from") + prev + " by more than " +
+         std::to_string(ahead ? jump_us : opt.restart_back_jump_us) + " us (a stray, unless " + std::to_string(need) +
+         " such messages come in a row; this is " + std::to_string(pending_count_) + ")";
 }
 
 }  // namespace omnislam

@@ -57,7 +57,7 @@ class Walk {
 
 // Encoded sizes of the fixed-size element types (sum of their fields' sizes, no padding).
 constexpr size_t kFeatureBytes = 1 + 8 + 8 + 1 + 4 * 8 + 2 * 8 + 3 * 8 + 2 * 3 * 4;  // feature_t: 114
-constexpr size_t kLandmarkBytes = 8 + 3 * 8 + 9 * 8 + 1 + 4 + 1;                      // landmark_t: 110
+constexpr size_t kLandmarkBytes = 8 + 3 * 8 + 9 * 8 + 1 + 4 + 1;                     // landmark_t: 110
 
 /// utime, seq and another int64, then an int32 count of elements of `elem_bytes` (the arrays of
 /// map_t, particles_t, associations_t and feature_labels_t; what follows is fixed-size).

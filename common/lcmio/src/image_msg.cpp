@@ -31,7 +31,8 @@ vision::ImageLimits receiverLimits() {
 std::optional<std::string> checkAgainstMessage(const vision::ImageHeader& h, const image_t& msg) {
   const auto codec = msg.pixel_format == image_t::FORMAT_PNG ? vision::ImageCodec::kPng : vision::ImageCodec::kJpeg;
   if (h.codec != codec)
-    return std::string("pixel_format says ") + vision::codecName(codec) + ", the data is a " + vision::codecName(h.codec);
+    return std::string("pixel_format says ") + vision::codecName(codec) + ", the data is a " +
+           vision::codecName(h.codec);
   if (h.width_px != msg.width || h.height_px != msg.height)
     return "compressed image's own header says " + std::to_string(h.width_px) + "x" + std::to_string(h.height_px) +
            ", the message's " + std::to_string(msg.width) + "x" + std::to_string(msg.height);
@@ -90,8 +91,7 @@ std::optional<cv::Mat> decodeImage(const image_t& msg, std::string* why, const v
     const int64_t channels = msg.pixel_format == image_t::FORMAT_GRAY8 ? 1 : 3;
     const int64_t row_bytes = static_cast<int64_t>(msg.width) * channels;
     if (msg.width <= 0 || msg.height <= 0 || msg.row_stride < row_bytes ||
-        static_cast<int64_t>(msg.data.size()) <
-            static_cast<int64_t>(msg.row_stride) * (msg.height - 1) + row_bytes)
+        static_cast<int64_t>(msg.data.size()) < static_cast<int64_t>(msg.row_stride) * (msg.height - 1) + row_bytes)
       return fail("raw image sizes (" + std::to_string(msg.width) + "x" + std::to_string(msg.height) + ", stride " +
                   std::to_string(msg.row_stride) + ") do not fit its " + std::to_string(msg.data.size()) + " bytes");
   }

@@ -68,8 +68,7 @@ void Node::error(const std::string& what) {
 
 void Node::publishStatus() {
   process_status_t st;
-  st.utime = std::chrono::duration_cast<std::chrono::microseconds>(
-                 std::chrono::system_clock::now().time_since_epoch())
+  st.utime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
                  .count();
   st.seq = status_seq_++;
   st.name = name_;
@@ -91,7 +90,8 @@ void Node::publishStatus() {
   if (counters_.utime_strays > 0 || counters_.implausible > 0)
     st.detail += " [refused: " + std::to_string(counters_.utime_strays) + " stray utimes, " +
                  std::to_string(counters_.implausible) + " implausible]";
-  if (lcm_.publish(channels::kProcessStatus, &st) != 0) error("publish on " + std::string(channels::kProcessStatus) + " failed");
+  if (lcm_.publish(channels::kProcessStatus, &st) != 0)
+    error("publish on " + std::string(channels::kProcessStatus) + " failed");
   next_status_ = std::chrono::steady_clock::now() + std::chrono::seconds(1);
 }
 

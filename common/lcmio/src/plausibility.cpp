@@ -44,8 +44,8 @@ std::optional<std::string> PoseStreamCheck::step(const Sample& from, const Sampl
 std::optional<std::string> PoseStreamCheck::admit(int64_t utime, double x_m, double y_m, double theta_rad,
                                                   const PosePlausibility& opt) {
   if (!(std::abs(x_m) <= opt.max_coordinate_m && std::abs(y_m) <= opt.max_coordinate_m && std::isfinite(theta_rad)))
-    return "pose (" + num(x_m) + " m, " + num(y_m) + " m, " + num(theta_rad) + " rad) outside the workspace (|x|, |y| <= " +
-           num(opt.max_coordinate_m) + " m)";
+    return "pose (" + num(x_m) + " m, " + num(y_m) + " m, " + num(theta_rad) +
+           " rad) outside the workspace (|x|, |y| <= " + num(opt.max_coordinate_m) + " m)";
   const Sample s{utime, x_m, y_m, theta_rad};
   if (!have_) {
     have_ = true;

@@ -106,8 +106,7 @@ std::optional<std::string> validate(const features_t& m, const Limits& lim) {
       const double det = f.covariance[0][0] * f.covariance[1][1] - f.covariance[0][1] * f.covariance[1][0];
       if (!(f.covariance[1][1] > 0.0) || !(det > 0.0)) return at + "covariance not positive definite";
       // Symmetric up to rounding: the filter's paths would otherwise read different matrices.
-      if (std::abs(f.covariance[0][1] - f.covariance[1][0]) >
-          1e-9 * std::sqrt(f.covariance[0][0] * f.covariance[1][1]))
+      if (std::abs(f.covariance[0][1] - f.covariance[1][0]) > 1e-9 * std::sqrt(f.covariance[0][0] * f.covariance[1][1]))
         return at + "covariance not symmetric";
     }
     for (int c = 0; c < 3; ++c)

@@ -94,18 +94,17 @@ void getCounts(ByteReader& r, const std::vector<int64_t*>& v, const char* what) 
 template <class S>
 auto pairingCounters(S& s) {  // S = PairingStats or const PairingStats
   return std::vector<decltype(&s.odometry_in)>{
-      &s.odometry_in,         &s.frames_in,           &s.frames_paired,    &s.dropped_no_odometry,
-      &s.dropped_odometry_gap, &s.dropped_too_old,    &s.dropped_restart,  &s.duplicates,
-      &s.out_of_order,        &s.stale_after_restart, &s.restarts,         &s.forward_jumps,
-      &s.stray_ahead,         &s.odometry_jumps};
+      &s.odometry_in,     &s.frames_in,       &s.frames_paired, &s.dropped_no_odometry, &s.dropped_odometry_gap,
+      &s.dropped_too_old, &s.dropped_restart, &s.duplicates,    &s.out_of_order,        &s.stale_after_restart,
+      &s.restarts,        &s.forward_jumps,   &s.stray_ahead,   &s.odometry_jumps};
 }
 
 template <class S>
 auto driverCounters(S& s) {  // S = DriverStats or const DriverStats; the pairing's are the pairer's
   return std::vector<decltype(&s.frames_processed)>{
-      &s.frames_processed,   &s.features_in,         &s.features_skipped_kind,     &s.measurements_rejected,
-      &s.filter_resets,      &s.degenerate_weights,  &s.odometry_only_steps,       &s.dropped_behind_prediction,
-      &s.frames_too_large,   &s.implausible,         &s.reinit_last_estimate};
+      &s.frames_processed, &s.features_in,        &s.features_skipped_kind, &s.measurements_rejected,
+      &s.filter_resets,    &s.degenerate_weights, &s.odometry_only_steps,   &s.dropped_behind_prediction,
+      &s.frames_too_large, &s.implausible,        &s.reinit_last_estimate};
 }
 
 /// describe() without the lines of the map files (paths may differ between two starts of one run).

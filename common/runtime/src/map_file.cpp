@@ -35,7 +35,8 @@ std::string mapToYaml(const SavedMap& map) {
   if (map.landmarks.empty()) o << " []";
   o << "\n";
   for (const slam::Landmark& L : map.landmarks) {
-    o << "  - {id: " << L.id << ", kind: " << (L.kind == slam::LandmarkKind::kVerticalLine ? "vertical_line" : "point3d")
+    o << "  - {id: " << L.id
+      << ", kind: " << (L.kind == slam::LandmarkKind::kVerticalLine ? "vertical_line" : "point3d")
       << ", type: " << (L.type == slam::LandmarkType::kTypeI ? 1 : 2) << ", counter: " << L.counter << ", position_m: ["
       << num(L.p_LinW_m.x()) << ", " << num(L.p_LinW_m.y()) << ", " << num(L.p_LinW_m.z()) << "], covariance_m2: [";
     for (int i = 0; i < 9; ++i) o << (i ? ", " : "") << num(L.cov_LinW_m2(i / 3, i % 3));
@@ -91,7 +92,7 @@ SavedMap loadMap(const std::string& path) {
     slam::Landmark L;
     L.id = static_cast<std::uint64_t>(n.getInt("id", 0, INT64_MAX));
     L.kind = n.getEnum("kind", {"point3d", "vertical_line"}) == "vertical_line" ? slam::LandmarkKind::kVerticalLine
-                                                                                 : slam::LandmarkKind::kPoint3D;
+                                                                                : slam::LandmarkKind::kPoint3D;
     L.type = n.getInt("type", 1, 2) == 1 ? slam::LandmarkType::kTypeI : slam::LandmarkType::kTypeII;
     L.counter = static_cast<int>(n.getInt("counter", 0, INT32_MAX));
     const auto p = n.getDoubles("position_m", 3, -1e6, 1e6);
@@ -103,8 +104,7 @@ SavedMap loadMap(const std::string& path) {
     if (!symmetric || Eigen::LLT<Eigen::Matrix3d>(L.cov_LinW_m2).info() != Eigen::Success)
       throw ConfigError(n.where("covariance_m2") + " of landmark " + std::to_string(L.id) +
                         " must be symmetric positive definite");
-    if (!ids.insert(L.id).second)
-      throw ConfigError(n.where("id") + ": duplicate landmark id " + std::to_string(L.id));
+    if (!ids.insert(L.id).second) throw ConfigError(n.where("id") + ": duplicate landmark id " + std::to_string(L.id));
     m.landmarks.push_back(L);
   }
   return m;

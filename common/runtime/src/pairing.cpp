@@ -139,10 +139,12 @@ void Pairer::refuseHeld(InputResult& r) {
   for (const Input& h : held_) {
     if (held_ahead_) {
       ++stats_.stray_ahead;
-      r.refused_held.emplace_back(h.is_frame, "utime " + us(h.utime) + " jumped ahead and the stream went on (a stray stamp)");
+      r.refused_held.emplace_back(h.is_frame,
+                                  "utime " + us(h.utime) + " jumped ahead and the stream went on (a stray stamp)");
     } else {
       ++stats_.out_of_order;
-      r.refused_held.emplace_back(h.is_frame, "utime " + us(h.utime) + " jumped back and no restart followed (out of order)");
+      r.refused_held.emplace_back(h.is_frame,
+                                  "utime " + us(h.utime) + " jumped back and no restart followed (out of order)");
     }
   }
   held_.clear();
@@ -239,7 +241,8 @@ InputResult Pairer::holdAhead(Input in, std::vector<PairEvent>& out) {
         // overlap): refused as on a stream that was not held; it refutes nothing.
         InputResult r;
         r.verdict = in.utime == h.utime ? Verdict::kDuplicate : Verdict::kOutOfOrder;
-        r.reason = "utime " + us(in.utime) + (in.utime == h.utime ? " repeated (duplicate)" : " before a held message (out of order)");
+        r.reason = "utime " + us(in.utime) +
+                   (in.utime == h.utime ? " repeated (duplicate)" : " before a held message (out of order)");
         ++(in.utime == h.utime ? stats_.duplicates : stats_.out_of_order);
         return r;
       }
@@ -367,8 +370,9 @@ void Pairer::decide(std::vector<PairEvent>& out, bool at_end) {
         continue;
       }
       case OdometryBuffer::Status::kGapTooLarge:
-        drop(out, "odometry gap of " + us(L.gap_us) + " us around it (max_odometry_gap_us " +
-                      us(opt_.max_odometry_gap_us) + ")",
+        drop(out,
+             "odometry gap of " + us(L.gap_us) + " us around it (max_odometry_gap_us " + us(opt_.max_odometry_gap_us) +
+                 ")",
              stats_.dropped_odometry_gap);
         continue;
       case OdometryBuffer::Status::kBeforeBuffer:
@@ -381,9 +385,10 @@ void Pairer::decide(std::vector<PairEvent>& out, bool at_end) {
         if (at_end) {
           drop(out, "no odometry up to it at the end of the input", stats_.dropped_no_odometry);
         } else if (waited_too_long || too_many) {
-          drop(out, std::string("no odometry up to it within ") +
-                        (waited_too_long ? "max_wait_us " + us(opt_.max_wait_us)
-                                         : "max_pending_frames " + std::to_string(opt_.max_pending_frames)),
+          drop(out,
+               std::string("no odometry up to it within ") +
+                   (waited_too_long ? "max_wait_us " + us(opt_.max_wait_us)
+                                    : "max_pending_frames " + std::to_string(opt_.max_pending_frames)),
                stats_.dropped_no_odometry);
         } else {
           return;  // wait for odometry

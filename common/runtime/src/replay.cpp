@@ -121,7 +121,8 @@ bool isSlamOutput(const std::string& channel) {
 /// Whether the replay's event number pos.events was read before the checkpoint it resumed from (its
 /// state holds it: the event is copied to the output, not fed). Throws std::invalid_argument (exit 2)
 /// when the checkpoint's last event is not this log's event of that number: another log.
-bool processedBeforeResume(const ReplayPosition& pos, const ReplayPosition& resumed, const std::string& checkpoint_path) {
+bool processedBeforeResume(const ReplayPosition& pos, const ReplayPosition& resumed,
+                           const std::string& checkpoint_path) {
   if (pos.events > resumed.events) return false;
   if (pos.events == resumed.events && (pos.channel != resumed.channel || pos.log_utime != resumed.log_utime))
     throw std::invalid_argument("checkpoint " + checkpoint_path + ": written after event " +
@@ -219,12 +220,14 @@ bool runReplay(const SlamProcessOptions& options, std::vector<slam::Landmark> pr
   const bool checkpoint_ok = !interrupted || pos.events < replay.resumed.events || rt.writeCheckpointNow();
   replay.handle(rt.finish(), last_timestamp);
   replay.progress.update(1.0, rt.driver().stats().frames_processed, true);
-  if (interrupted) std::cerr << kTag << "replay interrupted by signal " << lcmio::stopSignal() << ": outputs so far kept" << std::endl;
+  if (interrupted)
+    std::cerr << kTag << "replay interrupted by signal " << lcmio::stopSignal() << ": outputs so far kept" << std::endl;
   else rt.removeFinishedCheckpoint();
   rt.saveMap();
   out.commit();  // a failed last write (a full disk) is an error, not "N events written"
-  std::cerr << kTag << "replay done: " << replay.outputs << " frames answered, " << out.events() << " events written to "
-            << args.out_path << "; " << replay.rep.counts() << "; " << rt.detail() << std::endl;
+  std::cerr << kTag << "replay done: " << replay.outputs << " frames answered, " << out.events()
+            << " events written to " << args.out_path << "; " << replay.rep.counts() << "; " << rt.detail()
+            << std::endl;
   return checkpoint_ok;
 }
 

@@ -134,9 +134,10 @@ DriverResult SlamDriver::onFeatures(const features_t& msg) {
   const double cam_m = std::hypot(msg.camera_position_m[0], msg.camera_position_m[1], msg.camera_position_m[2]);
   if (!(cam_m <= opt_.plausibility.max_camera_offset_m)) {
     ++stats_.implausible;
-    r.refused.push_back({"OMNI_FEATURES", "frame seq " + std::to_string(msg.seq) + ": camera_position_m " +
-                                              num(cam_m) + " m from the robot's origin, more than plausibility.max_camera_offset_m " +
-                                              num(opt_.plausibility.max_camera_offset_m)});
+    r.refused.push_back(
+        {"OMNI_FEATURES", "frame seq " + std::to_string(msg.seq) + ": camera_position_m " + num(cam_m) +
+                              " m from the robot's origin, more than plausibility.max_camera_offset_m " +
+                              num(opt_.plausibility.max_camera_offset_m)});
     return r;
   }
   stats_.features_in += msg.num_features;
@@ -147,10 +148,10 @@ DriverResult SlamDriver::onFeatures(const features_t& msg) {
   if (static_cast<int>(frame.z.size()) > opt_.max_features_per_frame) {
     // The association's time grows with about the cube of the count (docs/user/slam-process.md).
     ++stats_.frames_too_large;
-    r.refused.push_back({"OMNI_FEATURES", "frame seq " + std::to_string(msg.seq) + " has " +
-                                              std::to_string(frame.z.size()) +
-                                              " usable features, more than features.max_per_frame = " +
-                                              std::to_string(opt_.max_features_per_frame)});
+    r.refused.push_back(
+        {"OMNI_FEATURES",
+         "frame seq " + std::to_string(msg.seq) + " has " + std::to_string(frame.z.size()) +
+             " usable features, more than features.max_per_frame = " + std::to_string(opt_.max_features_per_frame)});
     return r;
   }
   stats_.features_skipped_kind += skipped;
@@ -181,9 +182,7 @@ void SlamDriver::apply(std::vector<PairEvent>& events, DriverResult& r) {
         ++epoch_;
         last_step_utime_ = last_frame_utime_ = odom_utime_at_last_frame_ = 0;
         break;
-      case PairEvent::Kind::kDropped:
-        r.dropped.push_back(ev.reason);
-        break;
+      case PairEvent::Kind::kDropped: r.dropped.push_back(ev.reason); break;
       case PairEvent::Kind::kPaired:
         if (auto out = process(ev.frame, ev.odom_O, r)) r.outputs.push_back(std::move(*out));
         break;
@@ -209,14 +208,15 @@ void SlamDriver::ensureFilter(const Pose2& odom_O, DriverResult& r) {
     // After a restart of the inputs: the robot is where the filter last had it, less sure by the
     // motion the restart may have hidden; its map goes on (shared by all particles, ids kept).
     Eigen::Matrix3d cov = restart_from_->cov;
-    cov.diagonal() += Eigen::Vector3d(ro.position_sigma_m * ro.position_sigma_m, ro.position_sigma_m * ro.position_sigma_m,
-                                      ro.heading_sigma_rad * ro.heading_sigma_rad);
+    cov.diagonal() +=
+        Eigen::Vector3d(ro.position_sigma_m * ro.position_sigma_m, ro.position_sigma_m * ro.position_sigma_m,
+                        ro.heading_sigma_rad * ro.heading_sigma_rad);
     filter->initialise(restart_from_->pose_W, restart_from_->map, cov);
     ++stats_.reinit_last_estimate;
     r.notes.push_back("filter re-initialised from its last estimate (" + num(restart_from_->pose_W.x_m) + " m, " +
                       num(restart_from_->pose_W.y_m) + " m, " + num(restart_from_->pose_W.theta_rad) + " rad; " +
-                      std::to_string(restart_from_->map.size()) + " landmarks), widened by " + num(ro.position_sigma_m) +
-                      " m, " + num(ro.heading_sigma_rad) + " rad");
+                      std::to_string(restart_from_->map.size()) + " landmarks), widened by " +
+                      num(ro.position_sigma_m) + " m, " + num(ro.heading_sigma_rad) + " rad");
   } else {
     // First step of an epoch: the start pose is known (paper 000), all particles at it.
     const Pose2 start_W = opt_.start_source == SlamProcessOptions::StartSource::kFixed ? opt_.start_pose_W : odom_O;
@@ -229,8 +229,7 @@ void SlamDriver::ensureFilter(const Pose2& odom_O, DriverResult& r) {
 // Odometry-only steps: only after the filter has started (the first frame fixes the start), only
 // when no frame waits for odometry, and only on the odometry's own clock.
 void SlamDriver::maybePredict(DriverResult& r) {
-  if (opt_.odometry_only_after_us <= 0 || !filter_ || pairer_.pendingFrames() > 0 || pairer_.odometry().empty())
-    return;
+  if (opt_.odometry_only_after_us <= 0 || !filter_ || pairer_.pendingFrames() > 0 || pairer_.odometry().empty()) return;
   const int64_t t = pairer_.odometry().newestUtime();
   // Frames still arrive (late ones too, even ones that are dropped): the features process is alive.
   if (t - std::max(last_frame_utime_, odom_utime_at_last_frame_) < opt_.odometry_only_after_us) return;
@@ -278,8 +277,8 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
       }
       l.type = static_cast<int8_t>(L.type == slam::LandmarkType::kTypeI ? 1 : 2);
       l.times_detected = L.counter;
-      l.kind = L.kind == slam::LandmarkKind::kVerticalLine ? feature_t::KIND_VERTICAL_LINE
-                                                           : feature_t::KIND_CEILING_LIGHT;
+      l.kind =
+          L.kind == slam::LandmarkKind::kVerticalLine ? feature_t::KIND_VERTICAL_LINE : feature_t::KIND_CEILING_LIGHT;
       m.landmarks.push_back(l);
     }
     m.num_landmarks = static_cast<int32_t>(m.landmarks.size());
@@ -296,8 +295,9 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   for (std::size_t k = 0; k < frame.feature_index.size(); ++k) {
     const std::int64_t id = k < sr.landmark_of_measurement.size() ? sr.landmark_of_measurement[k] : -1;
     const bool refused = k < sr.measurement_refused.size() && sr.measurement_refused[k];
-    a.landmark_id[static_cast<std::size_t>(frame.feature_index[k])] =
-        refused ? +associations_t::NOT_USED : id >= 0 ? id : +associations_t::NOT_ASSOCIATED;
+    a.landmark_id[static_cast<std::size_t>(frame.feature_index[k])] = refused   ? +associations_t::NOT_USED
+                                                                      : id >= 0 ? id
+                                                                                : +associations_t::NOT_ASSOCIATED;
   }
   out.associations = std::move(a);
   return out;
@@ -342,14 +342,15 @@ std::string SlamDriver::summary() const {
   std::ostringstream o;
   o << "frames " << p.frames_in << " processed " << s.frames_processed << " dropped: no_odometry "
     << p.dropped_no_odometry << " odometry_gap " << p.dropped_odometry_gap << " too_old " << p.dropped_too_old
-    << " restart " << p.dropped_restart << "; odometry " << p.odometry_in << "; refused: duplicates "
-    << p.duplicates << " out_of_order " << p.out_of_order << " stale " << p.stale_after_restart << " too_large "
-    << s.frames_too_large << " implausible " << s.implausible << "; restarts "
-    << p.restarts << " filter_resets " << s.filter_resets << "; jumps_ahead: taken " << p.forward_jumps << " stray "
-    << p.stray_ahead << "; odometry_jumps " << p.odometry_jumps << "; features " << s.features_in << " skipped " << s.features_skipped_kind
+    << " restart " << p.dropped_restart << "; odometry " << p.odometry_in << "; refused: duplicates " << p.duplicates
+    << " out_of_order " << p.out_of_order << " stale " << p.stale_after_restart << " too_large " << s.frames_too_large
+    << " implausible " << s.implausible << "; restarts " << p.restarts << " filter_resets " << s.filter_resets
+    << "; jumps_ahead: taken " << p.forward_jumps << " stray " << p.stray_ahead << "; odometry_jumps "
+    << p.odometry_jumps << "; features " << s.features_in << " skipped " << s.features_skipped_kind
     << " rejected_by_filter " << s.measurements_rejected << "; odometry_only_steps " << s.odometry_only_steps
     << " dropped_behind_prediction " << s.dropped_behind_prediction << " degenerate_weights " << s.degenerate_weights;
-  if (filter_) o << "; landmarks " << filter_->bestParticle().map.size() << " candidates " << filter_->bestCandidateCount();
+  if (filter_)
+    o << "; landmarks " << filter_->bestParticle().map.size() << " candidates " << filter_->bestCandidateCount();
   return o.str();
 }
 

@@ -119,11 +119,13 @@ void SlamRuntime::feed(const char* channel, bool is_frame, int64_t utime, Step&&
 }
 
 void SlamRuntime::onOdometry(const odometry_t& msg, const Emit& emit) {
-  feed(channels::kOdometry, false, msg.utime, [&] { return driver_.onOdometry(msg); }, emit);
+  feed(
+      channels::kOdometry, false, msg.utime, [&] { return driver_.onOdometry(msg); }, emit);
 }
 
 void SlamRuntime::onFeatures(const features_t& msg, const Emit& emit) {
-  feed(channels::kOmniFeatures, true, msg.utime, [&] { return driver_.onFeatures(msg); }, emit);
+  feed(
+      channels::kOmniFeatures, true, msg.utime, [&] { return driver_.onFeatures(msg); }, emit);
 }
 
 void SlamRuntime::saveMap() const {
@@ -146,8 +148,6 @@ void SlamRuntime::saveMap() const {
   }
 }
 
-std::string SlamRuntime::detail() const {
-  return driver_.summary() + ckpt_.summary() + alreadyProcessedNote(clock_);
-}
+std::string SlamRuntime::detail() const { return driver_.summary() + ckpt_.summary() + alreadyProcessedNote(clock_); }
 
 }  // namespace omnislam::slamproc

@@ -14,8 +14,8 @@ ImageClock::ImageClock(int64_t start_utime, double image_rate_hz, double truth_r
 
 bool ImageClock::take(int64_t utime) {
   // The difference in uint64: exact for any two int64 with utime < next_utime_ (which may be INT64_MAX).
-  if (utime < next_utime_ &&
-      static_cast<uint64_t>(next_utime_) - static_cast<uint64_t>(utime) > static_cast<uint64_t>(tolerance_us_))
+  if (utime<next_utime_&& static_cast<uint64_t>(next_utime_) - static_cast<uint64_t>(utime)> static_cast<uint64_t>(
+          tolerance_us_))
     return false;
   // In double: (utime - start) may not fit int64, and n * period is exact enough to 1 us up to
   // about 1e15 us; beyond that (decades) only the order of the times matters.

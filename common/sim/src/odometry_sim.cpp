@@ -48,8 +48,9 @@ Pose2 OdometrySimulator::step(const Pose2& truth) {
     return odo_;
   }
   const double sd = noise_.distance_sigma_m_per_sqrt_m * std::sqrt(dist);
-  const double sr = std::sqrt(noise_.rotation_sigma_rad_per_sqrt_rad * noise_.rotation_sigma_rad_per_sqrt_rad * std::abs(dth) +
-                              noise_.heading_sigma_rad_per_sqrt_m * noise_.heading_sigma_rad_per_sqrt_m * dist);
+  const double sr =
+      std::sqrt(noise_.rotation_sigma_rad_per_sqrt_rad * noise_.rotation_sigma_rad_per_sqrt_rad * std::abs(dth) +
+                noise_.heading_sigma_rad_per_sqrt_m * noise_.heading_sigma_rad_per_sqrt_m * dist);
   const double ds_odo = ds * (1.0 + k_scale_) + sd * n01(rng_);
   const double dth_odo = dth + drift_ * dist + sr * n01(rng_);
   odo_ = odo_.compose(Pose2{ds_odo * std::cos(0.5 * dth_odo), ds_odo * std::sin(0.5 * dth_odo), dth_odo});

@@ -93,7 +93,8 @@ TrajectorySample Trajectory::at(double t_s) const {
     s.pose = along(segments_.back(), opt_, start_poses_.back(), end_times_.back() - start_times_.back()).pose;
     return s;
   }
-  const size_t i = static_cast<size_t>(std::upper_bound(end_times_.begin(), end_times_.end(), t_s) - end_times_.begin());
+  const size_t i =
+      static_cast<size_t>(std::upper_bound(end_times_.begin(), end_times_.end(), t_s) - end_times_.begin());
   return along(segments_[i], opt_, start_poses_[i], t_s - start_times_[i]);
 }
 

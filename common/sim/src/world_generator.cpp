@@ -30,10 +30,10 @@ class Draw {
 double roundTo(double v, double step) { return std::round(v / step) * step; }
 
 // Margins and the robot's limits (docs/results/world-families.md, "Trajectories").
-constexpr double kWallMargin_m = 1.0;      ///< the path keeps this far from the walls
-constexpr double kCorridorMargin_m = 0.5;  ///< ... in a corridor (2.5 m wide at the least)
-constexpr double kMaxYawRate_radps = 0.52; ///< paper 000: <= 0.52 rad/s
-constexpr double kLampMinGap_m = 2.0;      ///< extra / scattered lamps keep this far from the others
+constexpr double kWallMargin_m = 1.0;       ///< the path keeps this far from the walls
+constexpr double kCorridorMargin_m = 0.5;   ///< ... in a corridor (2.5 m wide at the least)
+constexpr double kMaxYawRate_radps = 0.52;  ///< paper 000: <= 0.52 rad/s
+constexpr double kLampMinGap_m = 2.0;       ///< extra / scattered lamps keep this far from the others
 
 struct Path {
   TrajectoryOptions opt;
@@ -114,10 +114,8 @@ void explore(const HallBounds& h, Path& path, Pose2& pose, Draw& d) {
     for (int attempt = 0; attempt < 30 && !moved; ++attempt) {
       std::vector<Segment> segs;
       const double angle = d.uniform(30.0, 180.0) * (d.chance(0.5) ? 1.0 : -1.0);
-      if (d.chance(0.5))
-        segs.push_back(turn(angle));
-      else
-        segs.push_back(arc(std::clamp(angle, -120.0, 120.0), d.uniform(minArcRadius(path.opt), 2.0)));
+      if (d.chance(0.5)) segs.push_back(turn(angle));
+      else segs.push_back(arc(std::clamp(angle, -120.0, 120.0), d.uniform(minArcRadius(path.opt), 2.0)));
       segs.push_back(straight(d.uniform(2.0, 25.0)));
       moved = tryAppend(h, kWallMargin_m, path, pose, segs);
     }
@@ -134,7 +132,9 @@ void explore(const HallBounds& h, Path& path, Pose2& pose, Draw& d) {
 double pathLength(const Path& p) {
   double L = 0.0;
   for (const Segment& s : p.segs)
-    L += s.kind == Segment::Kind::kStraight ? s.length_m : s.kind == Segment::Kind::kArc ? std::abs(s.angle_rad) * s.radius_m : 0.0;
+    L += s.kind == Segment::Kind::kStraight ? s.length_m
+         : s.kind == Segment::Kind::kArc    ? std::abs(s.angle_rad) * s.radius_m
+                                            : 0.0;
   return L;
 }
 
@@ -281,8 +281,8 @@ void corridorsFamily(GeneratedWorld& g, Draw& d) {
   p.spacing_y_m = rows == 2 ? 0.5 * p.hall_y_m : 0.0;
   const double z = roundTo(d.uniform(3.0, 6.0), 0.01);
   const double r = roundTo(d.uniform(0.15, 0.30), 0.01);
-  gridLamps(w, p, *w.hall, p.spacing_x_m, rows == 2 ? 0.5 * p.hall_y_m : 2.0 * p.hall_y_m, z, r,
-            d.uniform(0.0, 0.15), d);
+  gridLamps(w, p, *w.hall, p.spacing_x_m, rows == 2 ? 0.5 * p.hall_y_m : 2.0 * p.hall_y_m, z, r, d.uniform(0.0, 0.15),
+            d);
 }
 
 void drawNuisances(World& w, Draw& d) {

@@ -58,11 +58,12 @@ void writeNoise(std::ostringstream& y, const World& w) {
   const ImageNuisance& z = w.nuisance;
   y << "image:\n  noise_sigma_grey: " << num(z.noise_sigma_grey) << "\n  blur_sigma_px: " << num(z.blur_sigma_px)
     << "\n  background_grey: " << num(z.background_grey) << "\n  light_peak_grey: " << num(z.light_peak_grey)
-    << "\n  samples_per_light: " << z.samples_per_light << "\n  window_wall: {enabled: "
-    << (z.window_wall_enabled ? "true" : "false") << ", y_m: " << num(z.window_wall_y_m)
-    << ", band_m: " << num(z.window_band_m) << ", miss_probability: " << num(z.window_miss_probability)
-    << "}\n  false_blobs: {per_frame: " << num(z.false_blobs_per_frame) << ", radius_px: "
-    << num(z.false_blob_radius_px) << ", peak_grey: " << num(z.false_blob_peak_grey) << "}\n";
+    << "\n  samples_per_light: " << z.samples_per_light
+    << "\n  window_wall: {enabled: " << (z.window_wall_enabled ? "true" : "false")
+    << ", y_m: " << num(z.window_wall_y_m) << ", band_m: " << num(z.window_band_m)
+    << ", miss_probability: " << num(z.window_miss_probability)
+    << "}\n  false_blobs: {per_frame: " << num(z.false_blobs_per_frame)
+    << ", radius_px: " << num(z.false_blob_radius_px) << ", peak_grey: " << num(z.false_blob_peak_grey) << "}\n";
 }
 
 }  // namespace
@@ -79,8 +80,8 @@ std::string worldToYaml(const World& w, const std::vector<std::string>& header) 
   y << "lights:\n  list:\n";
   for (const Light& L : w.lights)
     y << "    - {id: " << L.id << ", x_m: " << num(L.p_LinW_m.x()) << ", y_m: " << num(L.p_LinW_m.y())
-      << ", z_m: " << num(L.p_LinW_m.z()) << ", radius_m: " << num(L.radius_m)
-      << ", intensity: " << num(L.intensity) << "}\n";
+      << ", z_m: " << num(L.p_LinW_m.z()) << ", radius_m: " << num(L.radius_m) << ", intensity: " << num(L.intensity)
+      << "}\n";
   writeCamera(y, w.camera);
   writeTrajectory(y, w);
   writeNoise(y, w);
@@ -89,7 +90,8 @@ std::string worldToYaml(const World& w, const std::vector<std::string>& header) 
 
 double detectionRange_m(const World& world, double radius_m, double height_m, double min_area_px) {
   const auto camera = makeCamera(world.camera);
-  const Eigen::Vector3d cam = Eigen::Vector3d(world.camera.mounting.x_m, world.camera.mounting.y_m, world.camera.mounting.z_m);
+  const Eigen::Vector3d cam =
+      Eigen::Vector3d(world.camera.mounting.x_m, world.camera.mounting.y_m, world.camera.mounting.z_m);
   double range = 0.0;
   for (double dx = 0.0; dx <= 1000.0; dx += 0.05) {  // the lamp ahead of a robot at the origin
     const Eigen::Vector3d p(cam.x() + dx, cam.y(), height_m);

@@ -13,10 +13,8 @@ namespace {
 
 cv::Mat toBgr(const cv::Mat& image) {
   cv::Mat out;
-  if (image.channels() == 1)
-    cv::cvtColor(image, out, cv::COLOR_GRAY2BGR);
-  else
-    out = image.clone();
+  if (image.channels() == 1) cv::cvtColor(image, out, cv::COLOR_GRAY2BGR);
+  else out = image.clone();
   return out;
 }
 

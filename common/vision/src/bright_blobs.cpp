@@ -196,8 +196,8 @@ std::vector<BrightBlob> detectLampBlobs(const cv::Mat& grey, const cv::Mat& vali
     Moments a;
     for (int v = box.y; v < box.y + box.height; ++v)
       for (int u = box.x; u < box.x + box.width; ++u)
-        if (labels.at<int>(v, u) == i) a.add(u, v, std::max(0.0, grey.at<uint8_t>(v, u) - ctx.background_grey),
-                                              grey.at<uint8_t>(v, u));
+        if (labels.at<int>(v, u) == i)
+          a.add(u, v, std::max(0.0, grey.at<uint8_t>(v, u) - ctx.background_grey), grey.at<uint8_t>(v, u));
     BrightBlob b;
     if (!a.fill(b)) continue;
     const bool saturated = b.peak_grey >= o.saturation_grey;

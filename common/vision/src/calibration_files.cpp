@@ -52,7 +52,8 @@ std::string_view body(const std::string& text) {
 
 bool isOpencvStorage(const std::string& text) {
   const std::string_view t = body(text);
-  return t.substr(0, 6) == "%YAML:" || (t.substr(0, 5) == "<?xml" && t.find("<opencv_storage>") != std::string_view::npos);
+  return t.substr(0, 6) == "%YAML:" ||
+         (t.substr(0, 5) == "<?xml" && t.find("<opencv_storage>") != std::string_view::npos);
 }
 
 /// cv::FileStorage over the text; its parse errors become one-line ConfigErrors.
@@ -112,8 +113,9 @@ void readOpencvSize(const cv::FileStorage& fs, const std::string& source, Camera
   if (w.isNone() && h.isNone()) return;
   for (const auto& [key, n] : {std::pair<const char*, cv::FileNode>{"image_width", w}, {"image_height", h}}) {
     if (!n.isInt() || static_cast<int>(n) < 1 || static_cast<int>(n) > 16384)
-      fail(source, std::string("key '") + key + "' must be an integer in [1, 16384] (with both image_width and "
-                                                "image_height given, or neither)");
+      fail(source, std::string("key '") + key +
+                       "' must be an integer in [1, 16384] (with both image_width and "
+                       "image_height given, or neither)");
   }
   c->width_px = static_cast<int>(w);
   c->height_px = static_cast<int>(h);
@@ -123,7 +125,8 @@ void readOpencvSize(const cv::FileStorage& fs, const std::string& source, Camera
 std::optional<double> readXi(const cv::FileStorage& fs, const std::string& source) {
   const cv::FileNode n = fs["xi"];
   if (n.isNone()) return std::nullopt;
-  const double xi = n.isReal() || n.isInt() ? static_cast<double>(n) : readMatrix(fs, "xi", 1, 1, false, source).at<double>(0, 0);
+  const double xi =
+      n.isReal() || n.isInt() ? static_cast<double>(n) : readMatrix(fs, "xi", 1, 1, false, source).at<double>(0, 0);
   if (!std::isfinite(xi) || xi < 0.0) fail(source, "key 'xi' must be a number >= 0, found " + fmt(xi));
   return xi;
 }
@@ -202,7 +205,8 @@ CalibratedIntrinsics kalibrModel(const config::Node& cam, const std::string& mod
                                     : std::vector<double>{};
   if (model == "omni") {
     const auto v = kalibrIntrinsics(cam, 5, 1, text);
-    if (v[0] < 0.0) throw ConfigError(whereLine(cam, "intrinsics", text) + " xi (item 0) must be >= 0, found " + fmt(v[0]));
+    if (v[0] < 0.0)
+      throw ConfigError(whereLine(cam, "intrinsics", text) + " xi (item 0) must be >= 0, found " + fmt(v[0]));
     MeiIntrinsics m{v[1], v[2], v[3], v[4], 0.0, v[0]};
     if (n_dist) {
       m.k1 = d[0];
@@ -224,8 +228,8 @@ CalibratedIntrinsics kalibrModel(const config::Node& cam, const std::string& mod
   }
   const auto v = kalibrIntrinsics(cam, 6, 2, text);  // eucm
   if (!(v[0] >= 0.0 && v[0] <= 1.0) || !(v[1] > 0.0))
-    throw ConfigError(whereLine(cam, "intrinsics", text) + " alpha (item 0) must be in [0, 1] and beta (item 1) > 0, found " +
-                      fmt(v[0]) + ", " + fmt(v[1]));
+    throw ConfigError(whereLine(cam, "intrinsics", text) +
+                      " alpha (item 0) must be in [0, 1] and beta (item 1) > 0, found " + fmt(v[0]) + ", " + fmt(v[1]));
   return EucmIntrinsics{v[2], v[3], v[4], v[5], v[0], v[1]};
 }
 
@@ -235,7 +239,8 @@ CameraCalibration parseKalibr(const std::string& text, const std::string& source
   const std::string model = cam.getString("camera_model");
   const std::string dist = cam.getString("distortion_model");
   const bool ok = (model == "omni" && (dist == "radtan" || dist == "none")) ||
-                  (model == "pinhole" && dist == "equidistant") || ((model == "ds" || model == "eucm") && dist == "none");
+                  (model == "pinhole" && dist == "equidistant") ||
+                  ((model == "ds" || model == "eucm") && dist == "none");
   if (!ok)
     throw ConfigError(whereLine(cam, "camera_model", text) + " " + model + " + " + dist +
                       " is not supported; supported (camera_model + distortion_model): omni + radtan, omni + none, "
@@ -274,10 +279,8 @@ CameraCalibration parseAs(CalibrationFormat f, const std::string& text, const st
       if (!isOpencvStorage(text))
         fail(source, "not an OpenCV FileStorage file (its first line must be %YAML:1.0, or an XML <opencv_storage>)");
       return parseOpencv(text, source, f);
-    case CalibrationFormat::kKalibr:
-      return parseKalibr(text, source, o.kalibr_camera);
-    case CalibrationFormat::kOcamcalib:
-      break;
+    case CalibrationFormat::kKalibr: return parseKalibr(text, source, o.kalibr_camera);
+    case CalibrationFormat::kOcamcalib: break;
   }
   return parseOcam(text, source);
 }
@@ -358,8 +361,8 @@ struct ModelMaker {
 
 }  // namespace
 
-std::unique_ptr<camera::CameraModel> makeCalibratedCamera(const CameraCalibration& calibration, camera::OcamOptics optics,
-                                                          int width_px, int height_px) {
+std::unique_ptr<camera::CameraModel> makeCalibratedCamera(const CameraCalibration& calibration,
+                                                          camera::OcamOptics optics, int width_px, int height_px) {
   auto model = std::visit(ModelMaker{calibration, optics, width_px, height_px}, calibration.intrinsics);
   const bool reflect = optics == camera::OcamOptics::kCatadioptric &&
                        !std::holds_alternative<camera::ScaramuzzaParams>(calibration.intrinsics);
@@ -371,8 +374,7 @@ Eigen::Vector2d principalPointPx(const CameraCalibration& calibration) {
       [](const auto& i) -> Eigen::Vector2d {
         if constexpr (std::is_same_v<std::decay_t<decltype(i)>, camera::ScaramuzzaParams>)
           return {i.yc_col_px, i.xc_row_px};
-        else
-          return {i.cx_px, i.cy_px};
+        else return {i.cx_px, i.cy_px};
       },
       calibration.intrinsics);
 }

@@ -32,8 +32,8 @@ struct JpegErrors {
 /// Warnings of damaged data: pixels lost or invented. Others (extraneous bytes between segments, a
 /// camera's non-standard SOS or ICC marker) leave the pixels as coded and are not reasons to refuse.
 bool meansDamagedData(int code) {
-  return code == JWRN_HIT_MARKER || code == JWRN_HUFF_BAD_CODE || code == JWRN_JPEG_EOF ||
-         code == JWRN_MUST_RESYNC || code == JWRN_BOGUS_PROGRESSION;
+  return code == JWRN_HIT_MARKER || code == JWRN_HUFF_BAD_CODE || code == JWRN_JPEG_EOF || code == JWRN_MUST_RESYNC ||
+         code == JWRN_BOGUS_PROGRESSION;
 }
 
 std::string formatted(j_common_ptr c) {
@@ -151,10 +151,12 @@ cv::Mat decodeInspected(const uint8_t* bytes, size_t size, const ImageHeader& h,
     if (why) *why = w;
     return cv::Mat();
   };
-  if (size > static_cast<size_t>(INT32_MAX)) return fail("encoded image of " + std::to_string(size) + " bytes: too large");
+  if (size > static_cast<size_t>(INT32_MAX))
+    return fail("encoded image of " + std::to_string(size) + " bytes: too large");
   cv::Mat img;
-  const bool strict_jpeg = h.codec == ImageCodec::kJpeg && h.bit_depth == 8 &&
-                           (flags == cv::IMREAD_UNCHANGED || flags == cv::IMREAD_GRAYSCALE || flags == cv::IMREAD_COLOR);
+  const bool strict_jpeg =
+      h.codec == ImageCodec::kJpeg && h.bit_depth == 8 &&
+      (flags == cv::IMREAD_UNCHANGED || flags == cv::IMREAD_GRAYSCALE || flags == cv::IMREAD_COLOR);
   if (strict_jpeg) {
     bool fall_back = false;
     img = decodeJpegStrictly(bytes, size, flags, &fall_back, why);
@@ -175,8 +177,8 @@ cv::Mat decodeInspected(const uint8_t* bytes, size_t size, const ImageHeader& h,
   }
   if (img.empty()) return fail(std::string(codecName(h.codec)) + " does not decode (" + h.describe() + ")");
   if (img.cols != h.width_px || img.rows != h.height_px)
-    return fail("decoded size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) + " differs from the header's " +
-                std::to_string(h.width_px) + "x" + std::to_string(h.height_px));
+    return fail("decoded size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +
+                " differs from the header's " + std::to_string(h.width_px) + "x" + std::to_string(h.height_px));
   const bool depth_ok = flags >= 0 && (flags & cv::IMREAD_ANYDEPTH) == 0
                             ? img.depth() == CV_8U
                             : img.depth() == (h.bytesPerChannel() == 1 ? CV_8U : CV_16U);

@@ -56,7 +56,9 @@ bool validPngDepth(int type, int depth) {
   switch (type) {
     case 0: return depth == 1 || depth == 2 || depth == 4 || depth == 8 || depth == 16;
     case 3: return depth == 1 || depth == 2 || depth == 4 || depth == 8;
-    case 2: case 4: case 6: return depth == 8 || depth == 16;
+    case 2:
+    case 4:
+    case 6: return depth == 8 || depth == 16;
     default: return false;
   }
 }
@@ -91,9 +93,8 @@ std::optional<std::string> pngComplete(const uint8_t* d, size_t n) {
   if (where + 8 <= n) {
     std::string type(reinterpret_cast<const char*>(d + where + 4), 4);
     for (char& c : type) c = (c >= 32 && c < 127) ? c : '?';
-    return "truncated PNG: chunk '" + type + "'" + at(where) + " declares " +
-           std::to_string(bigEndian(d + where, 4)) + " bytes, " + std::to_string(n - where - 8) +
-           " are left (no complete IEND chunk)";
+    return "truncated PNG: chunk '" + type + "'" + at(where) + " declares " + std::to_string(bigEndian(d + where, 4)) +
+           " bytes, " + std::to_string(n - where - 8) + " are left (no complete IEND chunk)";
   }
   return "truncated PNG: the data ends after " + std::to_string(n) + " bytes without an IEND chunk";
 }
@@ -128,7 +129,8 @@ HeaderResult frameHeader(const uint8_t* d, size_t n, size_t i, uint8_t m) {
   h.progressive = m == 0xC2 || m == 0xC6 || m == 0xCA || m == 0xCE;
   if (h.height_px == 0) return fail("JPEG height 0 (a DNL-defined height, which libjpeg does not support)");
   if (auto why = sidesProblem("JPEG", h.width_px, h.height_px)) return fail(*why);
-  if (h.bit_depth < 2 || h.bit_depth > 16) return fail("JPEG sample precision " + std::to_string(h.bit_depth) + " bits");
+  if (h.bit_depth < 2 || h.bit_depth > 16)
+    return fail("JPEG sample precision " + std::to_string(h.bit_depth) + " bits");
   if (components != 1 && components != 3 && components != 4)
     return fail("JPEG with " + std::to_string(components) + " components (1, 3 or 4 are decoded)");
   if (len < 8u + 3u * static_cast<uint32_t>(components)) return fail("JPEG frame header" + at(i) + " too short");

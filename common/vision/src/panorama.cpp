@@ -31,7 +31,8 @@ std::optional<std::string> validate(const PanoramaOptions& o) {
   if (rows * cols > kMaxPanoramaPixels)
     return "rows x (columns + 2 pad_columns) = " + std::to_string(rows) + " x " + std::to_string(cols) + " = " +
            std::to_string(rows * cols) + " pixels, more than " + std::to_string(kMaxPanoramaPixels) +
-           " (4096 x 4096); lower columns or rows" + (o.rows == 0 ? " (rows 0: one per pixel of r_max_px - r_min_px)" : "");
+           " (4096 x 4096); lower columns or rows" +
+           (o.rows == 0 ? " (rows 0: one per pixel of r_max_px - r_min_px)" : "");
   return std::nullopt;
 }
 
@@ -71,7 +72,9 @@ void Panorama::unwarp(const cv::Mat& image, cv::Mat& out) const {
 double Panorama::angleOfColumn(double col) const {
   return -kPiD + (col - opt_.pad_columns + 0.5) * 2.0 * kPiD / opt_.columns;
 }
-double Panorama::columnOfAngle(double a) const { return (a + kPiD) * opt_.columns / (2.0 * kPiD) - 0.5 + opt_.pad_columns; }
+double Panorama::columnOfAngle(double a) const {
+  return (a + kPiD) * opt_.columns / (2.0 * kPiD) - 0.5 + opt_.pad_columns;
+}
 double Panorama::radialStepPx() const { return (opt_.r_max_px - opt_.r_min_px) / (rows_ - 1); }
 double Panorama::radiusOfRow(double row) const { return opt_.r_min_px + row * radialStepPx(); }
 Eigen::Vector2d Panorama::pixelAt(double col, double row) const {
@@ -106,10 +109,8 @@ namespace {
 // zeroed where the (eroded) mask is 0. CV_32F, rows x N.
 cv::Mat rotationFeature(const cv::Mat& pano, const cv::Mat& mask, int pad) {
   cv::Mat grey;
-  if (pano.channels() == 3)
-    cv::cvtColor(pano, grey, cv::COLOR_BGR2GRAY);
-  else
-    grey = pano;
+  if (pano.channels() == 3) cv::cvtColor(pano, grey, cv::COLOR_BGR2GRAY);
+  else grey = pano;
   cv::Mat f;
   grey.convertTo(f, CV_32F);
   const int n = f.cols - 2 * pad;
@@ -141,9 +142,11 @@ void checkRotationInputs(const cv::Mat& pano, const PanoramaRotationOptions& o, 
   if (o.pad_columns < 0 || pano.cols - 2 * o.pad_columns < 16)
     throw std::invalid_argument("panorama rotation: pad_columns must be in [0, (cols - 16) / 2]");
   const int n = pano.cols - 2 * o.pad_columns;
-  if (o.sectors < 2 || o.sectors > n / 4) throw std::invalid_argument("panorama rotation: sectors must be in [2, columns / 4]");
+  if (o.sectors < 2 || o.sectors > n / 4)
+    throw std::invalid_argument("panorama rotation: sectors must be in [2, columns / 4]");
   if (!(o.inlier_gate_rad > 0.0)) throw std::invalid_argument("panorama rotation: inlier_gate_rad must be > 0");
-  if (!(o.min_sector_energy_fraction >= 0.0)) throw std::invalid_argument("panorama rotation: min_sector_energy_fraction must be >= 0");
+  if (!(o.min_sector_energy_fraction >= 0.0))
+    throw std::invalid_argument("panorama rotation: min_sector_energy_fraction must be >= 0");
   for (const cv::Mat* m : {&valid_ref, &valid})
     if (!m->empty() && (m->type() != CV_8UC1 || m->size() != pano.size()))
       throw std::invalid_argument("panorama rotation: a mask must be CV_8U of the panoramas' size");
@@ -209,7 +212,8 @@ std::vector<SectorCurve> sectorCurves(const cv::Mat& a, const cv::Mat& b, int se
   cv::multiply(b, b, b2);
   cv::reduce(b2, eb, 0, cv::REDUCE_SUM, CV_64F);
   std::vector<double> cum(2 * static_cast<size_t>(n) + 1, 0.0);
-  for (int i = 0; i < 2 * n; ++i) cum[static_cast<size_t>(i) + 1] = cum[static_cast<size_t>(i)] + eb.at<double>(0, i % n);
+  for (int i = 0; i < 2 * n; ++i)
+    cum[static_cast<size_t>(i) + 1] = cum[static_cast<size_t>(i)] + eb.at<double>(0, i % n);
   std::vector<SectorCurve> curves;
   cv::Mat aj(a.size(), CV_32F), A, P, S, c;
   for (int j = 0; j < sectors; ++j) curves.push_back(sectorCurve(a, B, cum, j, sectors, aj, A, P, S, c));
@@ -245,7 +249,8 @@ std::vector<double> inlierCurve(const std::vector<const SectorCurve*>& used, int
   std::vector<double> inlier_sum(static_cast<size_t>(n), 0.0);
   for (const SectorCurve* cu : used) {
     const int pj = static_cast<int>(std::max_element(cu->ncc.begin(), cu->ncc.end()) - cu->ncc.begin());
-    const double sj = pj + parabolaOffset(atShift(cu->ncc, pj - 1, n), atShift(cu->ncc, pj, n), atShift(cu->ncc, pj + 1, n));
+    const double sj =
+        pj + parabolaOffset(atShift(cu->ncc, pj - 1, n), atShift(cu->ncc, pj, n), atShift(cu->ncc, pj + 1, n));
     res.sector_centre_rad.push_back(wrapAngle(-kPiD + cu->centre * 2.0 * kPiD / n));
     res.sector_rotation_rad.push_back(wrapShift(sj, n) * 2.0 * kPiD / n);
     res.sector_row.push_back(cu->row);
@@ -284,13 +289,15 @@ std::optional<PanoramaRotation> estimatePanoramaRotation(const cv::Mat& pano_ref
   int best = peak;
   for (int s = peak - g; s <= peak + g; ++s)
     if (atShift(fin, s, n) > atShift(fin, best, n)) best = s;
-  const double shift = best + parabolaOffset(atShift(fin, best - 1, n), atShift(fin, best, n), atShift(fin, best + 1, n));
+  const double shift =
+      best + parabolaOffset(atShift(fin, best - 1, n), atShift(fin, best, n), atShift(fin, best + 1, n));
   res.rotation_rad = wrapAngle(wrapShift(shift, n) * 2.0 * kPiD / n);
   res.score = atShift(fin, best, n) / std::max(1, res.inliers > 0 ? res.inliers : res.sectors_used);
   return res;
 }
 
-std::optional<PanoramaMotion> fitPanoramaMotion(const PanoramaRotation& r, const Panorama& pano, double outlier_floor_rad) {
+std::optional<PanoramaMotion> fitPanoramaMotion(const PanoramaRotation& r, const Panorama& pano,
+                                                double outlier_floor_rad) {
   const size_t m = r.sector_centre_rad.size();
   if (m != r.sector_rotation_rad.size() || m != r.sector_row.size()) return std::nullopt;
   // Per sector, the mean of 1 / rho over its rows with their peak weights (1 / rho of its mean row

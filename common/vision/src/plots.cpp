@@ -80,7 +80,8 @@ cv::Mat renderMapPlot(const MapPlot& plot, int W, int H) {
     text(img, fmt(g, "%g"), P(cx - (c0.x - left) / s, g) + cv::Point(-40, 4), 0.4);
   }
   auto polyline = [&](const std::vector<Pose2>& ps, cv::Scalar col, int th) {
-    for (size_t i = 1; i < ps.size(); ++i) cv::line(img, P(ps[i - 1].x_m, ps[i - 1].y_m), P(ps[i].x_m, ps[i].y_m), col, th, cv::LINE_AA);
+    for (size_t i = 1; i < ps.size(); ++i)
+      cv::line(img, P(ps[i - 1].x_m, ps[i - 1].y_m), P(ps[i].x_m, ps[i].y_m), col, th, cv::LINE_AA);
   };
   polyline(plot.truth, kTruth, 2);
   polyline(plot.estimate, kEst, 1);
@@ -93,8 +94,10 @@ cv::Mat renderMapPlot(const MapPlot& plot, int W, int H) {
       const Eigen::Vector2d ev = es.eigenvalues().cwiseMax(0.0);
       const Eigen::Vector2d v = es.eigenvectors().col(1);
       const double ang = -std::atan2(v.y(), v.x()) * 180.0 / M_PI;  // image y points down
-      cv::ellipse(img, q, cv::Size(std::max(1, cvRound(2 * std::sqrt(ev(1)) * s)), std::max(1, cvRound(2 * std::sqrt(ev(0)) * s))),
-                  ang, 0, 360, kLm, 1, cv::LINE_AA);
+      cv::ellipse(
+          img, q,
+          cv::Size(std::max(1, cvRound(2 * std::sqrt(ev(1)) * s)), std::max(1, cvRound(2 * std::sqrt(ev(0)) * s))), ang,
+          0, 360, kLm, 1, cv::LINE_AA);
     }
   }
   text(img, plot.title, {left, 24}, 0.6);

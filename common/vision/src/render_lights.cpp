@@ -52,8 +52,7 @@ CameraPoseInWorld cameraInWorld(const Pose2& T_RinW, const camera::CameraMountin
   return out;
 }
 
-CeilingLightRenderer::CeilingLightRenderer(const camera::CameraModel& camera,
-                                           const camera::CameraMounting& mounting,
+CeilingLightRenderer::CeilingLightRenderer(const camera::CameraModel& camera, const camera::CameraMounting& mounting,
                                            const sim::ImageNuisance& nuisance)
     : camera_(camera), mounting_(mounting), nz_(nuisance) {
   inside_ = cv::Mat(camera.heightPx(), camera.widthPx(), CV_8U);
@@ -62,8 +61,8 @@ CeilingLightRenderer::CeilingLightRenderer(const camera::CameraModel& camera,
       inside_.at<uint8_t>(v, u) = camera.unproject(Eigen::Vector2d(u, v)).has_value() ? 1 : 0;
 }
 
-cv::Mat CeilingLightRenderer::render(const Pose2& T_RinW, const std::vector<sim::Light>& lights,
-                                     std::mt19937_64& rng, RenderReport* report) const {
+cv::Mat CeilingLightRenderer::render(const Pose2& T_RinW, const std::vector<sim::Light>& lights, std::mt19937_64& rng,
+                                     RenderReport* report) const {
   const camera::CameraModel& camera = camera_;
   const sim::ImageNuisance& nz = nz_;
   RenderReport rep;

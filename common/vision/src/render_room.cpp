@@ -13,7 +13,7 @@
 namespace omnislam::vision {
 namespace {
 
-constexpr int kBins = 1024;            // azimuth bins over 360 deg (0.35 deg each)
+constexpr int kBins = 1024;  // azimuth bins over 360 deg (0.35 deg each)
 constexpr double kTwoPi = 2.0 * kPi;
 const Eigen::Vector2d kLightDir(std::cos(deg2rad(35.0)), std::sin(deg2rad(35.0)));  // shading only
 
@@ -82,10 +82,12 @@ Bins binFacets(const std::vector<sim::Facet>& facets, const Eigen::Vector2d& p) 
     b.min_dist[i] = md;
     const int k0 = static_cast<int>(std::floor(lo / w)) - 1;  // one bin of margin on each side
     const int k1 = span >= kTwoPi - 1e-12 ? k0 + kBins - 1 : static_cast<int>(std::floor((lo + span) / w)) + 1;
-    for (int k = k0; k <= std::min(k1, k0 + kBins - 1); ++k) b.list[static_cast<size_t>(((k % kBins) + kBins) % kBins)].push_back(static_cast<int>(i));
+    for (int k = k0; k <= std::min(k1, k0 + kBins - 1); ++k)
+      b.list[static_cast<size_t>(((k % kBins) + kBins) % kBins)].push_back(static_cast<int>(i));
   }
   for (auto& l : b.list)
-    std::sort(l.begin(), l.end(), [&](int x, int y) { return b.min_dist[static_cast<size_t>(x)] < b.min_dist[static_cast<size_t>(y)]; });
+    std::sort(l.begin(), l.end(),
+              [&](int x, int y) { return b.min_dist[static_cast<size_t>(x)] < b.min_dist[static_cast<size_t>(y)]; });
   return b;
 }
 

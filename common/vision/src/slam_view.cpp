@@ -74,11 +74,9 @@ void covEllipse(cv::Mat& img, cv::Point q, const Eigen::Matrix2d& cov, double sc
   if (!cov.allFinite() || cov.norm() <= 0) return;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(0.5 * (cov + cov.transpose()));
   const Eigen::Vector2d ev = es.eigenvalues().cwiseMax(0.0);
-  const Eigen::Vector2d v = es.eigenvectors().col(1);  // major axis (larger eigenvalue last)
+  const Eigen::Vector2d v = es.eigenvectors().col(1);               // major axis (larger eigenvalue last)
   const double ang_deg = -std::atan2(v.y(), v.x()) * 180.0 / M_PI;  // view y points down
-  auto axis = [&](double var) {
-    return std::clamp(cvRound(2.0 * std::sqrt(var) * scale), 1, max_axis_px);
-  };
+  auto axis = [&](double var) { return std::clamp(cvRound(2.0 * std::sqrt(var) * scale), 1, max_axis_px); };
   cv::ellipse(img, q, cv::Size(axis(ev(1)), axis(ev(0))), ang_deg, 0, 360, col, 1, cv::LINE_AA);
 }
 
@@ -111,7 +109,6 @@ void drawGrid(cv::Mat& view, const SlamViewLayout& L) {
   }
   text(view, "x [m]", {pr.x + pr.width / 2 - 15, pr.br().y + 33}, 0.45);
   text(view, "y [m]", {L.map_rect.x + 6, pr.y - 6}, 0.45);
-
 }
 
 // Tracks, landmarks with their ellipses, poses and particles, clipped to the plot area.
@@ -143,7 +140,8 @@ void drawContent(cv::Mat& view, const SlamViewData& d, const SlamViewOptions& op
     const cv::Scalar col = landmarkColour(l.type);
     const cv::Point q = ipt(P(l.p_m.x(), l.p_m.y()));
     covEllipse(plot, q, l.cov_xy_m2, s, col, max_axis);
-    cv::drawMarker(plot, q, col, l.kind == 2 ? cv::MARKER_DIAMOND : cv::MARKER_CROSS, l.kind == 2 ? 9 : 10, 2, cv::LINE_8);
+    cv::drawMarker(plot, q, col, l.kind == 2 ? cv::MARKER_DIAMOND : cv::MARKER_CROSS, l.kind == 2 ? 9 : 10, 2,
+                   cv::LINE_8);
     if (opt.landmark_ids) text(plot, std::to_string(l.id), q + cv::Point(7, -6), 0.35, col);
   }
   if (d.true_pose && finite2(d.true_pose->x_m, d.true_pose->y_m))
@@ -159,7 +157,6 @@ void drawContent(cv::Mat& view, const SlamViewData& d, const SlamViewOptions& op
     if (!finite2(p.pose.x_m, p.pose.y_m)) continue;
     cv::circle(plot, ipt(P(p.pose.x_m, p.pose.y_m)), 2, vc::kParticle, cv::FILLED, cv::LINE_8);
   }
-
 }
 
 // Scale bar under the plot area, right-aligned, level with the axis label.
@@ -187,7 +184,8 @@ void drawLegend(cv::Mat& view, const SlamViewLayout& L) {
   item("true trajectory", [&](cv::Point p) { cv::line(view, p, p + cv::Point(20, 0), vc::kTruth, 2); });
   item("estimated", [&](cv::Point p) { cv::line(view, p, p + cv::Point(20, 0), vc::kEstimate, 1); });
   item("particles", [&](cv::Point p) {
-    for (int k = 0; k < 4; ++k) cv::circle(view, p + cv::Point(3 + 5 * k, (k % 2) * 3 - 1), 1, vc::kParticle, cv::FILLED);
+    for (int k = 0; k < 4; ++k)
+      cv::circle(view, p + cv::Point(3 + 5 * k, (k % 2) * 3 - 1), 1, vc::kParticle, cv::FILLED);
   });
   item("pose (est/true)", [&](cv::Point p) {
     cv::arrowedLine(view, p + cv::Point(0, -3), p + cv::Point(20, -3), vc::kEstimate, 2, cv::LINE_AA, 0, 0.35);
@@ -200,7 +198,8 @@ void drawLegend(cv::Mat& view, const SlamViewLayout& L) {
     text(view, label, {lx + 26, ly2 + 4}, 0.4);
     lx += 26 + 9 * static_cast<int>(label.size()) + 14;
   };
-  item2("true landmark", [&](cv::Point p) { cv::circle(view, p + cv::Point(10, 0), 7, vc::kTrueLandmark, 1, cv::LINE_AA); });
+  item2("true landmark",
+        [&](cv::Point p) { cv::circle(view, p + cv::Point(10, 0), 7, vc::kTrueLandmark, 1, cv::LINE_AA); });
   item2("type I (2-sigma)", [&](cv::Point p) {
     cv::drawMarker(view, p + cv::Point(10, 0), vc::kLandmarkType1, cv::MARKER_CROSS, 10, 2);
     cv::ellipse(view, p + cv::Point(10, 0), cv::Size(11, 6), 0, 0, 360, vc::kLandmarkType1, 1, cv::LINE_AA);
@@ -234,10 +233,8 @@ void drawImage(cv::Mat& view, const SlamViewData& d, const SlamViewLayout& L) {
     text(view, "no image yet", {x0 + L.image_rect.width / 2 - 50, L.image_rect.height / 2}, 0.55, kPanelText);
   } else {
     cv::Mat bgr;
-    if (d.image.channels() == 1)
-      cv::cvtColor(d.image, bgr, cv::COLOR_GRAY2BGR);
-    else
-      bgr = d.image;
+    if (d.image.channels() == 1) cv::cvtColor(d.image, bgr, cv::COLOR_GRAY2BGR);
+    else bgr = d.image;
     cv::Mat dst = view(L.image_draw);
     cv::resize(bgr, dst, L.image_draw.size(), 0, 0, L.image_scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
     cv::Mat img = view(L.image_draw);

@@ -25,9 +25,9 @@ struct VerticalLineDetector::Group {
 struct VerticalLineDetector::Fit {
   double column_mid = 0.0;  ///< the fit at the mid row of r_lo..r_hi
   int r_lo = 0, r_hi = 0;
-  double strength = 0.0;    ///< mean peak response of the rows used
+  double strength = 0.0;  ///< mean peak response of the rows used
   int sign = 0;
-  double slope = 0.0;       ///< columns per row
+  double slope = 0.0;                                 ///< columns per row
   double bar_width_px = 0.0, bar_half_columns = 0.0;  ///< a thin bar's width, half its width in columns
 };
 
@@ -96,7 +96,8 @@ bool isJunctionChain(const cv::Mat& gx, const LineFit& f, double mid0, int sign,
     return n;
   };
   const int len = f.r_hi - f.r_lo + 1;
-  return opposite(f.r_hi + 1, f.r_hi + len) > max_fraction * len && opposite(f.r_lo - len, f.r_lo - 1) > max_fraction * len;
+  return opposite(f.r_hi + 1, f.r_hi + len) > max_fraction * len &&
+         opposite(f.r_lo - len, f.r_lo - 1) > max_fraction * len;
 }
 
 }  // namespace
@@ -119,11 +120,14 @@ std::optional<std::string> validate(const VerticalLineOptions& o) {
   if (!(o.contrast_exponent >= 0.0 && o.contrast_exponent <= 1.0)) return "contrast_exponent must be in [0, 1]";
   if (!(o.contrast_reference_grey > 0.0 && o.contrast_reference_grey <= 255.0))
     return "contrast_reference_grey must be in (0, 255]";
-  if (!(o.contrast_offset_grey >= 0.0 && o.contrast_offset_grey <= 255.0)) return "contrast_offset_grey must be in [0, 255]";
-  if (o.contrast_window_columns < 1 || o.contrast_window_columns > 100) return "contrast_window_columns must be in [1, 100]";
+  if (!(o.contrast_offset_grey >= 0.0 && o.contrast_offset_grey <= 255.0))
+    return "contrast_offset_grey must be in [0, 255]";
+  if (o.contrast_window_columns < 1 || o.contrast_window_columns > 100)
+    return "contrast_window_columns must be in [1, 100]";
   if (!(o.clahe_clip_limit >= 0.0 && o.clahe_clip_limit <= 100.0)) return "clahe_clip_limit must be in [0, 100]";
   if (o.clahe_tile_columns < 8 || o.clahe_tile_columns > 20000) return "clahe_tile_columns must be in [8, 20000]";
-  if (!(o.max_opposite_fraction >= 0.0 && o.max_opposite_fraction <= 1.0)) return "max_opposite_fraction must be in [0, 1]";
+  if (!(o.max_opposite_fraction >= 0.0 && o.max_opposite_fraction <= 1.0))
+    return "max_opposite_fraction must be in [0, 1]";
   if (o.cell_row_min_lines != 0 && (o.cell_row_min_lines < 3 || o.cell_row_min_lines > 100))
     return "cell_row_min_lines must be 0 (off) or in [3, 100]";
   if (!(o.cell_max_aspect >= 1.0 && o.cell_max_aspect <= 10.0)) return "cell_max_aspect must be in [1, 10]";
@@ -138,8 +142,9 @@ VerticalLineDetector::VerticalLineDetector(const VerticalLineOptions& options, i
                                            const camera::CameraModel* camera, const camera::CameraMounting& mounting,
                                            const cv::Mat& mask)
     : opt_(options),
-      pano_((validate(options) ? throw std::invalid_argument("vertical lines: " + *validate(options)) : options.panorama),
-            width_px, height_px),
+      pano_(
+          (validate(options) ? throw std::invalid_argument("vertical lines: " + *validate(options)) : options.panorama),
+          width_px, height_px),
       camera_(camera),
       mounting_(mounting) {
   if (camera_ && (camera_->widthPx() != width_px || camera_->heightPx() != height_px))
@@ -167,7 +172,8 @@ bool VerticalLineDetector::usableBetween(int col, int r_from, int r_to) const {
 void VerticalLineDetector::response(const cv::Mat& grey, cv::Mat& pano, cv::Mat& gx) const {
   pano_.unwarp(grey, pano);
   if (opt_.clahe_clip_limit > 0.0) {
-    const int tx = std::max(1, pano.cols / opt_.clahe_tile_columns), ty = std::max(1, pano.rows / opt_.clahe_tile_columns);
+    const int tx = std::max(1, pano.cols / opt_.clahe_tile_columns),
+              ty = std::max(1, pano.rows / opt_.clahe_tile_columns);
     cv::createCLAHE(opt_.clahe_clip_limit, cv::Size(tx, ty))->apply(pano, pano);
   }
   if (opt_.contrast_exponent <= 0.0) {
@@ -180,7 +186,8 @@ void VerticalLineDetector::response(const cv::Mat& grey, cv::Mat& pano, cv::Mat&
     mean += opt_.contrast_offset_grey;
     cv::max(mean, 1e-3, mean);
     cv::pow(mean, -opt_.contrast_exponent, mean);
-    cv::multiply(gf, mean, gf, std::pow(opt_.contrast_reference_grey + opt_.contrast_offset_grey, opt_.contrast_exponent));
+    cv::multiply(gf, mean, gf,
+                 std::pow(opt_.contrast_reference_grey + opt_.contrast_offset_grey, opt_.contrast_exponent));
     gf.convertTo(gx, CV_16S);
   }
   gx.setTo(0, unusable_);
@@ -239,9 +246,8 @@ std::vector<VerticalLineDetector::Group> VerticalLineDetector::groupRuns(std::ve
   std::vector<int> parent(runs.size());
   std::iota(parent.begin(), parent.end(), 0);
   for (size_t i = 0; i < runs.size(); ++i)
-    for (size_t j = i + 1; j < runs.size() && runs[j].sign == runs[i].sign &&
-                           runs[j].col - runs[i].col <= opt_.merge_columns;
-         ++j) {
+    for (size_t j = i + 1;
+         j < runs.size() && runs[j].sign == runs[i].sign && runs[j].col - runs[i].col <= opt_.merge_columns; ++j) {
       const int lo = std::min(runs[i].r1, runs[j].r1) + 1, hi = std::max(runs[i].r0, runs[j].r0);
       if (hi - lo + 1 > opt_.merge_gap_rows) continue;
       if (!usableBetween(runs[i].col, lo, hi) || !usableBetween(runs[j].col, lo, hi)) continue;
@@ -487,10 +493,8 @@ std::vector<VerticalLine> VerticalLineDetector::detect(const cv::Mat& image) con
                                 std::to_string(image.rows) + " is not the configured " +
                                 std::to_string(pano_.imageWidth()) + "x" + std::to_string(pano_.imageHeight()));
   cv::Mat grey;
-  if (image.channels() == 3)
-    cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
-  else
-    grey = image;
+  if (image.channels() == 3) cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  else grey = image;
   // Work buffers reused across calls (per thread): no allocation and page faults per frame.
   thread_local cv::Mat pano, gx;
   response(grey, pano, gx);

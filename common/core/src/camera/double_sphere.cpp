@@ -30,8 +30,12 @@ double normalisedRadius(const DoubleSphereParams& p, double zeta) {
 }  // namespace
 
 std::optional<std::string> DoubleSphereCamera::validate(const Params& p) {
-  if (auto err = detail::firstNonFinite({{"fx_px", p.fx_px}, {"fy_px", p.fy_px}, {"cx_px", p.cx_px},
-                                         {"cy_px", p.cy_px}, {"xi", p.xi}, {"alpha", p.alpha}})) {
+  if (auto err = detail::firstNonFinite({{"fx_px", p.fx_px},
+                                         {"fy_px", p.fy_px},
+                                         {"cx_px", p.cx_px},
+                                         {"cy_px", p.cy_px},
+                                         {"xi", p.xi},
+                                         {"alpha", p.alpha}})) {
     return err;
   }
   if (auto err = detail::checkPinholePart(p.fx_px, p.fy_px, p.width_px, p.height_px)) return err;
@@ -48,8 +52,8 @@ DoubleSphereCamera::DoubleSphereCamera(const Params& params) : p_(params) {
   // The paper's condition z > -w2 |X| alone lets the radius turn back for xi < 0 with alpha near 0 or 1
   // (alpha = 0, xi = -0.5 is a pinhole shifted by 0.5: its denominator z - 0.5 changes sign at 60 deg,
   // whereas acos(-w2) = 63.4 deg): the field of view also ends where the radius stops increasing.
-  max_zenith_rad_ = detail::increasingStretchEnd([this](double zeta) { return normalisedRadius(p_, zeta); },
-                                                 std::acos(-w2_));
+  max_zenith_rad_ =
+      detail::increasingStretchEnd([this](double zeta) { return normalisedRadius(p_, zeta); }, std::acos(-w2_));
 }
 
 std::optional<Eigen::Vector2d> DoubleSphereCamera::project(const Eigen::Vector3d& d_C,
@@ -102,12 +106,12 @@ std::optional<Eigen::Vector3d> DoubleSphereCamera::unproject(const Eigen::Vector
   // Outside the projection's domain (paper's condition or the increasing stretch): not invertible.
   if (!(d.z() > -w2_) || std::atan2(std::hypot(d.x(), d.y()), d.z()) > max_zenith_rad_) return std::nullopt;
   if (J_d_px) {
-    const double dS = -(2.0 * a - 1.0) / (2.0 * S);       // dS/d(r2)
+    const double dS = -(2.0 * a - 1.0) / (2.0 * S);          // dS/d(r2)
     const double dmz = (-a * a * D - N * a * dS) / (D * D);  // d(mz)/d(r2)
     const double dP = 2.0 * mz * dmz + 1.0;
     const double dQ = (2.0 * mz * dmz + 1.0 - xi * xi) / (2.0 * Q);
     const double dk = ((xi * dmz + dQ) * P - (mz * xi + Q) * dP) / (P * P);  // dk/d(r2)
-    Eigen::Matrix<double, 3, 2> J_f_m;  // d(r2)/d(m) = 2 m^T
+    Eigen::Matrix<double, 3, 2> J_f_m;                                       // d(r2)/d(m) = 2 m^T
     J_f_m.topRows<2>() = k * Eigen::Matrix2d::Identity() + (2.0 * dk) * m * m.transpose();
     J_f_m.row(2) = (2.0 * (mz * dk + k * dmz)) * m.transpose();
     J_f_m.col(0) /= p_.fx_px;  // d(m)/d(px) = diag(1/fx, 1/fy)

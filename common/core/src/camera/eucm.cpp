@@ -17,7 +17,9 @@ using detail::str;
 double wOf(double alpha) { return alpha <= 0.5 ? alpha / (1.0 - alpha) : (1.0 - alpha) / alpha; }
 
 // Zenith angle of the unit direction on z = -w rho, rho = sqrt(beta sin^2 + cos^2).
-double maxZenithOf(double w, double beta) { return kPi / 2.0 + std::atan2(w * std::sqrt(beta), std::sqrt(1.0 - w * w)); }
+double maxZenithOf(double w, double beta) {
+  return kPi / 2.0 + std::atan2(w * std::sqrt(beta), std::sqrt(1.0 - w * w));
+}
 
 // Normalised image radius of the unit direction at zenith angle zeta.
 double normalisedRadius(const EucmParams& p, double zeta) {
@@ -29,8 +31,12 @@ double normalisedRadius(const EucmParams& p, double zeta) {
 }  // namespace
 
 std::optional<std::string> EucmCamera::validate(const Params& p) {
-  if (auto err = detail::firstNonFinite({{"fx_px", p.fx_px}, {"fy_px", p.fy_px}, {"cx_px", p.cx_px},
-                                         {"cy_px", p.cy_px}, {"alpha", p.alpha}, {"beta", p.beta}})) {
+  if (auto err = detail::firstNonFinite({{"fx_px", p.fx_px},
+                                         {"fy_px", p.fy_px},
+                                         {"cx_px", p.cx_px},
+                                         {"cy_px", p.cy_px},
+                                         {"alpha", p.alpha},
+                                         {"beta", p.beta}})) {
     return err;
   }
   if (auto err = detail::checkPinholePart(p.fx_px, p.fy_px, p.width_px, p.height_px)) return err;
@@ -48,7 +54,8 @@ EucmCamera::EucmCamera(const Params& params) : p_(params) {
                                                  maxZenithOf(w_, p_.beta));
 }
 
-std::optional<Eigen::Vector2d> EucmCamera::project(const Eigen::Vector3d& d_C, Eigen::Matrix<double, 2, 3>* J_px_d) const {
+std::optional<Eigen::Vector2d> EucmCamera::project(const Eigen::Vector3d& d_C,
+                                                   Eigen::Matrix<double, 2, 3>* J_px_d) const {
   const double n = d_C.norm();
   if (!(n > 0.0) || !std::isfinite(n)) return std::nullopt;
   const double x = d_C.x(), y = d_C.y(), z = d_C.z();
@@ -75,7 +82,8 @@ std::optional<Eigen::Vector2d> EucmCamera::project(const Eigen::Vector3d& d_C, E
   return px;
 }
 
-std::optional<Eigen::Vector3d> EucmCamera::unproject(const Eigen::Vector2d& px, Eigen::Matrix<double, 3, 2>* J_d_px) const {
+std::optional<Eigen::Vector3d> EucmCamera::unproject(const Eigen::Vector2d& px,
+                                                     Eigen::Matrix<double, 3, 2>* J_d_px) const {
   if (!inImage(px)) return std::nullopt;
   const double a = p_.alpha, b = p_.beta;
   const Eigen::Vector2d m((px.x() - p_.cx_px) / p_.fx_px, (px.y() - p_.cy_px) / p_.fy_px);
@@ -91,7 +99,7 @@ std::optional<Eigen::Vector3d> EucmCamera::unproject(const Eigen::Vector2d& px, 
   // Outside the projection's domain (validity condition or increasing stretch): not invertible.
   if (!(d.z() > -w_ * rho) || std::atan2(std::hypot(d.x(), d.y()), d.z()) > max_zenith_rad_) return std::nullopt;
   if (J_d_px) {
-    const double dS = -(2.0 * a - 1.0) * b / (2.0 * S);         // dS/d(r2)
+    const double dS = -(2.0 * a - 1.0) * b / (2.0 * S);          // dS/d(r2)
     const double dmz = (-b * a * a * D - N * a * dS) / (D * D);  // d(mz)/d(r2)
     Eigen::Matrix<double, 3, 2> J_f_m;
     J_f_m.topRows<2>().setIdentity();

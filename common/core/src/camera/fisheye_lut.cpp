@@ -59,7 +59,8 @@ Eigen::Vector3d LutBearing::unit_C() const {
 
 std::optional<std::string> FisheyeLut::validate(const FisheyeLutOptions& o) {
   if (!(o.delta_phi_rad >= 1e-6 && o.delta_phi_rad <= 0.1)) return std::string("delta_phi_rad must be in [1e-6, 0.1]");
-  if (!(o.delta_zeta_rad >= 1e-6 && o.delta_zeta_rad <= 0.1)) return std::string("delta_zeta_rad must be in [1e-6, 0.1]");
+  if (!(o.delta_zeta_rad >= 1e-6 && o.delta_zeta_rad <= 0.1))
+    return std::string("delta_zeta_rad must be in [1e-6, 0.1]");
   return std::nullopt;
 }
 
@@ -204,8 +205,8 @@ std::optional<FisheyeLut> FisheyeLut::deserialize(const std::vector<std::uint8_t
     return fail("cell count " + std::to_string(count) + " != 4 * width * height = " + std::to_string(4 * w * h));
   }
   if (bytes.size() != kHeaderBytes + 4 * count) {
-    return fail("size " + std::to_string(bytes.size()) + " bytes != header + 4 * count = " +
-                std::to_string(kHeaderBytes + 4 * count));
+    return fail("size " + std::to_string(bytes.size()) +
+                " bytes != header + 4 * count = " + std::to_string(kHeaderBytes + 4 * count));
   }
   FisheyeLut lut(p, o);
   for (float& f : lut.cells_) f = rd.f32();

@@ -21,9 +21,15 @@ detail::Intrinsics intrinsicsOf(const KannalaBrandtParams& p) {
 }  // namespace
 
 std::optional<std::string> KannalaBrandtCamera::validate(const Params& p) {
-  if (auto err = detail::firstNonFinite({{"fx_px", p.fx_px}, {"fy_px", p.fy_px}, {"cx_px", p.cx_px},
-                                         {"cy_px", p.cy_px}, {"skew_px", p.skew_px}, {"k1", p.k1},
-                                         {"k2", p.k2}, {"k3", p.k3}, {"k4", p.k4},
+  if (auto err = detail::firstNonFinite({{"fx_px", p.fx_px},
+                                         {"fy_px", p.fy_px},
+                                         {"cx_px", p.cx_px},
+                                         {"cy_px", p.cy_px},
+                                         {"skew_px", p.skew_px},
+                                         {"k1", p.k1},
+                                         {"k2", p.k2},
+                                         {"k3", p.k3},
+                                         {"k4", p.k4},
                                          {"max_zenith_rad", p.max_zenith_rad}})) {
     return err;
   }
@@ -55,7 +61,8 @@ double KannalaBrandtCamera::distortedAngle(double theta_rad, double* dthetad_dth
   const double t2 = theta_rad * theta_rad;
   // Horner in t2: theta_d = theta (1 + k1 t2 + k2 t2^2 + k3 t2^3 + k4 t2^4).
   const double poly = 1.0 + t2 * (p_.k1 + t2 * (p_.k2 + t2 * (p_.k3 + t2 * p_.k4)));
-  if (dthetad_dtheta) *dthetad_dtheta = 1.0 + t2 * (3.0 * p_.k1 + t2 * (5.0 * p_.k2 + t2 * (7.0 * p_.k3 + t2 * 9.0 * p_.k4)));
+  if (dthetad_dtheta)
+    *dthetad_dtheta = 1.0 + t2 * (3.0 * p_.k1 + t2 * (5.0 * p_.k2 + t2 * (7.0 * p_.k3 + t2 * 9.0 * p_.k4)));
   return theta_rad * poly;
 }
 

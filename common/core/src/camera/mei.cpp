@@ -31,9 +31,16 @@ double normalisedRadius(double zeta, double xi) { return std::sin(zeta) / (std::
 }  // namespace
 
 std::optional<std::string> MeiCamera::validate(const Params& p) {
-  if (auto err = detail::firstNonFinite({{"fx_px", p.fx_px}, {"fy_px", p.fy_px}, {"cx_px", p.cx_px},
-                                         {"cy_px", p.cy_px}, {"skew_px", p.skew_px}, {"xi", p.xi},
-                                         {"k1", p.k1}, {"k2", p.k2}, {"p1", p.p1}, {"p2", p.p2}})) {
+  if (auto err = detail::firstNonFinite({{"fx_px", p.fx_px},
+                                         {"fy_px", p.fy_px},
+                                         {"cx_px", p.cx_px},
+                                         {"cy_px", p.cy_px},
+                                         {"skew_px", p.skew_px},
+                                         {"xi", p.xi},
+                                         {"k1", p.k1},
+                                         {"k2", p.k2},
+                                         {"p1", p.p1},
+                                         {"p2", p.p2}})) {
     return err;
   }
   if (auto err = detail::checkPinholePart(p.fx_px, p.fy_px, p.width_px, p.height_px)) return err;
@@ -93,10 +100,10 @@ Eigen::Vector2d MeiCamera::distort(const Eigen::Vector2d& m, Eigen::Matrix2d* J_
     const double dg = p_.k1 + 2.0 * p_.k2 * r2;  // dg/d(r2)
     *J_md_m << g + 2.0 * x * x * dg + 2.0 * p_.p1 * y + 6.0 * p_.p2 * x,
         2.0 * x * y * dg + 2.0 * p_.p1 * x + 2.0 * p_.p2 * y,  //
-        2.0 * x * y * dg + 2.0 * p_.p1 * x + 2.0 * p_.p2 * y,
-        g + 2.0 * y * y * dg + 6.0 * p_.p1 * y + 2.0 * p_.p2 * x;
+        2.0 * x * y * dg + 2.0 * p_.p1 * x + 2.0 * p_.p2 * y, g + 2.0 * y * y * dg + 6.0 * p_.p1 * y + 2.0 * p_.p2 * x;
   }
-  return {x * g + 2.0 * p_.p1 * x * y + p_.p2 * (r2 + 2.0 * x * x), y * g + p_.p1 * (r2 + 2.0 * y * y) + 2.0 * p_.p2 * x * y};
+  return {x * g + 2.0 * p_.p1 * x * y + p_.p2 * (r2 + 2.0 * x * x),
+          y * g + p_.p1 * (r2 + 2.0 * y * y) + 2.0 * p_.p2 * x * y};
 }
 
 std::optional<Eigen::Vector2d> MeiCamera::undistort(const Eigen::Vector2d& m_d) const {
@@ -125,7 +132,8 @@ std::optional<Eigen::Vector2d> MeiCamera::undistort(const Eigen::Vector2d& m_d) 
   return F.norm() <= tol ? std::optional<Eigen::Vector2d>(m) : std::nullopt;
 }
 
-std::optional<Eigen::Vector2d> MeiCamera::project(const Eigen::Vector3d& d_C, Eigen::Matrix<double, 2, 3>* J_px_d) const {
+std::optional<Eigen::Vector2d> MeiCamera::project(const Eigen::Vector3d& d_C,
+                                                  Eigen::Matrix<double, 2, 3>* J_px_d) const {
   const double n = d_C.norm();
   if (!(n > 0.0) || !std::isfinite(n)) return std::nullopt;
   if (std::atan2(std::hypot(d_C.x(), d_C.y()), d_C.z()) > max_zenith_rad_) return std::nullopt;
@@ -149,7 +157,8 @@ std::optional<Eigen::Vector2d> MeiCamera::project(const Eigen::Vector3d& d_C, Ei
   return px;
 }
 
-std::optional<Eigen::Vector3d> MeiCamera::unproject(const Eigen::Vector2d& px, Eigen::Matrix<double, 3, 2>* J_d_px) const {
+std::optional<Eigen::Vector3d> MeiCamera::unproject(const Eigen::Vector2d& px,
+                                                    Eigen::Matrix<double, 3, 2>* J_d_px) const {
   if (!inImage(px)) return std::nullopt;
   const detail::Intrinsics K = intrinsicsOf(p_);
   const Eigen::Vector2d m_d = K.toNormalised(px);

@@ -27,9 +27,11 @@ std::string str(double x) {
 std::optional<std::string> PajdlaBaksteinCamera::validate(const Params& p) {
   if (p.width_px <= 0) return "width_px must be > 0 (got " + std::to_string(p.width_px) + ")";
   if (p.height_px <= 0) return "height_px must be > 0 (got " + std::to_string(p.height_px) + ")";
-  const struct { const char* name; double v; } finite[] = {{"a_px", p.a_px}, {"b", p.b},         {"c_px", p.c_px},
-                                                           {"d", p.d},       {"u0_px", p.u0_px}, {"v0_px", p.v0_px},
-                                                           {"beta", p.beta}, {"max_zenith_rad", p.max_zenith_rad}};
+  const struct {
+    const char* name;
+    double v;
+  } finite[] = {{"a_px", p.a_px},   {"b", p.b},         {"c_px", p.c_px}, {"d", p.d},
+                {"u0_px", p.u0_px}, {"v0_px", p.v0_px}, {"beta", p.beta}, {"max_zenith_rad", p.max_zenith_rad}};
   for (const auto& f : finite) {
     if (!std::isfinite(f.v)) return std::string(f.name) + " must be finite (got " + str(f.v) + ")";
   }
@@ -39,8 +41,8 @@ std::optional<std::string> PajdlaBaksteinCamera::validate(const Params& p) {
   }
   const double b_min = 2.0 * p.max_zenith_rad / kPi;
   if (!(p.b > b_min)) {
-    return "b must be > 2*max_zenith_rad/pi = " + str(b_min) + " so that tan(zeta/b) stays finite on [0, max_zenith_rad] (got " +
-           str(p.b) + ")";
+    return "b must be > 2*max_zenith_rad/pi = " + str(b_min) +
+           " so that tan(zeta/b) stays finite on [0, max_zenith_rad] (got " + str(p.b) + ")";
   }
   if (!(p.d > 0.0)) return "d must be > 0 (got " + str(p.d) + ")";
   constexpr int kSamples = 2048;
@@ -48,7 +50,8 @@ std::optional<std::string> PajdlaBaksteinCamera::validate(const Params& p) {
     const double zeta = p.max_zenith_rad * i / kSamples;
     const double dr = radiusDerivative(p, zeta);
     if (!(dr > 0.0)) {
-      return "a_px, c_px: r(zeta) = a tan(zeta/b) + c sin(zeta/d) must be strictly increasing on [0, max_zenith_rad]; dr/dzeta = " +
+      return "a_px, c_px: r(zeta) = a tan(zeta/b) + c sin(zeta/d) must be strictly increasing on [0, max_zenith_rad]; "
+             "dr/dzeta = " +
              str(dr) + " px/rad at zeta = " + str(zeta) + " rad";
     }
   }

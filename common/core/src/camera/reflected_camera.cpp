@@ -22,7 +22,7 @@ std::optional<Eigen::Vector3d> ReflectedCamera::unproject(const Eigen::Vector2d&
                                                           Eigen::Matrix<double, 3, 2>* J_d_px) const {
   std::optional<Eigen::Vector3d> d = inner_->unproject(px, J_d_px);
   if (!d) return std::nullopt;
-  d->z() = -d->z();                          // S d_inner
+  d->z() = -d->z();                              // S d_inner
   if (J_d_px) J_d_px->row(2) = -J_d_px->row(2);  // S J_inner
   return d;
 }

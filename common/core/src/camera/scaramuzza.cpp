@@ -53,7 +53,8 @@ double ScaramuzzaCamera::effectiveMaxRadius(const Params& p) {
 std::optional<std::string> ScaramuzzaCamera::validate(const Params& p) {
   if (p.width_px <= 0) return "width_px must be > 0 (got " + std::to_string(p.width_px) + ")";
   if (p.height_px <= 0) return "height_px must be > 0 (got " + std::to_string(p.height_px) + ")";
-  if (p.pol.empty() || p.pol.size() > 64) return "pol must have 1 to 64 coefficients (got " + std::to_string(p.pol.size()) + ")";
+  if (p.pol.empty() || p.pol.size() > 64)
+    return "pol must have 1 to 64 coefficients (got " + std::to_string(p.pol.size()) + ")";
   if (p.invpol.empty() || p.invpol.size() > 64) {
     return "invpol must have 1 to 64 coefficients (got " + std::to_string(p.invpol.size()) + ")";
   }
@@ -66,10 +67,17 @@ std::optional<std::string> ScaramuzzaCamera::validate(const Params& p) {
   if (!(p.pol[0] < 0.0)) {
     return "pol[0] = f(0) must be < 0 (OCamCalib convention: the centre pixel sees -z_ocam; got " + str(p.pol[0]) + ")";
   }
-  const struct { const char* name; double v; } finite[] = {
-      {"xc_row_px", p.xc_row_px}, {"yc_col_px", p.yc_col_px}, {"c", p.c}, {"d", p.d}, {"e", p.e},
-      {"min_radius_px", p.min_radius_px}, {"min_elevation_rad", p.min_elevation_rad},
-      {"max_elevation_rad", p.max_elevation_rad}};
+  const struct {
+    const char* name;
+    double v;
+  } finite[] = {{"xc_row_px", p.xc_row_px},
+                {"yc_col_px", p.yc_col_px},
+                {"c", p.c},
+                {"d", p.d},
+                {"e", p.e},
+                {"min_radius_px", p.min_radius_px},
+                {"min_elevation_rad", p.min_elevation_rad},
+                {"max_elevation_rad", p.max_elevation_rad}};
   for (const auto& f : finite) {
     if (!std::isfinite(f.v)) return std::string(f.name) + " must be finite (got " + str(f.v) + ")";
   }
@@ -105,8 +113,9 @@ std::optional<std::string> ScaramuzzaCamera::validate(const Params& p) {
       f = f * rho + p.pol[k];
     }
     if (!(rho * df - f > 0.0)) {
-      return "pol: the ray angle atan2(rho, -f(rho)) must increase strictly with rho on [min_radius_px, " + str(rho_hi) +
-             "] px; it does not at rho = " + str(rho) + " px (lower max_radius_px to the polynomial's usable range)";
+      return "pol: the ray angle atan2(rho, -f(rho)) must increase strictly with rho on [min_radius_px, " +
+             str(rho_hi) + "] px; it does not at rho = " + str(rho) +
+             " px (lower max_radius_px to the polynomial's usable range)";
     }
   }
   return std::nullopt;
@@ -214,7 +223,7 @@ std::optional<Eigen::Vector3d> ScaramuzzaCamera::unproject(const Eigen::Vector2d
     J_m_q.topRows<2>().setIdentity();
     J_m_q.row(2) = s_z() * df * w.transpose();
     const Eigen::Matrix3d J_d_m = (Eigen::Matrix3d::Identity() - d_C * d_C.transpose()) / mn;  // 3x3
-    *J_d_px = J_d_m * J_m_q * Q;  // 3x3 * 3x2 * 2x2 = 3x2
+    *J_d_px = J_d_m * J_m_q * Q;                                                               // 3x3 * 3x2 * 2x2 = 3x2
   }
   return d_C;
 }
@@ -287,7 +296,8 @@ OcamCalibParseResult parseOcamCalib(const std::string& text) {
     const DataLine& l = lines[field];
     int count = 0;
     if (!toNumber(l.tokens[0], count) || count < 1 || count > 64) {
-      result.error = where(l, field) + "the coefficient count '" + std::string(l.tokens[0]) + "' must be an integer in [1, 64]";
+      result.error =
+          where(l, field) + "the coefficient count '" + std::string(l.tokens[0]) + "' must be an integer in [1, 64]";
       return result;
     }
     if (l.tokens.size() != static_cast<std::size_t>(count) + 1) {

@@ -203,10 +203,10 @@ MapErrors mapErrors(const std::vector<Eigen::Vector3d>& est, const std::vector<E
   for (const auto& [key, g] : groups) {
     const auto& [ei, ti] = g;
     if (static_cast<double>(ei.size()) * static_cast<double>(ti.size()) > static_cast<double>(kMaxMatchingCells))
-      throw std::invalid_argument("landmark matching: " + std::to_string(ei.size()) + " estimated and " +
-                                  std::to_string(ti.size()) + " true landmarks lie within the gate of each other: " +
-                                  "an assignment over " + std::to_string(kMaxMatchingCells) +
-                                  " cells would not fit; a smaller gate splits them");
+      throw std::invalid_argument(
+          "landmark matching: " + std::to_string(ei.size()) + " estimated and " + std::to_string(ti.size()) +
+          " true landmarks lie within the gate of each other: " + "an assignment over " +
+          std::to_string(kMaxMatchingCells) + " cells would not fit; a smaller gate splits them");
     matchGroup(est, truth, ei, ti, gate_m, dist, r, sum);
   }
   if (r.matched > 0) r.mean_err_m = sum / r.matched;

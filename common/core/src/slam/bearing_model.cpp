@@ -36,7 +36,7 @@ std::optional<Eigen::Vector2d> predictBearingCS(const Eigen::Vector3d& p_LinW_m,
   if (J_z_pose == nullptr && J_z_landmark == nullptr) return z;
 
   const double r2 = rho2 + d.z() * d.z();
-  Eigen::Matrix<double, 2, 3> J_z_d;  // d z / d d
+  Eigen::Matrix<double, 2, 3> J_z_d;          // d z / d d
   J_z_d << -d.y() / rho2, d.x() / rho2, 0.0,  //
       -d.z() * d.x() / (rho * r2), -d.z() * d.y() / (rho * r2), rho / r2;
   Eigen::Matrix3d RzT;  // d d / d p_LinW
@@ -68,8 +68,8 @@ std::optional<MeasVec> predictMeasurement(LandmarkKind kind, const Eigen::Vector
                                           MeasJac* J_z_pose, MeasJac* J_z_landmark) {
   Eigen::Matrix<double, 2, 3> Jp, Jl;
   const int dim = measurementDim(kind);
-  const auto z = predictBearingCS(p_LinW_m, T_WtoR, cos_theta, sin_theta, p_CinR_m, dim == 2,
-                                  J_z_pose ? &Jp : nullptr, J_z_landmark ? &Jl : nullptr);
+  const auto z = predictBearingCS(p_LinW_m, T_WtoR, cos_theta, sin_theta, p_CinR_m, dim == 2, J_z_pose ? &Jp : nullptr,
+                                  J_z_landmark ? &Jl : nullptr);
   if (!z) return std::nullopt;
   MeasVec out = z->head(dim);
   if (J_z_pose) *J_z_pose = Jp.topRows(dim);

@@ -209,8 +209,8 @@ CandidateEvaluation evaluateCandidate(const Candidate& c, const CandidateOptions
   }
   if (ev.has_best) {
     ev.cov_m2 = initialCovariance(c, ev.best_p_LinW_m, o);
-    ev.type = initialLandmarkType(c.observations[best_a].T_WtoR, c.observations[best_b].T_WtoR, ev.best_p_LinW_m,
-                                  o.d_min_m);
+    ev.type =
+        initialLandmarkType(c.observations[best_a].T_WtoR, c.observations[best_b].T_WtoR, ev.best_p_LinW_m, o.d_min_m);
   }
   return ev;
 }
@@ -241,15 +241,16 @@ CandidatePrediction::Point rayPoint(const Candidate& c, const CandidateObservati
   return pt;
 }
 
-double scorePoint(const CandidatePrediction::Point& pt, const CandidateObservation& now, const CandidateObservation& o) {
+double scorePoint(const CandidatePrediction::Point& pt, const CandidateObservation& now,
+                  const CandidateObservation& o) {
   if (!pt.valid) return -std::numeric_limits<double>::infinity();
   return logGaussian(innovation(now.z, pt.zhat), MeasMat(now.Q + pt.scale * pt.scale * o.Q));
 }
 
 bool madeFor(const CandidatePrediction& p, const CandidateObservation& now, double min_range_m, double max_range_m) {
   return p.made && p.T_WtoR.x_m == now.T_WtoR.x_m && p.T_WtoR.y_m == now.T_WtoR.y_m &&
-         p.T_WtoR.theta_rad == now.T_WtoR.theta_rad && p.p_CinR_m == now.p_CinR_m &&
-         p.min_range_m == min_range_m && p.max_range_m == max_range_m;
+         p.T_WtoR.theta_rad == now.T_WtoR.theta_rad && p.p_CinR_m == now.p_CinR_m && p.min_range_m == min_range_m &&
+         p.max_range_m == max_range_m;
 }
 
 }  // namespace
@@ -265,8 +266,8 @@ CandidatePrediction predictCandidate(const Candidate& c, const CandidateObservat
   if (c.observations.empty()) return p;
   if (c.has_estimate) {
     MeasJac Hm;
-    const auto zhat = predictMeasurement(c.kind, c.estimate_W_m, now.T_WtoR, now.cos_theta, now.sin_theta,
-                                         now.p_CinR_m, nullptr, &Hm);
+    const auto zhat = predictMeasurement(c.kind, c.estimate_W_m, now.T_WtoR, now.cos_theta, now.sin_theta, now.p_CinR_m,
+                                         nullptr, &Hm);
     if (!zhat) return p;
     p.valid_estimate = true;
     p.zhat_estimate = *zhat;

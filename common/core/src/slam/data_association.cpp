@@ -16,7 +16,8 @@ int findRoot(std::vector<int>& parent, int i) {
 }
 }  // namespace
 
-std::vector<int> associate(const Eigen::Ref<const Eigen::MatrixXd>& cost, const std::vector<double>& cost_new, AssociationMethod method) {
+std::vector<int> associate(const Eigen::Ref<const Eigen::MatrixXd>& cost, const std::vector<double>& cost_new,
+                           AssociationMethod method) {
   const int nz = static_cast<int>(cost.rows());
   const int n = static_cast<int>(cost.cols());
   std::vector<int> out(nz, -1);

@@ -105,7 +105,8 @@ FastSlam::FastSlam(const FastSlamOptions& options, std::uint64_t seed)
   last_p_CinR_m_ = options_.perception.default_p_CinR_m;
 }
 
-void FastSlam::initialise(const Pose2& start, const std::vector<Landmark>& prior_map, const Eigen::Matrix3d& start_cov) {
+void FastSlam::initialise(const Pose2& start, const std::vector<Landmark>& prior_map,
+                          const Eigen::Matrix3d& start_cov) {
   LandmarkMap map(options_.map_cell_size_m);
   map.apply({}, prior_map);
   next_landmark_id_ = 0;
@@ -138,7 +139,8 @@ void FastSlam::predictOnly(const Pose2& odom_prev, const Pose2& odom_now) {
   try {
     for (const auto& p : particles_) {
       const Pose2 x_hat = predictPose(p.pose, u);
-      poses.push_back(poseFromVec(rng_.gaussian3(x_hat.vec(), stages::checkedMotionCovariance(p.pose, u, options_.motion))));
+      poses.push_back(
+          poseFromVec(rng_.gaussian3(x_hat.vec(), stages::checkedMotionCovariance(p.pose, u, options_.motion))));
     }
   } catch (...) {
     rng_ = rng_before;
@@ -175,8 +177,8 @@ StepResult FastSlam::stepInPlace(const Pose2& odom_prev, const Pose2& odom_now,
   Z.reserve(z.size());
   result.measurement_refused.assign(z.size(), 0);
   for (std::size_t i = 0; i < z.size(); ++i) {
-    std::optional<stages::Measurement> q = stages::prepareMeasurement(
-        z[i], i, options_.inflate_azimuth_near_zenith, options_.p_new_mahalanobis_sq);
+    std::optional<stages::Measurement> q =
+        stages::prepareMeasurement(z[i], i, options_.inflate_azimuth_near_zenith, options_.p_new_mahalanobis_sq);
     if (!q) {
       ++result.num_rejected;
       result.measurement_refused[i] = 1;
@@ -195,7 +197,8 @@ StepResult FastSlam::stepInPlace(const Pose2& odom_prev, const Pose2& odom_now,
   // Per input measurement of the best particle.
   const ParticleStepInfo& best = infos[result.best_particle];
   result.landmark_of_measurement.assign(z.size(), -1);
-  for (std::size_t l = 0; l < Z.size(); ++l) result.landmark_of_measurement[Z[l].input_index] = best.landmark_of_measurement[l];
+  for (std::size_t l = 0; l < Z.size(); ++l)
+    result.landmark_of_measurement[Z[l].input_index] = best.landmark_of_measurement[l];
   result.best_particle = best_index_;
   return result;
 }
@@ -205,7 +208,7 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
                                                      const std::vector<stages::Measurement>& Z,
                                                      const Eigen::Vector3d& p_CinR_vis_m) {
   const FastSlamOptions& o = options_;
-  const stages::FastSlam2* fs2 = std::get_if<stages::FastSlam2>(&variant_);  // else FastSLAM 1.0
+  const stages::FastSlam2* fs2 = std::get_if<stages::FastSlam2>(&variant_);          // else FastSLAM 1.0
   const stages::MotionPrediction pred = stages::predictMotion(p.pose, u, o.motion);  // Alg. 1 line 3
   std::vector<LandmarkMap::Ref> near, vis;
   stages::predictVisibleLandmarks(p.map, pred.x_hat, p_CinR_vis_m, o.perception, near, vis);

@@ -88,7 +88,7 @@ double correctedPairCost(const Landmark& L, const Measurement& m, const MotionPr
   if (!smallSpdInverse(Qjl, Qjl_inv, log_det_Qjl)) return kInf;
   const MeasJac QinvHx = Qjl_inv * Hx;
   const Eigen::Matrix3d Sx = (Hx.transpose() * QinvHx + pred.R_inv).inverse();  // line 7 (SPD 3x3, closed form)
-  const Eigen::Vector3d dmu = Sx * (QinvHx.transpose() * nu);  // line 8: Sx H^T Q^-1 (z - zbar)
+  const Eigen::Vector3d dmu = Sx * (QinvHx.transpose() * nu);                   // line 8: Sx H^T Q^-1 (z - zbar)
   const Pose2& x_hat = pred.x_hat;
   const Pose2 mu_x{x_hat.x_m + dmu(0), x_hat.y_m + dmu(1), wrapAngle(x_hat.theta_rad + dmu(2))};
   const auto zhat = predictMeasurement(L.kind, L.p_LinW_m, mu_x, m.p_CinR_m);  // line 10
@@ -270,7 +270,7 @@ HierarchicalAssociation associateHierarchically(const MapLevelInput& level1,
                                                 const CandidateLevelInput& level2) {
   HierarchicalAssociation a;
   a.level1 = associateWithMap(level1);  // level 1: the map
-  a.x_t = propose(a.level1);                 // Alg. 3 (the candidates are scored at x_t)
+  a.x_t = propose(a.level1);            // Alg. 3 (the candidates are scored at x_t)
   const std::vector<int>& lm_of_meas = a.level1.landmark_of_measurement;
   for (int l = 0; l < static_cast<int>(lm_of_meas.size()); ++l) {
     if (lm_of_meas[l] < 0) a.leftover.push_back(l);
@@ -348,10 +348,10 @@ std::vector<ProposalTerm> orderedProposalTerms(const std::vector<LandmarkMap::Re
 Pose2 sampleFastSlam2Pose(const MotionPrediction& pred, const std::vector<LandmarkMap::Ref>& visible,
                           const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
                           Rng& rng) {
-  const bool any_assoc = std::any_of(landmark_of_measurement.begin(), landmark_of_measurement.end(),
-                                     [](int j) { return j >= 0; });
+  const bool any_assoc =
+      std::any_of(landmark_of_measurement.begin(), landmark_of_measurement.end(), [](int j) { return j >= 0; });
   if (!any_assoc) return sampleMotionModel(pred, rng);  // line 2
-  Eigen::Matrix3d info_x = pred.R_inv;  // Sigma_{x,0}^-1 = R_t^-1
+  Eigen::Matrix3d info_x = pred.R_inv;                  // Sigma_{x,0}^-1 = R_t^-1
   Eigen::Matrix3d Sx = pred.R;
   Eigen::Vector3d mu = pred.x_hat.vec();  // mu_{x,0} = xhat_t
   for (const auto& t : orderedProposalTerms(visible, Z, landmark_of_measurement)) {
@@ -366,9 +366,9 @@ Pose2 sampleFastSlam2Pose(const MotionPrediction& pred, const std::vector<Landma
     const Eigen::LLT<MeasMat> llt(Qj);
     if (llt.info() != Eigen::Success) continue;
     const MeasJac QinvHx = llt.solve(Hx);
-    info_x += Hx.transpose() * QinvHx;                                   // line 8
+    info_x += Hx.transpose() * QinvHx;  // line 8
     Sx = info_x.llt().solve(Eigen::Matrix3d::Identity());
-    mu += Sx * (QinvHx.transpose() * innovation(m.z, *zj));              // line 9
+    mu += Sx * (QinvHx.transpose() * innovation(m.z, *zj));  // line 9
     mu(2) = wrapAngle(mu(2));
   }
   return Pose2::fromVec(rng.gaussian3(mu, 0.5 * (Sx + Sx.transpose())));  // line 14
@@ -380,9 +380,9 @@ namespace {
 // Lines 5-10 for one pair at x_t: the updated mean and covariance into `out`; false when there is
 // no prediction or Q~_j is not positive definite (the landmark is then only counted).
 struct Innovation {
-  MeasVec nu;   ///< z - z~_j
-  MeasMat Qt;   ///< Q~_j
-  MeasJac Hx;   ///< H~_x,j at x_t
+  MeasVec nu;  ///< z - z~_j
+  MeasMat Qt;  ///< Q~_j
+  MeasJac Hx;  ///< H~_x,j at x_t
 };
 std::optional<Innovation> updateLandmarkEkf(const Landmark& L, const Measurement& m, const Pose2& x_t, Landmark& out) {
   MeasJac Hx, Hm;
@@ -412,30 +412,32 @@ double weightTerm(WeightTerm form, const MeasVec& nu, const MeasMat& S) {
 }
 
 // Lines 11-14: log w^_j of a type I landmark, or nothing (no prediction at xhat_t).
-std::optional<double> typeIWeight(const Weighting& weighting, WeightTerm form, const Landmark& L,
-                                  const Measurement& m, const Innovation& in, const MotionPrediction& pred) {
+std::optional<double> typeIWeight(const Weighting& weighting, WeightTerm form, const Landmark& L, const Measurement& m,
+                                  const Innovation& in, const MotionPrediction& pred) {
   return std::visit(
-      Overloaded{
-          [&](WeightMarginal) -> std::optional<double> { return weightTerm(form, in.nu, in.Qt); },  // N(z; h(L, x_t), Qt)
-          [&](WeightAtPredictedPose) -> std::optional<double> {
-            MeasJac Hxp, Hmp;
-            const auto zp = predictMeasurement(L.kind, L.p_LinW_m, pred.x_hat, m.p_CinR_m, &Hxp, &Hmp);
-            if (!zp) return std::nullopt;
-            const MeasMat Lp = Hxp * pred.R * Hxp.transpose() + m.Q + Hmp * L.cov_LinW_m2 * Hmp.transpose();
-            return weightTerm(form, innovation(m.z, *zp), Lp);
-          },
-          [&](WeightAlg4) -> std::optional<double> {
-            const MeasMat Lw = in.Hx * pred.R * in.Hx.transpose() + in.Qt;  // line 13
-            return weightTerm(form, in.nu, Lw);
-          }},
+      Overloaded{[&](WeightMarginal) -> std::optional<double> {
+                   return weightTerm(form, in.nu, in.Qt);
+                 },  // N(z; h(L, x_t), Qt)
+                 [&](WeightAtPredictedPose) -> std::optional<double> {
+                   MeasJac Hxp, Hmp;
+                   const auto zp = predictMeasurement(L.kind, L.p_LinW_m, pred.x_hat, m.p_CinR_m, &Hxp, &Hmp);
+                   if (!zp) return std::nullopt;
+                   const MeasMat Lp = Hxp * pred.R * Hxp.transpose() + m.Q + Hmp * L.cov_LinW_m2 * Hmp.transpose();
+                   return weightTerm(form, innovation(m.z, *zp), Lp);
+                 },
+                 [&](WeightAlg4) -> std::optional<double> {
+                   const MeasMat Lw = in.Hx * pred.R * in.Hx.transpose() + in.Qt;  // line 13
+                   return weightTerm(form, in.nu, Lw);
+                 }},
       weighting);
 }
 
 }  // namespace
 
-void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t, const std::vector<LandmarkMap::Ref>& visible,
-                             const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
-                             const FastSlamOptions& o, const Weighting& weight, ParticleUpdate& out) {
+void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t,
+                             const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
+                             const std::vector<int>& landmark_of_measurement, const FastSlamOptions& o,
+                             const Weighting& weight, ParticleUpdate& out) {
   for (int l = 0; l < static_cast<int>(landmark_of_measurement.size()); ++l) {
     const int j = landmark_of_measurement[l];
     if (j < 0) continue;
@@ -450,7 +452,8 @@ void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t, con
     e.value.counter += hitIncrement(o.perception.detection_probability);  // i_j + 1 (p_in >= 0.5)
     const std::optional<Innovation> in = updateLandmarkEkf(L, m, x_t, e.value);
     if (in && correctsPoseAndWeighs(L)) {  // lines 11-14
-      if (const std::optional<double> log_w_j = typeIWeight(weight, o.weight_term, L, m, *in, pred)) out.log_w += *log_w_j;
+      if (const std::optional<double> log_w_j = typeIWeight(weight, o.weight_term, L, m, *in, pred))
+        out.log_w += *log_w_j;
     }
     e.value.type = promotedLandmarkType(e.value, x_t, o.candidates.d_min_m);  // updateLandmarksType()
     if (o.update_map) out.edits.push_back(e);
@@ -476,13 +479,14 @@ void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector
     e.value = *r.landmark;
     --e.value.counter;
     e.erase = e.value.counter < 0;  // deleted when i_j goes negative
-    if (!o.update_map) continue;  // localisation only: the weight counts the miss, the map stays
+    if (!o.update_map) continue;    // localisation only: the weight counts the miss, the map stays
     if (e.erase) ++out.num_deleted;
     out.edits.push_back(e);
   }
 }
 
-double unexplainedWeight(const HierarchicalAssociation& a, const std::vector<Measurement>& Z, const FastSlamOptions& o) {
+double unexplainedWeight(const HierarchicalAssociation& a, const std::vector<Measurement>& Z,
+                         const FastSlamOptions& o) {
   if (o.weight_term != WeightTerm::kConsistency) return 0.0;
   double log_w = 0.0;
   for (std::size_t r = 0; r < a.leftover.size(); ++r) {

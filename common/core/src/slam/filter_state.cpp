@@ -240,7 +240,8 @@ std::vector<Particle> readParticles(ByteReader& r, double cell, std::size_t M) {
   const std::size_t num_maps = r.count("maps", kMaxItems, 8);
   maps.reserve(num_maps);
   for (std::size_t i = 0; i < num_maps; ++i) {
-    std::vector<std::pair<std::uint64_t, std::shared_ptr<const LandmarkMap::Cell>>> mc(r.count("cells of a map", kMaxItems, 16));
+    std::vector<std::pair<std::uint64_t, std::shared_ptr<const LandmarkMap::Cell>>> mc(
+        r.count("cells of a map", kMaxItems, 16));
     for (auto& [key, c] : mc) {
       key = r.u64("cell key");
       c = cells[getIndex(r, cells.size(), "cell")];
@@ -255,7 +256,8 @@ std::vector<Particle> readParticles(ByteReader& r, double cell, std::size_t M) {
   for (auto& c : cands) c = getCandidate(r);
 
   std::vector<Particle> particles(r.count("particles", kMaxItems, 56));
-  if (particles.size() != M) throw StateFormatError("particles: " + std::to_string(particles.size()) + " for M = " + std::to_string(M));
+  if (particles.size() != M)
+    throw StateFormatError("particles: " + std::to_string(particles.size()) + " for M = " + std::to_string(M));
   for (Particle& p : particles) {
     p.pose = getPose(r);
     p.log_weight = r.f64("log_weight");

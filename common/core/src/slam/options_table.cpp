@@ -38,8 +38,8 @@ Field<S> vec3(const char* key, Eigen::Vector3d S::*m, const char* field, const c
   return f;
 }
 template <class S>
-Field<S> enumeration(const char* key, const char* field, const std::vector<std::string>& names,
-                     int (*get)(const S&), void (*set)(S&, int), const char* doc) {
+Field<S> enumeration(const char* key, const char* field, const std::vector<std::string>& names, int (*get)(const S&),
+                     void (*set)(S&, int), const char* doc) {
   Field<S> f;
   f.key = key, f.field = field, f.kind = Kind::kEnum, f.doc = doc, f.names = &names, f.get_index = get;
   f.set_index = set;
@@ -79,6 +79,8 @@ const std::vector<std::string>& motionModelNames() {
 }
 
 const std::vector<Field<FastSlamOptions>>& fastSlamFields() {
+  // One row per key: not reformatted.
+  // clang-format off
   static const std::vector<Field<F>> t{
       integer<F>("particles", &F::num_particles, "num_particles", 1, 1e5, "M, the number of particles"),
       enumeration<F>(
@@ -112,10 +114,13 @@ const std::vector<Field<FastSlamOptions>>& fastSlamFields() {
       real<F>("scale_correction_max_step", &F::scale_correction_max_step, "scale_correction_max_step", "", 0.0, 1.0,
               kLo, "largest relative rescaling of one step (odometry_scale_correction)"),
   };
+  // clang-format on
   return t;
 }
 
 const std::vector<Field<MotionNoiseOptions>>& motionFields() {
+  // One row per key: not reformatted.
+  // clang-format off
   static const std::vector<Field<M>> t{
       enumeration<M>(
           "model", "model", motionModelNames(), [](const M& o) { return static_cast<int>(o.model); },
@@ -139,10 +144,13 @@ const std::vector<Field<MotionNoiseOptions>>& motionFields() {
       real<M>("min_sigma_xy_m", &M::min_sigma_xy_m, "min_sigma_xy_m", "m", 0, 10, kLo, "floor of both translation stds (keeps R_t invertible)"),
       real<M>("min_sigma_theta_rad", &M::min_sigma_theta_rad, "min_sigma_theta_rad", "rad", 0, 10, kLo, "floor of the heading std"),
   };
+  // clang-format on
   return t;
 }
 
 const std::vector<Field<PerceptionOptions>>& perceptionFields() {
+  // One row per key: not reformatted.
+  // clang-format off
   static const std::vector<Field<P>> t{
       real<P>("min_elevation_deg", &P::min_elevation_rad, "min_elevation_rad", "deg", -90, 90, kC, "lowest elevation seen", true),
       real<P>("max_elevation_deg", &P::max_elevation_rad, "max_elevation_rad", "deg", -90, 90, kC, "highest elevation seen (>= min_elevation_deg)", true),
@@ -155,10 +163,13 @@ const std::vector<Field<PerceptionOptions>>& perceptionFields() {
       real<P>("association_margin_m", &P::association_margin_m, "association_margin_m", "m", 0, 1e3, kC, "range widening for the same"),
       vec3<P>("default_camera_position_m", &P::default_p_CinR_m, "default_p_CinR_m", "m", -10, 10, "optical centre in R before any measurement carried one"),
   };
+  // clang-format on
   return t;
 }
 
 const std::vector<Field<CandidateOptions>>& candidateFields() {
+  // One row per key: not reformatted.
+  // clang-format off
   static const std::vector<Field<C>> t{
       integer<C>("nz_min", &C::nz_min, "nz_min", 2, 1000, "NZ_min: measurements a candidate needs"),
       integer<C>("ncross_valid", &C::ncross_valid, "ncross_valid", 1, 1e5, "NCROSS_valid: valid cross-points needed"),
@@ -175,6 +186,7 @@ const std::vector<Field<CandidateOptions>>& candidateFields() {
               "deviation: a ray nearer than this to the ray before the newest replaces the newest (baseline, not frames)"),
       flag<C>("ray_motion_noise", &C::ray_motion_noise, "ray_motion_noise", "deviation: a ray carries the motion model's heading variance since the first ray"),
   };
+  // clang-format on
   return t;
 }
 
@@ -237,10 +249,10 @@ std::string describeFields(const S& s, const std::vector<Field<S>>& table) {
   return out;
 }
 
-#define OMNISLAM_OPTIONS_TABLE_INSTANTIATE(S)                                       \
-  template std::string rangeText<S>(const Field<S>&);                              \
-  template std::string valueText<S>(const Field<S>&, const S&);                    \
-  template std::string checkRanges<S>(const S&, const std::vector<Field<S>>&);     \
+#define OMNISLAM_OPTIONS_TABLE_INSTANTIATE(S)                                  \
+  template std::string rangeText<S>(const Field<S>&);                          \
+  template std::string valueText<S>(const Field<S>&, const S&);                \
+  template std::string checkRanges<S>(const S&, const std::vector<Field<S>>&); \
   template std::string describeFields<S>(const S&, const std::vector<Field<S>>&);
 OMNISLAM_OPTIONS_TABLE_INSTANTIATE(FastSlamOptions)
 OMNISLAM_OPTIONS_TABLE_INSTANTIATE(MotionNoiseOptions)

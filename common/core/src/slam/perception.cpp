@@ -43,8 +43,6 @@ double probabilityInside(const Eigen::Vector3d& p_LinW_m, LandmarkKind kind, con
   return insidePerceptualRange(p_LinW_m, kind, T_WtoR, p_CinR_m, options) ? options.detection_probability : 0.0;
 }
 
-double horizontalReach_m(const PerceptionOptions& options, double margin_m) {
-  return options.max_range_m + margin_m;
-}
+double horizontalReach_m(const PerceptionOptions& options, double margin_m) { return options.max_range_m + margin_m; }
 
 }  // namespace omnislam::slam

@@ -67,8 +67,8 @@ struct SlamProcessOptions {
   int max_features_per_frame = 256;
   int map_every_n_frames = 1;  ///< SLAM_MAP on every n-th processed frame (SLAM_POSE, SLAM_PARTICLES on every one)
   /// Odometry-only poses: when no frame has arrived for odometry_only_after_us of odometry time (and
-  /// none is waiting; the last frame step is older than that too), the filter predicts with the odometry alone and SLAM_POSE and
-  /// SLAM_PARTICLES are published every odometry_only_period_us (input_seq -1). 0 = off.
+  /// none is waiting; the last frame step is older than that too), the filter predicts with the odometry alone and
+  /// SLAM_POSE and SLAM_PARTICLES are published every odometry_only_period_us (input_seq -1). 0 = off.
   int64_t odometry_only_after_us = 3'000'000;
   int64_t odometry_only_period_us = 1'000'000;
   /// Saved maps (map_file.h). save: on exit (end of replay, SIGINT, SIGTERM) the best particle's map

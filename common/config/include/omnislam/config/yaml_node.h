@@ -64,8 +64,7 @@ class Node {
   std::string getString(const std::string& key, const std::string& def) const;
   /// A string that must be one of `allowed`.
   std::string getEnum(const std::string& key, const std::vector<std::string>& allowed) const;
-  std::string getEnum(const std::string& key, const std::vector<std::string>& allowed,
-                      const std::string& def) const;
+  std::string getEnum(const std::string& key, const std::vector<std::string>& allowed, const std::string& def) const;
   /// A sequence of exactly `n` numbers, each in [lo, hi].
   std::vector<double> getDoubles(const std::string& key, size_t n, double lo, double hi) const;
   /// A non-empty sequence of scalars, as strings.

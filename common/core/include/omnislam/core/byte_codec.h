@@ -82,7 +82,8 @@ class ByteReader {
 using StateMagic = std::array<char, 8>;
 
 /// The envelope around `payload` (layout above).
-std::vector<std::uint8_t> sealState(const StateMagic& magic, std::uint32_t version, const std::vector<std::uint8_t>& payload);
+std::vector<std::uint8_t> sealState(const StateMagic& magic, std::uint32_t version,
+                                    const std::vector<std::uint8_t>& payload);
 
 /// What openState() found.
 struct OpenedState {

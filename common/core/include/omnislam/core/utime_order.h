@@ -79,8 +79,8 @@ class UtimeOrder {
 
   bool have_ = false;
   int64_t last_ = 0;
-  int pending_count_ = 0;     ///< messages in a row that continue a possible new timeline
-  int64_t pending_utime_ = 0; ///< the newest of them
+  int pending_count_ = 0;      ///< messages in a row that continue a possible new timeline
+  int64_t pending_utime_ = 0;  ///< the newest of them
   int64_t restarts_ = 0;
   int64_t strays_ = 0;
   std::array<int64_t, 8> steps_{};  ///< the last accepted steps (ring), for the usual interval

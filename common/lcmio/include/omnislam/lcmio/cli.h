@@ -36,8 +36,8 @@ inline CLI::Validator FiniteRange(double min, double max) {
 inline CLI::Validator SeedRange() {
   return CLI::Validator(
       [](std::string& input) -> std::string {
-        const bool digits = !input.empty() && input.size() <= 19 &&
-                            input.find_first_not_of("0123456789") == std::string::npos;
+        const bool digits =
+            !input.empty() && input.size() <= 19 && input.find_first_not_of("0123456789") == std::string::npos;
         if (!digits || (input.size() == 19 && input > "9223372036854775807"))
           return "Value " + input + " not in range [0 - 9223372036854775807] (a whole number)";
         return std::string();
@@ -60,8 +60,7 @@ inline int parseFlags(CLI::App& cli, int argc, char** argv) {
 }  // namespace omnislam::app
 
 /// Drop-in for CLI11_PARSE: returns from main() with 0 (help) or 2 (bad flag).
-#define OMNISLAM_PARSE_FLAGS(cli, argc, argv)                                         \
-  do {                                                                                \
-    if (const int omnislam_rc_ = ::omnislam::app::parseFlags(cli, argc, argv); omnislam_rc_ >= 0) \
-      return omnislam_rc_;                                                            \
+#define OMNISLAM_PARSE_FLAGS(cli, argc, argv)                                                                          \
+  do {                                                                                                                 \
+    if (const int omnislam_rc_ = ::omnislam::app::parseFlags(cli, argc, argv); omnislam_rc_ >= 0) return omnislam_rc_; \
   } while (false)

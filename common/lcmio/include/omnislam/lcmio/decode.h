@@ -36,7 +36,9 @@ std::optional<std::string> checkEncodedLengths(const associations_t*, const uint
 std::optional<std::string> checkEncodedLengths(const feature_labels_t*, const uint8_t* body, size_t size);
 std::optional<std::string> checkEncodedLengths(const process_status_t*, const uint8_t* body, size_t size);
 inline std::optional<std::string> checkEncodedLengths(const pose_t*, const uint8_t*, size_t) { return std::nullopt; }
-inline std::optional<std::string> checkEncodedLengths(const odometry_t*, const uint8_t*, size_t) { return std::nullopt; }
+inline std::optional<std::string> checkEncodedLengths(const odometry_t*, const uint8_t*, size_t) {
+  return std::nullopt;
+}
 
 /// Decodes `size` bytes as one Msg into `out`. Nothing on success, else a one-line reason:
 /// "wrong type (fingerprint)", a length that does not fit (checkEncodedLengths), or "corrupt".

@@ -24,15 +24,15 @@ struct LogEvent {
 /// whether the file ends there or is truncated or corrupt; the bytes after the last good event
 /// tell them apart.
 struct LogReadResult {
-  int64_t events = 0;           ///< events read (and given to fn)
-  int64_t bytes_read = 0;       ///< file offset just after the last event read
-  int64_t file_bytes = 0;       ///< size of the file
+  int64_t events = 0;      ///< events read (and given to fn)
+  int64_t bytes_read = 0;  ///< file offset just after the last event read
+  int64_t file_bytes = 0;  ///< size of the file
   /// Event numbers missing between consecutive events. LCM's writers number the events of a file
   /// 0, 1, 2, ...; a gap means events were lost, e.g. inside an event whose corrupt data length
   /// still ended just before another event's header.
   int64_t missing_event_numbers = 0;
   int64_t last_event_number = -1;  ///< the number of the last event read
-  std::string stop_reason;      ///< why reading stopped before the end of the file ("" if it did not)
+  std::string stop_reason;         ///< why reading stopped before the end of the file ("" if it did not)
   int64_t unreadable() const { return file_bytes - bytes_read; }
   /// The share of the file read so far, 0..1 (1 for a file of unknown size): for progress lines.
   double shareRead() const;

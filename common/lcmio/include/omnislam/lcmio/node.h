@@ -55,8 +55,8 @@ struct Counters {
   int64_t sequence_gaps = 0;
   int64_t sequence_restarts = 0;
   int64_t utime_restarts = 0;  ///< new timelines accepted on the inputs (UtimeOrder)
-  int64_t utime_strays = 0;  ///< inputs refused as a time jump that the next messages did not continue
-  int64_t implausible = 0;          ///< inputs a handler refused by throwing Refused (plausibility)
+  int64_t utime_strays = 0;    ///< inputs refused as a time jump that the next messages did not continue
+  int64_t implausible = 0;     ///< inputs a handler refused by throwing Refused (plausibility)
   std::string last_error;
 };
 
@@ -144,8 +144,8 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
     Msg msg;
     if (auto why = lcmio::decode(rbuf->data, rbuf->data_size, msg)) {
       ++counters_.decode_errors;
-      counters_.last_error = channel + ": cannot decode " + std::to_string(rbuf->data_size) +
-                             " bytes as " + Msg::getTypeName() + ": " + *why;
+      counters_.last_error = channel + ": cannot decode " + std::to_string(rbuf->data_size) + " bytes as " +
+                             Msg::getTypeName() + ": " + *why;
       report("decode error: " + counters_.last_error);
       return;
     }

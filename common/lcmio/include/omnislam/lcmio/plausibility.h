@@ -34,7 +34,8 @@ class PoseStreamCheck {
   /// Nothing when the pose is plausible (it becomes the reference), else the one-line reason it
   /// is refused. A utime not after the reference's skips the speed test (time order is the
   /// caller's: a new timeline calls reset()).
-  std::optional<std::string> admit(int64_t utime, double x_m, double y_m, double theta_rad, const PosePlausibility& opt);
+  std::optional<std::string> admit(int64_t utime, double x_m, double y_m, double theta_rad,
+                                   const PosePlausibility& opt);
   /// The reference taken from elsewhere (the SLAM's pairing: the last odometry it accepted).
   void setReference(int64_t utime, double x_m, double y_m, double theta_rad);
   /// Forgets the reference and any row waiting for confirmation (a new timeline).

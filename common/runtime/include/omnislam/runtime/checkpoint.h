@@ -47,16 +47,16 @@ class InputClock {
 
  private:
   int64_t restart_jump_us_;
-  int64_t newest_[2] = {-1, -1};    ///< odometry, frames
-  int64_t resumed_[2] = {-1, -1};   ///< the checkpoint's newest, while its rule holds; -1 after
+  int64_t newest_[2] = {-1, -1};   ///< odometry, frames
+  int64_t resumed_[2] = {-1, -1};  ///< the checkpoint's newest, while its rule holds; -1 after
   int64_t already_processed_ = 0;
 };
 
 /// What a checkpoint holds, for the one-line reports.
 struct CheckpointSummary {
-  int64_t utime = 0;       ///< the last filter step's utime
-  int64_t frames = 0;      ///< frames processed
-  int64_t epoch = 0;       ///< input restarts before it
+  int64_t utime = 0;   ///< the last filter step's utime
+  int64_t frames = 0;  ///< frames processed
+  int64_t epoch = 0;   ///< input restarts before it
   std::size_t particles = 0, landmarks = 0;
   std::string line() const;  ///< "utime U, F frames processed, M particles, L landmarks"
 };

@@ -68,8 +68,8 @@ class OdometryBuffer {
   enum class Status { kOk, kEmpty, kBeforeBuffer, kAfterBuffer, kGapTooLarge };
   struct Lookup {
     Status status = Status::kEmpty;
-    Pose2 pose_O;          ///< valid when status == kOk
-    int64_t gap_us = 0;    ///< distance between the bracketing samples (0 at a sample)
+    Pose2 pose_O;        ///< valid when status == kOk
+    int64_t gap_us = 0;  ///< distance between the bracketing samples (0 at a sample)
   };
 
   explicit OdometryBuffer(int64_t keep_us = 10'000'000) : keep_us_(keep_us) {}
@@ -221,10 +221,10 @@ class Pairer {
   std::deque<Frame> pending_;
   std::vector<Input> held_;  ///< messages that jumped back (or ahead), waiting to be confirmed or refuted
   bool held_ahead_ = false;  ///< held_ jumped ahead (else back)
-  Pose2 T_OfromIn_;           ///< re-basing of incoming odometry after a discontinuity (identity until one)
+  Pose2 T_OfromIn_;          ///< re-basing of incoming odometry after a discontinuity (identity until one)
   bool have_last_odom_ = false;
   int64_t last_odom_utime_ = 0;
-  Pose2 last_odom_in_;        ///< last accepted odometry pose as received
+  Pose2 last_odom_in_;  ///< last accepted odometry pose as received
   StreamState odom_state_, frame_state_;
   /// The newest utime accepted on either stream since the last restart (a jump ahead is measured
   /// from it, so that frames after a stretch without features are no jump while odometry goes on).

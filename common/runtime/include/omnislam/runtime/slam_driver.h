@@ -30,7 +30,7 @@ struct FrameOutput {
   std::optional<map_t> map;
   particles_t particles;
   std::optional<associations_t> associations;  ///< absent for an odometry-only step
-  bool odometry_only = false;  ///< a prediction without a frame (pose.input_seq = -1)
+  bool odometry_only = false;                  ///< a prediction without a frame (pose.input_seq = -1)
 };
 
 /// Everything one input produced: the outputs, the refusal of the input itself, the frames
@@ -44,23 +44,23 @@ struct DriverResult {
   /// earlier for a restart that did not come.
   std::vector<Refusal> refused;
   std::vector<FrameOutput> outputs;
-  std::vector<std::string> dropped;     ///< OMNI_FEATURES frames dropped by rule, one line each
-  std::vector<std::string> notes;       ///< restarts and held messages (accepted, but worth a line)
+  std::vector<std::string> dropped;  ///< OMNI_FEATURES frames dropped by rule, one line each
+  std::vector<std::string> notes;    ///< restarts and held messages (accepted, but worth a line)
 };
 
 struct DriverStats {
   PairingStats pairing;
   int64_t frames_processed = 0;
   int64_t features_in = 0;
-  int64_t features_skipped_kind = 0;     ///< of a kind turned off in the config, or a light without elevation
-  int64_t measurements_rejected = 0;     ///< refused by the filter (non-finite, covariance not PD)
-  int64_t filter_resets = 0;             ///< restarts that re-initialised the filter
-  int64_t degenerate_weights = 0;        ///< steps whose weights were all zero (reset to uniform)
-  int64_t odometry_only_steps = 0;       ///< predictions published while no frame came
-  int64_t dropped_behind_prediction = 0; ///< frames older than the last odometry-only step
-  int64_t frames_too_large = 0;          ///< refused: more usable features than max_features_per_frame
-  int64_t implausible = 0;               ///< refused: valid but beyond options.plausibility
-  int64_t reinit_last_estimate = 0;      ///< filter_resets that started from the last estimate
+  int64_t features_skipped_kind = 0;      ///< of a kind turned off in the config, or a light without elevation
+  int64_t measurements_rejected = 0;      ///< refused by the filter (non-finite, covariance not PD)
+  int64_t filter_resets = 0;              ///< restarts that re-initialised the filter
+  int64_t degenerate_weights = 0;         ///< steps whose weights were all zero (reset to uniform)
+  int64_t odometry_only_steps = 0;        ///< predictions published while no frame came
+  int64_t dropped_behind_prediction = 0;  ///< frames older than the last odometry-only step
+  int64_t frames_too_large = 0;           ///< refused: more usable features than max_features_per_frame
+  int64_t implausible = 0;                ///< refused: valid but beyond options.plausibility
+  int64_t reinit_last_estimate = 0;       ///< filter_resets that started from the last estimate
 };
 
 /// Converts one feature to a filter measurement; nothing for a kind that is off in `options` or a
@@ -116,7 +116,7 @@ class SlamDriver {
 
   SlamProcessOptions opt_;
   Pairer pairer_;
-  std::unique_ptr<slam::FastSlam> filter_;  ///< created at the first frame of each epoch
+  std::unique_ptr<slam::FastSlam> filter_;        ///< created at the first frame of each epoch
   std::unique_ptr<slam::FastSlam> ended_filter_;  ///< the filter the last restart ended
   /// The estimate the last restart ended with (restart.reinit_from: last_estimate).
   struct Estimate {
@@ -126,11 +126,11 @@ class SlamDriver {
   };
   std::optional<Estimate> restart_from_;
   lcmio::PoseStreamCheck odometry_check_;
-  int64_t ended_step_utime_ = 0;                  ///< its last step's utime
+  int64_t ended_step_utime_ = 0;  ///< its last step's utime
   Pose2 odom_prev_O_;
   std::vector<slam::Landmark> prior_map_;
-  int64_t last_step_utime_ = 0;     ///< utime of the last filter step (frame or prediction)
-  int64_t last_frame_utime_ = 0;    ///< utime of the last frame step
+  int64_t last_step_utime_ = 0;   ///< utime of the last filter step (frame or prediction)
+  int64_t last_frame_utime_ = 0;  ///< utime of the last frame step
   /// Newest odometry utime when the last frame arrived (processed or not): the odometry-only rule
   /// measures how long no frame has *arrived*, so a features stream that lags behind the odometry
   /// but is alive never triggers predictions (a replayed log of a loaded machine).

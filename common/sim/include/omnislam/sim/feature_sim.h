@@ -46,11 +46,11 @@ struct FeatureSimOptions {
 
 /// One published feature, with its truth.
 struct SimFeature {
-  int64_t light_id = -1;  ///< the lamp's id; -1 for clutter
+  int64_t light_id = -1;                          ///< the lamp's id; -1 for clutter
   double azimuth_rad = 0.0, elevation_rad = 0.0;  ///< robot frame, from the optical centre
   Eigen::Matrix2d covariance_rad2 = Eigen::Matrix2d::Identity();
   Eigen::Vector2d px = Eigen::Vector2d::Zero();  ///< the noisy centroid
-  double area_px = 0.0;  ///< the disc's image area (clutter: 0)
+  double area_px = 0.0;                          ///< the disc's image area (clutter: 0)
 };
 
 struct SimFrame {
@@ -62,8 +62,8 @@ struct SimFrame {
 
 struct SimTruthStep {
   double t_s = 0.0;
-  Pose2 truth;  ///< robot in W
-  Pose2 odometry;  ///< robot in the odometry frame (the first true pose), noisy
+  Pose2 truth;                            ///< robot in W
+  Pose2 odometry;                         ///< robot in the odometry frame (the first true pose), noisy
   double v_mps = 0.0, omega_radps = 0.0;  ///< from consecutive odometry poses, as the odometry process
 };
 

@@ -32,22 +32,22 @@
 namespace omnislam::sim {
 
 enum class OdometryModel {
-  kWheel,           ///< scale error, heading drift and random walks (the default; sports hall)
-  kTranslateRotate, ///< paper 002: err_tran, err_rot, err_drift per translate-then-rotate step
+  kWheel,            ///< scale error, heading drift and random walks (the default; sports hall)
+  kTranslateRotate,  ///< paper 002: err_tran, err_rot, err_drift per translate-then-rotate step
 };
 
 struct OdometryNoise {
   OdometryModel model = OdometryModel::kWheel;
   // kWheel:
-  double distance_sigma_m_per_sqrt_m = 0.05;       ///< sigma_d: 5 % of 1 m travelled
-  double rotation_sigma_rad_per_sqrt_rad = 0.05;   ///< sigma_r: 5 % of 1 rad turned
-  double heading_sigma_rad_per_sqrt_m = 0.01;      ///< sigma_h: random heading walk per metre
-  double scale_error_sigma = 0.01;                 ///< per-run distance scale error (1-sigma)
-  double heading_drift_sigma_rad_per_m = 0.003;    ///< per-run systematic heading drift (1-sigma)
+  double distance_sigma_m_per_sqrt_m = 0.05;      ///< sigma_d: 5 % of 1 m travelled
+  double rotation_sigma_rad_per_sqrt_rad = 0.05;  ///< sigma_r: 5 % of 1 rad turned
+  double heading_sigma_rad_per_sqrt_m = 0.01;     ///< sigma_h: random heading walk per metre
+  double scale_error_sigma = 0.01;                ///< per-run distance scale error (1-sigma)
+  double heading_drift_sigma_rad_per_m = 0.003;   ///< per-run systematic heading drift (1-sigma)
   // kTranslateRotate (paper 002):
-  double err_tran_m_per_sqrt_m = 0.03;      ///< translation error: sigma after 1 m [m / sqrt(m)]
-  double err_rot_rad_per_sqrt_rad = 0.05;   ///< rotation error: sigma after 1 rad turned [rad / sqrt(rad)]
-  double err_drift_rad_per_sqrt_m = 0.02;   ///< heading drift while translating: sigma after 1 m [rad / sqrt(m)]
+  double err_tran_m_per_sqrt_m = 0.03;     ///< translation error: sigma after 1 m [m / sqrt(m)]
+  double err_rot_rad_per_sqrt_rad = 0.05;  ///< rotation error: sigma after 1 rad turned [rad / sqrt(rad)]
+  double err_drift_rad_per_sqrt_m = 0.02;  ///< heading drift while translating: sigma after 1 m [rad / sqrt(m)]
 
   std::optional<std::string> validate() const;
 };

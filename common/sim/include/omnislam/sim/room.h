@@ -19,8 +19,8 @@ namespace omnislam::sim {
 
 /// A straight run of wall from `from` to `to`, floor to ceiling, split along its length into panels.
 struct WallPanel {
-  double width_m = 0.0;                          ///< along the wall; <= 0: fill the rest of the wall
-  Eigen::Vector3d rgb = Eigen::Vector3d::Zero(); ///< R, G, B, 0..255
+  double width_m = 0.0;                           ///< along the wall; <= 0: fill the rest of the wall
+  Eigen::Vector3d rgb = Eigen::Vector3d::Zero();  ///< R, G, B, 0..255
 };
 struct Wall {
   Eigen::Vector2d from_m = Eigen::Vector2d::Zero();
@@ -43,10 +43,10 @@ struct Box {
 
 /// A vertical-line landmark: the line x = p_m, z in [z_min_m, z_max_m].
 struct RoomLine {
-  int64_t id = 0;               ///< 1.. in the order of walls then boxes
+  int64_t id = 0;  ///< 1.. in the order of walls then boxes
   Eigen::Vector2d p_m = Eigen::Vector2d::Zero();
   double z_min_m = 0.0, z_max_m = 0.0;
-  std::string what;             ///< e.g. "wall 2 panel 3|4", "corner", "box cabinet corner 1"
+  std::string what;  ///< e.g. "wall 2 panel 3|4", "corner", "box cabinet corner 1"
 };
 
 /// A planar piece of the scene the ray caster tests. Vertical: the quad over the segment a..b,
@@ -81,8 +81,8 @@ struct Room {
 
 /// What a ray hits first.
 struct RayHit {
-  double t_h_m = 0.0;    ///< horizontal distance from the ray's origin to the hit [m]
-  int facet = -1;        ///< index into facets(); -1 floor, -2 ceiling, -3 nothing
+  double t_h_m = 0.0;  ///< horizontal distance from the ray's origin to the hit [m]
+  int facet = -1;      ///< index into facets(); -1 floor, -2 ceiling, -3 nothing
 };
 
 /// First hit of the ray from `origin` (z inside the room) along azimuth `az` (cos, sin) and

@@ -21,10 +21,10 @@ struct Segment {
 };
 
 struct TrajectoryOptions {
-  Pose2 start;                    ///< start pose in the world frame
-  double speed_mps = 0.27;        ///< forward speed on straights and arcs, m/s
-  double turn_rate_radps = 0.5;   ///< yaw rate of turns on the spot, rad/s
-  double start_pause_s = 1.0;     ///< standing still before moving, s
+  Pose2 start;                   ///< start pose in the world frame
+  double speed_mps = 0.27;       ///< forward speed on straights and arcs, m/s
+  double turn_rate_radps = 0.5;  ///< yaw rate of turns on the spot, rad/s
+  double start_pause_s = 1.0;    ///< standing still before moving, s
 };
 
 /// The state of the robot at a time.
@@ -39,8 +39,7 @@ class Trajectory {
   Trajectory(const TrajectoryOptions& options, std::vector<Segment> segments);
 
   /// Checks speeds and segments; returns a message naming the offending item, or nothing.
-  static std::optional<std::string> validate(const TrajectoryOptions& options,
-                                             const std::vector<Segment>& segments);
+  static std::optional<std::string> validate(const TrajectoryOptions& options, const std::vector<Segment>& segments);
 
   /// Pose and velocities at t_s seconds after the start (clamped to [0, duration]).
   TrajectorySample at(double t_s) const;

@@ -29,11 +29,11 @@ struct Light {
 
 /// What makes the rendered images imperfect, as in the paper's sports hall.
 struct ImageNuisance {
-  double noise_sigma_grey = 2.0;      ///< additive Gaussian sensor noise, grey levels
-  double blur_sigma_px = 0.8;         ///< Gaussian blur (optics), pixels; 0 = none
-  double background_grey = 12.0;      ///< dark level of the IR-filtered image
-  double light_peak_grey = 200.0;     ///< peak grey level of a nominal light seen overhead
-  int samples_per_light = 1500;       ///< supersamples of the disc when rendering
+  double noise_sigma_grey = 2.0;   ///< additive Gaussian sensor noise, grey levels
+  double blur_sigma_px = 0.8;      ///< Gaussian blur (optics), pixels; 0 = none
+  double background_grey = 12.0;   ///< dark level of the IR-filtered image
+  double light_peak_grey = 200.0;  ///< peak grey level of a nominal light seen overhead
+  int samples_per_light = 1500;    ///< supersamples of the disc when rendering
   /// Wall of windows: lights whose horizontal distance to the line y = window_wall_y_m is below
   /// window_band_m are missed with probability window_miss_probability in each frame.
   bool window_wall_enabled = true;
@@ -58,7 +58,7 @@ struct CameraSetup {
   CameraModelKind model = CameraModelKind::kPajdlaBakstein;
   camera::PajdlaBaksteinParams intrinsics;  ///< model == kPajdlaBakstein
   camera::ScaramuzzaParams scaramuzza;      ///< model == kScaramuzza
-  camera::CameraMounting mounting;  ///< optical centre in the robot frame
+  camera::CameraMounting mounting;          ///< optical centre in the robot frame
 };
 
 /// The camera model of a setup (PajdlaBaksteinCamera or ScaramuzzaCamera); throws
@@ -83,9 +83,9 @@ struct World {
   int64_t start_utime = 1'700'000'000'000'000;  ///< simulated time of t = 0, microseconds
   double truth_rate_hz = 50.0;                  ///< GROUND_TRUTH_POSE rate (>= 20 Hz)
   double image_rate_hz = 1.0;                   ///< OMNI_IMAGE rate
-  std::vector<Light> lights;   ///< ceiling lights (paper 000); empty in a room world
-  std::optional<Room> room;    ///< paper 002's room with vertical lines; exclusive with lights
-  std::optional<HallBounds> hall;  ///< the walls around the lights, when the file gives them
+  std::vector<Light> lights;                    ///< ceiling lights (paper 000); empty in a room world
+  std::optional<Room> room;                     ///< paper 002's room with vertical lines; exclusive with lights
+  std::optional<HallBounds> hall;               ///< the walls around the lights, when the file gives them
   CameraSetup camera;
   TrajectoryOptions trajectory_options;
   std::vector<Segment> segments;

@@ -47,14 +47,14 @@ struct GeneratorOptions {
 struct GeneratedParams {
   WorldFamily family = WorldFamily::kHalls;
   uint64_t seed = 0;
-  double hall_x_m = 0.0, hall_y_m = 0.0;        ///< hall size along x and y
-  double spacing_x_m = 0.0, spacing_y_m = 0.0;  ///< grid spacing (halls, corridors); 0 otherwise
+  double hall_x_m = 0.0, hall_y_m = 0.0;            ///< hall size along x and y
+  double spacing_x_m = 0.0, spacing_y_m = 0.0;      ///< grid spacing (halls, corridors); 0 otherwise
   double ceiling_min_m = 0.0, ceiling_max_m = 0.0;  ///< lowest / highest lamp height
-  int lamps_missing = 0;   ///< grid positions left empty
-  int lamps_extra = 0;     ///< lamps added off the grid
-  int close_pairs = 0;     ///< lamps with a partner 0.5-1.5 m away (irregular)
-  int loops = 0;           ///< closed loops driven
-  double path_m = 0.0;     ///< trajectory length
+  int lamps_missing = 0;                            ///< grid positions left empty
+  int lamps_extra = 0;                              ///< lamps added off the grid
+  int close_pairs = 0;                              ///< lamps with a partner 0.5-1.5 m away (irregular)
+  int loops = 0;                                    ///< closed loops driven
+  double path_m = 0.0;                              ///< trajectory length
 };
 
 struct GeneratedWorld {

@@ -36,11 +36,11 @@ struct BrightBlobOptions {
 };
 
 struct BrightBlob {
-  double u_px = 0.0;   ///< intensity-weighted centroid, column (pixel centres at integers)
-  double v_px = 0.0;   ///< intensity-weighted centroid, row
-  int area_px = 0;     ///< pixels of the blob
+  double u_px = 0.0;  ///< intensity-weighted centroid, column (pixel centres at integers)
+  double v_px = 0.0;  ///< intensity-weighted centroid, row
+  int area_px = 0;    ///< pixels of the blob
   double peak_grey = 0.0;
-  double mass = 0.0;   ///< sum of the centroid weights (intensity - background) over the blob
+  double mass = 0.0;           ///< sum of the centroid weights (intensity - background) over the blob
   double major_axis_px = 0.0;  ///< 4 sqrt(largest eigenvalue of the weighted second moments)
   double minor_axis_px = 0.0;  ///< 4 sqrt(smallest eigenvalue): full width of a uniform bar or ellipse
   /// Direction of the major axis in the image, rad, from +u towards +v, in (-pi/2, pi/2].
@@ -60,19 +60,19 @@ struct LampBlobOptions {
   /// CeilingLightDetector derives it from the camera (background_window_rad); detectLampBlobs
   /// refuses 0.
   int background_window_px = 0;
-  double noise_margin_sigma = 5.0;     ///< core: I - B >= this x the frame's noise sigma; > 0
-  double min_noise_sigma_grey = 0.5;   ///< floor of the per-frame noise estimate (quantisation) [grey]; > 0
-  double min_source_ratio = 3.0;       ///< core: I - black >= this x (B - black), unless saturated; >= 1
-  int saturation_grey = 250;           ///< 1..255: at or above, a pixel is clipped (true value unknown)
+  double noise_margin_sigma = 5.0;    ///< core: I - B >= this x the frame's noise sigma; > 0
+  double min_noise_sigma_grey = 0.5;  ///< floor of the per-frame noise estimate (quantisation) [grey]; > 0
+  double min_source_ratio = 3.0;      ///< core: I - black >= this x (B - black), unless saturated; >= 1
+  int saturation_grey = 250;          ///< 1..255: at or above, a pixel is clipped (true value unknown)
   /// blob: peak - black >= this x (median - black), unless saturated; >= 0. A lamp's luminance is
   /// >= 100 x the room's; through a gamma-2.2 encoding (the least contrast an 8-bit camera gives)
   /// that is 100^(1/2.2) = 8 in grey levels above black.
   double min_peak_ratio = 8.0;
-  double min_surround_contrast = 0.25; ///< blob: contrast above its 2-px ring, 0..1
-  int threshold_grey = 0;              ///< core: I > this; 0 = no absolute level (0..254)
-  int min_area_px = 2;                 ///< smaller blobs are dropped (noise)
-  int max_area_px = 5000;              ///< larger blobs are dropped
-  int connectivity = 8;                ///< 4 or 8
+  double min_surround_contrast = 0.25;  ///< blob: contrast above its 2-px ring, 0..1
+  int threshold_grey = 0;               ///< core: I > this; 0 = no absolute level (0..254)
+  int min_area_px = 2;                  ///< smaller blobs are dropped (noise)
+  int max_area_px = 5000;               ///< larger blobs are dropped
+  int connectivity = 8;                 ///< 4 or 8
 };
 
 /// The per-frame statistics the lamp criteria are relative to (over the usable pixels).

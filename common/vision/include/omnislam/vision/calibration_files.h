@@ -40,7 +40,7 @@ std::string formatDescription(CalibrationFormat f);
 /// Pixel: u = fx_px x_d + skew_px y_d + cx_px, v = fy_px y_d + cy_px (OpenCV's K).
 struct MeiIntrinsics {
   double fx_px = 0, fy_px = 0, cx_px = 0, cy_px = 0, skew_px = 0;
-  double xi = 0;                      ///< mirror parameter, >= 0
+  double xi = 0;                          ///< mirror parameter, >= 0
   double k1 = 0, k2 = 0, p1 = 0, p2 = 0;  ///< radial, tangential distortion
 };
 /// Kannala-Brandt equidistant model (cv::fisheye, Kalibr pinhole + equidistant):
@@ -65,7 +65,7 @@ using CalibratedIntrinsics = std::variant<MeiIntrinsics, KannalaBrandtIntrinsics
 struct CameraCalibration {
   CalibrationFormat format = CalibrationFormat::kOpencvOmnidir;
   CalibratedIntrinsics intrinsics;
-  int width_px = 0;   ///< image size the file states [px]; 0 when it states none
+  int width_px = 0;  ///< image size the file states [px]; 0 when it states none
   int height_px = 0;
   std::string description;  ///< one line for logs, e.g. "Kalibr cam0 (omni + radtan) of 'x.yaml'"
 };
@@ -95,8 +95,8 @@ CameraCalibration readCalibrationFile(const std::string& path, const Calibration
 /// is kCatadioptric (camera looking up into a mirror: d_C = diag(1, 1, -1) d_calibration); an
 /// OCamCalib calibration becomes a ScaramuzzaCamera with params.optics = optics. Throws
 /// config::ConfigError naming the calibration when the model refuses the parameters (validate()).
-std::unique_ptr<camera::CameraModel> makeCalibratedCamera(const CameraCalibration& calibration, camera::OcamOptics optics,
-                                                          int width_px, int height_px);
+std::unique_ptr<camera::CameraModel> makeCalibratedCamera(const CameraCalibration& calibration,
+                                                          camera::OcamOptics optics, int width_px, int height_px);
 
 /// The pixel of the calibration's optical axis, (cx, cy) [px] ((yc, xc) for OCamCalib).
 Eigen::Vector2d principalPointPx(const CameraCalibration& calibration);

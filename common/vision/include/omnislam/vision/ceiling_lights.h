@@ -37,7 +37,7 @@ enum class TruncatedBlobs {
 };
 
 struct CeilingLightOptions {
-  LampBlobOptions blobs;             ///< lamp criteria, area, connectivity (bright_blobs.h)
+  LampBlobOptions blobs;  ///< lamp criteria, area, connectivity (bright_blobs.h)
   /// Angular side of the background's median window [rad], used when blobs.background_window_px
   /// is 0 (default): window_px = this x the camera's pixel scale (median px/rad over the field of
   /// view), rounded to odd, 3..255. A median window ignores a disc narrower than 1 / 1.25 of it and
@@ -54,7 +54,7 @@ struct CeilingLightOptions {
   /// Image noise (grey levels) for the centroid sigma; nullopt (default) = the frame's own robust
   /// estimate (FrameStatistics::noise_sigma_grey); >= 0.
   std::optional<double> noise_sigma_grey;
-  double pixel_sigma_floor_px = 0.3; ///< added in quadrature to the centroid sigma [px]; > 0
+  double pixel_sigma_floor_px = 0.3;  ///< added in quadrature to the centroid sigma [px]; > 0
   TruncatedBlobs truncated_blobs = TruncatedBlobs::kDrop;
 };
 
@@ -63,10 +63,10 @@ std::optional<std::string> validate(const CeilingLightOptions& o);
 
 struct CeilingLight {
   BrightBlob blob;
-  double azimuth_rad = 0.0;    ///< robot-parallel axes, origin at the optical centre
+  double azimuth_rad = 0.0;  ///< robot-parallel axes, origin at the optical centre
   double elevation_rad = 0.0;
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();  ///< (az, el) [rad^2]
-  double sigma_px = 0.0;       ///< pixel sigma used for the covariance
+  double sigma_px = 0.0;                                     ///< pixel sigma used for the covariance
   double elongation = 1.0;
 };
 

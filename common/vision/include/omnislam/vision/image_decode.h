@@ -26,10 +26,10 @@ namespace omnislam::vision {
 /// largest camera the project is configured for is 1280 x 960 (the OpenCV omnidir samples), 4.8 %
 /// of this; consumers that know their camera refuse anything else through their HeaderCheck.
 struct ImageLimits {
-  int64_t max_side_px = 8192;                       ///< width and height at most this
-  int64_t max_pixels = int64_t{8192} * 8192;        ///< 67 108 864: an 8192 x 8192 frame
-  int64_t max_decoded_bytes = int64_t{64} << 20;    ///< pixels x channels x bytes per channel
-  int64_t max_encoded_bytes = int64_t{64} << 20;    ///< a file larger than this is not read
+  int64_t max_side_px = 8192;                     ///< width and height at most this
+  int64_t max_pixels = int64_t{8192} * 8192;      ///< 67 108 864: an 8192 x 8192 frame
+  int64_t max_decoded_bytes = int64_t{64} << 20;  ///< pixels x channels x bytes per channel
+  int64_t max_encoded_bytes = int64_t{64} << 20;  ///< a file larger than this is not read
 };
 
 /// Why `header` exceeds `limits`, or nothing.
@@ -75,8 +75,8 @@ cv::Mat decodeInspected(const uint8_t* bytes, size_t size, const ImageHeader& he
 
 struct DecodeOptions {
   ImageLimits limits;
-  HeaderCheck check;                   ///< null: no check beyond the limits
-  int flags = cv::IMREAD_UNCHANGED;    ///< passed to cv::imdecode
+  HeaderCheck check;                 ///< null: no check beyond the limits
+  int flags = cv::IMREAD_UNCHANGED;  ///< passed to cv::imdecode
 };
 
 struct DecodedImage {

@@ -49,10 +49,10 @@ class Panorama {
   cv::Mat unwarp(const cv::Mat& image) const;
   void unwarp(const cv::Mat& image, cv::Mat& out) const;
 
-  double angleOfColumn(double col) const;  ///< alpha [rad], not wrapped (pad columns go beyond +-pi)
+  double angleOfColumn(double col) const;        ///< alpha [rad], not wrapped (pad columns go beyond +-pi)
   double columnOfAngle(double alpha_rad) const;  ///< inverse, for alpha in (-pi, pi]
-  double radiusOfRow(double row) const;    ///< rho [px]
-  double radialStepPx() const;             ///< image px per panorama row
+  double radiusOfRow(double row) const;          ///< rho [px]
+  double radialStepPx() const;                   ///< image px per panorama row
   Eigen::Vector2d pixelAt(double col, double row) const;
   int totalColumns() const { return opt_.columns + 2 * opt_.pad_columns; }
   int rows() const { return rows_; }
@@ -97,19 +97,19 @@ std::optional<ImageCircle> estimateImageCircle(const cv::Mat& grey, int threshol
 /// peak lies more than `inlier_gate_rad` from it are outliers (a moved object, a person) and the
 /// peak of the inliers' sum is refined by a parabola through it and its neighbours (sub-column).
 struct PanoramaRotationOptions {
-  int pad_columns = 0;   ///< wrapped columns on each side of both inputs (Panorama: options().pad_columns)
-  int sectors = 24;      ///< azimuth sectors of the reference; in [2, columns / 4]
+  int pad_columns = 0;             ///< wrapped columns on each side of both inputs (Panorama: options().pad_columns)
+  int sectors = 24;                ///< azimuth sectors of the reference; in [2, columns / 4]
   double inlier_gate_rad = 0.035;  ///< a sector's own peak within this of the combined one (~2 deg)
   double min_sector_energy_fraction = 0.05;  ///< of the median sector energy; less = no texture
 };
 struct PanoramaRotation {
-  double rotation_rad = 0.0;  ///< wrapped to (-pi, pi]
-  double score = 0.0;         ///< mean normalised correlation of the inlier sectors at the peak
-  int sectors_used = 0;       ///< sectors with texture
-  int inliers = 0;            ///< of those, agreeing with the peak
-  std::vector<double> sector_centre_rad;  ///< per used sector: its centre angle in pano_ref
+  double rotation_rad = 0.0;                ///< wrapped to (-pi, pi]
+  double score = 0.0;                       ///< mean normalised correlation of the inlier sectors at the peak
+  int sectors_used = 0;                     ///< sectors with texture
+  int inliers = 0;                          ///< of those, agreeing with the peak
+  std::vector<double> sector_centre_rad;    ///< per used sector: its centre angle in pano_ref
   std::vector<double> sector_rotation_rad;  ///< and its own (sub-column) peak, wrapped
-  std::vector<double> sector_row;  ///< and its gradient-energy-weighted mean panorama row in pano_ref
+  std::vector<double> sector_row;           ///< and its gradient-energy-weighted mean panorama row in pano_ref
   /// and each panorama row's weight in the sector's peak, which is about the weighted mean of its
   /// rows' own shifts: the curvature of the row's autocorrelation at zero lag, i.e. the energy of the
   /// feature's derivative along the columns (fitPanoramaMotion needs the shifts per radius)

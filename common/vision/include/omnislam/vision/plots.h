@@ -20,8 +20,8 @@ struct PlotLandmark {
 
 struct MapPlot {
   std::string title;
-  std::vector<Pose2> estimate;  ///< estimated trajectory (blue)
-  std::vector<Pose2> truth;     ///< true trajectory (grey)
+  std::vector<Pose2> estimate;                    ///< estimated trajectory (blue)
+  std::vector<Pose2> truth;                       ///< true trajectory (grey)
   std::vector<PlotLandmark> estimated_landmarks;  ///< red crosses and ellipses
   std::vector<Eigen::Vector3d> true_landmarks;    ///< black circles
 };

@@ -30,7 +30,7 @@ struct ViewLandmark {
   int64_t id = 0;
   Eigen::Vector3d p_m = Eigen::Vector3d::Zero();        ///< position in W, metres
   Eigen::Matrix2d cov_xy_m2 = Eigen::Matrix2d::Zero();  ///< x-y block of the covariance, m^2
-  int type = 0;  ///< 1 (type I, reliable), 2 (type II), 0 unknown
+  int type = 0;                                         ///< 1 (type I, reliable), 2 (type II), 0 unknown
   int kind = 1;  ///< feature_t KIND_*: 1 ceiling light (cross), 2 vertical line (diamond)
 };
 
@@ -59,7 +59,7 @@ struct SlamViewData {
   std::vector<Pose2> truth_track;     ///< true trajectory, oldest first
   std::optional<Pose2> pose;          ///< current estimate
   Eigen::Matrix2d pose_cov_xy_m2 = Eigen::Matrix2d::Zero();
-  std::optional<Pose2> true_pose;     ///< true pose at the estimate's time
+  std::optional<Pose2> true_pose;  ///< true pose at the estimate's time
   std::vector<ViewLandmark> landmarks;
   std::vector<Eigen::Vector3d> true_landmarks;
   std::vector<ViewParticle> particles;
@@ -112,17 +112,17 @@ cv::Mat renderSlamView(const SlamViewData& data, const SlamViewOptions& opt = {}
 
 /// Colours (BGR) of the legend, for tests and docs.
 namespace view_colours {
-inline const cv::Scalar kLandmarkType1(30, 30, 220);    // red
-inline const cv::Scalar kLandmarkType2(0, 150, 255);    // orange
-inline const cv::Scalar kLandmarkOther(160, 60, 160);   // purple (type unknown)
-inline const cv::Scalar kTrueLandmark(0, 0, 0);         // black
-inline const cv::Scalar kEstimate(200, 90, 20);         // blue
-inline const cv::Scalar kTruth(150, 150, 150);          // grey
-inline const cv::Scalar kParticle(200, 60, 200);        // violet
-inline const cv::Scalar kFeatAssociated(40, 220, 40);   // green
-inline const cv::Scalar kFeatCandidate(0, 165, 255);    // orange
-inline const cv::Scalar kFeatNotUsed(170, 170, 170);    // grey
-inline const cv::Scalar kFeatUnknown(255, 255, 0);      // cyan
+inline const cv::Scalar kLandmarkType1(30, 30, 220);   // red
+inline const cv::Scalar kLandmarkType2(0, 150, 255);   // orange
+inline const cv::Scalar kLandmarkOther(160, 60, 160);  // purple (type unknown)
+inline const cv::Scalar kTrueLandmark(0, 0, 0);        // black
+inline const cv::Scalar kEstimate(200, 90, 20);        // blue
+inline const cv::Scalar kTruth(150, 150, 150);         // grey
+inline const cv::Scalar kParticle(200, 60, 200);       // violet
+inline const cv::Scalar kFeatAssociated(40, 220, 40);  // green
+inline const cv::Scalar kFeatCandidate(0, 165, 255);   // orange
+inline const cv::Scalar kFeatNotUsed(170, 170, 170);   // grey
+inline const cv::Scalar kFeatUnknown(255, 255, 0);     // cyan
 }  // namespace view_colours
 
 /// A trajectory kept within a bounded number of points: a pose is appended only if it moved at

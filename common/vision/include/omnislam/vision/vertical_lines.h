@@ -41,12 +41,12 @@ namespace omnislam::vision {
 
 struct VerticalLineOptions {
   PanoramaOptions panorama;
-  int edge_threshold = 80;     ///< |Sobel gx| on 8-bit grey (range 0..1020); in [1, 1020]
-  int min_run_rows = 5;        ///< shorter runs are noise; >= 1
-  int max_gap_rows = 2;        ///< gaps bridged inside a run; >= 0
-  int merge_columns = 2;       ///< runs this many columns apart may be one line; >= 0
-  int merge_gap_rows = 20;     ///< runs of one line may be this far apart along it; >= 0
-  int min_length_rows = 40;    ///< shortest line kept (panorama rows); >= 1
+  int edge_threshold = 80;         ///< |Sobel gx| on 8-bit grey (range 0..1020); in [1, 1020]
+  int min_run_rows = 5;            ///< shorter runs are noise; >= 1
+  int max_gap_rows = 2;            ///< gaps bridged inside a run; >= 0
+  int merge_columns = 2;           ///< runs this many columns apart may be one line; >= 0
+  int merge_gap_rows = 20;         ///< runs of one line may be this far apart along it; >= 0
+  int min_length_rows = 40;        ///< shortest line kept (panorama rows); >= 1
   double max_drift_columns = 6.0;  ///< a line may drift this many columns end to end (else slanted); > 0
   double max_rms_columns = 2.0;    ///< rms of the rows' peaks about the line's fit (else not one edge); > 0
   /// A line whose column shows the opposite sign above the threshold beyond both its ends, on more
@@ -61,17 +61,17 @@ struct VerticalLineOptions {
   int cell_row_min_lines = 4;
   double cell_max_aspect = 2.0;         ///< length / spacing in [1/a, a]; in [1, 10]
   double cell_max_spacing_ratio = 1.5;  ///< in [1, 10]
-  int colour_offset_columns = 3;  ///< colour strips start this far from the line; >= 1
-  int colour_width_columns = 6;   ///< and are this wide; >= 1
-  double pixel_sigma_px = 1.0;    ///< tangential pixel noise of a line for its azimuth variance; > 0
+  int colour_offset_columns = 3;        ///< colour strips start this far from the line; >= 1
+  int colour_width_columns = 6;         ///< and are this wide; >= 1
+  double pixel_sigma_px = 1.0;          ///< tangential pixel noise of a line for its azimuth variance; > 0
   /// Contrast normalisation of the response before the threshold: |gx| x ((ref + off) / (m + off))^p,
   /// m = local mean grey (a box of 2 contrast_window_columns + 1 columns x 2 contrast_window_columns + 1
   /// rows of the panorama). p = 0: plain Sobel; 0.5: divided by the shot-noise sigma (sigma^2 grows
   /// with the grey level); 1: relative (Weber) contrast. The threshold then holds at grey `ref`.
-  double contrast_exponent = 0.0;           ///< p; in [0, 1]
-  double contrast_reference_grey = 128.0;   ///< ref; in (0, 255]
-  double contrast_offset_grey = 0.0;        ///< off; in [0, 255]
-  int contrast_window_columns = 4;          ///< half width of the local-mean box; in [1, 100]
+  double contrast_exponent = 0.0;          ///< p; in [0, 1]
+  double contrast_reference_grey = 128.0;  ///< ref; in (0, 255]
+  double contrast_offset_grey = 0.0;       ///< off; in [0, 255]
+  int contrast_window_columns = 4;         ///< half width of the local-mean box; in [1, 100]
   /// CLAHE (cv::CLAHE, tiles of this many panorama columns) on the panorama before the Sobel; 0 = off.
   double clahe_clip_limit = 0.0;
   int clahe_tile_columns = 90;
@@ -84,15 +84,15 @@ struct VerticalLineOptions {
 std::optional<std::string> validate(const VerticalLineOptions& o);
 
 struct VerticalLine {
-  double azimuth_rad = 0.0;     ///< robot-parallel axes, wrapped to (-pi, pi]
-  double variance_rad2 = 0.0;   ///< of the azimuth
-  double image_angle_rad = 0.0; ///< alpha of the refined column (the fit at the line's mid row), wrapped
-  double column = 0.0;          ///< refined panorama column (padded coordinates)
+  double azimuth_rad = 0.0;        ///< robot-parallel axes, wrapped to (-pi, pi]
+  double variance_rad2 = 0.0;      ///< of the azimuth
+  double image_angle_rad = 0.0;    ///< alpha of the refined column (the fit at the line's mid row), wrapped
+  double column = 0.0;             ///< refined panorama column (padded coordinates)
   int row_begin = 0, row_end = 0;  ///< panorama rows covered (inclusive)
-  double length_px = 0.0;       ///< length along the radius in image pixels
-  double strength = 0.0;        ///< mean |gx| along the line at its peak column
-  double bar_width_px = 0.0;    ///< 0 for an edge; for a thin bar (its two sides merged) its width
-  int sign = 0;                 ///< +1: brighter at larger alpha (counter-clockwise side), -1: darker
+  double length_px = 0.0;          ///< length along the radius in image pixels
+  double strength = 0.0;           ///< mean |gx| along the line at its peak column
+  double bar_width_px = 0.0;       ///< 0 for an edge; for a thin bar (its two sides merged) its width
+  int sign = 0;                    ///< +1: brighter at larger alpha (counter-clockwise side), -1: darker
   Eigen::Vector2d px_inner = Eigen::Vector2d::Zero();  ///< line point nearest the centre (image px)
   Eigen::Vector2d px_outer = Eigen::Vector2d::Zero();
   std::array<float, 3> colour_ccw{};  ///< mean R, G, B on the counter-clockwise side (larger alpha)

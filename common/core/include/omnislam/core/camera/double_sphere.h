@@ -32,14 +32,14 @@ namespace omnislam::camera {
 /// Parameters of the double sphere model (Kalibr ds: [xi, alpha, fu, fv, pu, pv]). The defaults are
 /// not a camera: fx_px, fy_px, width_px, height_px must be set (validate() rejects 0).
 struct DoubleSphereParams {
-  double fx_px = 0.0;   ///< focal length along u [px]; finite, > 0
-  double fy_px = 0.0;   ///< focal length along v [px]; finite, > 0
-  double cx_px = 0.0;   ///< principal point, column [px]; finite
-  double cy_px = 0.0;   ///< principal point, row [px]; finite
-  double xi = 0.0;      ///< distance between the two sphere centres [-]; in (-1, 1] (-1: degenerate axis)
-  double alpha = 0.5;   ///< image-plane shift [-]; in [0, 1]
-  int width_px = 0;     ///< image width [px]; > 0
-  int height_px = 0;    ///< image height [px]; > 0
+  double fx_px = 0.0;  ///< focal length along u [px]; finite, > 0
+  double fy_px = 0.0;  ///< focal length along v [px]; finite, > 0
+  double cx_px = 0.0;  ///< principal point, column [px]; finite
+  double cy_px = 0.0;  ///< principal point, row [px]; finite
+  double xi = 0.0;     ///< distance between the two sphere centres [-]; in (-1, 1] (-1: degenerate axis)
+  double alpha = 0.5;  ///< image-plane shift [-]; in [0, 1]
+  int width_px = 0;    ///< image width [px]; > 0
+  int height_px = 0;   ///< image height [px]; > 0
 };
 
 class DoubleSphereCamera final : public CameraModel {

@@ -79,7 +79,8 @@ class FisheyeLut {
  private:
   FisheyeLut(const PajdlaBaksteinParams& camera, const FisheyeLutOptions& options);
   std::size_t index(int col, int row) const {
-    return 4 * (static_cast<std::size_t>(row) * static_cast<std::size_t>(camera_.width_px) + static_cast<std::size_t>(col));
+    return 4 *
+           (static_cast<std::size_t>(row) * static_cast<std::size_t>(camera_.width_px) + static_cast<std::size_t>(col));
   }
 
   PajdlaBaksteinParams camera_;

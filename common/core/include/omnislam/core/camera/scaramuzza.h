@@ -48,8 +48,8 @@ struct ScaramuzzaParams {
   double c = 1.0;              ///< affine A = [c d; e 1] (OCamCalib c, d, e); c - d e != 0
   double d = 0.0;
   double e = 0.0;
-  int width_px = 0;   ///< image width (columns) [px]; > 0
-  int height_px = 0;  ///< image height (rows) [px]; > 0
+  int width_px = 0;                               ///< image width (columns) [px]; > 0
+  int height_px = 0;                              ///< image height (rows) [px]; > 0
   OcamOptics optics = OcamOptics::kCatadioptric;  ///< axis mapping, see the header comment
   double min_radius_px = 0.0;  ///< smallest usable sensor radius rho [px] (e.g. the mirror's dead centre)
   double max_radius_px = std::numeric_limits<double>::infinity();  ///< largest usable rho [px]; clipped to the image

@@ -16,19 +16,19 @@ struct CoverageOptions {
 };
 
 struct Coverage {
-  int64_t frames = 0;           ///< distinct feature-frame utimes (0: none, nothing to answer)
-  int64_t frames_answered = 0;  ///< of them, those with a pose at the same utime
-  double answered_share = 1.0;  ///< frames_answered / frames; 1 when frames == 0
+  int64_t frames = 0;                ///< distinct feature-frame utimes (0: none, nothing to answer)
+  int64_t frames_answered = 0;       ///< of them, those with a pose at the same utime
+  double answered_share = 1.0;       ///< frames_answered / frames; 1 when frames == 0
   bool reference_is_frames = false;  ///< the reference span is the frames' (else the truth's)
   double reference_span_s = 0.0;     ///< last - first utime of the reference
   double pose_span_s = 0.0;          ///< last - first pose utime
   double start_gap_s = 0.0;          ///< first pose - reference start (> 0: the poses start late)
   double end_gap_s = 0.0;            ///< reference end - last pose (> 0: the poses end early)
-  double span_share = 0.0;  ///< overlap of [first, last pose] with the reference span / that span
-  double truth_span_s = 0.0;          ///< last - first truth utime (0 without truth)
-  double truth_end_gap_s = 0.0;       ///< last truth - last pose (> 0: the poses end before the truth)
-  bool answered_ok = true;  ///< answered_share >= min_answered_share
-  bool span_ok = true;      ///< span_share >= min_span_share
+  double span_share = 0.0;           ///< overlap of [first, last pose] with the reference span / that span
+  double truth_span_s = 0.0;         ///< last - first truth utime (0 without truth)
+  double truth_end_gap_s = 0.0;      ///< last truth - last pose (> 0: the poses end before the truth)
+  bool answered_ok = true;           ///< answered_share >= min_answered_share
+  bool span_ok = true;               ///< span_share >= min_span_share
   bool complete() const { return answered_ok && span_ok; }
 };
 

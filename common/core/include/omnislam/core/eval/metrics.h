@@ -63,11 +63,11 @@ double rootMeanSquare(const std::vector<double>& v);
 
 struct TrajectoryErrors {
   int pairs = 0;
-  double ate_rmse_m = 0.0;      ///< RMS of the position error (accumulated scaled: finite for finite errors)
+  double ate_rmse_m = 0.0;  ///< RMS of the position error (accumulated scaled: finite for finite errors)
   double ate_max_m = 0.0;
   double heading_rmse_rad = 0.0;
   double heading_max_rad = 0.0;
-  std::vector<double> position_error_m;  ///< per pair, in order
+  std::vector<double> position_error_m;   ///< per pair, in order
   std::vector<double> heading_error_rad;  ///< per pair, wrapped
 };
 

@@ -44,16 +44,15 @@ int measurementDim(LandmarkKind kind);
 
 /// Model chosen by landmark kind (the filter calls only this): prediction of dimension
 /// measurementDim(kind) and Jacobians (dim x 3) when non-null; std::nullopt when undefined.
-std::optional<MeasVec> predictMeasurement(LandmarkKind kind, const Eigen::Vector3d& p_LinW_m,
-                                          const Pose2& T_WtoR, const Eigen::Vector3d& p_CinR_m,
-                                          MeasJac* J_z_pose = nullptr, MeasJac* J_z_landmark = nullptr);
+std::optional<MeasVec> predictMeasurement(LandmarkKind kind, const Eigen::Vector3d& p_LinW_m, const Pose2& T_WtoR,
+                                          const Eigen::Vector3d& p_CinR_m, MeasJac* J_z_pose = nullptr,
+                                          MeasJac* J_z_landmark = nullptr);
 /// The same with cos and sin of T_WtoR.theta_rad given: a caller predicting many points from one
 /// pose computes them once. Equal to the overload above, bit for bit, when they are std::cos and
 /// std::sin of it.
-std::optional<MeasVec> predictMeasurement(LandmarkKind kind, const Eigen::Vector3d& p_LinW_m,
-                                          const Pose2& T_WtoR, double cos_theta, double sin_theta,
-                                          const Eigen::Vector3d& p_CinR_m, MeasJac* J_z_pose = nullptr,
-                                          MeasJac* J_z_landmark = nullptr);
+std::optional<MeasVec> predictMeasurement(LandmarkKind kind, const Eigen::Vector3d& p_LinW_m, const Pose2& T_WtoR,
+                                          double cos_theta, double sin_theta, const Eigen::Vector3d& p_CinR_m,
+                                          MeasJac* J_z_pose = nullptr, MeasJac* J_z_landmark = nullptr);
 
 /// The measured vector z of a measurement (its kind decides the dimension).
 MeasVec measurementVector(const BearingMeasurement& m);

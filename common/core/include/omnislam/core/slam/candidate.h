@@ -75,8 +75,8 @@ struct RangeLimits {
 struct CandidateObservation {
   Pose2 T_WtoR;
   Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();
-  MeasVec z;  ///< measured bearing (robot-parallel axes)
-  MeasMat Q;  ///< its covariance Q_t
+  MeasVec z;                                           ///< measured bearing (robot-parallel axes)
+  MeasMat Q;                                           ///< its covariance Q_t
   Eigen::Vector3d p_CinW_m = Eigen::Vector3d::Zero();  ///< optical centre in W (z = 0 for lines)
   Eigen::Vector3d dir_W = Eigen::Vector3d::UnitX();    ///< unit ray direction in W (horizontal for lines)
   double cos_theta = 1.0;  ///< std::cos(T_WtoR.theta_rad), once per ray (predictions from this pose)
@@ -89,12 +89,12 @@ CandidateObservation makeObservation(LandmarkKind kind, const Pose2& T_WtoR, con
 /// C_j of paper 000: its rays and counters, plus the current best estimate used for association.
 struct Candidate {
   LandmarkKind kind = LandmarkKind::kPoint3D;
-  ColourDescriptor descriptor;  ///< running mean of its measurements' descriptors (optional)
+  ColourDescriptor descriptor;                     ///< running mean of its measurements' descriptors (optional)
   std::vector<CandidateObservation> observations;  ///< oldest first
-  int num_associated = 0;      ///< NZ_j: measurements associated along time (including dropped)
-  int counter = 1;             ///< i_j: +1 per association, -I_not per missed step, deleted at <= 0
-  int consecutive_misses = 0;  ///< I_not
-  bool has_estimate = false;   ///< a valid cross-point exists
+  int num_associated = 0;                          ///< NZ_j: measurements associated along time (including dropped)
+  int counter = 1;                                 ///< i_j: +1 per association, -I_not per missed step, deleted at <= 0
+  int consecutive_misses = 0;                      ///< I_not
+  bool has_estimate = false;                       ///< a valid cross-point exists
   Eigen::Vector3d estimate_W_m = Eigen::Vector3d::Zero();
   Eigen::Matrix3d estimate_cov_m2 = Eigen::Matrix3d::Identity();
 };
@@ -106,8 +106,8 @@ struct CandidateEvaluation {
   bool ready = false;              ///< NZ_j >= NZ_min, num_valid >= NCROSS_valid, valid_with_latest
   bool has_best = false;           ///< a valid cross-point exists
   Eigen::Vector3d best_p_LinW_m = Eigen::Vector3d::Zero();  ///< valid cross-point of highest likelihood
-  double best_log_likelihood = 0.0;  ///< sum over the observations of log N(z_i; h(X, x_i), Q_i)
-  Eigen::Matrix3d cov_m2 = Eigen::Matrix3d::Identity();  ///< Sigma_0 for best_p_LinW_m
+  double best_log_likelihood = 0.0;                         ///< sum over the observations of log N(z_i; h(X, x_i), Q_i)
+  Eigen::Matrix3d cov_m2 = Eigen::Matrix3d::Identity();     ///< Sigma_0 for best_p_LinW_m
   LandmarkType type = LandmarkType::kTypeII;
 };
 

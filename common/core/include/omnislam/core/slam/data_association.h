@@ -19,6 +19,7 @@ enum class AssociationMethod : std::uint8_t {
 /// cost_new: N_z values -log P_new,l. Returns, per measurement, the landmark column or -1 for
 /// "new". Hungarian: solves the N_z x (N + N_z) problem (every row is assigned). ML: measurements
 /// in index order take the free landmark of least cost when that cost is below cost_new.
-std::vector<int> associate(const Eigen::Ref<const Eigen::MatrixXd>& cost, const std::vector<double>& cost_new, AssociationMethod method);
+std::vector<int> associate(const Eigen::Ref<const Eigen::MatrixXd>& cost, const std::vector<double>& cost_new,
+                           AssociationMethod method);
 
 }  // namespace omnislam::slam

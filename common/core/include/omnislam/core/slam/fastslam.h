@@ -144,11 +144,11 @@ struct StepResult {
   // Of the best particle (highest weight before resampling):
   std::vector<std::int64_t> landmark_of_measurement;  ///< per input measurement: landmark id, -1 otherwise
   std::vector<char> measurement_refused;  ///< per input measurement: 1 = rejected (see num_rejected), never used
-  int num_associated = 0;      ///< measurements associated with map landmarks
-  int num_to_candidates = 0;   ///< measurements associated with existing candidates
-  int num_new_candidates = 0;  ///< candidates created
-  int num_initialised = 0;     ///< candidates turned into landmarks
-  int num_deleted = 0;         ///< landmarks deleted (counter < 0)
+  int num_associated = 0;                 ///< measurements associated with map landmarks
+  int num_to_candidates = 0;              ///< measurements associated with existing candidates
+  int num_new_candidates = 0;             ///< candidates created
+  int num_initialised = 0;                ///< candidates turned into landmarks
+  int num_deleted = 0;                    ///< landmarks deleted (counter < 0)
   std::size_t num_landmarks = 0;
   std::size_t num_candidates = 0;
 };
@@ -156,8 +156,8 @@ struct StepResult {
 /// Memory held by the particle set, counting shared storage once.
 struct StorageStats {
   std::size_t num_particles = 0;
-  std::size_t unique_bytes = 0;       ///< maps + candidates + particle records, shared parts once
-  std::size_t deep_copy_bytes = 0;    ///< what M independent vector-of-landmark maps would hold
+  std::size_t unique_bytes = 0;     ///< maps + candidates + particle records, shared parts once
+  std::size_t deep_copy_bytes = 0;  ///< what M independent vector-of-landmark maps would hold
   double bytesPerParticle() const { return num_particles ? double(unique_bytes) / double(num_particles) : 0.0; }
 };
 
@@ -190,7 +190,9 @@ class FastSlam {
   /// Weighted mean of the particle poses (circular mean for theta) and its 3x3 covariance.
   Pose2 meanPose() const;
   Eigen::Matrix3d poseCovariance() const;
-  double ess() const { return ess_; }  ///< ESS of the last step's weights before resampling (predictOnly: the current weights)
+  double ess() const {
+    return ess_;
+  }  ///< ESS of the last step's weights before resampling (predictOnly: the current weights)
   std::vector<Pose2> particlePoses() const;
   const std::vector<double>& particleWeights() const { return weights_; }  ///< normalised
   /// The particle set of the last step before resampling: sampled poses and their normalised weights

@@ -62,10 +62,10 @@ DeterministicAssociation associationOf(const FilterVariant& v);
 
 // --- Alg. 1 line 3 --------------------------------------------------------------------------------
 struct MotionPrediction {
-  Pose2 x_prev;            ///< x_{t-1}
-  Pose2 x_hat;             ///< xhat_t = g(x_{t-1}, u_t)
-  Eigen::Matrix3d R;       ///< R_t (motion_model.h)
-  Eigen::Matrix3d R_inv;   ///< R_t^-1
+  Pose2 x_prev;           ///< x_{t-1}
+  Pose2 x_hat;            ///< xhat_t = g(x_{t-1}, u_t)
+  Eigen::Matrix3d R;      ///< R_t (motion_model.h)
+  Eigen::Matrix3d R_inv;  ///< R_t^-1
 };
 /// R_t of the step; throws std::invalid_argument when it or x_prev is not finite (an overflowed
 /// odometry increment), which leaves the filter as it was (FastSlam::step is all-or-nothing).
@@ -142,8 +142,7 @@ std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Po
 /// x_t ~ N(mu_x, Sigma_x) folded in from the associated type I landmarks, ordered by trace(Sigma_j),
 /// then measured azimuth, then id (lines 4-14); N(xhat_t, R_t) when nothing is associated (line 2).
 Pose2 sampleFastSlam2Pose(const MotionPrediction& pred, const std::vector<LandmarkMap::Ref>& visible,
-                          const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
-                          Rng& rng);
+                          const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement, Rng& rng);
 
 // --- Alg. 4: landmark updates and the weight ---------------------------------------------------------
 struct ParticleUpdate {
@@ -155,14 +154,14 @@ struct ParticleUpdate {
 /// Alg. 4 lines 3-17 for every associated pair, in measurement order: i_j + 1, descriptor blend,
 /// EKF (Joseph form), the type I weight; then updateLandmarksType() on the observed landmarks. Edits
 /// are kept only when update_map.
-void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t, const std::vector<LandmarkMap::Ref>& visible,
-                             const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
-                             const FastSlamOptions& o, const Weighting& weight, ParticleUpdate& out);
+void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t,
+                             const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
+                             const std::vector<int>& landmark_of_measurement, const FastSlamOptions& o,
+                             const Weighting& weight, ParticleUpdate& out);
 /// Alg. 4 lines 18-25: w *= 1 - p_in and i_j - 1 for each unseen landmark inside the perceptual
 /// range of x_t; deleted when i_j < 0. Only the weight when !update_map.
 void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector3d& p_CinR_vis_m,
-                   const FastSlamOptions& o, std::vector<LandmarkMap::Ref>& near,
-                   ParticleUpdate& out);
+                   const FastSlamOptions& o, std::vector<LandmarkMap::Ref>& near, ParticleUpdate& out);
 
 /// WeightTerm::kConsistency only (else 0): each measurement that neither a map landmark nor a candidate
 /// takes (it starts a new candidate) adds -1/2 (p_new_mahalanobis_sq - dim), the consistency term of

@@ -42,11 +42,11 @@ enum class MotionNoiseModel : std::uint8_t {
 
 struct MotionNoiseOptions {
   MotionNoiseModel model = MotionNoiseModel::kChord;
-  double trans_sigma_per_m = 0.05;     ///< along-track std per metre travelled [m/m] (5 %)
-  double lateral_sigma_per_m = 0.02;   ///< cross-track std per metre travelled [m/m]
-  double trans_sigma_per_rad = 0.01;   ///< translation std per radian turned [m/rad]
-  double rot_sigma_per_rad = 0.05;     ///< heading std per radian turned [rad/rad] (5 %)
-  double rot_sigma_per_m = 0.01;       ///< heading std per metre travelled [rad/m] (0.57 deg/m)
+  double trans_sigma_per_m = 0.05;    ///< along-track std per metre travelled [m/m] (5 %)
+  double lateral_sigma_per_m = 0.02;  ///< cross-track std per metre travelled [m/m]
+  double trans_sigma_per_rad = 0.01;  ///< translation std per radian turned [m/rad]
+  double rot_sigma_per_rad = 0.05;    ///< heading std per radian turned [rad/rad] (5 %)
+  double rot_sigma_per_m = 0.01;      ///< heading std per metre travelled [rad/m] (0.57 deg/m)
   // Random-walk terms (variance proportional to distance / rotation, as the wheel-encoder noise of
   // docs/user/world-file.md): add (k^2 d) or (k^2 a) to the variances above. 0 by default (the paper's
   // model is per metre); with them R_t does not depend on the frame rate.
@@ -55,15 +55,15 @@ struct MotionNoiseOptions {
   double rot_sigma_per_sqrt_rad = 0.0;    ///< heading std after 1 rad turned [rad/sqrt(rad)]
   double rot_sigma_per_sqrt_m = 0.0;      ///< heading std after 1 m travelled [rad/sqrt(m)]
   // kTranslateThenRotate (paper 002):
-  double err_tran_per_m = 0.05;      ///< std of the translated distance per metre [m/m]
-  double err_rot_per_rad = 0.05;     ///< std of the rotation per radian turned [rad/rad]
-  double err_drift_rad_per_m = 0.01; ///< std of the heading drift per metre translated [rad/m]
+  double err_tran_per_m = 0.05;       ///< std of the translated distance per metre [m/m]
+  double err_rot_per_rad = 0.05;      ///< std of the rotation per radian turned [rad/rad]
+  double err_drift_rad_per_m = 0.01;  ///< std of the heading drift per metre translated [rad/m]
   // Their random-walk forms (variance proportional to the distance / rotation, frame-rate free):
-  double err_tran_per_sqrt_m = 0.0;        ///< std of the distance after 1 m [m/sqrt(m)]
-  double err_rot_per_sqrt_rad = 0.0;       ///< std of the rotation after 1 rad [rad/sqrt(rad)]
-  double err_drift_rad_per_sqrt_m = 0.0;   ///< std of the heading drift after 1 m [rad/sqrt(m)]
-  double min_sigma_xy_m = 0.002;       ///< floor of both translation stds [m], > 0
-  double min_sigma_theta_rad = 0.002;  ///< floor of the heading std [rad], > 0
+  double err_tran_per_sqrt_m = 0.0;       ///< std of the distance after 1 m [m/sqrt(m)]
+  double err_rot_per_sqrt_rad = 0.0;      ///< std of the rotation after 1 rad [rad/sqrt(rad)]
+  double err_drift_rad_per_sqrt_m = 0.0;  ///< std of the heading drift after 1 m [rad/sqrt(m)]
+  double min_sigma_xy_m = 0.002;          ///< floor of both translation stds [m], > 0
+  double min_sigma_theta_rad = 0.002;     ///< floor of the heading std [rad], > 0
 
   /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
   std::string validate() const;

@@ -72,10 +72,10 @@ struct Field {
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 /// The table of each struct, in the order the docs and the echo list them.
-const std::vector<Field<FastSlamOptions>>& fastSlamFields();  ///< keys `filter.*` (not the parts below)
-const std::vector<Field<MotionNoiseOptions>>& motionFields();  ///< keys `filter.motion.*`
+const std::vector<Field<FastSlamOptions>>& fastSlamFields();      ///< keys `filter.*` (not the parts below)
+const std::vector<Field<MotionNoiseOptions>>& motionFields();     ///< keys `filter.motion.*`
 const std::vector<Field<PerceptionOptions>>& perceptionFields();  ///< keys `filter.perception.*`
-const std::vector<Field<CandidateOptions>>& candidateFields();  ///< keys `filter.candidates.*`
+const std::vector<Field<CandidateOptions>>& candidateFields();    ///< keys `filter.candidates.*`
 
 /// Names of the enum fields (index = the enum's value).
 const std::vector<std::string>& associationNames();  ///< "hungarian", "ml"

@@ -41,8 +41,8 @@ struct PerceptionOptions {
 /// True when the landmark lies inside the window widened by margin_rad / margin_m.
 /// Vertical lines ignore the elevation limits and use the horizontal range.
 bool insidePerceptualRange(const Eigen::Vector3d& p_LinW_m, LandmarkKind kind, const Pose2& T_WtoR,
-                           const Eigen::Vector3d& p_CinR_m, const PerceptionOptions& options,
-                           double margin_rad = 0.0, double margin_m = 0.0);
+                           const Eigen::Vector3d& p_CinR_m, const PerceptionOptions& options, double margin_rad = 0.0,
+                           double margin_m = 0.0);
 
 /// p_in of Alg. 4 line 21: detection_probability inside the (unwidened) range, 0 outside.
 double probabilityInside(const Eigen::Vector3d& p_LinW_m, LandmarkKind kind, const Pose2& T_WtoR,

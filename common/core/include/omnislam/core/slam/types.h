@@ -39,7 +39,7 @@ struct BearingMeasurement {
   double elevation_rad = 0.0;  ///< above the x_R-y_R plane, [-pi/2, pi/2]; unused for kVerticalLine
   /// Covariance of (azimuth, elevation) [rad^2]; for kVerticalLine only entry (0, 0) is used.
   Eigen::Matrix2d cov_rad2 = Eigen::Matrix2d::Identity() * 2.7e-5;  // (0.3 deg)^2
-  Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();  ///< optical centre in the robot frame [m]
+  Eigen::Vector3d p_CinR_m = Eigen::Vector3d::Zero();               ///< optical centre in the robot frame [m]
   LandmarkKind kind = LandmarkKind::kPoint3D;
   ColourDescriptor descriptor;  ///< optional appearance (FastSlamOptions::descriptor_gate)
 };

@@ -84,7 +84,7 @@ ConfigError validationError(const Node& n, const std::string& err) {
 
 void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   namespace opt = slam::options;
-  n.rejectUnknownKeysIn(keysOf(opt::fastSlamFields(), {"preset", "motion", "perception", "candidates"}));
+  n.rejectUnknownKeysIn(keysOf(opt::fastSlamFields(), {"preset", "motion", "perception", "candidates", "keyframes"}));
   if (n.has("preset")) {  // first: the keys given override the preset's values
     const auto& names = slam::presetNames();
     const std::string preset = n.getEnum("preset", names);
@@ -99,6 +99,10 @@ void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   if (auto c = n.optChild("candidates")) {
     c->rejectUnknownKeysIn(keysOf(opt::candidateFields()));
     parseFields(*c, f.candidates, opt::candidateFields());
+  }
+  if (auto k = n.optChild("keyframes")) {
+    k->rejectUnknownKeysIn(keysOf(opt::keyframeFields()));
+    parseFields(*k, f.keyframes, opt::keyframeFields());
   }
   const std::string err = f.validate();
   if (!err.empty()) throw validationError(n, err);
@@ -244,6 +248,7 @@ std::string describe(const SlamProcessOptions& o) {
   s << "filter.motion: " << opt::describeFields(f.motion, opt::motionFields()) << "\n";
   s << "filter.perception: " << opt::describeFields(f.perception, opt::perceptionFields()) << "\n";
   s << "filter.candidates: " << opt::describeFields(f.candidates, opt::candidateFields()) << "\n";
+  s << "filter.keyframes: " << opt::describeFields(f.keyframes, opt::keyframeFields()) << "\n";
   const std::vector<std::string> deviations = slam::presetDeviations(f);
   s << "deviations from paper 000: ";
   for (std::size_t i = 0; i < deviations.size(); ++i) s << (i ? ", " : "") << deviations[i];
@@ -302,6 +307,7 @@ std::string filterKeysMarkdown() {
   markdownRows(s, "filter.motion.", opt::motionFields());
   markdownRows(s, "filter.perception.", opt::perceptionFields());
   markdownRows(s, "filter.candidates.", opt::candidateFields());
+  markdownRows(s, "filter.keyframes.", opt::keyframeFields());
   return s.str();
 }
 

@@ -104,7 +104,7 @@ auto driverCounters(S& s) {  // S = DriverStats or const DriverStats; the pairin
   return std::vector<decltype(&s.frames_processed)>{
       &s.frames_processed, &s.features_in,        &s.features_skipped_kind, &s.measurements_rejected,
       &s.filter_resets,    &s.degenerate_weights, &s.odometry_only_steps,   &s.dropped_behind_prediction,
-      &s.frames_too_large, &s.implausible,        &s.reinit_last_estimate};
+      &s.frames_too_large, &s.implausible,        &s.reinit_last_estimate,  &s.frames_between_keyframes};
 }
 
 /// describe() without the lines of the map files (paths may differ between two starts of one run).

@@ -254,7 +254,10 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
                         "): dropped");
     return std::nullopt;
   }
+  const bool started = filter_ != nullptr;
   ensureFilter(odom_O, r);
+  if (started && !slam::isKeyframe(opt_.filter.keyframes, odom_prev_O_, odom_O, frame.utime - last_step_utime_))
+    return betweenKeyframes(frame, odom_O);
   const slam::StepResult sr = filter_->step(odom_prev_O_, odom_O, frame.z);
   odom_prev_O_ = odom_O;
   last_step_utime_ = last_frame_utime_ = frame.utime;
@@ -303,10 +306,35 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   return out;
 }
 
-FrameOutput SlamDriver::makeOutput(int64_t utime, int64_t input_seq, double ess) {
+// A frame between keyframes (filter.keyframes): the filter is not stepped; the outputs are its
+// estimate moved by the odometry since the last step, and no measurement of the frame is used.
+FrameOutput SlamDriver::betweenKeyframes(const Frame& frame, const Pose2& odom_O) {
+  last_frame_utime_ = frame.utime;
+  ++stats_.frames_between_keyframes;
+  const Pose2 u = slam::odometryIncrement(odom_prev_O_, odom_O);
+  FrameOutput out = makeOutput(frame.utime, frame.seq, filter_->ess(), &u);
+  associations_t a{};
+  a.utime = frame.utime;
+  a.seq = associations_seq_++;
+  a.input_seq = frame.seq;
+  a.num_features = frame.num_features;
+  a.landmark_id.assign(static_cast<std::size_t>(frame.num_features), +associations_t::NOT_USED);
+  out.associations = std::move(a);
+  return out;
+}
+
+FrameOutput SlamDriver::makeOutput(int64_t utime, int64_t input_seq, double ess, const Pose2* u) {
   FrameOutput out;
-  const Pose2 mean = filter_->meanPose();
-  const Eigen::Matrix3d cov = filter_->poseCovariance();
+  Pose2 mean = filter_->meanPose();
+  Eigen::Matrix3d cov = filter_->poseCovariance();
+  if (u) {  // moved by the odometry increment u since the last step: x * u, P -> J_x P J_x^T + R
+    const Eigen::Matrix3d R = slam::motionCovariance(mean, *u, opt_.filter.motion);
+    Eigen::Matrix3d J_x = Eigen::Matrix3d::Identity();
+    J_x(0, 2) = -std::sin(mean.theta_rad) * u->x_m - std::cos(mean.theta_rad) * u->y_m;
+    J_x(1, 2) = std::cos(mean.theta_rad) * u->x_m - std::sin(mean.theta_rad) * u->y_m;
+    cov = J_x * cov * J_x.transpose() + R;
+    mean = slam::predictPose(mean, *u);
+  }
   pose_t& p = out.pose;
   p.utime = utime;
   p.seq = pose_seq_++;
@@ -328,9 +356,10 @@ FrameOutput SlamDriver::makeOutput(int64_t utime, int64_t input_seq, double ess)
   const std::vector<double>& w = filter_->weightsBeforeResampling();
   q.num_particles = static_cast<int32_t>(poses.size());
   for (std::size_t k = 0; k < poses.size(); ++k) {
-    q.x_m.push_back(poses[k].x_m);
-    q.y_m.push_back(poses[k].y_m);
-    q.theta_rad.push_back(poses[k].theta_rad);
+    const Pose2 x = u ? slam::predictPose(poses[k], *u) : poses[k];
+    q.x_m.push_back(x.x_m);
+    q.y_m.push_back(x.y_m);
+    q.theta_rad.push_back(x.theta_rad);
     q.weight.push_back(k < w.size() ? w[k] : 1.0 / static_cast<double>(poses.size()));
   }
   return out;
@@ -348,7 +377,8 @@ std::string SlamDriver::summary() const {
     << "; jumps_ahead: taken " << p.forward_jumps << " stray " << p.stray_ahead << "; odometry_jumps "
     << p.odometry_jumps << "; features " << s.features_in << " skipped " << s.features_skipped_kind
     << " rejected_by_filter " << s.measurements_rejected << "; odometry_only_steps " << s.odometry_only_steps
-    << " dropped_behind_prediction " << s.dropped_behind_prediction << " degenerate_weights " << s.degenerate_weights;
+    << " dropped_behind_prediction " << s.dropped_behind_prediction << " degenerate_weights " << s.degenerate_weights
+    << "; between_keyframes " << s.frames_between_keyframes;
   if (filter_)
     o << "; landmarks " << filter_->bestParticle().map.size() << " candidates " << filter_->bestCandidateCount();
   return o.str();

@@ -47,7 +47,8 @@ std::string FastSlamOptions::validate() const {
                "needs proposal kFastSlam2 (FastSLAM 1.0 weighs at its sampled pose; it would be ignored)")
       .nested("motion", motion.validate())
       .nested("perception", perception.validate())
-      .nested("candidates", candidates.validate());
+      .nested("candidates", candidates.validate())
+      .nested("keyframes", options::checkRanges(keyframes, options::keyframeFields()));
   return c.message();
 }
 

@@ -190,6 +190,19 @@ const std::vector<Field<CandidateOptions>>& candidateFields() {
   return t;
 }
 
+const std::vector<Field<KeyframeOptions>>& keyframeFields() {
+  using K = KeyframeOptions;
+  // One row per key: not reformatted.
+  // clang-format off
+  static const std::vector<Field<K>> t{
+      real<K>("min_travel_m", &K::min_travel_m, "min_travel_m", "m", 0, 1e3, kC, "a frame is processed when the odometry moved this far since the last step (0 = criterion off) ..."),
+      real<K>("min_rotation_deg", &K::min_rotation_rad, "min_rotation_rad", "deg", 0, 180, kC, "... or turned this much (0 = off) ...", true),
+      real<K>("max_interval_s", &K::max_interval_s, "max_interval_s", "s", 0, 3600, kC, "... or came this long after it (0 = off); all off = every frame (the papers)"),
+  };
+  // clang-format on
+  return t;
+}
+
 template <class S>
 std::string rangeText(const Field<S>& f) {
   if (f.kind == Kind::kBool) return "true, false";
@@ -258,6 +271,7 @@ OMNISLAM_OPTIONS_TABLE_INSTANTIATE(FastSlamOptions)
 OMNISLAM_OPTIONS_TABLE_INSTANTIATE(MotionNoiseOptions)
 OMNISLAM_OPTIONS_TABLE_INSTANTIATE(PerceptionOptions)
 OMNISLAM_OPTIONS_TABLE_INSTANTIATE(CandidateOptions)
+OMNISLAM_OPTIONS_TABLE_INSTANTIATE(KeyframeOptions)
 #undef OMNISLAM_OPTIONS_TABLE_INSTANTIATE
 
 }  // namespace omnislam::slam::options

@@ -51,6 +51,8 @@ struct DriverResult {
 struct DriverStats {
   PairingStats pairing;
   int64_t frames_processed = 0;
+  /// Frames not given to the filter (filter.keyframes): published as the estimate moved by odometry.
+  int64_t frames_between_keyframes = 0;
   int64_t features_in = 0;
   int64_t features_skipped_kind = 0;      ///< of a kind turned off in the config, or a light without elevation
   int64_t measurements_rejected = 0;      ///< refused by the filter (non-finite, covariance not PD)
@@ -112,7 +114,9 @@ class SlamDriver {
   void ensureFilter(const Pose2& odom_O, DriverResult& r);
   /// The odometry plausibility check (options.plausibility); nothing when plausible.
   std::optional<std::string> checkOdometry(const odometry_t& msg);
-  FrameOutput makeOutput(int64_t utime, int64_t input_seq, double ess);
+  /// The outputs of the filter's estimate; moved by the odometry increment *u when given.
+  FrameOutput makeOutput(int64_t utime, int64_t input_seq, double ess, const Pose2* u = nullptr);
+  FrameOutput betweenKeyframes(const Frame& frame, const Pose2& odom_O);
 
   SlamProcessOptions opt_;
   Pairer pairer_;

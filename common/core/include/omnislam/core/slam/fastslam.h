@@ -20,6 +20,7 @@
 #include "omnislam/core/pose2.h"
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/candidate.h"
+#include "omnislam/core/slam/keyframe.h"
 #include "omnislam/core/slam/data_association.h"
 #include "omnislam/core/slam/filter_variant.h"
 #include "omnislam/core/slam/landmark_map.h"
@@ -103,6 +104,8 @@ struct FastSlamOptions {
   MotionNoiseOptions motion;
   PerceptionOptions perception;
   CandidateOptions candidates;
+  /// Which frames the filter is given (applied by the caller: slam runtime); all frames by default.
+  KeyframeOptions keyframes;
 
   /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
   std::string validate() const;

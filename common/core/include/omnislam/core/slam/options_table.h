@@ -76,6 +76,7 @@ const std::vector<Field<FastSlamOptions>>& fastSlamFields();      ///< keys `fil
 const std::vector<Field<MotionNoiseOptions>>& motionFields();     ///< keys `filter.motion.*`
 const std::vector<Field<PerceptionOptions>>& perceptionFields();  ///< keys `filter.perception.*`
 const std::vector<Field<CandidateOptions>>& candidateFields();    ///< keys `filter.candidates.*`
+const std::vector<Field<KeyframeOptions>>& keyframeFields();      ///< keys `filter.keyframes.*`
 
 /// Names of the enum fields (index = the enum's value).
 const std::vector<std::string>& associationNames();  ///< "hungarian", "ml"

@@ -61,6 +61,7 @@ struct Config {
   std::string name;
   int particles = 10;
   bool scale_correction = true;
+  bool every_frame = false;  ///< filter.keyframes off (every frame steps the filter)
 };
 
 struct RunResult {
@@ -193,16 +194,23 @@ int main(int argc, char** argv) {
             << "load average at start: " << loadAverage() << " (" << sysconf(_SC_NPROCESSORS_ONLN) << " cores)\n\n";
 
   const bool cfg_anchor = base.filter.odometry_scale_correction;
-  const std::vector<Config> configs = {
+  std::vector<Config> configs = {
       {"M=10", 10, cfg_anchor},
       {"M=100", 100, cfg_anchor},
       {std::string("M=10 anchoring ") + (cfg_anchor ? "off" : "on"), 10, !cfg_anchor},
       {std::string("M=100 anchoring ") + (cfg_anchor ? "off" : "on"), 100, !cfg_anchor},
   };
+  // With keyframes in the config: the same with every frame stepping the filter (the cost they save).
+  const bool keyframed = base.filter.keyframes.skipsFrames();
+  if (keyframed) {
+    configs.push_back({"M=10 every frame", 10, cfg_anchor, true});
+    configs.push_back({"M=100 every frame", 100, cfg_anchor, true});
+  }
   const auto optionsFor = [&](const Config& c) {
     SlamProcessOptions o = base;
     o.filter.num_particles = c.particles;
     o.filter.odometry_scale_correction = c.scale_correction;
+    if (c.every_frame) o.filter.keyframes = slam::KeyframeOptions{};
     if (const std::string err = o.validate(); !err.empty()) throw std::invalid_argument(err);
     return o;
   };
@@ -297,6 +305,16 @@ int main(int argc, char** argv) {
   std::cout << "anchoring " << on << " / " << off << ", M=10: time per frame " << fmt(s10.wall / s10x.wall, 2)
             << "x wall, " << fmt(s10.cpu / s10x.cpu, 2) << "x cpu; mean sharing over the run "
             << fmt(s10.mean_sharing, 2) << " vs " << fmt(s10x.mean_sharing, 2) << "\n\n";
+  if (keyframed) {
+    const Summary& k10 = sum["M=10 every frame"];
+    const Summary& k100 = sum["M=100 every frame"];
+    const double per_in = 1e3 / double(n_frames);  // ms per frame of the log
+    std::cout << "keyframes (" << s10.frames << " of " << n_frames << " frames step the filter) / every frame: CPU per "
+              << "frame of the log, M=10 " << fmt(s10.cpu * per_in, 3) << " / " << fmt(k10.cpu * per_in, 3) << " ms ("
+              << fmt(s10.cpu / k10.cpu, 2) << "x), M=100 " << fmt(s100.cpu * per_in, 3) << " / "
+              << fmt(k100.cpu * per_in, 3) << " ms (" << fmt(s100.cpu / k100.cpu, 2)
+              << "x); real time by CPU, M=100: " << fmt(s100.rtf_cpu, 1) << "x / " << fmt(k100.rtf_cpu, 1) << "x\n\n";
+  }
   const bool pass = s100.rtf >= target_rtf;
   std::cout << "ACCEPTANCE (issue 4): 100 particles on the sports hall at >= " << fmt(target_rtf, 0)
             << "x real time: " << (pass ? "PASS" : "FAIL") << " (" << fmt(s100.rtf, 0) << "x by wall time, "

@@ -104,7 +104,8 @@ void HealthMonitor::advance(const HealthInput& in) {
   const Pose2 u = window_.back().odom_O.between(in.odom_O);
   const Eigen::Matrix3d sigma_u = incrementCovariance(u, motion_);
   travel_m_ += std::hypot(u.x_m, u.y_m);
-  for (Anchor* a : {&start_, &good_}) a->P = composeCovariance(a->odom_O.between(window_.back().odom_O), a->P, u, sigma_u);
+  for (Anchor* a : {&start_, &good_})
+    a->P = composeCovariance(a->odom_O.between(window_.back().odom_O), a->P, u, sigma_u);
   window_.push_back(Step{in.slam_W, in.odom_O, u, sigma_u, travel_m_});
   // The front is the newest step at least window_m of travel back (or the oldest kept).
   while (window_.size() > kMaxWindowSteps ||
@@ -142,36 +143,43 @@ void HealthMonitor::nisWindow(const HealthInput& in, HealthReport& r) {
   r.nis_upper = chiSquareQuantile(0.5 * (1.0 + p), n) / n;
 }
 
-void HealthMonitor::decide(const HealthInput& in, bool exceeds, bool nis_bad, HealthReport& r) {
-  exceed_streak_ = exceeds ? exceed_streak_ + 1 : 0;
-  clear_streak_ = exceeds ? 0 : clear_streak_ + 1;
+void HealthMonitor::decide(const HealthInput& in, const Tests& t, HealthReport& r) {
+  exceed_streak_ = t.total_exceeds ? exceed_streak_ + 1 : 0;
+  clear_streak_ = t.total_exceeds ? 0 : clear_streak_ + 1;
   if (!diverged_ && exceed_streak_ >= options_.divergence_frames) diverged_ = true;
   else if (diverged_ && clear_streak_ >= options_.recovery_frames) diverged_ = false;
   r.exceedances = exceed_streak_;
-  const double worst = std::max(r.window_statistic, r.total_statistic);
   const bool ess_bad = in.weights_degenerate || in.ess < options_.ess_min_fraction * in.num_particles;
   if (diverged_) {
     r.state = HealthState::kDiverged;
-    r.reason = exceeds ? format("diverged: departure %.3g > %.3g (window %.3g m)", worst, r.threshold, r.window_travel_m)
-                       : format("diverged: recovering, %.0f of %.0f steps within the odometry's noise",
-                                clear_streak_, options_.recovery_frames);
-  } else if (exceeds) {
+    r.reason = t.total_exceeds ? format("diverged: departure %.3g > %.3g over %.3g m", r.total_statistic, r.threshold,
+                                        r.total_travel_m)
+                               : format("diverged: recovering, %.0f of %.0f steps within the odometry's noise",
+                                        clear_streak_, options_.recovery_frames);
+  } else if (t.total_exceeds) {
     r.state = HealthState::kUncertain;
-    r.reason = format("departs from the odometry: %.3g > %.3g (%.0f of %.0f)", worst, r.threshold, exceed_streak_,
-                      options_.divergence_frames);
-  } else if (nis_bad) {
+    r.reason = format("departs from the odometry: %.3g > %.3g (%.0f of %.0f)", r.total_statistic, r.threshold,
+                      exceed_streak_, options_.divergence_frames);
+  } else if (t.window_exceeds) {
     r.state = HealthState::kUncertain;
-    r.reason = format("innovations inconsistent: NIS/dof %.3g outside [%.3g, %.3g]", r.nis_window_per_dof,
-                      r.nis_lower, r.nis_upper);
+    r.reason = format("moves unlike the odometry over the last %.3g m: %.3g > %.3g", r.window_travel_m,
+                      r.window_statistic, r.threshold);
+  } else if (t.nis_high) {
+    r.state = HealthState::kUncertain;
+    r.reason = format("innovations too large: NIS/dof %.3g above %.3g", r.nis_window_per_dof, r.nis_upper);
   } else if (ess_bad) {
     r.state = HealthState::kUncertain;
-    r.reason = in.weights_degenerate ? std::string("weights degenerate (reset to uniform)")
-                                     : format("ESS %.3g below %.3g", in.ess, options_.ess_min_fraction * in.num_particles);
+    r.reason = in.weights_degenerate
+                   ? std::string("weights degenerate (reset to uniform)")
+                   : format("ESS %.3g below %.3g", in.ess, options_.ess_min_fraction * in.num_particles);
   } else {
     r.state = HealthState::kOk;
     r.reason = "ok";
   }
-  if (!diverged_ && !exceeds) good_ = Anchor{in.slam_W, in.odom_O, in.slam_cov, Eigen::Matrix3d::Zero(), travel_m_};
+  // The last good step, which the fallback moves on from: no departure, neither since the start nor
+  // over the window (a jump not yet beyond the total's noise is not trusted either).
+  if (!diverged_ && !t.total_exceeds && !t.window_exceeds)
+    good_ = Anchor{in.slam_W, in.odom_O, in.slam_cov, Eigen::Matrix3d::Zero(), travel_m_};
 }
 
 HealthReport HealthMonitor::update(const HealthInput& in) {
@@ -182,10 +190,11 @@ HealthReport HealthMonitor::update(const HealthInput& in) {
   r.total_statistic = departure(start_.slam_W, start_.odom_O, in.slam_W, in.odom_O, start_.P);
   r.total_travel_m = travel_m_ - start_.travel_m;
   nisWindow(in, r);
-  const bool nis_bad =
-      r.nis_window_dof > 0.0 && (r.nis_window_per_dof < r.nis_lower || r.nis_window_per_dof > r.nis_upper);
-  const bool exceeds = r.window_statistic > threshold_ || r.total_statistic > threshold_;
-  decide(in, exceeds, nis_bad, r);
+  Tests t;
+  t.nis_high = r.nis_window_dof > 0.0 && r.nis_window_per_dof > r.nis_upper;
+  t.window_exceeds = r.window_statistic > threshold_;
+  t.total_exceeds = r.total_statistic > threshold_;
+  decide(in, t, r);
   r.pose_W = in.slam_W;
   r.pose_cov = in.slam_cov;
   if (diverged_ && options_.policy == HealthPolicy::kFallbackOdometry) {

@@ -9,20 +9,26 @@
 //  - NIS: sum over the frame's associated pairs of nu^T L^-1 nu, nu = z - h(mu_j, xhat_t),
 //    L = H_x R_t H_x^T + H_m Sigma_j H_m^T + Q (the predictive innovation at the predicted pose),
 //    averaged over the particles with their weights *before* the frame (StepResult::nis);
-//    windowed: sum NIS / sum dof over the last nis_window_frames frames with associations, tested
-//    against the two-sided chi-square bounds q((1 -+ p) / 2, n) / n, n = sum dof, p = nis_probability.
-//  - Divergence: for an anchor a (the start of a sliding window of window_m metres of odometry
-//    travel, and the start of the epoch), D_O = O_a^-1 O_t and D_S = S_a^-1 S_t (both in the robot
-//    frame at a); e = D_S - D_O (x, y, wrapped theta); P = the covariance of D_O compounded from the
-//    increments' Sigma_u: P <- J_D P J_D^T + J_u Sigma_u J_u^T (first-order pose composition);
-//    d^2 = e^T P^-1 e ~ chi-square(3) if the SLAM path moved as the odometry did up to the
-//    odometry's noise. A step exceeds when either d^2 > q(divergence_probability, 3); diverged
-//    after divergence_frames consecutive exceedances, ok again after recovery_frames without one.
-//  - State: kDiverged as above; else kUncertain when this step exceeds, the windowed NIS is outside
-//    its bounds, or ESS < ess_min_fraction * M (or the weights were degenerate); else kOk.
+//    windowed: sum NIS / sum dof over the last nis_window_frames frames with associations, with the
+//    two-sided chi-square bounds q((1 -+ p) / 2, n) / n, n = sum dof, p = nis_probability. Only the
+//    upper bound makes a step uncertain (innovations larger than the filter's own uncertainty); below
+//    the lower one the filter is conservative (a covariance floor above the sensor's noise).
+//  - Departure from the odometry: for an anchor a, D_O = O_a^-1 O_t and D_S = S_a^-1 S_t (both in
+//    the robot frame at a); e = D_S - D_O (x, y, wrapped theta); P = the covariance of D_O
+//    compounded from the increments' Sigma_u: P <- J_D P J_D^T + J_u Sigma_u J_u^T (first-order
+//    pose composition); d^2 = e^T P^-1 e ~ chi-square(3) if the SLAM path moved as the odometry did
+//    up to the odometry's noise. Two anchors: the epoch's start (total) and the start of a sliding
+//    window of window_m metres of odometry travel. Both are tested against q(divergence_probability,
+//    3). The total decides: diverged after divergence_frames consecutive exceedances, ok again after
+//    recovery_frames without one. The window only makes a step uncertain: a correction of drift
+//    (a loop closed) moves the SLAM path unlike the odometry over a few metres but keeps it within
+//    the odometry's noise since the start.
+//  - State: kDiverged as above; else kUncertain when a departure test or the NIS upper bound fails,
+//    or ESS < ess_min_fraction * M (or the weights were degenerate); else kOk.
 //  - Fallback (policy kFallbackOdometry, while diverged): the published pose is the last good SLAM
-//    pose composed with the odometry since then, S_g * (O_g^-1 O_t), with covariance
-//    J Sigma_g J^T + P_g (P_g compounded from the good step); the filter itself keeps running.
+//    pose (no departure on either test) composed with the odometry since then, S_g * (O_g^-1 O_t),
+//    with covariance J Sigma_g J^T + P_g (P_g compounded from the good step); the filter itself
+//    keeps running.
 #pragma once
 
 #include <Eigen/Core>
@@ -69,9 +75,9 @@ struct HealthOptions {
 
 /// What the filter knows after one step (fastslam.h: StepResult, meanPose, poseCovariance).
 struct HealthInput {
-  Pose2 slam_W;                                             ///< the filter's mean pose
-  Eigen::Matrix3d slam_cov = Eigen::Matrix3d::Zero();       ///< its covariance [m^2, rad^2]
-  Pose2 odom_O;                                             ///< the odometry pose of the step
+  Pose2 slam_W;                                        ///< the filter's mean pose
+  Eigen::Matrix3d slam_cov = Eigen::Matrix3d::Zero();  ///< its covariance [m^2, rad^2]
+  Pose2 odom_O;                                        ///< the odometry pose of the step
   int num_particles = 0;
   double ess = 0.0;
   bool resampled = false;
@@ -85,9 +91,9 @@ struct HealthReport {
   HealthState state = HealthState::kOk;
   std::string reason;  ///< one short line
   double nis = 0.0, nis_dof = 0.0;
-  double nis_window_per_dof = 0.0;  ///< sum NIS / sum dof over the window (0: no association yet)
-  double nis_window_dof = 0.0;      ///< sum dof over the window
-  double nis_lower = 0.0, nis_upper = 0.0;  ///< its chi-square bounds (per dof; 0 without dof)
+  double nis_window_per_dof = 0.0;                       ///< sum NIS / sum dof over the window (0: no association yet)
+  double nis_window_dof = 0.0;                           ///< sum dof over the window
+  double nis_lower = 0.0, nis_upper = 0.0;               ///< its chi-square bounds (per dof; 0 without dof)
   double window_statistic = 0.0, window_travel_m = 0.0;  ///< d^2 over the sliding window, its travel
   double total_statistic = 0.0, total_travel_m = 0.0;    ///< d^2 since the epoch's start, its travel
   double threshold = 0.0;                                ///< q(divergence_probability, 3)
@@ -133,7 +139,10 @@ class HealthMonitor {
   void advance(const HealthInput& in);  // the window, the anchors, the travel
   double windowStatistic(double* travel_m) const;
   void nisWindow(const HealthInput& in, HealthReport& r);
-  void decide(const HealthInput& in, bool exceeds, bool nis_bad, HealthReport& r);
+  struct Tests {  // the step's test outcomes
+    bool total_exceeds = false, window_exceeds = false, nis_high = false;
+  };
+  void decide(const HealthInput& in, const Tests& t, HealthReport& r);
 
   HealthOptions options_;
   MotionNoiseOptions motion_;

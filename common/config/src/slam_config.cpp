@@ -159,6 +159,7 @@ std::string SlamProcessOptions::validate() const {
   if (!f.empty()) return "filter: " + f;
   const std::string p = pairing.validate();
   if (!p.empty()) return "pairing: " + p;
+  if (const std::string h = health.validate(); !h.empty()) return "health: " + h;
   if (map_every_n_frames < 1) return "map_every_n_frames must be >= 1";
   if (max_features_per_frame < 1 || max_features_per_frame > 4096) return "features.max_per_frame must be in [1, 4096]";
   if (odometry_only_after_us < 0) return "output.odometry_only_after_s must be >= 0";
@@ -178,7 +179,7 @@ std::string SlamProcessOptions::validate() const {
 
 SlamProcessOptions parseSlamOptions(const Node& root) {
   root.rejectUnknownKeys({"seed", "start_pose", "features", "output", "pairing", "filter", "map", "checkpoint",
-                          "plausibility", "restart"});
+                          "plausibility", "restart", "health"});
   SlamProcessOptions o;
   o.seed = static_cast<std::uint64_t>(root.getInt("seed", 0, INT64_MAX, 1));
   if (auto s = root.optChild("start_pose")) {
@@ -222,6 +223,10 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
   if (auto p = root.optChild("plausibility")) parsePlausibility(*p, o.plausibility);
   if (auto r = root.optChild("restart")) parseRestart(*r, o.restart);
   if (auto f = root.optChild("filter")) parseFilter(*f, o.filter);
+  if (auto h = root.optChild("health")) {
+    h->rejectUnknownKeysIn(keysOf(slam::options::healthFields()));
+    parseFields(*h, o.health, slam::options::healthFields());
+  }
   return o;
 }
 
@@ -249,6 +254,7 @@ std::string describe(const SlamProcessOptions& o) {
   s << "filter.perception: " << opt::describeFields(f.perception, opt::perceptionFields()) << "\n";
   s << "filter.candidates: " << opt::describeFields(f.candidates, opt::candidateFields()) << "\n";
   s << "filter.keyframes: " << opt::describeFields(f.keyframes, opt::keyframeFields()) << "\n";
+  s << "health: " << opt::describeFields(o.health, opt::healthFields()) << "\n";
   const std::vector<std::string> deviations = slam::presetDeviations(f);
   s << "deviations from paper 000: ";
   for (std::size_t i = 0; i < deviations.size(); ++i) s << (i ? ", " : "") << deviations[i];
@@ -308,6 +314,7 @@ std::string filterKeysMarkdown() {
   markdownRows(s, "filter.perception.", opt::perceptionFields());
   markdownRows(s, "filter.candidates.", opt::candidateFields());
   markdownRows(s, "filter.keyframes.", opt::keyframeFields());
+  markdownRows(s, "health.", opt::healthFields());
   return s.str();
 }
 

@@ -192,4 +192,27 @@ std::optional<std::string> validate(const feature_labels_t& m, const Limits& lim
   return std::nullopt;
 }
 
+std::optional<std::string> validate(const slam_health_t& m, const Limits& lim) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (m.state < slam_health_t::STATE_OK || m.state > slam_health_t::STATE_DIVERGED)
+    return "unknown state " + std::to_string(m.state);
+  if (m.num_particles < 0 || m.num_particles > lim.max_particles) return "num_particles out of range";
+  const double values[] = {m.effective_sample_size,
+                           m.nis,
+                           m.nis_dof,
+                           m.nis_window_per_dof,
+                           m.nis_window_dof,
+                           m.nis_lower,
+                           m.nis_upper,
+                           m.window_statistic,
+                           m.window_travel_m,
+                           m.total_statistic,
+                           m.total_travel_m,
+                           m.divergence_threshold};
+  for (double v : values)
+    if (!finite(v) || v < 0.0) return "a statistic that is negative or not finite";
+  if (m.exceedances < 0) return "negative exceedances";
+  return std::nullopt;
+}
+
 }  // namespace omnislam::lcmio

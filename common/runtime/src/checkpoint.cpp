@@ -104,7 +104,8 @@ auto driverCounters(S& s) {  // S = DriverStats or const DriverStats; the pairin
   return std::vector<decltype(&s.frames_processed)>{
       &s.frames_processed, &s.features_in,        &s.features_skipped_kind, &s.measurements_rejected,
       &s.filter_resets,    &s.degenerate_weights, &s.odometry_only_steps,   &s.dropped_behind_prediction,
-      &s.frames_too_large, &s.implausible,        &s.reinit_last_estimate,  &s.frames_between_keyframes};
+      &s.frames_too_large, &s.implausible,        &s.reinit_last_estimate,  &s.health_uncertain,
+      &s.health_diverged,  &s.health_fallback, &s.frames_between_keyframes};
 }
 
 /// describe() without the lines of the map files (paths may differ between two starts of one run).
@@ -223,6 +224,8 @@ void SlamDriver::saveState(ByteWriter& w) const {
                     particles_seq_, associations_seq_})
     w.i64(v);
   putCounts(w, driverCounters(stats_));
+  health_.saveState(w);
+  w.i64(health_seq_);
 }
 
 void SlamDriver::loadState(ByteReader& r) {
@@ -239,6 +242,9 @@ void SlamDriver::loadState(ByteReader& r) {
   for (int64_t& x : v) x = r.i64("driver counters");
   DriverStats stats = stats_;
   getCounts(r, driverCounters(stats), "driver counters");
+  slam::HealthMonitor health = health_;
+  health.loadState(r);
+  const int64_t health_seq = r.i64("health seq");
   r.expectEnd("checkpoint");  // the driver's state ends a checkpoint
   pairer_ = std::move(pairer);
   filter_ = std::move(filters[0]);
@@ -254,6 +260,8 @@ void SlamDriver::loadState(ByteReader& r) {
   particles_seq_ = v[6];
   associations_seq_ = v[7];
   stats_ = stats;
+  health_ = std::move(health);
+  health_seq_ = health_seq;
   // Derived, not stored: the estimate a restart of the inputs re-initialises from is the ended
   // filter's while no filter of the new epoch has started (apply(), kReset); the odometry
   // plausibility check takes its reference from the pairing at every message (checkOdometry), only

@@ -115,7 +115,7 @@ lcmio::LogWriter::Mode outputMode(const std::string& out_path) {
 
 bool isSlamOutput(const std::string& channel) {
   return channel == channels::kSlamPose || channel == channels::kSlamMap || channel == channels::kSlamParticles ||
-         channel == channels::kSlamAssociations;
+         channel == channels::kSlamAssociations || channel == channels::kSlamHealth;
 }
 
 /// Whether the replay's event number pos.events was read before the checkpoint it resumed from (its
@@ -140,6 +140,7 @@ int64_t writeReplayResult(const DriverResult& r, int64_t ts, lcmio::LogWriter& o
   for (const auto& n : r.notes) rep.line(n);
   for (const auto& o : r.outputs) {
     out.write(ts, channels::kSlamPose, o.pose);
+    if (o.health) out.write(ts, channels::kSlamHealth, *o.health);
     if (o.map) out.write(ts, channels::kSlamMap, *o.map);
     out.write(ts, channels::kSlamParticles, o.particles);
     if (o.associations) out.write(ts, channels::kSlamAssociations, *o.associations);

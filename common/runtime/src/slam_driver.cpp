@@ -60,7 +60,10 @@ Frame toFrame(const features_t& msg, const SlamProcessOptions& options, int64_t*
 }
 
 SlamDriver::SlamDriver(const SlamProcessOptions& options, std::vector<slam::Landmark> prior_map)
-    : opt_(options), pairer_(options.pairing), prior_map_(std::move(prior_map)) {
+    : opt_(options),
+      pairer_(options.pairing),
+      prior_map_(std::move(prior_map)),
+      health_(options.health, options.filter.motion) {
   if (opt_.localisation_only) opt_.filter.update_map = false;
   const std::string err = opt_.validate();
   if (!err.empty()) throw std::invalid_argument("SLAM options: " + err);
@@ -224,6 +227,7 @@ void SlamDriver::ensureFilter(const Pose2& odom_O, DriverResult& r) {
   }
   filter_ = std::move(filter);
   odom_prev_O_ = odom_O;
+  health_.reset();  // the new filter's start is the health's start
 }
 
 // Odometry-only steps: only after the filter has started (the first frame fixes the start), only
@@ -242,6 +246,7 @@ void SlamDriver::maybePredict(DriverResult& r) {
   ++stats_.odometry_only_steps;
   FrameOutput out = makeOutput(t, -1, filter_->ess());
   out.odometry_only = true;
+  applyHealth(out, lk.pose_O, nullptr);
   r.outputs.push_back(std::move(out));
 }
 
@@ -266,6 +271,7 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   if (sr.weights_degenerate) ++stats_.degenerate_weights;
 
   FrameOutput out = makeOutput(frame.utime, frame.seq, sr.ess);
+  applyHealth(out, odom_O, &sr);
   if ((stats_.frames_processed - 1) % opt_.map_every_n_frames == 0) {  // the first frame has a map
     map_t m{};
     m.utime = frame.utime;
@@ -313,6 +319,14 @@ FrameOutput SlamDriver::betweenKeyframes(const Frame& frame, const Pose2& odom_O
   ++stats_.frames_between_keyframes;
   const Pose2 u = slam::odometryIncrement(odom_prev_O_, odom_O);
   FrameOutput out = makeOutput(frame.utime, frame.seq, filter_->ess(), &u);
+  if (const auto fallback = health_.fallbackAt(odom_O)) {  // health.policy fallback_odometry while diverged
+    ++stats_.health_fallback;
+    out.pose.x_m = fallback->first.x_m;
+    out.pose.y_m = fallback->first.y_m;
+    out.pose.theta_rad = fallback->first.theta_rad;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) out.pose.covariance[i][j] = fallback->second(i, j);
+  }
   associations_t a{};
   a.utime = frame.utime;
   a.seq = associations_seq_++;
@@ -365,6 +379,56 @@ FrameOutput SlamDriver::makeOutput(int64_t utime, int64_t input_seq, double ess,
   return out;
 }
 
+void SlamDriver::applyHealth(FrameOutput& out, const Pose2& odom_O, const slam::StepResult* sr) {
+  pose_t& p = out.pose;
+  slam::HealthInput in;
+  in.slam_W = Pose2{p.x_m, p.y_m, p.theta_rad};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) in.slam_cov(i, j) = p.covariance[i][j];
+  in.odom_O = odom_O;
+  in.num_particles = p.num_particles;
+  in.ess = p.effective_sample_size;
+  if (sr) {
+    in.resampled = sr->resampled;
+    in.weights_degenerate = sr->weights_degenerate;
+    in.nis = sr->nis;
+    in.nis_dof = sr->nis_dof;
+  }
+  const slam::HealthReport r = health_.update(in);
+  if (r.fallback) {  // health.policy fallback_odometry while diverged
+    ++stats_.health_fallback;
+    p.x_m = r.pose_W.x_m;
+    p.y_m = r.pose_W.y_m;
+    p.theta_rad = r.pose_W.theta_rad;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) p.covariance[i][j] = r.pose_cov(i, j);
+  }
+  stats_.health_uncertain += r.state == slam::HealthState::kUncertain;
+  stats_.health_diverged += r.state == slam::HealthState::kDiverged;
+  slam_health_t& h = out.health.emplace();
+  h.utime = p.utime;
+  h.seq = health_seq_++;
+  h.input_seq = p.input_seq;
+  h.state = static_cast<int8_t>(r.state);
+  h.reason = r.reason;
+  h.fallback = r.fallback;
+  h.num_particles = p.num_particles;
+  h.effective_sample_size = p.effective_sample_size;
+  h.resampled = in.resampled;
+  h.nis = r.nis;
+  h.nis_dof = r.nis_dof;
+  h.nis_window_per_dof = r.nis_window_per_dof;
+  h.nis_window_dof = r.nis_window_dof;
+  h.nis_lower = r.nis_lower;
+  h.nis_upper = r.nis_upper;
+  h.window_statistic = r.window_statistic;
+  h.window_travel_m = r.window_travel_m;
+  h.total_statistic = r.total_statistic;
+  h.total_travel_m = r.total_travel_m;
+  h.divergence_threshold = r.threshold;
+  h.exceedances = r.exceedances;
+}
+
 std::string SlamDriver::summary() const {
   const DriverStats& s = stats();
   const PairingStats& p = s.pairing;
@@ -378,7 +442,9 @@ std::string SlamDriver::summary() const {
     << p.odometry_jumps << "; features " << s.features_in << " skipped " << s.features_skipped_kind
     << " rejected_by_filter " << s.measurements_rejected << "; odometry_only_steps " << s.odometry_only_steps
     << " dropped_behind_prediction " << s.dropped_behind_prediction << " degenerate_weights " << s.degenerate_weights
-    << "; between_keyframes " << s.frames_between_keyframes;
+    << "; between_keyframes " << s.frames_between_keyframes
+    << "; health: uncertain " << s.health_uncertain << " diverged " << s.health_diverged << " fallback "
+    << s.health_fallback;
   if (filter_)
     o << "; landmarks " << filter_->bestParticle().map.size() << " candidates " << filter_->bestCandidateCount();
   return o.str();

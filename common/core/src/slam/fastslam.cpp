@@ -99,6 +99,8 @@ struct FastSlam::ParticleStepInfo {
   double log_w = 0.0;
   std::vector<std::int64_t> landmark_of_measurement;  // per accepted measurement
   int num_associated = 0, num_to_candidates = 0, num_new_candidates = 0, num_initialised = 0, num_deleted = 0;
+  double nis = 0.0;  // health: StepResult::nis
+  int nis_dof = 0;
 };
 
 FastSlam::FastSlam(const FastSlamOptions& options, std::uint64_t seed)
@@ -193,6 +195,10 @@ StepResult FastSlam::stepInPlace(const Pose2& odom_prev, const Pose2& odom_now,
   std::vector<ParticleStepInfo> infos;
   infos.reserve(particles_.size());
   for (auto& p : particles_) infos.push_back(processParticle(p, u, Z, last_p_CinR_m_));
+  for (std::size_t k = 0; k < infos.size(); ++k) {  // health: with the weights before this frame
+    result.nis += weights_[k] * infos[k].nis;
+    result.nis_dof += weights_[k] * infos[k].nis_dof;
+  }
 
   finishStep(result, infos);
   // Per input measurement of the best particle.
@@ -242,6 +248,8 @@ FastSlam::ParticleStepInfo FastSlam::processParticle(Particle& p, const Pose2& u
   info.landmark_of_measurement = landmarkIdsOf(a.level1.landmark_of_measurement, vis);
   info.num_associated = up.num_associated;
   info.num_deleted = up.num_deleted;
+  info.nis = up.nis;
+  info.nis_dof = up.nis_dof;
   std::vector<Landmark> inserts;
   if (o.update_map) {  // updateCandidateLandmarks() (Alg. 4 line 28)
     stages::CandidateUpdate cu = stages::updateCandidates(p.candidates, x_t, Z, a, o, next_landmark_id_);

@@ -432,6 +432,20 @@ std::optional<double> typeIWeight(const Weighting& weighting, WeightTerm form, c
       weighting);
 }
 
+// Health (health_monitor.h): the pair's normalised innovation squared at the predicted pose, whatever
+// the weighting; read-only, so the filter's results do not depend on it.
+void addPredictiveNis(const Landmark& L, const Measurement& m, const MotionPrediction& pred, ParticleUpdate& out) {
+  MeasJac Hx, Hm;
+  const auto zp = predictMeasurement(L.kind, L.p_LinW_m, pred.x_hat, m.p_CinR_m, &Hx, &Hm);
+  if (!zp) return;
+  const MeasMat S = Hx * pred.R * Hx.transpose() + m.Q + Hm * L.cov_LinW_m2 * Hm.transpose();
+  double d2 = 0.0;
+  logGaussian(innovation(m.z, *zp), S, &d2);
+  if (!std::isfinite(d2)) return;
+  out.nis += d2;
+  out.nis_dof += static_cast<int>(m.z.size());
+}
+
 }  // namespace
 
 void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t,
@@ -450,6 +464,7 @@ void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t,
     e.value = L;
     blendDescriptor(e.value.descriptor, m.descriptor, o.descriptor_update_rate);
     e.value.counter += hitIncrement(o.perception.detection_probability);  // i_j + 1 (p_in >= 0.5)
+    addPredictiveNis(L, m, pred, out);
     const std::optional<Innovation> in = updateLandmarkEkf(L, m, x_t, e.value);
     if (in && correctsPoseAndWeighs(L)) {  // lines 11-14
       if (const std::optional<double> log_w_j = typeIWeight(weight, o.weight_term, L, m, *in, pred))

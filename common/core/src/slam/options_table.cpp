@@ -203,6 +203,32 @@ const std::vector<Field<KeyframeOptions>>& keyframeFields() {
   return t;
 }
 
+const std::vector<std::string>& healthPolicyNames() {
+  static const std::vector<std::string> n{"report", "fallback_odometry"};
+  return n;
+}
+
+const std::vector<Field<HealthOptions>>& healthFields() {
+  using H = HealthOptions;
+  // One row per key: not reformatted. Reasons for the defaults: slam-core.md, "Health".
+  // clang-format off
+  static const std::vector<Field<H>> t{
+      enumeration<H>(
+          "policy", "policy", healthPolicyNames(), [](const H& o) { return static_cast<int>(o.policy); },
+          [](H& o, int i) { o.policy = static_cast<HealthPolicy>(i); },
+          "while diverged: report (SLAM_POSE is the filter's) or fallback_odometry (the last good pose moved by the odometry)"),
+      real<H>("ess_min_fraction", &H::ess_min_fraction, "ess_min_fraction", "", 0, 1, kC, "uncertain when ESS < fraction * M"),
+      integer<H>("nis_window_frames", &H::nis_window_frames, "nis_window_frames", 1, 1e5, "frames with associations in the NIS window"),
+      real<H>("nis_probability", &H::nis_probability, "nis_probability", "", 0.5, 0.999999, kC, "two-sided chi-square interval of the windowed NIS per dof"),
+      real<H>("divergence_probability", &H::divergence_probability, "divergence_probability", "", 0.5, 0.999999, kC, "chi-square(3) quantile a departure from the odometry is tested against"),
+      integer<H>("divergence_frames", &H::divergence_frames, "divergence_frames", 1, 1e5, "consecutive exceedances that raise diverged"),
+      integer<H>("recovery_frames", &H::recovery_frames, "recovery_frames", 1, 1e5, "consecutive steps without one that end diverged (and the fallback)"),
+      real<H>("window_m", &H::window_m, "window_m", "m", 0, 1e4, kLo, "odometry travel of the sliding window"),
+  };
+  // clang-format on
+  return t;
+}
+
 template <class S>
 std::string rangeText(const Field<S>& f) {
   if (f.kind == Kind::kBool) return "true, false";
@@ -272,6 +298,7 @@ OMNISLAM_OPTIONS_TABLE_INSTANTIATE(MotionNoiseOptions)
 OMNISLAM_OPTIONS_TABLE_INSTANTIATE(PerceptionOptions)
 OMNISLAM_OPTIONS_TABLE_INSTANTIATE(CandidateOptions)
 OMNISLAM_OPTIONS_TABLE_INSTANTIATE(KeyframeOptions)
+OMNISLAM_OPTIONS_TABLE_INSTANTIATE(HealthOptions)
 #undef OMNISLAM_OPTIONS_TABLE_INSTANTIATE
 
 }  // namespace omnislam::slam::options

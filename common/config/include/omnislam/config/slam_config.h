@@ -10,6 +10,7 @@
 #include "omnislam/config/yaml_node.h"
 #include "omnislam/core/pose2.h"
 #include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/health_monitor.h"
 #include "omnislam/runtime/pairing.h"
 
 namespace omnislam::slamproc {
@@ -51,6 +52,8 @@ struct SlamProcessOptions {
   PairingOptions pairing;
   PlausibilityOptions plausibility;
   RestartOptions restart;
+  /// Health of the filter and the policy while it is diverged (SLAM_HEALTH; keys `health.*`).
+  slam::HealthOptions health;
   /// Where the map frame W is: kOdometry = the odometry frame O (the robot's pose at the first
   /// frame is its odometry pose); kFixed = `start_pose_W` is the robot's pose at the first frame.
   enum class StartSource { kOdometry, kFixed };

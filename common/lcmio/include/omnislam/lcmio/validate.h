@@ -16,6 +16,7 @@
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
+#include "omnislam/slam_health_t.hpp"
 
 namespace omnislam::lcmio {
 
@@ -42,5 +43,6 @@ std::optional<std::string> validate(const particles_t& m, const Limits& lim = {}
 std::optional<std::string> validate(const process_status_t& m, const Limits& lim = {});
 std::optional<std::string> validate(const associations_t& m, const Limits& lim = {});
 std::optional<std::string> validate(const feature_labels_t& m, const Limits& lim = {});
+std::optional<std::string> validate(const slam_health_t& m, const Limits& lim = {});  ///< since 0.3
 
 }  // namespace omnislam::lcmio

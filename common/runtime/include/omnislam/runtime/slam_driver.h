@@ -1,7 +1,8 @@
 // The SLAM process's one code path, shared by the live process and --replay: takes decoded and
 // validated OMNI_FEATURES / ODOMETRY messages in arrival order, pairs frames with odometry
-// (pairing.h), runs one FastSLAM step per paired frame and returns the SLAM_POSE, SLAM_MAP and
-// SLAM_PARTICLES messages that answer it, stamped with the frame's utime. No I/O, no clock.
+// (pairing.h), runs one FastSLAM step per paired frame and returns the SLAM_POSE, SLAM_MAP,
+// SLAM_PARTICLES, SLAM_ASSOCIATIONS and SLAM_HEALTH messages that answer it, stamped with the frame's
+// utime. No I/O, no clock.
 #pragma once
 
 #include <cstdint>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/health_monitor.h"
 #include "omnislam/lcmio/plausibility.h"
 #include "omnislam/associations_t.hpp"
 #include "omnislam/features_t.hpp"
@@ -18,15 +20,19 @@
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "omnislam/slam_health_t.hpp"
 #include "omnislam/config/slam_config.h"
 #include "omnislam/runtime/pairing.h"
 
 namespace omnislam::slamproc {
 
-/// What answers one processed frame, in publishing order: pose, map (every n-th frame), particles,
-/// associations.
+/// What answers one processed frame, in publishing order: pose, health, map (every n-th frame),
+/// particles, associations.
 struct FrameOutput {
-  pose_t pose;
+  pose_t pose;           ///< the filter's, or the odometry fallback (health.fallback)
+  /// SLAM_HEALTH of a filter step (same utime and input_seq as the pose); absent for a frame between
+  /// keyframes (filter.keyframes), whose state is the last step's.
+  std::optional<slam_health_t> health;
   std::optional<map_t> map;
   particles_t particles;
   std::optional<associations_t> associations;  ///< absent for an odometry-only step
@@ -63,6 +69,9 @@ struct DriverStats {
   int64_t frames_too_large = 0;           ///< refused: more usable features than max_features_per_frame
   int64_t implausible = 0;                ///< refused: valid but beyond options.plausibility
   int64_t reinit_last_estimate = 0;       ///< filter_resets that started from the last estimate
+  int64_t health_uncertain = 0;           ///< steps whose SLAM_HEALTH said uncertain
+  int64_t health_diverged = 0;            ///< steps whose SLAM_HEALTH said diverged
+  int64_t health_fallback = 0;            ///< steps whose SLAM_POSE was the odometry fallback
 };
 
 /// Converts one feature to a filter measurement; nothing for a kind that is off in `options` or a
@@ -117,6 +126,9 @@ class SlamDriver {
   /// The outputs of the filter's estimate; moved by the odometry increment *u when given.
   FrameOutput makeOutput(int64_t utime, int64_t input_seq, double ess, const Pose2* u = nullptr);
   FrameOutput betweenKeyframes(const Frame& frame, const Pose2& odom_O);
+  /// SLAM_HEALTH of the step (sr: nothing for an odometry-only step), and with the fallback policy
+  /// while diverged the fallback pose in out.pose.
+  void applyHealth(FrameOutput& out, const Pose2& odom_O, const slam::StepResult* sr);
 
   SlamProcessOptions opt_;
   Pairer pairer_;
@@ -140,7 +152,8 @@ class SlamDriver {
   /// but is alive never triggers predictions (a replayed log of a loaded machine).
   int64_t odom_utime_at_last_frame_ = 0;
   int64_t epoch_ = 0;
-  int64_t pose_seq_ = 0, map_seq_ = 0, particles_seq_ = 0, associations_seq_ = 0;
+  int64_t pose_seq_ = 0, map_seq_ = 0, particles_seq_ = 0, associations_seq_ = 0, health_seq_ = 0;
+  slam::HealthMonitor health_;  ///< reset with each new filter
   mutable DriverStats stats_;
 };
 

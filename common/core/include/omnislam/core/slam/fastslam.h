@@ -143,7 +143,11 @@ struct StepResult {
   double ess = 0.0;          ///< effective sample size of this step's weights (before resampling)
   bool resampled = false;
   bool weights_degenerate = false;  ///< no finite weight: reset to uniform
-  int best_particle = 0;            ///< index of the best particle after this step
+  /// Health (health_monitor.h): the particles' predictive NIS of the frame's associated pairs and its
+  /// degrees of freedom, each averaged with the weights before this frame (the posterior weights
+  /// would favour the particles with small innovations); 0 and 0 without associations.
+  double nis = 0.0, nis_dof = 0.0;
+  int best_particle = 0;  ///< index of the best particle after this step
   // Of the best particle (highest weight before resampling):
   std::vector<std::int64_t> landmark_of_measurement;  ///< per input measurement: landmark id, -1 otherwise
   std::vector<char> measurement_refused;  ///< per input measurement: 1 = rejected (see num_rejected), never used

@@ -150,6 +150,10 @@ struct ParticleUpdate {
   std::vector<const Landmark*> updated;  ///< the observed landmarks (sorted by accountMisses)
   double log_w = 0.0;                    ///< log w^k so far
   int num_associated = 0, num_deleted = 0;
+  /// Health (health_monitor.h): sum over the associated pairs of nu^T L^-1 nu with the predictive
+  /// innovation at xhat_t, L = H_x R_t H_x^T + H_m Sigma_j H_m^T + Q, and its degrees of freedom.
+  double nis = 0.0;
+  int nis_dof = 0;
 };
 /// Alg. 4 lines 3-17 for every associated pair, in measurement order: i_j + 1, descriptor blend,
 /// EKF (Joseph form), the type I weight; then updateLandmarksType() on the observed landmarks. Edits

@@ -13,6 +13,7 @@
 
 #include "omnislam/core/angles.h"
 #include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/health_monitor.h"
 
 namespace omnislam::slam::options {
 
@@ -77,12 +78,14 @@ const std::vector<Field<MotionNoiseOptions>>& motionFields();     ///< keys `fil
 const std::vector<Field<PerceptionOptions>>& perceptionFields();  ///< keys `filter.perception.*`
 const std::vector<Field<CandidateOptions>>& candidateFields();    ///< keys `filter.candidates.*`
 const std::vector<Field<KeyframeOptions>>& keyframeFields();      ///< keys `filter.keyframes.*`
+const std::vector<Field<HealthOptions>>& healthFields();          ///< keys `health.*` (health_monitor.h)
 
 /// Names of the enum fields (index = the enum's value).
-const std::vector<std::string>& associationNames();  ///< "hungarian", "ml"
-const std::vector<std::string>& proposalNames();     ///< "fastslam2", "fastslam1"
-const std::vector<std::string>& motionModelNames();  ///< "chord", "translate_then_rotate"
-const std::vector<std::string>& weightTermNames();   ///< "density", "consistency"
+const std::vector<std::string>& associationNames();   ///< "hungarian", "ml"
+const std::vector<std::string>& proposalNames();      ///< "fastslam2", "fastslam1"
+const std::vector<std::string>& motionModelNames();   ///< "chord", "translate_then_rotate"
+const std::vector<std::string>& weightTermNames();    ///< "density", "consistency"
+const std::vector<std::string>& healthPolicyNames();  ///< "report", "fallback_odometry"
 
 /// The first field of s outside its range, as "field must be in [lo, hi], got v" in the member's
 /// own units (radians for a _deg key); empty when every field is in range.

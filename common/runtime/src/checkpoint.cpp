@@ -102,10 +102,10 @@ auto pairingCounters(S& s) {  // S = PairingStats or const PairingStats
 template <class S>
 auto driverCounters(S& s) {  // S = DriverStats or const DriverStats; the pairing's are the pairer's
   return std::vector<decltype(&s.frames_processed)>{
-      &s.frames_processed, &s.features_in,        &s.features_skipped_kind, &s.measurements_rejected,
-      &s.filter_resets,    &s.degenerate_weights, &s.odometry_only_steps,   &s.dropped_behind_prediction,
-      &s.frames_too_large, &s.implausible,        &s.reinit_last_estimate,  &s.health_uncertain,
-      &s.health_diverged,  &s.health_fallback, &s.frames_between_keyframes};
+      &s.frames_processed, &s.features_in,        &s.features_skipped_kind,   &s.measurements_rejected,
+      &s.filter_resets,    &s.degenerate_weights, &s.odometry_only_steps,     &s.dropped_behind_prediction,
+      &s.frames_too_large, &s.implausible,        &s.reinit_last_estimate,    &s.health_uncertain,
+      &s.health_diverged,  &s.health_fallback,    &s.frames_between_keyframes};
 }
 
 /// describe() without the lines of the map files (paths may differ between two starts of one run).

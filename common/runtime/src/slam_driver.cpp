@@ -442,9 +442,8 @@ std::string SlamDriver::summary() const {
     << p.odometry_jumps << "; features " << s.features_in << " skipped " << s.features_skipped_kind
     << " rejected_by_filter " << s.measurements_rejected << "; odometry_only_steps " << s.odometry_only_steps
     << " dropped_behind_prediction " << s.dropped_behind_prediction << " degenerate_weights " << s.degenerate_weights
-    << "; between_keyframes " << s.frames_between_keyframes
-    << "; health: uncertain " << s.health_uncertain << " diverged " << s.health_diverged << " fallback "
-    << s.health_fallback;
+    << "; between_keyframes " << s.frames_between_keyframes << "; health: uncertain " << s.health_uncertain
+    << " diverged " << s.health_diverged << " fallback " << s.health_fallback;
   if (filter_)
     o << "; landmarks " << filter_->bestParticle().map.size() << " candidates " << filter_->bestCandidateCount();
   return o.str();

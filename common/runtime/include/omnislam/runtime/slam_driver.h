@@ -29,7 +29,7 @@ namespace omnislam::slamproc {
 /// What answers one processed frame, in publishing order: pose, health, map (every n-th frame),
 /// particles, associations.
 struct FrameOutput {
-  pose_t pose;           ///< the filter's, or the odometry fallback (health.fallback)
+  pose_t pose;  ///< the filter's, or the odometry fallback (health.fallback)
   /// SLAM_HEALTH of a filter step (same utime and input_seq as the pose); absent for a frame between
   /// keyframes (filter.keyframes), whose state is the last step's.
   std::optional<slam_health_t> health;

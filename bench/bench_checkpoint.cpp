@@ -2,7 +2,7 @@
 // sports hall: the regression fixture tests/data/regression/sports_hall.lcm (151 frames, 16 lights) replayed through
 // SlamDriver with config/slam/sports_hall.yaml and its default particle count (or OMNISLAM_BENCH_PARTICLES), as
 // `omnislam-slam --replay` does, then the state at the end of the log encoded, decoded, and written atomically
-// (PATH.tmp, fsync, rename, folder fsync) into $TMPDIR. Counter `bytes`: the checkpoint's size.
+// (PATH.tmp.<pid>, fsync, rename, folder fsync) into $TMPDIR. Counter `bytes`: the checkpoint's size.
 //
 // Usage: build/bin/bench_checkpoint [--benchmark_repetitions=5 ...]
 #include <benchmark/benchmark.h>

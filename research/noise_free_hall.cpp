@@ -16,42 +16,16 @@
 #include "omnislam/core/angles.h"
 #include "omnislam/core/slam/fastslam.h"
 #include "omnislam/config/slam_config.h"
+#include "slam_scenarios.h"
 
 using namespace omnislam;
 using namespace omnislam::slam;
 
 namespace {
 
-const Eigen::Vector3d kCamInR(0.0, 0.0, 1.8);
-
-std::vector<Eigen::Vector3d> hallLights() {
-  std::vector<Eigen::Vector3d> l;
-  for (double x : {4.5, 13.5, 22.5, 31.5})
-    for (double y : {-5.5, -1.0, 3.5, 8.0}) l.emplace_back(x, y, 6.5);
-  return l;
-}
-
-// The scenario test's rounded rectangle (18 x 7 m, arcs of 1 m), at arc length s.
-Pose2 poseAt(double s) {
-  struct Segment {
-    double length_m, curvature;
-  };
-  const std::vector<Segment> loop{{18.0, 0.0}, {kPi / 2, 1.0}, {7.0, 0.0}, {kPi / 2, 1.0},
-                                  {18.0, 0.0}, {kPi / 2, 1.0}, {7.0, 0.0}, {kPi / 2, 1.0}};
-  Pose2 p{6.0, -3.25, 0.0};
-  for (const auto& seg : loop) {
-    const double ds = std::min(s, seg.length_m);
-    if (seg.curvature == 0.0) {
-      p = p.compose(Pose2{ds, 0.0, 0.0});
-    } else {
-      const double r = 1.0 / seg.curvature, a = ds * seg.curvature;
-      p = p.compose(Pose2{r * std::sin(a), r * (1.0 - std::cos(a)), a});
-    }
-    s -= ds;
-    if (s <= 0.0) break;
-  }
-  return p;
-}
+using scenarios::hallLights;  // the scenario test's hall and loop (tests/core/slam_scenarios.h)
+using scenarios::kCamInR;
+using scenarios::poseAt;
 
 std::vector<BearingMeasurement> exactBearings(const Pose2& truth, double sigma_rad) {
   std::vector<BearingMeasurement> z;
@@ -121,7 +95,7 @@ int main(int argc, char** argv) {
   }
   const auto po = slamproc::loadSlamOptions(argv[1], sets);
   const double sigma = std::max(po.min_sigma_rad, 1e-6);
-  const double v = 0.27, L = 2 * 18.0 + 2 * 7.0 + 2 * kPi;
+  const double v = 0.27, L = scenarios::loopLength();
   double sum_abs_rot = 0;
   int within = 0;
   for (int seed = 1; seed <= seeds; ++seed) {

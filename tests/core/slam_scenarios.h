@@ -1,5 +1,6 @@
-// Whole-filter scenarios without images or processes, shared by tests/core/test_slam_scenario.cpp and
-// research/slam_sweeps.cpp. The sports hall of paper 000 (16 ceiling lights at 6.5 m, camera 1.8 m
+// Whole-filter scenarios without images or processes, shared by tests/core/test_slam_scenario.cpp,
+// tests/support/slam_inputs.h (the hall's lights), research/slam_sweeps.cpp and
+// research/noise_free_hall.cpp. The sports hall of paper 000 (16 ceiling lights at 6.5 m, camera 1.8 m
 // above the floor), a closed rounded-rectangle loop at 0.27 m/s with frames at 1 Hz, noisy odometry
 // (~5 %) and bearings (0.3 deg), run through FastSlam and scored against the truth (runHall); and two
 // walls of vertical lines (paper 002's landmarks, azimuth only) along a straight path (runLines).

@@ -11,50 +11,13 @@
 
 #include "omnislam/core/angles.h"
 #include "omnislam/runtime/slam_driver.h"
+#include "slam_inputs.h"
 
 using namespace omnislam;
 using namespace omnislam::slamproc;
+using namespace omnislam::testing;
 
 namespace {
-
-constexpr int64_t kT0 = 1'700'000'000'000'000;
-const Eigen::Vector3d kCam_m(0.0, 0.0, 1.8);
-
-/// Straight line along x at 0.27 m/s from (6, -3.25), the sports hall's speed.
-Pose2 truthAt(int64_t utime) {
-  const double t = static_cast<double>(utime - kT0) * 1e-6;
-  return Pose2{6.0 + 0.27 * t, -3.25, 0.0};
-}
-
-odometry_t odo(int64_t utime, int64_t seq) {
-  odometry_t m{};
-  m.utime = utime;
-  m.seq = seq;
-  const Pose2 p = truthAt(utime);
-  m.x_m = p.x_m, m.y_m = p.y_m, m.theta_rad = p.theta_rad, m.v_mps = 0.27;
-  return m;
-}
-
-/// The sports hall's 16 lights seen from the true pose.
-features_t feats(int64_t utime, int64_t seq) {
-  features_t m{};
-  m.utime = utime, m.seq = seq, m.image_seq = seq, m.detector = "test";
-  for (int i = 0; i < 3; ++i) m.camera_position_m[i] = kCam_m(i);
-  const Pose2 x = truthAt(utime);
-  for (double lx : {4.5, 13.5, 22.5, 31.5})
-    for (double ly : {-5.5, -1.0, 3.5, 8.0}) {
-      const Eigen::Vector3d d_W(lx - x.x_m, ly - x.y_m, 6.5 - kCam_m.z());
-      feature_t f{};
-      f.kind = feature_t::KIND_CEILING_LIGHT;
-      f.azimuth_rad = wrapAngle(std::atan2(d_W.y(), d_W.x()) - x.theta_rad);
-      f.elevation_rad = std::atan2(d_W.z(), d_W.head<2>().norm());
-      f.has_elevation = true;
-      f.covariance[0][0] = f.covariance[1][1] = 2.7e-5;
-      m.features.push_back(f);
-    }
-  m.num_features = static_cast<int32_t>(m.features.size());
-  return m;
-}
 
 struct Fed {
   std::vector<FrameOutput> outputs;
@@ -72,8 +35,9 @@ struct Fed {
 template <class Inject>
 void feed(SlamDriver& d, Fed& fed, int64_t t0, int64_t t1, int64_t& oseq, int64_t& fseq, Inject inject) {
   for (int64_t t = t0; t <= t1; t += 20'000) {
-    fed.add(d.onOdometry(odo(t, oseq++)));
-    if ((t - 100'000 - kT0) % 1'000'000 == 0 && t - 100'000 >= kT0) fed.add(d.onFeatures(feats(t - 100'000, fseq++)));
+    fed.add(d.onOdometry(hallOdometry(t, oseq++)));
+    if ((t - 100'000 - kT0) % 1'000'000 == 0 && t - 100'000 >= kT0)
+      fed.add(d.onFeatures(hallFeatures(t - 100'000, fseq++)));
     inject(t, fed);
   }
 }
@@ -100,8 +64,8 @@ TEST(SlamTimeFaults, OneStrayStampOnEitherStreamIsRefusedAndResetsNothing) {
         feed(d, fed, kT0, kT0 + 20'000'000, oseq, fseq, [&](int64_t t, Fed& f) {
           if (t != when) return;
           // The last good message again, re-stamped (what omnislam-inject does).
-          odometry_t m = odo(t, 999);
-          features_t g = feats(t - 100'000, 999);
+          odometry_t m = hallOdometry(t, 999);
+          features_t g = hallFeatures(t - 100'000, 999);
           m.utime += offset, g.utime += offset;
           f.add(on_frames ? d.onFeatures(g) : d.onOdometry(m));
         });
@@ -114,7 +78,7 @@ TEST(SlamTimeFaults, OneStrayStampOnEitherStreamIsRefusedAndResetsNothing) {
         ASSERT_EQ(fed.refused.size(), 1u) << d.summary();
         EXPECT_EQ(fed.refused[0].channel, on_frames ? "OMNI_FEATURES" : "ODOMETRY");
         EXPECT_EQ(d.stats().frames_processed, 20) << "every good frame answered: " << d.summary();
-        const Pose2 truth = truthAt(fed.outputs.back().pose.utime);
+        const Pose2 truth = hallTruthAt(fed.outputs.back().pose.utime);
         EXPECT_LT(std::hypot(fed.outputs.back().pose.x_m - truth.x_m, fed.outputs.back().pose.y_m - truth.y_m), 0.3);
       }
     }
@@ -132,8 +96,8 @@ TEST(SlamTimeFaults, SixStraysInOneRunAreEachRefused) {
     if (k % 250 != 125 || k / 250 >= 6) return;  // at 2.5 s, 7.5 s, ... 27.5 s
     const int64_t i = k / 250;
     const int64_t off = offsets[static_cast<size_t>(i % 3)];
-    odometry_t m = odo(t, 900 + i);
-    features_t g = feats(t - 500'000, 900 + i);
+    odometry_t m = hallOdometry(t, 900 + i);
+    features_t g = hallFeatures(t - 500'000, 900 + i);
     m.utime += off, g.utime += off;
     f.add(i < 3 ? d.onOdometry(m) : d.onFeatures(g));
   });
@@ -153,12 +117,12 @@ TEST(SlamValueFaults, OneImplausibleOdometryPoseNeverBecomesTheReference) {
   int64_t oseq = 0, fseq = 0;
   feed(d, fed, kT0, kT0 + 20'000'000, oseq, fseq, [&](int64_t t, Fed& f) {
     if (t == kT0 + 5'000'000) {
-      odometry_t bad = odo(t + 10'000, 999);
+      odometry_t bad = hallOdometry(t + 10'000, 999);
       bad.x_m += 50.0;
       f.add(d.onOdometry(bad));
     }
     if (t == kT0 + 8'000'000) {
-      odometry_t bad = odo(t + 10'000, 998);
+      odometry_t bad = hallOdometry(t + 10'000, 998);
       bad.x_m = 1e300;
       f.add(d.onOdometry(bad));
     }
@@ -169,7 +133,7 @@ TEST(SlamValueFaults, OneImplausibleOdometryPoseNeverBecomesTheReference) {
   EXPECT_NE(fed.refused[0].reason.find("faster than max_speed_mps"), std::string::npos) << fed.refused[0].reason;
   EXPECT_NE(fed.refused[1].reason.find("outside the workspace"), std::string::npos) << fed.refused[1].reason;
   EXPECT_EQ(d.stats().frames_processed, 20);
-  const Pose2 truth = truthAt(fed.outputs.back().pose.utime);
+  const Pose2 truth = hallTruthAt(fed.outputs.back().pose.utime);
   EXPECT_LT(std::hypot(fed.outputs.back().pose.x_m - truth.x_m, fed.outputs.back().pose.y_m - truth.y_m), 0.3);
 }
 
@@ -185,11 +149,11 @@ FrameOutput restartAndGetFirstPose(SlamDriver& d, double* landmarks_before) {
   const int64_t shift = 1'000'000'000;
   Fed after;
   for (int64_t t = kT0 + 10'020'000; t <= kT0 + 14'000'000; t += 20'000) {
-    odometry_t m = odo(t, oseq++);
+    odometry_t m = hallOdometry(t, oseq++);
     m.utime = t - shift;
     after.add(d.onOdometry(m));
     if ((t - 100'000 - kT0) % 1'000'000 == 0) {
-      features_t f = feats(t - 100'000, fseq++);
+      features_t f = hallFeatures(t - 100'000, fseq++);
       f.utime -= shift;
       after.add(d.onFeatures(f));
     }
@@ -203,13 +167,13 @@ FrameOutput restartAndGetFirstPose(SlamDriver& d, double* landmarks_before) {
 TEST(SlamRestart, AConfirmedRestartReinitialisesFromTheLastEstimateWithWidenedUncertainty) {
   SlamProcessOptions o;
   o.start_source = SlamProcessOptions::StartSource::kFixed;
-  o.start_pose_W = truthAt(kT0);
+  o.start_pose_W = hallTruthAt(kT0);
   SlamDriver d{o};
   double landmarks = 0;
   const FrameOutput first = restartAndGetFirstPose(d, &landmarks);
   ASSERT_GT(landmarks, 0);
   EXPECT_EQ(d.stats().reinit_last_estimate, 1);
-  const Pose2 truth = truthAt(kT0 + 11'000'000);
+  const Pose2 truth = hallTruthAt(kT0 + 11'000'000);
   EXPECT_LT(std::hypot(first.pose.x_m - truth.x_m, first.pose.y_m - truth.y_m), 1.0)
       << "near where the filter last had the robot, not at the start pose " << o.start_pose_W.x_m;
   EXPECT_GT(std::hypot(first.pose.x_m - o.start_pose_W.x_m, first.pose.y_m - o.start_pose_W.y_m), 2.0);
@@ -227,7 +191,7 @@ TEST(SlamRestart, AConfirmedRestartReinitialisesFromTheLastEstimateWithWidenedUn
 TEST(SlamRestart, StartPoseOnRequest) {
   SlamProcessOptions o;
   o.start_source = SlamProcessOptions::StartSource::kFixed;
-  o.start_pose_W = truthAt(kT0);
+  o.start_pose_W = hallTruthAt(kT0);
   o.restart.reinit_from = RestartOptions::ReinitFrom::kStartPose;
   SlamDriver d{o};
   double landmarks = 0;
@@ -244,7 +208,7 @@ TEST(SlamTimeFaults, HeldFramesSurviveADuplicateAndAreTakenWhenTheOdometryCatche
   Pairer p(PairingOptions{});
   std::vector<PairEvent> ev;
   int64_t t = kT0;
-  for (; t <= kT0 + 1'000'000; t += 20'000) p.addOdometry(t, truthAt(t), ev);
+  for (; t <= kT0 + 1'000'000; t += 20'000) p.addOdometry(t, hallTruthAt(t), ev);
   const int64_t f1 = kT0 + 8'000'000, f2 = kT0 + 9'000'000;  // the odometry lags 7 s behind
   Frame a;
   a.utime = f1, a.seq = 1;
@@ -256,7 +220,7 @@ TEST(SlamTimeFaults, HeldFramesSurviveADuplicateAndAreTakenWhenTheOdometryCatche
   EXPECT_EQ(dup.verdict, Verdict::kDuplicate) << dup.reason;
   EXPECT_TRUE(dup.refused_held.empty());
   size_t refused = 0;
-  for (; t <= kT0 + 10'000'000; t += 20'000) refused += p.addOdometry(t, truthAt(t), ev).refused_held.size();
+  for (; t <= kT0 + 10'000'000; t += 20'000) refused += p.addOdometry(t, hallTruthAt(t), ev).refused_held.size();
   EXPECT_EQ(refused, 0u);
   int paired = 0;
   for (const auto& e : ev) paired += e.kind == PairEvent::Kind::kPaired;

@@ -11,14 +11,13 @@
 
 #include "omnislam/runtime/checkpoint.h"
 #include "omnislam/core/angles.h"
+#include "slam_inputs.h"
 
 using namespace omnislam;
 using namespace omnislam::slamproc;
+using namespace omnislam::testing;
 
 namespace {
-
-constexpr int64_t kT0 = 1'700'000'000'000'000;
-const Eigen::Vector3d kCam_m(0.0, 0.0, 1.8);
 
 Pose2 truthAt(int64_t utime) {  // a slow circle under a grid of lights
   const double t = static_cast<double>(utime - kT0) * 1e-6;
@@ -26,46 +25,19 @@ Pose2 truthAt(int64_t utime) {  // a slow circle under a grid of lights
 }
 
 odometry_t odo(int64_t utime, int64_t seq) {
-  odometry_t m{};
-  m.utime = utime;
-  m.seq = seq;
   const Pose2 p = truthAt(utime);
-  m.x_m = p.x_m * 1.01;  // a scale error, so the filter has work to do
-  m.y_m = p.y_m * 1.01;
-  m.theta_rad = p.theta_rad;
-  return m;
+  return odometryAt(utime, seq, Pose2{p.x_m * 1.01, p.y_m * 1.01, p.theta_rad});  // a scale error: work to do
 }
 
 features_t feats(int64_t utime, int64_t seq, std::mt19937_64& rng) {
-  features_t m{};
-  m.utime = utime;
-  m.seq = seq;
-  m.detector = "test";
-  m.camera_position_m[2] = kCam_m.z();
-  const Pose2 x = truthAt(utime);
-  std::normal_distribution<double> n(0.0, 0.005);
-  for (double lx : {4.0, 10.0, 16.0})
-    for (double ly : {-2.0, 4.0, 10.0}) {
-      const double dx = lx - x.x_m, dy = ly - x.y_m;
-      feature_t f{};
-      f.kind = feature_t::KIND_CEILING_LIGHT;
-      f.azimuth_rad = wrapAngle(std::atan2(dy, dx) - x.theta_rad + n(rng));
-      f.elevation_rad = std::atan2(6.5 - 1.8, std::hypot(dx, dy)) + n(rng);
-      f.has_elevation = true;
-      f.covariance[0][0] = f.covariance[1][1] = 2.7e-5;
-      m.features.push_back(f);
-    }
-  m.num_features = static_cast<int32_t>(m.features.size());
-  return m;
+  return lightFeatures(utime, seq, truthAt(utime), gridLights(), &rng);
 }
-
-using Message = std::variant<odometry_t, features_t>;
 
 /// 60 s of 50 Hz odometry and 1 Hz frames arriving 100 ms before the odometry reaches them (each
 /// waits for five odometry messages), then the input restarting (a log
 /// looping) for 20 s; a stray frame stamped 1000 s ahead at 30 s and a duplicate frame at 40 s.
-std::vector<Message> stream() {
-  std::vector<Message> v;
+std::vector<InputMessage> stream() {
+  std::vector<InputMessage> v;
   std::mt19937_64 rng(3);
   int64_t oseq = 0, fseq = 0;
   const auto epoch = [&](int64_t t0, int seconds) {
@@ -84,26 +56,14 @@ std::vector<Message> stream() {
   return v;
 }
 
-template <class Msg>
-std::vector<uint8_t> bytes(const Msg& m) {
-  std::vector<uint8_t> b(static_cast<size_t>(m.getEncodedSize()));
-  m.encode(b.data(), 0, static_cast<int>(b.size()));
-  return b;
-}
-
 /// Every output of a driver result, encoded, in publishing order.
 void append(const DriverResult& r, std::vector<std::vector<uint8_t>>& out) {
   for (const FrameOutput& o : r.outputs) {
-    out.push_back(bytes(o.pose));
-    if (o.map) out.push_back(bytes(*o.map));
-    out.push_back(bytes(o.particles));
-    if (o.associations) out.push_back(bytes(*o.associations));
+    out.push_back(encoded(o.pose));
+    if (o.map) out.push_back(encoded(*o.map));
+    out.push_back(encoded(o.particles));
+    if (o.associations) out.push_back(encoded(*o.associations));
   }
-}
-
-DriverResult feed(SlamDriver& d, const Message& m) {
-  if (const auto* o = std::get_if<odometry_t>(&m)) return d.onOdometry(*o);
-  return d.onFeatures(std::get<features_t>(m));
 }
 
 SlamProcessOptions options() {
@@ -123,7 +83,7 @@ TEST(Checkpoint, ResumedDriverPublishesExactlyWhatTheUninterruptedOneDoes) {
   std::vector<std::size_t> outputs_before(msgs.size() + 1, 0);
   for (std::size_t i = 0; i < msgs.size(); ++i) {
     outputs_before[i] = ref_out.size();
-    append(feed(ref, msgs[i]), ref_out);
+    append(feedDriver(ref, msgs[i]), ref_out);
   }
   outputs_before[msgs.size()] = ref_out.size();
   append(ref.finish(), ref_out);
@@ -157,7 +117,7 @@ TEST(Checkpoint, ResumedDriverPublishesExactlyWhatTheUninterruptedOneDoes) {
       ASSERT_EQ(clock.admit(std::holds_alternative<features_t>(msgs[i]),
                             std::visit([](const auto& m) { return m.utime; }, msgs[i])),
                 "");
-      feed(before, msgs[i]);
+      feedDriver(before, msgs[i]);
     }
     const auto file = encodeCheckpoint(opt, before, clock, ReplayPosition{});
     SlamDriver after(opt);
@@ -165,7 +125,7 @@ TEST(Checkpoint, ResumedDriverPublishesExactlyWhatTheUninterruptedOneDoes) {
     decodeCheckpoint(file, opt, after, clock2);
     EXPECT_EQ(after.summary(), before.summary());
     std::vector<std::vector<uint8_t>> out;
-    for (std::size_t i = cut; i < msgs.size(); ++i) append(feed(after, msgs[i]), out);
+    for (std::size_t i = cut; i < msgs.size(); ++i) append(feedDriver(after, msgs[i]), out);
     append(after.finish(), out);
     const std::vector<std::vector<uint8_t>> tail(ref_out.begin() + static_cast<long>(outputs_before[cut]),
                                                  ref_out.end());
@@ -185,7 +145,7 @@ TEST(Checkpoint, OtherOptionsOrDamageAreRefusedWithTheReasonAndLeaveTheDriverAlo
   const SlamProcessOptions opt = options();
   SlamDriver d(opt);
   InputClock clock(opt.pairing.restart_jump_us);
-  for (std::size_t i = 0; i < 800; ++i) feed(d, msgs[i]);
+  for (std::size_t i = 0; i < 800; ++i) feedDriver(d, msgs[i]);
   const auto file = encodeCheckpoint(opt, d, clock, ReplayPosition{});
   const auto reason = [&](const std::vector<uint8_t>& bytes, const SlamProcessOptions& o) -> std::string {
     SlamDriver fresh(o);
@@ -245,7 +205,8 @@ TEST(Checkpoint, FileIsReplacedAtomically) {
   writeFileAtomically(path, {1, 2, 3});
   writeFileAtomically(path, {4, 5});
   EXPECT_EQ(readWholeFile(path), (std::vector<uint8_t>{4, 5}));
-  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename(), "state.ckpt") << "no temporary file left behind";
   EXPECT_THROW(writeFileAtomically(dir + "/no/such/folder/x", {1}), std::runtime_error);
   EXPECT_THROW(readWholeFile(dir + "/missing"), std::runtime_error);
   std::filesystem::remove_all(dir);

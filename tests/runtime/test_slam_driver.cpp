@@ -12,84 +12,24 @@
 
 #include "omnislam/core/angles.h"
 #include "omnislam/runtime/slam_driver.h"
+#include "slam_inputs.h"
 
 using namespace omnislam;
 using namespace omnislam::slamproc;
+using namespace omnislam::testing;
 
 namespace {
-
-constexpr int64_t kT0 = 1'700'000'000'000'000;
-
-const Eigen::Vector3d kCam_m(0.0, 0.0, 1.8);
-
-std::vector<Eigen::Vector3d> hallLights() {
-  std::vector<Eigen::Vector3d> out;
-  for (double x : {4.5, 13.5, 22.5, 31.5})
-    for (double y : {-5.5, -1.0, 3.5, 8.0}) out.emplace_back(x, y, 6.5);
-  return out;
-}
-
-/// Straight line along x at 0.27 m/s from (6, -3.25).
-Pose2 truthAt(int64_t utime) {
-  const double t = static_cast<double>(utime - kT0) * 1e-6;
-  return Pose2{6.0 + 0.27 * t, -3.25, 0.0};
-}
-
-odometry_t odo(int64_t utime, int64_t seq) {
-  odometry_t m{};
-  m.utime = utime;
-  m.seq = seq;
-  const Pose2 p = truthAt(utime);
-  m.x_m = p.x_m;
-  m.y_m = p.y_m;
-  m.theta_rad = p.theta_rad;
-  m.v_mps = 0.27;
-  return m;
-}
-
-features_t feats(int64_t utime, int64_t seq) {
-  features_t m{};
-  m.utime = utime;
-  m.seq = seq;
-  m.image_seq = seq;
-  m.detector = "test";
-  m.camera_position_m[0] = kCam_m.x();
-  m.camera_position_m[1] = kCam_m.y();
-  m.camera_position_m[2] = kCam_m.z();
-  const Pose2 x = truthAt(utime);
-  for (const auto& L : hallLights()) {
-    const Eigen::Vector2d c = x.transformFrom(kCam_m.head<2>());
-    const Eigen::Vector3d d_W(L.x() - c.x(), L.y() - c.y(), L.z() - kCam_m.z());
-    const double az_W = std::atan2(d_W.y(), d_W.x());
-    feature_t f{};
-    f.kind = feature_t::KIND_CEILING_LIGHT;
-    f.azimuth_rad = wrapAngle(az_W - x.theta_rad);
-    f.elevation_rad = std::atan2(d_W.z(), d_W.head<2>().norm());
-    f.has_elevation = true;
-    f.covariance[0][0] = f.covariance[1][1] = 2.7e-5;
-    m.features.push_back(f);
-  }
-  m.num_features = static_cast<int32_t>(m.features.size());
-  return m;
-}
 
 /// Feeds `seconds` of 50 Hz odometry and 1 Hz frames, frames arriving 100 ms late.
 std::vector<FrameOutput> run(SlamDriver& d, int seconds, int64_t t0 = kT0) {
   std::vector<FrameOutput> outs;
   int64_t oseq = 0, fseq = 0;
   for (int64_t t = t0; t <= t0 + seconds * 1'000'000LL; t += 20'000) {
-    for (auto& o : d.onOdometry(odo(t, oseq++)).outputs) outs.push_back(std::move(o));
+    for (auto& o : d.onOdometry(hallOdometry(t, oseq++)).outputs) outs.push_back(std::move(o));
     if (t - 100'000 >= t0 && (t - 100'000 - t0) % 1'000'000 == 0)
-      for (auto& o : d.onFeatures(feats(t - 100'000, fseq++)).outputs) outs.push_back(std::move(o));
+      for (auto& o : d.onFeatures(hallFeatures(t - 100'000, fseq++)).outputs) outs.push_back(std::move(o));
   }
   return outs;
-}
-
-template <class Msg>
-std::vector<uint8_t> bytes(const Msg& m) {
-  std::vector<uint8_t> b(static_cast<size_t>(m.getEncodedSize()));
-  m.encode(b.data(), 0, static_cast<int>(b.size()));
-  return b;
 }
 
 TEST(ToMeasurement, ConvertsKindsAndSkipsWhatIsOffOrIncomplete) {
@@ -162,7 +102,7 @@ TEST(SlamDriver, AnswersEveryFrameStampedWithItsUtimeAndSeq) {
     EXPECT_NEAR(wsum, 1.0, 1e-9);
   }
   // Perfect odometry and bearings: the pose follows the truth and lights get mapped.
-  const Pose2 truth = truthAt(outs.back().pose.utime);
+  const Pose2 truth = hallTruthAt(outs.back().pose.utime);
   EXPECT_LT(std::hypot(outs.back().pose.x_m - truth.x_m, outs.back().pose.y_m - truth.y_m), 0.1);
   EXPECT_GT(d.stats().frames_processed, 0);
   ASSERT_NE(d.filter(), nullptr);
@@ -177,14 +117,14 @@ TEST(SlamDriver, SameInputsAndSeedGiveIdenticalBytes) {
   const auto oa = run(a, 15), ob = run(b, 15);
   ASSERT_EQ(oa.size(), ob.size());
   for (size_t i = 0; i < oa.size(); ++i) {
-    EXPECT_EQ(bytes(oa[i].pose), bytes(ob[i].pose));
-    EXPECT_EQ(bytes(*oa[i].map), bytes(*ob[i].map));
-    EXPECT_EQ(bytes(oa[i].particles), bytes(ob[i].particles));
+    EXPECT_EQ(encoded(oa[i].pose), encoded(ob[i].pose));
+    EXPECT_EQ(encoded(*oa[i].map), encoded(*ob[i].map));
+    EXPECT_EQ(encoded(oa[i].particles), encoded(ob[i].particles));
   }
   o.seed = 43;
   SlamDriver c(o);
   const auto oc = run(c, 15);
-  EXPECT_NE(bytes(oa.back().particles), bytes(oc.back().particles)) << "the seed matters";
+  EXPECT_NE(encoded(oa.back().particles), encoded(oc.back().particles)) << "the seed matters";
 }
 
 TEST(SlamDriver, FixedStartPoseSetsTheMapFrame) {
@@ -194,9 +134,9 @@ TEST(SlamDriver, FixedStartPoseSetsTheMapFrame) {
   SlamDriver d(o);
   std::vector<FrameOutput> outs;
   for (int i = 0; i < 3; ++i) {
-    d.onOdometry(odo(kT0 + i * 20'000, i));
+    d.onOdometry(hallOdometry(kT0 + i * 20'000, i));
   }
-  auto r = d.onFeatures(feats(kT0, 0));
+  auto r = d.onFeatures(hallFeatures(kT0, 0));
   ASSERT_EQ(r.outputs.size(), 1u);
   EXPECT_NEAR(r.outputs[0].pose.x_m, 100.0, 0.05);
   EXPECT_NEAR(r.outputs[0].pose.y_m, 50.0, 0.05);
@@ -208,19 +148,19 @@ TEST(SlamDriver, DegradedInputIsRefusedOrDroppedAndTheFilterCarriesOn) {
   run(d, 10);
   const Pose2 before = d.filter()->meanPose();
   // Duplicate and out-of-order odometry and frames: refused with a reason, no output.
-  auto r = d.onOdometry(odo(kT0 + 10'000'000, 999));
+  auto r = d.onOdometry(hallOdometry(kT0 + 10'000'000, 999));
   ASSERT_EQ(r.refused.size(), 1u);
   EXPECT_EQ(r.refused[0].channel, "ODOMETRY");
-  r = d.onOdometry(odo(kT0 + 9'000'000, 999));
+  r = d.onOdometry(hallOdometry(kT0 + 9'000'000, 999));
   ASSERT_EQ(r.refused.size(), 1u);
   EXPECT_NE(r.refused[0].reason.find("out of order"), std::string::npos);
-  r = d.onFeatures(feats(kT0 + 9'000'000, 999));  // the frame at 9 s was already processed
+  r = d.onFeatures(hallFeatures(kT0 + 9'000'000, 999));  // the frame at 9 s was already processed
   ASSERT_EQ(r.refused.size(), 1u);
   EXPECT_EQ(r.refused[0].channel, "OMNI_FEATURES");
   EXPECT_NE(r.refused[0].reason.find("duplicate"), std::string::npos);
   EXPECT_TRUE(r.outputs.empty());
   // A frame with broken measurements (bypassing validation): the filter rejects them, no crash.
-  features_t bad = feats(kT0 + 9'950'000, 10);
+  features_t bad = hallFeatures(kT0 + 9'950'000, 10);
   bad.features[0].azimuth_rad = std::numeric_limits<double>::quiet_NaN();
   bad.features[1].covariance[1][1] = -1.0;  // not positive definite
   r = d.onFeatures(bad);
@@ -240,7 +180,7 @@ TEST(SlamDriver, ImplausibleOdometryAndCameraPositionsAreRefusedAndTheRunGoesOn)
   SlamDriver d{SlamProcessOptions{}};
   run(d, 10);
   const int64_t processed = d.stats().frames_processed;
-  odometry_t far = odo(kT0 + 10'020'000, 1000);
+  odometry_t far = hallOdometry(kT0 + 10'020'000, 1000);
   far.x_m = 1e300;
   auto r = d.onOdometry(far);
   ASSERT_EQ(r.refused.size(), 1u);
@@ -252,13 +192,13 @@ TEST(SlamDriver, ImplausibleOdometryAndCameraPositionsAreRefusedAndTheRunGoesOn)
         o << far.y_m << " m, " << far.theta_rad;
         return o.str();
       }() + " rad) outside the workspace (|x|, |y| <= 10000 m)");
-  odometry_t spun = odo(kT0 + 10'040'000, 1001);
+  odometry_t spun = hallOdometry(kT0 + 10'040'000, 1001);
   spun.theta_rad = 1e15;
   EXPECT_EQ(d.onOdometry(spun).refused.size(), 1u);
-  odometry_t edge = odo(kT0 + 10'060'000, 1002);
+  odometry_t edge = hallOdometry(kT0 + 10'060'000, 1002);
   edge.y_m = -10'000.0 - 1.0;
   EXPECT_EQ(d.onOdometry(edge).refused.size(), 1u);
-  features_t high = feats(kT0 + 10'900'000, 1000);
+  features_t high = hallFeatures(kT0 + 10'900'000, 1000);
   high.camera_position_m[2] = 1e10;
   r = d.onFeatures(high);
   ASSERT_EQ(r.refused.size(), 1u);
@@ -274,14 +214,14 @@ TEST(SlamDriver, ImplausibleOdometryAndCameraPositionsAreRefusedAndTheRunGoesOn)
   ASSERT_GE(outs.size(), 5u);
   for (const auto& o : outs) {
     ASSERT_TRUE(std::isfinite(o.pose.x_m) && std::isfinite(o.pose.y_m) && std::isfinite(o.pose.theta_rad));
-    const Pose2 t = truthAt(o.pose.utime);
+    const Pose2 t = hallTruthAt(o.pose.utime);
     EXPECT_LT(std::hypot(o.pose.x_m - t.x_m, o.pose.y_m - t.y_m), 0.5) << o.pose.utime;
   }
   // A camera 10 m away is the contract's bound itself: accepted.
   SlamDriver e{SlamProcessOptions{}};
-  features_t ten = feats(kT0, 0);
+  features_t ten = hallFeatures(kT0, 0);
   ten.camera_position_m[0] = 0.0, ten.camera_position_m[1] = 0.0, ten.camera_position_m[2] = 10.0;
-  e.onOdometry(odo(kT0, 0));
+  e.onOdometry(hallOdometry(kT0, 0));
   EXPECT_TRUE(e.onFeatures(ten).refused.empty());
   EXPECT_EQ(e.stats().implausible, 0);
 }
@@ -296,7 +236,7 @@ TEST(SlamDriver, TwoStrayFramesStampedYearsAheadDoNotResetTheFilter) {
   const int64_t years_us = int64_t{3} * 365 * 24 * 3600 * 1'000'000;
   std::vector<std::string> notes;
   for (int k = 0; k < 2; ++k) {
-    const auto r = d.onFeatures(feats(kT0 + 10'200'000 + k * 100'000 + years_us, 500 + k));
+    const auto r = d.onFeatures(hallFeatures(kT0 + 10'200'000 + k * 100'000 + years_us, 500 + k));
     EXPECT_TRUE(r.refused.empty() && r.outputs.empty());
     notes.insert(notes.end(), r.notes.begin(), r.notes.end());
   }
@@ -309,7 +249,7 @@ TEST(SlamDriver, TwoStrayFramesStampedYearsAheadDoNotResetTheFilter) {
   EXPECT_EQ(d.stats().pairing.forward_jumps, 0);
   ASSERT_GE(outs.size(), 9u);
   for (const auto& o : outs) {
-    const Pose2 t = truthAt(o.pose.utime);
+    const Pose2 t = hallTruthAt(o.pose.utime);
     EXPECT_LT(std::hypot(o.pose.x_m - t.x_m, o.pose.y_m - t.y_m), 0.5) << o.pose.utime;
   }
   EXPECT_GT(outs.back().map->num_landmarks, 0) << "the map was kept";
@@ -320,14 +260,14 @@ TEST(SlamDriver, TwoStrayFramesStampedYearsAheadDoNotResetTheFilter) {
 // frame of ordinary size spans the odometry since the last step.
 TEST(SlamDriver, AFrameWithTooManyFeaturesIsRefusedAndTheNextOneSteps) {
   SlamProcessOptions o;
-  o.max_features_per_frame = 16;  // hallLights() gives exactly 16
+  o.max_features_per_frame = 16;  // hallFeatures() gives exactly 16
   SlamDriver d{o};
   run(d, 10);
   const int64_t processed = d.stats().frames_processed;
-  features_t big = feats(kT0 + 10'500'000, 10);
+  features_t big = hallFeatures(kT0 + 10'500'000, 10);
   big.features.push_back(big.features.front());
   big.num_features = static_cast<int32_t>(big.features.size());
-  EXPECT_TRUE(d.onOdometry(odo(kT0 + 10'520'000, 600)).outputs.empty());
+  EXPECT_TRUE(d.onOdometry(hallOdometry(kT0 + 10'520'000, 600)).outputs.empty());
   EXPECT_TRUE(d.onFeatures(big).outputs.empty());
   auto r = d.onFeatures(big);  // the same again: refused for its size, not as a duplicate
   ASSERT_EQ(r.refused.size(), 1u);
@@ -341,19 +281,19 @@ TEST(SlamDriver, AFrameWithTooManyFeaturesIsRefusedAndTheNextOneSteps) {
   SlamProcessOptions lights_only = o;
   lights_only.use_vertical_lines = false;
   SlamDriver e{lights_only};
-  features_t mixed = feats(kT0, 0);
+  features_t mixed = hallFeatures(kT0, 0);
   feature_t line = mixed.features.front();
   line.kind = feature_t::KIND_VERTICAL_LINE;
   line.has_elevation = false;
   for (int i = 0; i < 40; ++i) mixed.features.push_back(line);
   mixed.num_features = static_cast<int32_t>(mixed.features.size());
-  e.onOdometry(odo(kT0, 0));
+  e.onOdometry(hallOdometry(kT0, 0));
   EXPECT_TRUE(e.onFeatures(mixed).refused.empty());
   EXPECT_EQ(e.stats().frames_too_large, 0);
   // The next ordinary frame steps.
-  d.onOdometry(odo(kT0 + 11'000'000, 601));
-  d.onOdometry(odo(kT0 + 11'020'000, 602));
-  r = d.onFeatures(feats(kT0 + 11'000'000, 11));
+  d.onOdometry(hallOdometry(kT0 + 11'000'000, 601));
+  d.onOdometry(hallOdometry(kT0 + 11'020'000, 602));
+  r = d.onFeatures(hallFeatures(kT0 + 11'000'000, 11));
   EXPECT_TRUE(r.refused.empty());
   EXPECT_EQ(d.stats().frames_processed, processed + 1);
 }
@@ -362,14 +302,14 @@ TEST(SlamDriver, OdometryGapDropsFramesButTheNextStepSpansTheGap) {
   SlamDriver d{SlamProcessOptions{}};
   run(d, 5);  // frames 0..4 s processed, odometry to 5 s
   // Odometry silent from 5 s to 8 s (cumulative: nothing is lost), frames at 5..7 s in the gap.
-  for (int i = 5; i <= 7; ++i) d.onFeatures(feats(kT0 + i * 1'000'000 + 10'000, 100 + i));
-  auto r = d.onOdometry(odo(kT0 + 8'000'000, 1000));
+  for (int i = 5; i <= 7; ++i) d.onFeatures(hallFeatures(kT0 + i * 1'000'000 + 10'000, 100 + i));
+  auto r = d.onOdometry(hallOdometry(kT0 + 8'000'000, 1000));
   EXPECT_EQ(r.dropped.size(), 3u);
   EXPECT_EQ(d.stats().pairing.dropped_odometry_gap, 3);
-  d.onOdometry(odo(kT0 + 8'020'000, 1001));
-  r = d.onFeatures(feats(kT0 + 8'010'000, 108));
+  d.onOdometry(hallOdometry(kT0 + 8'020'000, 1001));
+  r = d.onFeatures(hallFeatures(kT0 + 8'010'000, 108));
   ASSERT_EQ(r.outputs.size(), 1u);
-  const Pose2 truth = truthAt(kT0 + 8'010'000);
+  const Pose2 truth = hallTruthAt(kT0 + 8'010'000);
   EXPECT_NEAR(r.outputs[0].pose.x_m, truth.x_m, 0.1) << "the increment over the gap is applied whole";
 }
 
@@ -377,26 +317,26 @@ TEST(SlamDriver, OdometryRestartingAtTheOriginIsReBasedAndTheFilterCarriesOn) {
   SlamDriver d{SlamProcessOptions{}};
   run(d, 10);  // odometry up to 10 s
   // From 10.02 s the odometry process starts again: its frame is the robot's pose at 10.02 s.
-  const Pose2 origin = truthAt(kT0 + 10'020'000);
+  const Pose2 origin = hallTruthAt(kT0 + 10'020'000);
   std::vector<std::string> notes;
   std::vector<FrameOutput> outs;
   int64_t seq = 0;
   for (int64_t t = kT0 + 10'020'000; t <= kT0 + 15'000'000; t += 20'000) {
-    odometry_t m = odo(t, seq++);
-    const Pose2 p = origin.between(truthAt(t));
+    odometry_t m = hallOdometry(t, seq++);
+    const Pose2 p = origin.between(hallTruthAt(t));
     m.x_m = p.x_m;
     m.y_m = p.y_m;
     m.theta_rad = p.theta_rad;
     auto r = d.onOdometry(m);
     notes.insert(notes.end(), r.notes.begin(), r.notes.end());
     if ((t - kT0 - 100'000) % 1'000'000 == 0)
-      for (auto& o : d.onFeatures(feats(t - 100'000, 100 + seq)).outputs) outs.push_back(std::move(o));
+      for (auto& o : d.onFeatures(hallFeatures(t - 100'000, 100 + seq)).outputs) outs.push_back(std::move(o));
   }
   ASSERT_EQ(notes.size(), 1u);
   EXPECT_NE(notes[0].find("re-based"), std::string::npos) << notes[0];
   EXPECT_EQ(d.stats().pairing.odometry_jumps, 1);
   ASSERT_EQ(outs.size(), 5u);  // frames at 10..14 s
-  const Pose2 truth = truthAt(outs.back().pose.utime);
+  const Pose2 truth = hallTruthAt(outs.back().pose.utime);
   // 20 ms of motion (5 mm) is lost over the jump, nothing else.
   EXPECT_LT(std::hypot(outs.back().pose.x_m - truth.x_m, outs.back().pose.y_m - truth.y_m), 0.1);
 }
@@ -412,11 +352,11 @@ TEST(SlamDriver, RestartReinitialisesTheFilterAndKeepsOutputSequences) {
   int64_t oseq = 0, fseq = 0;
   std::vector<std::string> notes;
   for (int64_t t = kT0; t <= kT0 + 3'000'000; t += 20'000) {
-    auto r = d.onOdometry(odo(t, oseq++));
+    auto r = d.onOdometry(hallOdometry(t, oseq++));
     notes.insert(notes.end(), r.notes.begin(), r.notes.end());
     for (auto& o : r.outputs) second.push_back(std::move(o));
     if (t - 100'000 >= kT0 && (t - 100'000 - kT0) % 1'000'000 == 0) {
-      auto f = d.onFeatures(feats(t - 100'000, fseq++));
+      auto f = d.onFeatures(hallFeatures(t - 100'000, fseq++));
       notes.insert(notes.end(), f.notes.begin(), f.notes.end());
       for (auto& o : f.outputs) second.push_back(std::move(o));
     }
@@ -454,7 +394,7 @@ TEST(SlamDriver, TheMapEndedByARestartIsSavedWhenNoFrameFollowsIt) {
   // The odometry starts again from the beginning (a replayed log) and no frame comes after it: a
   // restart once the odometry held spans max_wait_s (the frame stream has gone silent).
   const int64_t wait_us = SlamProcessOptions{}.pairing.max_wait_us;
-  for (int64_t k = 0; k * 20'000 <= wait_us; ++k) d.onOdometry(odo(kT0 + k * 20'000, 1000 + k));
+  for (int64_t k = 0; k * 20'000 <= wait_us; ++k) d.onOdometry(hallOdometry(kT0 + k * 20'000, 1000 + k));
   ASSERT_EQ(d.stats().filter_resets, 1);
   EXPECT_EQ(d.filter(), nullptr);
   const slam::FastSlam* saved = d.filterToSave(&utime);
@@ -467,7 +407,7 @@ TEST(SlamDriver, FramesWithoutOdometryAreDroppedAndCounted) {
   SlamDriver d{SlamProcessOptions{}};
   std::vector<std::string> dropped;
   for (int i = 0; i < 6; ++i) {
-    auto r = d.onFeatures(feats(kT0 + i * 1'000'000, i));
+    auto r = d.onFeatures(hallFeatures(kT0 + i * 1'000'000, i));
     EXPECT_TRUE(r.outputs.empty());
     dropped.insert(dropped.end(), r.dropped.begin(), r.dropped.end());
   }
@@ -499,7 +439,7 @@ TEST(SlamDriver, OdometryOnlyPosesWhileFramesAreMissingThenRecovers) {
   std::vector<FrameOutput> pred;
   int64_t oseq = 10000;
   for (int64_t t = kT0 + 10'020'000; t <= kT0 + 20'000'000; t += 20'000)
-    for (auto& f : d.onOdometry(odo(t, oseq++)).outputs) pred.push_back(std::move(f));
+    for (auto& f : d.onOdometry(hallOdometry(t, oseq++)).outputs) pred.push_back(std::move(f));
   // The last frame (9 s) arrived with the odometry of 9.1 s: predictions at 12.1, 13.1, ..., 19.1 s.
   ASSERT_EQ(pred.size(), 8u);
   for (std::size_t i = 0; i < pred.size(); ++i) {
@@ -509,7 +449,7 @@ TEST(SlamDriver, OdometryOnlyPosesWhileFramesAreMissingThenRecovers) {
     EXPECT_FALSE(pred[i].map.has_value());
     EXPECT_FALSE(pred[i].associations.has_value());
     EXPECT_EQ(pred[i].pose.seq, outs.back().pose.seq + 1 + static_cast<int64_t>(i));
-    const Pose2 truth = truthAt(pred[i].pose.utime);
+    const Pose2 truth = hallTruthAt(pred[i].pose.utime);
     EXPECT_LT(std::hypot(pred[i].pose.x_m - truth.x_m, pred[i].pose.y_m - truth.y_m), 0.2);
     // The pose's ESS is that of the weights its SLAM_PARTICLES carries (the prediction keeps the
     // weights), not the last frame step's.
@@ -519,7 +459,7 @@ TEST(SlamDriver, OdometryOnlyPosesWhileFramesAreMissingThenRecovers) {
   }
   EXPECT_EQ(d.stats().odometry_only_steps, 8);
   // A late frame from before the last prediction is dropped, not stepped backwards.
-  auto late = d.onFeatures(feats(kT0 + 19'000'000, 500));
+  auto late = d.onFeatures(hallFeatures(kT0 + 19'000'000, 500));
   EXPECT_TRUE(late.outputs.empty());
   ASSERT_EQ(late.dropped.size(), 1u);
   EXPECT_NE(late.dropped[0].find("odometry-only"), std::string::npos) << late.dropped[0];
@@ -529,9 +469,9 @@ TEST(SlamDriver, OdometryOnlyPosesWhileFramesAreMissingThenRecovers) {
   std::vector<FrameOutput> back;
   int64_t fseq = 600;
   for (int64_t t = kT0 + 20'020'000; t <= kT0 + 25'000'000; t += 20'000) {
-    for (auto& f : d.onOdometry(odo(t, oseq++)).outputs) back.push_back(std::move(f));
+    for (auto& f : d.onOdometry(hallOdometry(t, oseq++)).outputs) back.push_back(std::move(f));
     if ((t - kT0 - 100'000) % 1'000'000 == 0)
-      for (auto& f : d.onFeatures(feats(t - 100'000, fseq++)).outputs) back.push_back(std::move(f));
+      for (auto& f : d.onFeatures(hallFeatures(t - 100'000, fseq++)).outputs) back.push_back(std::move(f));
   }
   ASSERT_GE(back.size(), 4u);
   for (const auto& f : back) {
@@ -541,7 +481,7 @@ TEST(SlamDriver, OdometryOnlyPosesWhileFramesAreMissingThenRecovers) {
     int associated = 0;
     for (int64_t id : f.associations->landmark_id) associated += id >= 0;
     EXPECT_GT(associated, 4) << "the mapped lights are associated again";
-    const Pose2 truth = truthAt(f.pose.utime);
+    const Pose2 truth = hallTruthAt(f.pose.utime);
     EXPECT_LT(std::hypot(f.pose.x_m - truth.x_m, f.pose.y_m - truth.y_m), 0.2);
   }
   // Off: no prediction at all.
@@ -550,7 +490,7 @@ TEST(SlamDriver, OdometryOnlyPosesWhileFramesAreMissingThenRecovers) {
   SlamDriver d2(off);
   run(d2, 5);
   for (int64_t t = kT0 + 5'020'000; t <= kT0 + 15'000'000; t += 20'000)
-    EXPECT_TRUE(d2.onOdometry(odo(t, oseq++)).outputs.empty());
+    EXPECT_TRUE(d2.onOdometry(hallOdometry(t, oseq++)).outputs.empty());
 }
 
 // SLAM_ASSOCIATIONS has one entry per feature of the message: features the filter does not use
@@ -563,7 +503,7 @@ TEST(SlamDriver, AssociationsCoverEveryFeatureOfTheFrame) {
   SlamDriver d(o);
   run(d, 10);
   const int64_t t = kT0 + 10'000'000;
-  features_t m = feats(t, 50);
+  features_t m = hallFeatures(t, 50);
   feature_t line{};
   line.kind = feature_t::KIND_VERTICAL_LINE;
   line.covariance[0][0] = 1e-4;
@@ -573,7 +513,7 @@ TEST(SlamDriver, AssociationsCoverEveryFeatureOfTheFrame) {
   m.features.insert(m.features.begin() + 6, bad);
   m.num_features = static_cast<int32_t>(m.features.size());
   auto r = d.onFeatures(m);
-  for (auto& f : d.onOdometry(odo(t + 20'000, 99999)).outputs) r.outputs.push_back(std::move(f));
+  for (auto& f : d.onOdometry(hallOdometry(t + 20'000, 99999)).outputs) r.outputs.push_back(std::move(f));
   ASSERT_EQ(r.outputs.size(), 1u);
   ASSERT_TRUE(r.outputs[0].associations);
   const associations_t& a = *r.outputs[0].associations;
@@ -601,7 +541,7 @@ TEST(SlamDriver, AssociationsCoverEveryFeatureOfTheFrame) {
 // Localisation only from a saved map: the pose follows the truth, the map is exactly the prior.
 TEST(SlamDriver, LocalisationOnlyFromAPriorMap) {
   std::vector<slam::Landmark> prior;
-  for (const auto& p : hallLights()) {
+  for (const auto& p : slam::scenarios::hallLights()) {
     slam::Landmark L;
     L.id = 1000 + prior.size();
     L.p_LinW_m = p;
@@ -613,12 +553,12 @@ TEST(SlamDriver, LocalisationOnlyFromAPriorMap) {
   o.localisation_only = true;
   o.load_map_path = "prior.yaml";  // only its presence is checked here; main.cpp reads the file
   o.start_source = SlamProcessOptions::StartSource::kFixed;
-  o.start_pose_W = truthAt(kT0);
+  o.start_pose_W = hallTruthAt(kT0);
   SlamDriver d(o, prior);
   const auto outs = run(d, 15);
   ASSERT_EQ(outs.size(), 15u);
   for (const auto& f : outs) {
-    const Pose2 truth = truthAt(f.pose.utime);
+    const Pose2 truth = hallTruthAt(f.pose.utime);
     EXPECT_LT(std::hypot(f.pose.x_m - truth.x_m, f.pose.y_m - truth.y_m), 0.1);
     ASSERT_TRUE(f.associations);
     int associated = 0;
@@ -654,13 +594,13 @@ TEST(SlamDriver, LaggingButAliveFeaturesNeverTriggerPredictions) {
   SlamDriver d(o);
   int64_t oseq = 0, fseq = 0, outputs = 0;
   for (int64_t t = kT0; t <= kT0 + 30'000'000; t += 20'000) {
-    for (auto& f : d.onOdometry(odo(t, oseq++)).outputs) {
+    for (auto& f : d.onOdometry(hallOdometry(t, oseq++)).outputs) {
       EXPECT_FALSE(f.odometry_only) << "at odometry time " << (t - kT0) * 1e-6;
       ++outputs;
     }
     const int64_t tf = t - 5'000'000;  // the frame taken 5 s ago arrives now
     if (tf >= kT0 && (tf - kT0) % 1'000'000 == 0)
-      for (auto& f : d.onFeatures(feats(tf, fseq++)).outputs) {
+      for (auto& f : d.onFeatures(hallFeatures(tf, fseq++)).outputs) {
         EXPECT_FALSE(f.odometry_only);
         ++outputs;
       }

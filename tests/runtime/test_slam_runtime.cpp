@@ -18,52 +18,28 @@
 #include "omnislam/lcmio/log_writer.h"
 #include "omnislam/runtime/replay.h"
 #include "omnislam/runtime/slam_runtime.h"
+#include "slam_inputs.h"
 
 using namespace omnislam;
 using namespace omnislam::slamproc;
+using namespace omnislam::testing;
 
 namespace {
 
-constexpr int64_t kT0 = 1'700'000'000'000'000;
-
-odometry_t odo(int64_t utime, int64_t seq) {
+/// Straight along x at 0.2 m/s from (10, 4).
+Pose2 truthAt(int64_t utime) {
   const double t = static_cast<double>(utime - kT0) * 1e-6;
-  odometry_t m{};
-  m.utime = utime;
-  m.seq = seq;
-  m.x_m = 10.0 + 0.2 * t;
-  m.y_m = 4.0;
-  m.theta_rad = 0.0;
-  return m;
+  return Pose2{10.0 + 0.2 * t, 4.0, 0.0};
 }
 
-/// Bearings to a 3 x 3 grid of ceiling lights 6.5 m up from the pose of odo().
-features_t feats(int64_t utime, int64_t seq) {
-  const odometry_t x = odo(utime, 0);
-  features_t m{};
-  m.utime = utime;
-  m.seq = seq;
-  m.detector = "test";
-  m.camera_position_m[2] = 1.8;
-  for (double lx : {4.0, 10.0, 16.0})
-    for (double ly : {-2.0, 4.0, 10.0}) {
-      feature_t f{};
-      f.kind = feature_t::KIND_CEILING_LIGHT;
-      f.azimuth_rad = wrapAngle(std::atan2(ly - x.y_m, lx - x.x_m));
-      f.elevation_rad = std::atan2(6.5 - 1.8, std::hypot(ly - x.y_m, lx - x.x_m));
-      f.has_elevation = true;
-      f.covariance[0][0] = f.covariance[1][1] = 2.7e-5;
-      m.features.push_back(f);
-    }
-  m.num_features = static_cast<int32_t>(m.features.size());
-  return m;
-}
+odometry_t odo(int64_t utime, int64_t seq) { return odometryAt(utime, seq, truthAt(utime)); }
 
-using Message = std::variant<odometry_t, features_t>;
+/// Exact bearings to a 3 x 3 grid of ceiling lights 6.5 m up from the pose of odo().
+features_t feats(int64_t utime, int64_t seq) { return lightFeatures(utime, seq, truthAt(utime), gridLights()); }
 
 /// 12 s of 50 Hz odometry and 1 Hz frames.
-std::vector<Message> stream() {
-  std::vector<Message> v;
+std::vector<InputMessage> stream() {
+  std::vector<InputMessage> v;
   int64_t fseq = 0;
   for (int64_t k = 0; k <= 600; ++k) {
     const int64_t t = kT0 + k * 20'000;
@@ -79,18 +55,11 @@ SlamProcessOptions options() {
   return o;
 }
 
-template <class Msg>
-std::vector<uint8_t> bytes(const Msg& m) {
-  std::vector<uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
-  m.encode(b.data(), 0, static_cast<int>(b.size()));
-  return b;
-}
-
 /// The SLAM_POSE messages, encoded, of every result.
 struct Poses {
   std::vector<std::vector<uint8_t>> encoded;
   void add(const DriverResult& r) {
-    for (const FrameOutput& o : r.outputs) encoded.push_back(bytes(o.pose));
+    for (const FrameOutput& o : r.outputs) encoded.push_back(omnislam::testing::encoded(o.pose));
   }
 };
 
@@ -107,7 +76,7 @@ TEST(SlamRuntime, AnswersEachInputAsTheDriverAloneDoes) {
   SlamRuntime rt(opt, {}, "[test] ");
   Poses direct, via_runtime;
   const auto emit = [&](const DriverResult& r) { via_runtime.add(r); };
-  for (const Message& m : stream()) {
+  for (const InputMessage& m : stream()) {
     if (const auto* o = std::get_if<odometry_t>(&m)) {
       direct.add(driver.onOdometry(*o));
       rt.onOdometry(*o, emit);
@@ -128,12 +97,12 @@ TEST(SlamRuntime, AResumedRuntimeRefusesOnItsChannelWhatTheCheckpointHeld) {
   SlamProcessOptions opt = options();
   opt.checkpoint_path = tempPath("resume.ckpt");
   std::filesystem::remove(opt.checkpoint_path);
-  const std::vector<Message> in = stream();
+  const std::vector<InputMessage> in = stream();
   const auto ignore = [](const DriverResult&) {};
   {
     SlamRuntime first(opt, {}, "[test] ");
     EXPECT_LT(first.resume().events, 0) << "no file yet: starts afresh";
-    for (const Message& m : in)
+    for (const InputMessage& m : in)
       std::visit(
           [&](const auto& x) {
             if constexpr (std::is_same_v<std::decay_t<decltype(x)>, odometry_t>) first.onOdometry(x, ignore);
@@ -146,7 +115,7 @@ TEST(SlamRuntime, AResumedRuntimeRefusesOnItsChannelWhatTheCheckpointHeld) {
   second.resume();
   std::vector<DriverResult::Refusal> refused;
   const odometry_t* last_odometry = nullptr;  // the newest the checkpoint holds on its stream
-  for (const Message& m : in)
+  for (const InputMessage& m : in)
     if (const auto* o = std::get_if<odometry_t>(&m)) last_odometry = o;
   second.onOdometry(*last_odometry, [&](const DriverResult& r) {
     refused.insert(refused.end(), r.refused.begin(), r.refused.end());
@@ -161,11 +130,11 @@ TEST(SlamRuntime, AResumedRuntimeRefusesOnItsChannelWhatTheCheckpointHeld) {
 TEST(Replay, CopiesEveryInputEventAndLogsTheDriversOutputsAfterTheirEvent) {
   const SlamProcessOptions opt = options();
   const std::string in_path = tempPath("in.lcm"), out_path = tempPath("out.lcm");
-  const std::vector<Message> in = stream();
+  const std::vector<InputMessage> in = stream();
   {
     lcmio::LogWriter w(in_path);
     int64_t ts = kT0;
-    for (const Message& m : in) {
+    for (const InputMessage& m : in) {
       if (const auto* o = std::get_if<odometry_t>(&m)) w.write(++ts, channels::kOdometry, *o);
       else w.write(++ts, channels::kOmniFeatures, std::get<features_t>(m));
     }
@@ -174,10 +143,7 @@ TEST(Replay, CopiesEveryInputEventAndLogsTheDriversOutputsAfterTheirEvent) {
   ASSERT_TRUE(runReplay(opt, {}, {in_path, out_path, false}));
   SlamDriver driver(opt);
   Poses direct;
-  for (const Message& m : in) {
-    if (const auto* o = std::get_if<odometry_t>(&m)) direct.add(driver.onOdometry(*o));
-    else direct.add(driver.onFeatures(std::get<features_t>(m)));
-  }
+  for (const InputMessage& m : in) direct.add(feedDriver(driver, m));
   direct.add(driver.finish());
   Poses replayed;
   std::size_t inputs = 0;

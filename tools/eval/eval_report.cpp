@@ -5,11 +5,11 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
+#include "omnislam/runtime/atomic_file.h"
 #include "omnislam/vision/plots.h"
 
 namespace omnislam::evaltool {
@@ -168,12 +168,13 @@ std::string incompleteLine(const eval::Coverage& v, const eval::CoverageOptions&
 }
 
 void writeTum(const std::string& path, const std::vector<eval::TimedPose>& poses) {
-  std::ofstream f(path);
-  if (!f) throw std::runtime_error("cannot write '" + path + "'");
+  std::ostringstream f;
   f << "# timestamp_s x_m y_m z_m qx qy qz qw\n" << std::setprecision(17);
   for (const auto& p : poses)
     f << p.utime * 1e-6 << " " << p.pose.x_m << " " << p.pose.y_m << " 0 0 0 " << std::sin(0.5 * p.pose.theta_rad)
       << " " << std::cos(0.5 * p.pose.theta_rad) << "\n";
+  const std::string text = f.str();
+  slamproc::writeFileAtomically(path, text.data(), text.size());
 }
 
 void writePlots(const Scores& s, const LogContent& c, const std::string& log, const std::string& prefix) {

@@ -1,19 +1,15 @@
 // Saved maps: YAML text, atomic writes (see map_file.h).
 #include "omnislam/runtime/map_file.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <Eigen/Cholesky>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_set>
 
 #include "omnislam/config/yaml_node.h"
+#include "omnislam/runtime/atomic_file.h"
 
 namespace omnislam::slamproc {
 
@@ -47,30 +43,7 @@ std::string mapToYaml(const SavedMap& map) {
 
 void saveMapAtomically(const SavedMap& map, const std::string& path) {
   const std::string text = mapToYaml(map);
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  const auto fail = [&](const std::string& what) {
-    const std::string err = std::strerror(errno);
-    ::unlink(tmp.c_str());
-    throw std::runtime_error("saving the map to '" + path + "': " + what + ": " + err);
-  };
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0) fail("cannot create " + tmp);
-  std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      ::close(fd);
-      fail("write");
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0) {
-    ::close(fd);
-    fail("fsync");
-  }
-  if (::close(fd) != 0) fail("close");
-  if (::rename(tmp.c_str(), path.c_str()) != 0) fail("rename");
+  writeFileAtomically(path, text.data(), text.size());
 }
 
 SavedMap loadMap(const std::string& path) {

@@ -34,6 +34,30 @@ std::vector<std::int64_t> landmarkIdsOf(const std::vector<int>& landmark_of_meas
   return ids;
 }
 
+/// Equal up to the rounding of a unit conversion (a value a config writes in degrees is converted to
+/// radians and may differ from the same value in the code in the last bit). An infinite value equals
+/// only itself.
+bool sameValue(double a, double b) {
+  if (a == b) return true;
+  return std::isfinite(a) && std::isfinite(b) && std::abs(a - b) <= 1e-12 * std::max(std::abs(a), std::abs(b));
+}
+
+/// "PREFIXkey=value" (the key's units, as a config writes it) of every field of the table in which
+/// `now` differs from `paper`, in the table's order.
+template <class S>
+void appendDifferences(const std::string& prefix, const S& now, const S& paper,
+                       const std::vector<options::Field<S>>& table, std::vector<std::string>& out) {
+  for (const auto& f : table) {
+    bool same = true;
+    if (f.kind == options::Kind::kVec3) {
+      for (int i = 0; i < 3; ++i) same = same && sameValue((now.*f.vec3)(i), (paper.*f.vec3)(i));
+    } else {
+      same = sameValue(f.value(now), f.value(paper));
+    }
+    if (!same) out.push_back(prefix + f.key + "=" + options::valueText(f, now));
+  }
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -77,21 +101,10 @@ const std::vector<std::string>& presetNames() {
 std::vector<std::string> presetDeviations(const FastSlamOptions& o) {
   const FastSlamOptions p = presetOptions(Preset::kPaper000);
   std::vector<std::string> out;
-  const auto flag = [&out](const char* name, bool value, bool paper) {
-    if (value != paper) out.push_back(std::string(name) + "=" + (value ? "true" : "false"));
-  };
-  flag("inflate_azimuth_near_zenith", o.inflate_azimuth_near_zenith, p.inflate_azimuth_near_zenith);
-  flag("association_predictive", o.association_predictive, p.association_predictive);
-  flag("weight_at_predicted_pose", o.weight_at_predicted_pose, p.weight_at_predicted_pose);
-  if (o.weight_term != p.weight_term) out.push_back("weight_term=consistency");
-  flag("odometry_scale_correction", o.odometry_scale_correction, p.odometry_scale_correction);
-  flag("candidates.initial_cov_from_triangulation", o.candidates.initial_cov_from_triangulation,
-       p.candidates.initial_cov_from_triangulation);
-  flag("candidates.refine_initial_point", o.candidates.refine_initial_point, p.candidates.refine_initial_point);
-  flag("candidates.ray_motion_noise", o.candidates.ray_motion_noise, p.candidates.ray_motion_noise);
-  if (o.resample_ess_fraction != p.resample_ess_fraction) {
-    out.push_back("resample_ess_fraction=" + std::to_string(o.resample_ess_fraction).substr(0, 4));
-  }
+  appendDifferences("", o, p, options::fastSlamFields(), out);
+  appendDifferences("motion.", o.motion, p.motion, options::motionFields(), out);
+  appendDifferences("perception.", o.perception, p.perception, options::perceptionFields(), out);
+  appendDifferences("candidates.", o.candidates, p.candidates, options::candidateFields(), out);
   return out;
 }
 

@@ -2,8 +2,8 @@
 // written atomically every `interval` of data time and on SIGINT / SIGTERM, so that a process
 // started again with the same arguments resumes where the last checkpoint left it (a kill -9 loses
 // at most one interval). The format, the resume rules and what is kept: docs/user/slam-process.md,
-// "Checkpoints". The state's encoding is pure (bytes in, bytes out); only writeFileAtomically and
-// readWholeFile touch files.
+// "Checkpoints". The state's encoding is pure (bytes in, bytes out); the file is written by
+// writeFileAtomically and read by readWholeFile (atomic_file.h).
 #pragma once
 
 #include <cstdint>
@@ -12,6 +12,7 @@
 
 #include "omnislam/core/byte_codec.h"
 #include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/atomic_file.h"  // writeFileAtomically, readWholeFile: the checkpoint file
 #include "omnislam/runtime/slam_driver.h"
 
 namespace omnislam::slamproc {
@@ -73,13 +74,6 @@ std::vector<std::uint8_t> encodeCheckpoint(const SlamProcessOptions& options, co
 /// written with other options, malformed) and then leaves `driver` and `clock` unchanged.
 ReplayPosition decodeCheckpoint(const std::vector<std::uint8_t>& bytes, const SlamProcessOptions& options,
                                 SlamDriver& driver, InputClock& clock);
-
-/// PATH.tmp written, fsynced, renamed over PATH, the folder fsynced: a crash at any point leaves the
-/// old checkpoint or the new one, never a part. Throws std::runtime_error naming the path and the
-/// system's reason.
-void writeFileAtomically(const std::string& path, const std::vector<std::uint8_t>& bytes);
-/// The whole file; throws std::runtime_error naming the path and the reason.
-std::vector<std::uint8_t> readWholeFile(const std::string& path);
 
 /// When checkpoints are due: each time the filter's last step is `interval_us` of data time past the
 /// last checkpoint (or the first step, or a restart that stepped back in time).

@@ -30,7 +30,8 @@ struct SavedMap {
 /// The YAML text of a map (deterministic: the same map gives the same bytes).
 std::string mapToYaml(const SavedMap& map);
 
-/// Writes atomically (temporary file, fsync, rename). Throws std::runtime_error naming the path.
+/// Writes atomically and durably (writeFileAtomically, atomic_file.h). Throws std::runtime_error
+/// naming the path, the step that failed and the system's reason.
 void saveMapAtomically(const SavedMap& map, const std::string& path);
 
 /// The most landmarks a map file may hold: what one SLAM_MAP message carries.

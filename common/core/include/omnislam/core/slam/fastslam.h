@@ -123,7 +123,10 @@ enum class Preset : std::uint8_t {
 FastSlamOptions presetOptions(Preset preset);
 /// The names of `filter.preset`, in the order of Preset: "recommended", "paper000", "paper002".
 const std::vector<std::string>& presetNames();
-/// The fields in which `o` differs from paper 000 as published, as "field=value" (the start-up echo).
+/// Every field of the options tables (options_table.h) in which `o` differs from paper 000 as
+/// published (presetOptions(kPaper000)), as "key=value" in the key's units, the parts' keys prefixed
+/// "motion.", "perception.", "candidates.", in the tables' order (the start-up echo). Derived from
+/// the tables, so a field added there is compared too.
 std::vector<std::string> presetDeviations(const FastSlamOptions& o);
 
 /// One particle k of Y_t.

@@ -217,8 +217,13 @@ std::string describe(const SlamProcessOptions& o) {
   s << "deviations from paper 000: ";
   for (std::size_t i = 0; i < deviations.size(); ++i) s << (i ? ", " : "") << deviations[i];
   s << (deviations.empty() ? "none" : "");
-  for (const auto& section : processSections())
-    s << "\n" << (section.name.empty() ? "" : section.name + ": ") << section.describe(o);
+  std::string run_files;  // the sections of one run's files, on the last line
+  for (const auto& section : processSections()) {
+    const std::string line = (section.name.empty() ? "" : section.name + ": ") + section.describe(o);
+    if (section.of_the_run) run_files += (run_files.empty() ? "" : "; ") + line;
+    else s << "\n" << line;
+  }
+  if (!run_files.empty()) s << "\n" << run_files;
   return s.str();
 }
 

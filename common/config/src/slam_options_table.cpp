@@ -131,9 +131,10 @@ std::string cell(const std::string& text) {
 // A section over the part of SlamProcessOptions that `part` returns.
 template <class S>
 ConfigSection section(std::string name, const std::vector<options::Field<S>>& (*table)(),
-                      const S& (*part)(const SlamProcessOptions&)) {
+                      const S& (*part)(const SlamProcessOptions&), bool of_the_run = false) {
   ConfigSection c;
   c.name = name;
+  c.of_the_run = of_the_run;
   c.describe = [table, part](const SlamProcessOptions& o) { return options::describeFields(part(o), table()); };
   c.check = [table, part](const SlamProcessOptions& o) { return options::checkRanges(part(o), table()); };
   c.markdownRows = [name, table, part] {
@@ -174,8 +175,8 @@ const std::vector<ConfigSection>& processSections() {
       section<O>("start_pose", startPoseFields, whole),
       section<O>("features", featureFields, whole),
       section<O>("output", outputFields, whole),
-      section<O>("map", mapFields, whole),
-      section<O>("checkpoint", checkpointFields, whole),
+      section<O>("map", mapFields, whole, true),
+      section<O>("checkpoint", checkpointFields, whole, true),
       section<PairingOptions>(
           "pairing", pairingFields, [](const O& o) -> const auto& { return o.pairing; }),
       section<RestartOptions>(

@@ -99,8 +99,9 @@ SlamProcessOptions loadSlamOptions(const std::string& path);
 SlamProcessOptions loadSlamOptions(const std::string& path, const std::vector<std::string>& overrides);
 
 /// The start-up echo: one line per section, "section: key=value ..." for every key of every section
-/// (from the options tables, slam_options_table.h), and after the filter's the deviations from
-/// paper 000 that are on. No line break at the end.
+/// (from the options tables, slam_options_table.h), after the filter's the deviations from paper 000
+/// that are on, and last the files of one run, "map: ...; checkpoint: ..." (the line a checkpoint's
+/// options fingerprint leaves out). No line break at the end.
 std::string describe(const SlamProcessOptions& o);
 
 /// The keys as Markdown tables (key, field, unit, range, default, meaning), generated from the

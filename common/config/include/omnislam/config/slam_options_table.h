@@ -34,6 +34,10 @@ const std::vector<std::string>& reinitFromNames();   ///< "last_estimate", "star
 /// to the part of SlamProcessOptions it describes: what the echo, validate() and the docs walk.
 struct ConfigSection {
   std::string name;
+  /// The files of one run (map, checkpoint): echoed together on the echo's last line, "map: ...;
+  /// checkpoint: ...", the line a checkpoint's options fingerprint leaves out (paths may differ
+  /// between two starts of one run).
+  bool of_the_run = false;
   std::function<std::string(const SlamProcessOptions&)> describe;  ///< "key=value ..." (describeFields)
   std::function<std::string(const SlamProcessOptions&)> check;     ///< checkRanges: "" when in range
   std::function<std::string()> markdownRows;                       ///< one docs-table row per key, keys written in full

@@ -19,13 +19,13 @@ namespace {
 
 /// A value of the field other than the one in s (each kind changed its own way).
 template <class S>
-void changeField(const options::Field<S>& f, S& s) {
+void changeField(const slam::options::Field<S>& f, S& s) {
   switch (f.kind) {
-    case options::Kind::kBool: s.*f.flag = !(s.*f.flag); break;
-    case options::Kind::kEnum: f.set_index(s, (f.get_index(s) + 1) % static_cast<int>(f.names->size())); break;
-    case options::Kind::kInt: s.*f.integer += 1; break;
-    case options::Kind::kReal: s.*f.real = std::isinf(s.*f.real) ? 10.0 : s.*f.real * 1.5 + 0.25; break;
-    case options::Kind::kVec3: (s.*f.vec3).x() += 0.25; break;
+    case slam::options::Kind::kBool: s.*f.flag = !(s.*f.flag); break;
+    case slam::options::Kind::kEnum: f.set_index(s, (f.get_index(s) + 1) % static_cast<int>(f.names->size())); break;
+    case slam::options::Kind::kInt: s.*f.integer += 1; break;
+    case slam::options::Kind::kReal: s.*f.real = std::isinf(s.*f.real) ? 10.0 : s.*f.real * 1.5 + 0.25; break;
+    case slam::options::Kind::kVec3: (s.*f.vec3).x() += 0.25; break;
     default: FAIL() << f.key << ": a kind this test cannot change";
   }
 }
@@ -33,7 +33,7 @@ void changeField(const options::Field<S>& f, S& s) {
 /// For each field of the table: paper 000 with that field alone changed gives exactly one deviation,
 /// "PREFIXkey=<its value>".
 template <class S, class PartOf>
-void eachFieldAloneIsOneDeviation(const std::string& prefix, const std::vector<options::Field<S>>& table,
+void eachFieldAloneIsOneDeviation(const std::string& prefix, const std::vector<slam::options::Field<S>>& table,
                                   PartOf part_of) {
   for (const auto& f : table) {
     FastSlamOptions o = presetOptions(Preset::kPaper000);
@@ -41,7 +41,7 @@ void eachFieldAloneIsOneDeviation(const std::string& prefix, const std::vector<o
     changeField(f, s);
     const std::vector<std::string> d = presetDeviations(o);
     ASSERT_EQ(d.size(), 1u) << prefix << f.key;
-    EXPECT_EQ(d[0], prefix + f.key + "=" + options::valueText(f, s));
+    EXPECT_EQ(d[0], prefix + f.key + "=" + slam::options::valueText(f, s));
   }
 }
 
@@ -54,13 +54,16 @@ TEST(PresetDeviations, PaperHasNoneAndRecommendedItsThree) {
 }
 
 TEST(PresetDeviations, EveryFieldOfEveryTableIsCompared) {
-  eachFieldAloneIsOneDeviation("", options::fastSlamFields(), [](FastSlamOptions& o) -> FastSlamOptions& { return o; });
-  eachFieldAloneIsOneDeviation("motion.", options::motionFields(),
+  eachFieldAloneIsOneDeviation("", slam::options::fastSlamFields(),
+                               [](FastSlamOptions& o) -> FastSlamOptions& { return o; });
+  eachFieldAloneIsOneDeviation("motion.", slam::options::motionFields(),
                                [](FastSlamOptions& o) -> MotionNoiseOptions& { return o.motion; });
-  eachFieldAloneIsOneDeviation("perception.", options::perceptionFields(),
+  eachFieldAloneIsOneDeviation("perception.", slam::options::perceptionFields(),
                                [](FastSlamOptions& o) -> PerceptionOptions& { return o.perception; });
-  eachFieldAloneIsOneDeviation("candidates.", options::candidateFields(),
+  eachFieldAloneIsOneDeviation("candidates.", slam::options::candidateFields(),
                                [](FastSlamOptions& o) -> CandidateOptions& { return o.candidates; });
+  eachFieldAloneIsOneDeviation("keyframes.", slam::options::keyframeFields(),
+                               [](FastSlamOptions& o) -> KeyframeOptions& { return o.keyframes; });
 }
 
 TEST(PresetDeviations, ValuesInTheKeysUnitsAndNamesAndNoRoundingNoise) {

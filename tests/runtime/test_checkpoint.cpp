@@ -165,7 +165,8 @@ TEST(Checkpoint, OtherOptionsOrDamageAreRefusedWithTheReasonAndLeaveTheDriverAlo
       << reason(file, more);
   SlamProcessOptions seed = opt;
   seed.seed = 9;
-  EXPECT_NE(reason(file, seed).find("seed 1"), std::string::npos) << reason(file, seed);
+  EXPECT_NE(reason(file, seed).find("'seed=1' (checkpoint) vs 'seed=9' (now)"), std::string::npos)
+      << reason(file, seed);
   auto flipped = file;
   flipped[flipped.size() / 2] ^= 1;
   EXPECT_NE(reason(flipped, opt).find("checksum mismatch"), std::string::npos);

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "omnislam/runtime/pairing_options_table.h"
+
 namespace omnislam::slamproc {
 
 namespace {
@@ -11,17 +13,10 @@ std::string us(int64_t v) { return std::to_string(v); }
 }  // namespace
 
 std::string PairingOptions::validate() const {
-  if (max_wait_us < 0) return "max_wait_us must be >= 0, got " + us(max_wait_us);
-  if (max_odometry_gap_us <= 0) return "max_odometry_gap_us must be > 0, got " + us(max_odometry_gap_us);
+  const std::string ranges = options::checkRanges(*this, pairingFields());  // pairing_options_table.h
+  if (!ranges.empty()) return ranges;
   if (odometry_buffer_us < max_wait_us)
     return "odometry_buffer_us must be >= max_wait_us (" + us(max_wait_us) + "), got " + us(odometry_buffer_us);
-  if (max_pending_frames < 1) return "max_pending_frames must be >= 1, got " + std::to_string(max_pending_frames);
-  if (restart_jump_us <= 0) return "restart_jump_us must be > 0, got " + us(restart_jump_us);
-  if (!(max_odometry_speed_mps > 0)) return "max_odometry_speed_mps must be > 0";
-  if (!(max_odometry_yaw_rate_radps > 0)) return "max_odometry_yaw_rate_radps must be > 0";
-  if (max_forward_jump_us <= 0) return "max_forward_jump_us must be > 0, got " + us(max_forward_jump_us);
-  if (restart_confirm_messages < 1)
-    return "restart_confirm_messages must be >= 1, got " + std::to_string(restart_confirm_messages);
   return "";
 }
 

@@ -105,6 +105,7 @@ std::vector<std::string> presetDeviations(const FastSlamOptions& o) {
   appendDifferences("motion.", o.motion, p.motion, options::motionFields(), out);
   appendDifferences("perception.", o.perception, p.perception, options::perceptionFields(), out);
   appendDifferences("candidates.", o.candidates, p.candidates, options::candidateFields(), out);
+  appendDifferences("keyframes.", o.keyframes, p.keyframes, options::keyframeFields(), out);
   return out;
 }
 

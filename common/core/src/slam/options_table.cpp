@@ -3,61 +3,21 @@
 // preset, docs/slam-core.md "Presets").
 #include "omnislam/core/slam/options_table.h"
 
-#include <cmath>
-#include <sstream>
-
 namespace omnislam::slam::options {
 
 namespace {
 
-template <class S>
-Field<S> real(const char* key, double S::*m, const char* field, const char* unit, double lo, double hi, Bounds b,
-              const char* doc, bool degrees = false) {
-  Field<S> f;
-  f.key = key, f.field = field, f.unit = unit, f.kind = Kind::kReal, f.lo = lo, f.hi = hi, f.bounds = b;
-  f.degrees = degrees, f.doc = doc, f.real = m;
-  return f;
-}
-template <class S>
-Field<S> integer(const char* key, int S::*m, const char* field, double lo, double hi, const char* doc) {
-  Field<S> f;
-  f.key = key, f.field = field, f.kind = Kind::kInt, f.lo = lo, f.hi = hi, f.doc = doc, f.integer = m;
-  return f;
-}
-template <class S>
-Field<S> flag(const char* key, bool S::*m, const char* field, const char* doc) {
-  Field<S> f;
-  f.key = key, f.field = field, f.kind = Kind::kBool, f.doc = doc, f.flag = m;
-  return f;
-}
-template <class S>
-Field<S> vec3(const char* key, Eigen::Vector3d S::*m, const char* field, const char* unit, double lo, double hi,
-              const char* doc) {
-  Field<S> f;
-  f.key = key, f.field = field, f.unit = unit, f.kind = Kind::kVec3, f.lo = lo, f.hi = hi, f.doc = doc, f.vec3 = m;
-  return f;
-}
-template <class S>
-Field<S> enumeration(const char* key, const char* field, const std::vector<std::string>& names, int (*get)(const S&),
-                     void (*set)(S&, int), const char* doc) {
-  Field<S> f;
-  f.key = key, f.field = field, f.kind = Kind::kEnum, f.doc = doc, f.names = &names, f.get_index = get;
-  f.set_index = set;
-  return f;
-}
+using omnislam::options::enumeration;
+using omnislam::options::flag;
+using omnislam::options::integer;
+using omnislam::options::real;
+using omnislam::options::vec3;
 
 constexpr Bounds kC = Bounds::kClosed, kLo = Bounds::kLowOpen, kHi = Bounds::kHighOpen;
 using F = FastSlamOptions;
 using M = MotionNoiseOptions;
 using P = PerceptionOptions;
 using C = CandidateOptions;
-
-std::string number(double v) {
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
 
 }  // namespace
 
@@ -228,77 +188,5 @@ const std::vector<Field<HealthOptions>>& healthFields() {
   // clang-format on
   return t;
 }
-
-template <class S>
-std::string rangeText(const Field<S>& f) {
-  if (f.kind == Kind::kBool) return "true, false";
-  if (f.kind == Kind::kEnum) {
-    std::string s;
-    for (const auto& n : *f.names) s += (s.empty() ? "" : ", ") + n;
-    return s;
-  }
-  return std::string(f.bounds == Bounds::kLowOpen ? "(" : "[") + number(f.lo) + ", " + number(f.hi) +
-         (f.bounds == Bounds::kHighOpen ? ")" : "]");
-}
-
-template <class S>
-std::string valueText(const Field<S>& f, const S& s) {
-  switch (f.kind) {
-    case Kind::kBool: return s.*f.flag ? "true" : "false";
-    case Kind::kEnum: return f.names->at(static_cast<std::size_t>(f.get_index(s)));
-    case Kind::kVec3: {
-      const Eigen::Vector3d& v = s.*f.vec3;
-      return "[" + number(v.x()) + ", " + number(v.y()) + ", " + number(v.z()) + "]";
-    }
-    case Kind::kReal:
-    case Kind::kInt: break;
-  }
-  return number(f.value(s));
-}
-
-template <class S>
-std::string checkRanges(const S& s, const std::vector<Field<S>>& table) {
-  const auto fail = [](const Field<S>& f, const std::string& field, double v) {  // v in the member's units
-    return field + " must be in " + std::string(f.bounds == Bounds::kLowOpen ? "(" : "[") + number(f.memberLo()) +
-           ", " + number(f.memberHi()) + (f.bounds == Bounds::kHighOpen ? ")" : "]") + ", got " + number(v);
-  };
-  for (const auto& f : table) {
-    if (f.kind == Kind::kVec3) {
-      const Eigen::Vector3d& v = s.*f.vec3;
-      for (int i = 0; i < 3; ++i) {
-        if (!f.memberInRange(v(i))) return fail(f, std::string(f.field) + "." + "xyz"[i], v(i));
-      }
-      continue;
-    }
-    if (f.kind == Kind::kEnum) {
-      const int i = f.get_index(s);
-      if (i < 0 || i >= static_cast<int>(f.names->size())) return std::string(f.field) + " is not a known value";
-      continue;
-    }
-    const double v = f.kind == Kind::kReal ? s.*f.real : f.value(s);  // the member's units
-    if (f.kind != Kind::kBool && !f.memberInRange(v)) return fail(f, f.field, v);
-  }
-  return "";
-}
-
-template <class S>
-std::string describeFields(const S& s, const std::vector<Field<S>>& table) {
-  std::string out;
-  for (const auto& f : table) out += (out.empty() ? "" : " ") + std::string(f.key) + "=" + valueText(f, s);
-  return out;
-}
-
-#define OMNISLAM_OPTIONS_TABLE_INSTANTIATE(S)                                  \
-  template std::string rangeText<S>(const Field<S>&);                          \
-  template std::string valueText<S>(const Field<S>&, const S&);                \
-  template std::string checkRanges<S>(const S&, const std::vector<Field<S>>&); \
-  template std::string describeFields<S>(const S&, const std::vector<Field<S>>&);
-OMNISLAM_OPTIONS_TABLE_INSTANTIATE(FastSlamOptions)
-OMNISLAM_OPTIONS_TABLE_INSTANTIATE(MotionNoiseOptions)
-OMNISLAM_OPTIONS_TABLE_INSTANTIATE(PerceptionOptions)
-OMNISLAM_OPTIONS_TABLE_INSTANTIATE(CandidateOptions)
-OMNISLAM_OPTIONS_TABLE_INSTANTIATE(KeyframeOptions)
-OMNISLAM_OPTIONS_TABLE_INSTANTIATE(HealthOptions)
-#undef OMNISLAM_OPTIONS_TABLE_INSTANTIATE
 
 }  // namespace omnislam::slam::options

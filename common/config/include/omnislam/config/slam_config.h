@@ -17,7 +17,7 @@ namespace omnislam::slamproc {
 
 /// Plausibility bounds on valid inputs (lcmio::validate checks only that they are finite); a
 /// message beyond them is refused, counted (`implausible`) and reported, and changes nothing
-/// (docs/user/slam-process.md, "Plausibility"). Keys `plausibility.*`.
+/// (docs/user/slam-process.md, "Plausibility"). Keys `plausibility.*` (slam_options_table.h).
 struct PlausibilityOptions {
   /// |x|, |y| of an ODOMETRY pose [m]: the workspace, as GROUND_TRUTH_POSE's max_coordinate_m in
   /// the odometry process (10 km). A pose beyond it, re-based by the pairing, left rounding junk of
@@ -36,7 +36,7 @@ struct PlausibilityOptions {
 /// What a confirmed restart of the inputs (pairing rule 2) starts the new filter from: its last
 /// estimate (mean pose, map of the best particle) with the pose covariance widened by the motion
 /// the restart may have hidden, or the configured start pose with an empty map (a replayed log
-/// started again). Keys `restart.*`.
+/// started again). Keys `restart.*` (slam_options_table.h).
 struct RestartOptions {
   enum class ReinitFrom { kLastEstimate, kStartPose };
   ReinitFrom reinit_from = ReinitFrom::kLastEstimate;
@@ -46,6 +46,8 @@ struct RestartOptions {
   double heading_sigma_rad = 0.52;
 };
 
+/// Everything a config/slam/*.yaml file sets; keys, ranges and units of the members here:
+/// slam_options_table.h (the sections of the file hold members of this struct).
 struct SlamProcessOptions {
   slam::FastSlamOptions filter;
   std::uint64_t seed = 1;
@@ -86,7 +88,9 @@ struct SlamProcessOptions {
   std::string checkpoint_path;
   int64_t checkpoint_interval_us = 10'000'000;
 
-  /// Empty when valid, otherwise a message naming the first bad field.
+  /// Empty when valid, otherwise a message naming the first bad field: the filter's and the
+  /// pairing's validate(), every table's ranges, at least one feature kind, localisation_only
+  /// with a map to load.
   std::string validate() const;
 };
 
@@ -97,13 +101,16 @@ SlamProcessOptions loadSlamOptions(const std::string& path);
 /// The file with "dotted.key=value" overrides applied first (config::Node::loadFileWithOverrides).
 SlamProcessOptions loadSlamOptions(const std::string& path, const std::vector<std::string>& overrides);
 
-/// One line per option group, for the start-up echo: every filter key with its value (from the
-/// options tables, options_table.h) and the deviations from paper 000 that are on.
+/// The start-up echo: one line per section, "section: key=value ..." for every key of every section
+/// (from the options tables, slam_options_table.h), after the filter's the deviations from paper 000
+/// that are on, and last the files of one run, "map: ...; checkpoint: ..." (the line a checkpoint's
+/// options fingerprint leaves out). No line break at the end.
 std::string describe(const SlamProcessOptions& o);
 
-/// The filter's keys as a Markdown table (key, field, unit, range, default, meaning), generated from
-/// the options tables: the block of docs/slam-process.md that scripts/check-config-docs.py checks.
-std::string filterKeysMarkdown();
+/// The keys as Markdown tables (key, field, unit, range, default, meaning), generated from the
+/// options tables: the blocks of docs/user/slam-process.md that scripts/check-config-docs.py checks.
+std::string filterKeysMarkdown();   ///< `filter.*`, with `filter.preset`
+std::string processKeysMarkdown();  ///< every other key: seed, start_pose.*, features.*, ...
 
 /// The names of filter.association and of omnislam-slam --association, in the order of
 /// slam::AssociationMethod: "hungarian", "ml".

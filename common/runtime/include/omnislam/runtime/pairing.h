@@ -20,6 +20,7 @@
 
 namespace omnislam::slamproc {
 
+/// Keys `pairing.*`, ranges and units: pairing_options_table.h.
 struct PairingOptions {
   /// A frame waits for odometry until the frame stream is this far past it (utime of frames).
   int64_t max_wait_us = 2'000'000;
@@ -54,7 +55,8 @@ struct PairingOptions {
   double max_odometry_speed_mps = 3.0;
   double max_odometry_yaw_rate_radps = 6.0;
 
-  /// Empty when valid, otherwise a message naming the first bad field and its accepted range.
+  /// Empty when valid, otherwise a message naming the first bad field and its accepted range (the
+  /// table's ranges, in microseconds, and odometry_buffer_us >= max_wait_us).
   std::string validate() const;
   /// The time-order thresholds of each stream (utime_order.h): ahead max_forward_jump_us (fixed,
   /// measured from the newest utime of either stream), back restart_jump_us.

@@ -10,6 +10,8 @@
 #   exact              exact odometry and bearings, no clutter, no window-wall misses; shipped filter
 #   exact-truth-assoc  both
 #   true-map           the lamps known at their true positions, localisation only, truth association
+#   truth-birth        truth association, and each landmark born (when the filter's initialisation
+#                      accepts its candidate) at its lamp's true position; exact-truth-birth: exact inputs
 # then research/oracle_table.py prints the table (issue 45's criteria, scripts/worlds_table.py's code).
 #
 #   research/oracle-worlds.sh --family halls|irregular|corridors [--worlds 30] [--first-seed 1]
@@ -83,7 +85,11 @@ print("start_pose.x_m=%r start_pose.y_m=%r start_pose.theta_deg=%r filter.percep
       "$BIN/omnislam-slam" --replay "$log" --association hungarian "${args[@]}" --out "$d/slam-$s.lcm" --no-progress 2> "$d/run-$s.txt" && ok=1 ;;
     *)
       local extra=(--association filter)
-      case "$v" in *truth-assoc) extra=(--association truth) ;; true-map) extra=(--association truth --map truth) ;; esac
+      case "$v" in
+        *truth-assoc) extra=(--association truth) ;;
+        *truth-birth) extra=(--association truth --birth truth) ;;
+        true-map) extra=(--association truth --map truth) ;;
+      esac
       "$BIN/research_oracle_worlds" --in "$log" --out "$d/slam-$s.lcm" "${args[@]}" "${extra[@]}" \
         --fit-json "$d/fit-$s.json" 2> "$d/run-$s.txt" && ok=1 ;;
   esac
@@ -114,5 +120,5 @@ export -f one_world
 
 LAST=$((FIRST + WORLDS - 1))
 echo "oracle-worlds: $WORLDS $FAMILY worlds (seeds $FIRST..$LAST) at $RATE Hz: $VARIANTS; $JOBS jobs; in $OUT" >&2
-seq "$FIRST" "$LAST" | xargs -P "$JOBS" -I{} bash -c 'one_world "$@"' _ {}
+seq "$FIRST" "$LAST" | xargs -P "$JOBS" -I{} bash -c 'one_world "$@"' _ {} || echo "oracle-worlds: some world failed (see */fail-*.txt)" >&2
 python3 "$ROOT/research/oracle_table.py" "$OUT" --family "$FAMILY" --seeds "$FIRST" "$LAST" --rate-hz "$RATE" --variants $VARIANTS

@@ -29,8 +29,13 @@ std::int64_t labelOf(const slam::ColourDescriptor& d) {
   return d.valid ? static_cast<std::int64_t>(std::llround(d.rgb[0])) : -1;
 }
 
-OracleFilter::OracleFilter(const slam::FastSlamOptions& options, std::uint64_t seed, Association association)
-    : options_(options), variant_(stages::filterVariantOf(options_)), association_(association), rng_(seed) {
+OracleFilter::OracleFilter(const slam::FastSlamOptions& options, std::uint64_t seed, Association association,
+                           Birth birth)
+    : options_(options),
+      variant_(stages::filterVariantOf(options_)),
+      association_(association),
+      birth_(std::move(birth)),
+      rng_(seed) {
   last_p_CinR_m_ = options_.perception.default_p_CinR_m;
 }
 
@@ -100,9 +105,17 @@ OracleFilter::ParticleInfo OracleFilter::processParticle(Particle& p, const Pose
     p.candidates = std::move(cu.candidates);
     inserts = std::move(cu.inserts);
   }
-  p.map.apply(up.edits, inserts);
+  // TruthBirth: the newborn join after this step's scale anchoring, so that they stand at their lamps.
+  const auto* truth = std::get_if<TruthBirth>(&birth_);
+  p.map.apply(up.edits, truth ? std::vector<Landmark>{} : inserts);
   p.pose = x_t;
   if (scale_anchored_) anchorScale(p, pred.x_prev, u, p_CinR_vis_m);
+  if (truth) {
+    for (Landmark& L : inserts)
+      if (const auto it = truth->p_LinW_m.find(labelOf(L.descriptor)); it != truth->p_LinW_m.end())
+        L.p_LinW_m = it->second;
+    p.map.apply({}, inserts);
+  }
   info.log_w = up.log_w;
   return info;
 }
@@ -125,7 +138,7 @@ stages::HierarchicalAssociation OracleFilter::associateAsShipped(const Particle&
   for (std::size_t l = 0; l < Z.size(); ++l) cost_new[l] = Z[l].neg_log_p_new;
   const stages::DeterministicAssociation method = stages::associationOf(variant_);
   const stages::MapLevelInput level1{cost, cost_new, method};
-  const stages::CandidateLevelInput level2{p.candidates, Z,     options_, method, options_.update_map,
+  const stages::CandidateLevelInput level2{p.candidates,           Z, options_, method, options_.update_map,
                                            &candidate_cost_buffer_};
   const auto prop = [&](const stages::MapAssociation& l1) {
     return propose(pred, vis, Z, l1.landmark_of_measurement, x_fs1);
@@ -149,9 +162,9 @@ stages::HierarchicalAssociation OracleFilter::associateByLabel(const Particle& p
     if (labelOf(Z[l].descriptor) < 0 || it == landmark_of_label.end()) continue;
     const auto in_vis = std::find_if(vis.begin(), vis.end(),
                                      [&](const LandmarkMap::Ref& r) { return r.landmark == it->second.landmark; });
-    if (in_vis == vis.end()) vis.push_back(it->second);
-    a.level1.landmark_of_measurement[l] = static_cast<int>(
-        in_vis == vis.end() ? vis.size() - 1 : static_cast<std::size_t>(in_vis - vis.begin()));
+    const std::size_t j = static_cast<std::size_t>(in_vis - vis.begin());  // before push_back moves vis
+    if (j == vis.size()) vis.push_back(it->second);
+    a.level1.landmark_of_measurement[l] = static_cast<int>(j);
   }
   a.x_t = propose(pred, vis, Z, a.level1.landmark_of_measurement, x_fs1);
   for (std::size_t l = 0; l < Z.size(); ++l)
@@ -197,7 +210,8 @@ int OracleFilter::finishStep(const std::vector<ParticleInfo>& infos, double& ess
 }
 
 // FastSlam::anchorScale (fastslam.cpp, where the reasoning is written down), copied: it is private there.
-void OracleFilter::anchorScale(Particle& p, const Pose2& x_prev, const Pose2& u, const Eigen::Vector3d& p_CinR_m) const {
+void OracleFilter::anchorScale(Particle& p, const Pose2& x_prev, const Pose2& u,
+                               const Eigen::Vector3d& p_CinR_m) const {
   const double d_u = std::hypot(u.x_m, u.y_m);
   if (d_u < 1e-3) return;
   const Pose2 a = x_prev.between(p.pose);

@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <map>
 #include <variant>
 #include <vector>
 
@@ -26,6 +27,13 @@ namespace omnislam::research {
 struct FilterAssociation {};  ///< the shipped association (Hungarian / ML on the map, then the candidates)
 struct TruthAssociation {};   ///< each measurement to the landmark or candidate of its truth label
 using Association = std::variant<FilterAssociation, TruthAssociation>;
+
+/// Where a candidate the delayed initialisation accepts is born.
+struct FilterBirth {};  ///< where the filter's initialisation puts it (the shipped filter)
+struct TruthBirth {     ///< at its lamp's true position (labelled candidates; the filter's covariance kept)
+  std::map<std::int64_t, Eigen::Vector3d> p_LinW_m;  ///< lamp id -> position in W [m]
+};
+using Birth = std::variant<FilterBirth, TruthBirth>;
 
 /// The descriptor that carries lamp `id` (>= 0) through the filter.
 slam::ColourDescriptor labelDescriptor(std::int64_t id);
@@ -42,7 +50,8 @@ struct OracleStep {
 class OracleFilter {
  public:
   /// Throws std::invalid_argument when the options are invalid.
-  OracleFilter(const slam::FastSlamOptions& options, std::uint64_t seed, Association association);
+  OracleFilter(const slam::FastSlamOptions& options, std::uint64_t seed, Association association,
+               Birth birth = FilterBirth{});
   /// All particles at `start`, with an optional prior map (ids kept), as FastSlam::initialise.
   void initialise(const Pose2& start, const std::vector<slam::Landmark>& prior_map);
   /// One step of Alg. 1 (FastSlam::step without its exception guarantee).
@@ -82,6 +91,7 @@ class OracleFilter {
   slam::FastSlamOptions options_;
   slam::stages::FilterVariant variant_;
   Association association_;
+  Birth birth_;
   slam::Rng rng_;
   std::vector<slam::Particle> particles_;
   std::vector<double> weights_;

@@ -4,8 +4,10 @@
 // research/oracle-worlds.sh scores the oracles exactly as scripts/evaluate-worlds.sh scores the
 // filter. Issue 45 ("What an oracle reaches", docs/results/world-families.md). Usage:
 //   research_oracle_worlds --config C.yaml --in LOG.lcm --out OUT.lcm [--seed N] [--set K=V ...]
-//       [--association filter|truth] [--map build|truth] [--fit-json FIT.json] [--association-method hungarian|ml]
+//       [--association filter|truth] [--map build|truth] [--birth filter|truth] [--fit-json FIT.json]
+//       [--association-method hungarian|ml]
 // --association truth: each feature to its lamp (GROUND_TRUTH_FEATURE_LABELS), clutter dropped.
+// --birth truth: (with --association truth) a candidate the filter initialises is born at its lamp.
 // --map truth: localisation only on the lamps of GROUND_TRUTH_MAP at their true positions.
 // --fit-json: the final map's rotation about the start (best fit to the lamps, as noise_free_hall).
 #include <CLI/CLI.hpp>
@@ -39,7 +41,7 @@ using research::OracleFilter;
 namespace {
 
 struct Args {
-  std::string config, in, out, fit_json, association = "filter", map = "build", method;
+  std::string config, in, out, fit_json, association = "filter", map = "build", birth = "filter", method;
   std::vector<std::string> sets;
   std::uint64_t seed = 1;
 };
@@ -117,6 +119,14 @@ pose_t poseMessage(const OracleFilter& f, int64_t utime, int64_t seq, int64_t in
   return p;
 }
 
+/// --birth truth: landmarks born at their lamps.
+research::Birth birthOf(const Args& a, const Truth& t) {
+  if (a.birth != "truth") return research::FilterBirth{};
+  research::TruthBirth b;
+  for (const auto& L : t.lamps) b.p_LinW_m[static_cast<int64_t>(L.id)] = L.p_LinW_m;
+  return b;
+}
+
 /// The replay: input events copied to the output, frames paired with odometry as omnislam-slam
 /// pairs them (slamproc::Pairer), one filter step per paired frame, its outputs at the event's time.
 class Replay {
@@ -127,7 +137,8 @@ class Replay {
         by_label_(a.association == "truth"),
         truth_map_(a.map == "truth"),
         filter_(opt.filter, opt.seed,
-                by_label_ ? research::Association{research::TruthAssociation{}} : research::FilterAssociation{}),
+                by_label_ ? research::Association{research::TruthAssociation{}} : research::FilterAssociation{},
+                birthOf(a, truth_)),
         pairer_(opt.pairing),
         out_(a.out, lcmio::LogWriter::Mode::kAtomic) {}
 
@@ -273,8 +284,8 @@ std::map<int64_t, LampSight> lampSights(const Truth& t, const slam::CandidateOpt
 /// The lamps seen 3x that fewer than NCROSS_valid wide pairs leave beyond the delayed initialisation
 /// (a necessary condition of candidate.h's validity a): the filter's window of rays sees fewer), and,
 /// with the truth association (landmarks carry their label), those not in the final map.
-std::string sightJson(const std::map<int64_t, LampSight>& sights, const std::vector<slam::Landmark>& map,
-                      bool labelled, int ncross_valid) {
+std::string sightJson(const std::map<int64_t, LampSight>& sights, const std::vector<slam::Landmark>& map, bool labelled,
+                      int ncross_valid) {
   std::set<int64_t> mapped;
   for (const auto& L : map) mapped.insert(research::labelOf(L.descriptor));
   int starved = 0;
@@ -321,13 +332,16 @@ std::string mapFitJson(const std::vector<slam::Landmark>& map, const std::vector
   std::ostringstream o;
   o.precision(6);
   o << "{\"map_rotation_deg\": " << a * 180.0 / M_PI << ", \"fit_matched\": " << pairs.size()
-    << ", \"fit_mean_xy_m\": " << mean << ", \"fit_mean_derotated_xy_m\": " << mean_derotated << ", " << sights << "}\n";
+    << ", \"fit_mean_xy_m\": " << mean << ", \"fit_mean_derotated_xy_m\": " << mean_derotated << ", " << sights
+    << "}\n";
   return o.str();
 }
 
 int run(const Args& a) {
   if (a.association != "filter" && a.association != "truth") throw std::invalid_argument("--association filter|truth");
   if (a.map != "build" && a.map != "truth") throw std::invalid_argument("--map build|truth");
+  if (a.birth != "filter" && !(a.birth == "truth" && a.association == "truth"))
+    throw std::invalid_argument("--birth filter|truth (truth needs --association truth)");
   slamproc::SlamProcessOptions opt = slamproc::loadSlamOptions(a.config, a.sets);
   opt.seed = a.seed;
   if (!a.method.empty()) opt.filter.association = slamproc::associationFromName(a.method);
@@ -341,8 +355,9 @@ int run(const Args& a) {
   const std::vector<slam::Landmark> map = replay.finish();
   if (!a.fit_json.empty()) {
     std::ofstream f(a.fit_json);
-    f << mapFitJson(map, lamps, Eigen::Vector2d(opt.start_pose_W.x_m, opt.start_pose_W.y_m),
-                    sightJson(sights, map, a.association == "truth" && a.map == "build", opt.filter.candidates.ncross_valid));
+    f << mapFitJson(
+        map, lamps, Eigen::Vector2d(opt.start_pose_W.x_m, opt.start_pose_W.y_m),
+        sightJson(sights, map, a.association == "truth" && a.map == "build", opt.filter.candidates.ncross_valid));
     if (!f) throw std::runtime_error("cannot write " + a.fit_json);
   }
   return 0;
@@ -361,6 +376,7 @@ int main(int argc, char** argv) {
   cli.add_option("--association", a.association, "filter | truth");
   cli.add_option("--association-method", a.method, "the filter association's method: hungarian | ml");
   cli.add_option("--map", a.map, "build | truth");
+  cli.add_option("--birth", a.birth, "filter | truth: landmarks born where the filter puts them, or at their lamps");
   cli.add_option("--fit-json", a.fit_json, "write the final map's rotation about the start here");
   CLI11_PARSE(cli, argc, argv);
   try {

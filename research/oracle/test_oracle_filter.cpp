@@ -68,30 +68,35 @@ TEST(OracleFilter, LabelRoundTrip) {
   EXPECT_EQ(research::labelOf(ColourDescriptor{}), -1);
 }
 
-// Exact bearings labelled with their lamp: each landmark keeps its lamp's label, no lamp has two
-// landmarks, and each associated measurement went to the landmark of its own lamp.
-TEST(OracleFilter, TruthAssociationFollowsTheLabels) {
+// Exact bearings from the truth pose at arc length s, each labelled with its lamp (index in hallLights()).
+std::vector<BearingMeasurement> labelledBearings(const Pose2& x, std::vector<std::int64_t>& label) {
   const auto lights = scenarios::hallLights();
+  std::vector<BearingMeasurement> z;
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    const auto zt = predictMeasurement(LandmarkKind::kPoint3D, lights[i], x, scenarios::kCamInR);
+    if (!zt || (*zt)(1) < -5.0 * kPi / 180.0) continue;
+    BearingMeasurement m;
+    m.azimuth_rad = (*zt)(0);
+    m.elevation_rad = (*zt)(1);
+    m.p_CinR_m = scenarios::kCamInR;
+    m.descriptor = research::labelDescriptor(static_cast<std::int64_t>(i));
+    z.push_back(m);
+    label.push_back(static_cast<std::int64_t>(i));
+  }
+  return z;
+}
+
+// Each landmark keeps its lamp's label, no lamp has two landmarks, and each associated measurement
+// went to the landmark of its own lamp.
+TEST(OracleFilter, TruthAssociationFollowsTheLabels) {
   OracleFilter f(hallFileOptions(), 7, research::TruthAssociation{});
   f.initialise(scenarios::poseAt(0.0), {});
-  const double L = scenarios::loopLength();
   Pose2 prev = scenarios::poseAt(0.0);
   int checked = 0;
-  for (double s = 0.27; s <= L; s += 0.27) {
+  for (double s = 0.27; s <= scenarios::loopLength(); s += 0.27) {
     const Pose2 x = scenarios::poseAt(s);
-    std::vector<BearingMeasurement> z;
     std::vector<std::int64_t> label;
-    for (std::size_t i = 0; i < lights.size(); ++i) {
-      const auto zt = predictMeasurement(LandmarkKind::kPoint3D, lights[i], x, scenarios::kCamInR);
-      if (!zt || (*zt)(1) < -5.0 * kPi / 180.0) continue;
-      BearingMeasurement m;
-      m.azimuth_rad = (*zt)(0);
-      m.elevation_rad = (*zt)(1);
-      m.p_CinR_m = scenarios::kCamInR;
-      m.descriptor = research::labelDescriptor(static_cast<std::int64_t>(i));
-      z.push_back(m);
-      label.push_back(static_cast<std::int64_t>(i));
-    }
+    const std::vector<BearingMeasurement> z = labelledBearings(x, label);
     const research::OracleStep st = f.step(prev, x, z);
     prev = x;
     std::map<std::uint64_t, std::int64_t> label_of_id;
@@ -109,4 +114,30 @@ TEST(OracleFilter, TruthAssociationFollowsTheLabels) {
   }
   EXPECT_GT(f.bestMap().size(), 0u);
   EXPECT_GT(checked, 0);
+}
+
+// With TruthBirth every landmark stands at its lamp's position at the end of the step that initialises it.
+TEST(OracleFilter, TruthBirthPutsNewLandmarksAtTheirLamps) {
+  const auto lights = scenarios::hallLights();
+  research::TruthBirth birth;
+  for (std::size_t i = 0; i < lights.size(); ++i) birth.p_LinW_m[static_cast<std::int64_t>(i)] = lights[i];
+  FastSlamOptions o = hallFileOptions();
+  o.num_particles = 1;  // a landmark new to the best map is then one born in this step
+  OracleFilter f(o, 8, research::TruthAssociation{}, birth);
+  f.initialise(scenarios::poseAt(0.0), {});
+  Pose2 prev = scenarios::poseAt(0.0);
+  std::set<std::uint64_t> known;
+  int born = 0;
+  for (double s = 0.27; s <= scenarios::loopLength(); s += 0.27) {
+    const Pose2 x = scenarios::poseAt(s);
+    std::vector<std::int64_t> label;
+    f.step(prev, x, labelledBearings(x, label));
+    prev = x;
+    for (const Landmark& lm : f.bestMap()) {
+      if (!known.insert(lm.id).second) continue;
+      EXPECT_EQ(lm.p_LinW_m, lights[static_cast<std::size_t>(research::labelOf(lm.descriptor))]);
+      ++born;
+    }
+  }
+  EXPECT_GT(born, 0);
 }

@@ -16,13 +16,15 @@
 #
 #   research/oracle-worlds.sh --family halls|irregular|corridors [--worlds 30] [--first-seed 1]
 #                             [--rate-hz 1] [--jobs 2] [--out DIR] [--variants "filter truth-assoc ..."]
-#                             [--check]
+#                             [--check] [--set KEY=VALUE ...]
+# --set goes to every run after the per-world settings (use a fresh --out for each setting).
 # Needs omnislam-gen-world, omnislam-slam, omnislam-eval and research_oracle_worlds in
 # ${OMNISLAM_BUILD_DIR:-build}/bin (a build with -DOMNISLAM_BUILD_RESEARCH=ON).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 FAMILY=""; WORLDS=30; FIRST=1; RATE=1; JOBS=2; OUT=""; CHECK=0
-VARIANTS="filter truth-assoc exact exact-truth-assoc true-map"
+VARIANTS="filter truth-assoc exact exact-truth-assoc truth-birth exact-truth-birth true-map"
+SETS=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --family) FAMILY="$2"; shift 2 ;;
@@ -33,6 +35,7 @@ while [ $# -gt 0 ]; do
     --out) OUT="$2"; shift 2 ;;
     --variants) VARIANTS="$2"; shift 2 ;;
     --check) CHECK=1; shift ;;
+    --set) SETS+=(--set "$2"); shift 2 ;;
     -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
     *) echo "oracle-worlds: unknown argument '$1'" >&2; exit 2 ;;
   esac
@@ -46,6 +49,7 @@ done
 mkdir -p "$OUT/worlds"
 [ "$CHECK" = 1 ] && VARIANTS="$VARIANTS shipped shipped-exact"
 export BIN OUT FAMILY RATE VARIANTS ROOT
+export SETS_STR="${SETS[*]+${SETS[*]}}"
 
 # The world file with exact inputs: odometry without noise, no window-wall misses, no false blobs
 # (the detector's base miss rate, 1/5136, has no switch in omnislam-gen-world).
@@ -79,6 +83,7 @@ print("start_pose.x_m=%r start_pose.y_m=%r start_pose.theta_deg=%r filter.percep
   d["start_x_m"], d["start_y_m"], d["start_theta_deg"], d["perception_max_range_m"], d["min_elevation_deg"]))' "$info"); do
     args+=(--set "$kv")
   done
+  for kv in $SETS_STR; do [ "$kv" = --set ] || args+=(--set "$kv"); done
   local ok=0
   case "$v" in
     shipped|shipped-exact)

@@ -75,7 +75,7 @@ TEST(FullSystem, SportsHallLiveMeetsThePapersFigures) {
     return v;
   };
   const auto o1 = outputs(out1), o2 = outputs(out2);
-  EXPECT_EQ(o1.size(), 4u * num_frames);  // pose, map, particles, associations per frame
+  EXPECT_EQ(o1.size(), 5u * num_frames);  // pose, health, map, particles, associations per frame (1 Hz: all keyframes)
   EXPECT_TRUE(o1 == o2) << "two replays with the same seed must write the same bytes";
   const auto ev2 = t::run({t::binPath("omnislam-eval"), out1, "--json", "--no-tum"}, 60);
   ASSERT_EQ(ev2.exit_code, 0) << ev2.output;

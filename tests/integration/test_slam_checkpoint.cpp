@@ -107,7 +107,7 @@ TEST(SlamCheckpoint, ReplayInterruptedAndResumedWritesTheTailOfTheUninterruptedO
   ASSERT_EQ(r0.exit_code, 0) << r0.output;
   EXPECT_FALSE(fs::exists(dir.file("ref.ckpt"))) << "a complete replay removes its checkpoint";
   const Split want = split(ref);
-  ASSERT_EQ(want.outputs.size(), 4u * 151u);
+  ASSERT_EQ(want.outputs.size(), 5u * 151u);
 
   for (int sig : {SIGKILL, SIGTERM}) {
     SCOPED_TRACE(sig == SIGKILL ? "SIGKILL" : "SIGTERM");
@@ -126,7 +126,7 @@ TEST(SlamCheckpoint, ReplayInterruptedAndResumedWritesTheTailOfTheUninterruptedO
     EXPECT_LT(frames_before, 151u);
     const Split got = split(out);
     EXPECT_TRUE(got.inputs == want.inputs) << "every input event is copied, also those before the checkpoint";
-    ASSERT_EQ(got.outputs.size(), want.outputs.size() - 4 * frames_before);
+    ASSERT_EQ(got.outputs.size(), want.outputs.size() - 5 * frames_before);
     EXPECT_TRUE(
         std::equal(got.outputs.begin(), got.outputs.end(), want.outputs.end() - static_cast<long>(got.outputs.size())))
         << "the resumed replay's outputs differ from the uninterrupted replay's";

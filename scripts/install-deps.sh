@@ -9,6 +9,7 @@ PKGS=(
   default-jdk-headless libjchart2d-java               # javac for the types jar; lcm-spy's viewer needs jchart2d
   default-jre                                         # lcm-spy is a Swing window: AWT's X11 library
   libeigen3-dev                                       # core maths
+  libceres-dev                                        # Ceres Solver 2.1: the smoothing back end's least squares
   libopencv-dev                                       # image processing, rendering, image I/O
   libopencv-contrib-dev                               # cv::omnidir (ccalib): calibration tool, model checks
   libjpeg-dev                                         # libjpeg (OpenCV's): JPEG decoding that reports damaged data

@@ -144,6 +144,31 @@ void FastSlam::initialise(const Pose2& start, const std::vector<Landmark>& prior
   scale_anchored_ = options_.odometry_scale_correction && prior_map.empty();
 }
 
+void FastSlam::applyCorrection(const MapCorrection& c) {
+  if (!initialised()) throw std::logic_error("FastSlam::applyCorrection before initialise()");
+  bool finite = c.T_WtoR_filter.vec().allFinite() && c.T_WtoR_smoothed.vec().allFinite();
+  for (const auto& l : c.landmarks) finite = finite && l.p_LinW_m.allFinite() && l.cov_LinW_m2.allFinite();
+  if (!finite) throw std::invalid_argument("FastSlam::applyCorrection: the correction is not finite");
+  const Pose2 T = correctionTransform(c);
+  const Particle& best = particles_.at(best_index_);
+  LandmarkMap map(options_.map_cell_size_m);
+  map.apply({}, correctLandmarks(best.map.landmarks(), c));
+  std::vector<std::shared_ptr<const Candidate>> candidates;
+  candidates.reserve(best.candidates.size());
+  for (const auto& cand : best.candidates)
+    candidates.push_back(std::make_shared<const Candidate>(transformCandidate(*cand, T)));
+  std::vector<Particle> next = particles_;  // built aside: nothing changes if an allocation fails
+  for (auto& p : next) {
+    p.pose = T.compose(p.pose);
+    p.map = map;
+    p.candidates = candidates;
+    p.log_weight = 0.0;
+  }
+  particles_ = std::move(next);
+  weights_.assign(particles_.size(), 1.0 / static_cast<double>(particles_.size()));
+  ess_ = static_cast<double>(particles_.size());
+}
+
 void FastSlam::predictOnly(const Pose2& odom_prev, const Pose2& odom_now) {
   if (!initialised()) throw std::logic_error("FastSlam::predictOnly before initialise()");
   const Pose2 u = odometryIncrement(odom_prev, odom_now);

@@ -24,6 +24,7 @@
 #include "omnislam/core/slam/data_association.h"
 #include "omnislam/core/slam/filter_variant.h"
 #include "omnislam/core/slam/landmark_map.h"
+#include "omnislam/core/slam/map_correction.h"
 #include "omnislam/core/slam/motion_model.h"
 #include "omnislam/core/slam/perception.h"
 #include "omnislam/core/slam/random.h"
@@ -190,6 +191,13 @@ class FastSlam {
   /// Odometry-only step (no image): every particle samples the motion model; weights, maps and
   /// candidates are unchanged. Strong exception guarantee, as step().
   void predictOnly(const Pose2& odom_prev, const Pose2& odom_now);
+
+  /// Continues from a smoother's solution (map_correction.h): every particle takes the best
+  /// particle's landmarks corrected by `c` (correctLandmarks) and its candidates moved by the
+  /// correction, shared; each particle's pose moves by correctionTransform(c), so the particles keep
+  /// their spread; the weights become uniform. Throws std::logic_error before initialise() and
+  /// std::invalid_argument for a correction that is not finite; strong exception guarantee.
+  void applyCorrection(const MapCorrection& c);
 
   // --- Results -------------------------------------------------------------------------------
   int bestParticleIndex() const { return best_index_; }

@@ -1,0 +1,67 @@
+// The filter's side of the back end: what the filter committed to at each keyframe (its estimate,
+// the frame's measurements and the best particle's association), the graph built from it for
+// smoother.h, and the correction a solution hands back to the filter (map_correction.h).
+//
+// Association: the best particle's at each keyframe (StepResult::landmark_of_measurement). Landmark
+// ids are unique in the filter and inherited through resampling, so an id names one landmark in
+// every particle that descends from the one that created it; the graph keeps the landmarks of the
+// current best particle's map (its ids) and every bearing any keyframe associated with them. A
+// bearing associated with a landmark the best particle no longer has (deleted, or of a lineage that
+// died out) is left out.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "omnislam/core/pose2.h"
+#include "omnislam/core/slam/map_correction.h"
+#include "omnislam/core/slam/motion_model.h"
+#include "omnislam/core/slam/types.h"
+#include "omnislam/smoothing/smoother.h"
+
+namespace omnislam::smoothing {
+
+/// What the filter committed to at one keyframe (one filter step).
+struct KeyframeRecord {
+  std::int64_t utime = 0;
+  Pose2 odom_O;         ///< cumulative odometry at the frame (frame O)
+  Pose2 T_WtoR_filter;  ///< the filter's estimate at the frame (the pose it published)
+  std::vector<slam::BearingMeasurement> z;
+  std::vector<std::int64_t> landmark_of_measurement;  ///< per z: the landmark id, -1 for none
+};
+
+struct GraphOptions {
+  slam::MotionNoiseOptions motion;  ///< the filter's: Sigma_u of the odometry between keyframes
+  Pose2 start;                      ///< the gauge: the start pose in W
+  /// Its covariance: the filter's start covariance, or 1 mm / 1 mrad when the start is exact.
+  Eigen::Matrix3d start_cov = Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal();
+  CeilingPrior ceiling;
+};
+
+class KeyframeGraph {
+ public:
+  explicit KeyframeGraph(const GraphOptions& options);
+
+  void add(KeyframeRecord record);
+  std::size_t size() const { return records_.size(); }
+  const std::vector<KeyframeRecord>& records() const { return records_; }
+
+  /// The graph of every keyframe so far: poses from the filter's estimates, odometry between
+  /// consecutive keyframes, the start prior, and the landmarks of `map` (the best particle's map:
+  /// the initial estimates and the ids kept) with the bearings associated with them. Throws
+  /// std::logic_error when no keyframe was added.
+  Graph build(const std::vector<slam::Landmark>& map) const;
+
+  /// What a solution of build()'s graph hands back: the smoothed landmarks that the solve located
+  /// (covariance from the solution, or the landmark's own when none was computed) and the pose of
+  /// the graph's last keyframe, with the filter's estimate there.
+  slam::MapCorrection correction(const Graph& graph, const Solution& solution,
+                                 const std::vector<slam::Landmark>& map) const;
+
+ private:
+  GraphOptions options_;
+  std::vector<KeyframeRecord> records_;
+};
+
+}  // namespace omnislam::smoothing

@@ -1,0 +1,156 @@
+// Residuals, analytic Jacobians and Ceres cost functions of the keyframe graph (factors.h).
+#include "omnislam/smoothing/factors.h"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+#include "omnislam/core/angles.h"
+#include "omnislam/core/slam/bearing_model.h"
+
+namespace omnislam::smoothing {
+namespace {
+
+Pose2 poseOf(const double* p) { return {p[0], p[1], p[2]}; }
+
+/// Copies a row-major Jacobian block for Ceres (each block is N x size, row-major).
+template <int N, int M>
+void writeJacobian(double* out, const Eigen::Matrix<double, N, M>& J) {
+  Eigen::Map<Eigen::Matrix<double, N, M, Eigen::RowMajor>> map(out);
+  map = J;
+}
+
+}  // namespace
+
+template <int N>
+std::optional<Eigen::Matrix<double, N, N>> whitener(const Eigen::Matrix<double, N, N>& Sigma) {
+  if (!Sigma.allFinite()) return std::nullopt;
+  const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(Sigma);
+  if (llt.info() != Eigen::Success) return std::nullopt;
+  const Eigen::Matrix<double, N, N> L = llt.matrixL();
+  if ((L.diagonal().array() <= 0.0).any()) return std::nullopt;
+  return L.template triangularView<Eigen::Lower>().solve(Eigen::Matrix<double, N, N>::Identity());
+}
+template std::optional<Eigen::Matrix<double, 2, 2>> whitener<2>(const Eigen::Matrix<double, 2, 2>&);
+template std::optional<Eigen::Matrix<double, 3, 3>> whitener<3>(const Eigen::Matrix<double, 3, 3>&);
+
+Eigen::Vector3d posePriorError(const Pose2& T_WtoR, const Pose2& prior, Matrix3d* J_e_pose) {
+  if (J_e_pose) J_e_pose->setIdentity();
+  return {T_WtoR.x_m - prior.x_m, T_WtoR.y_m - prior.y_m, wrapAngle(T_WtoR.theta_rad - prior.theta_rad)};
+}
+
+Eigen::Vector3d odometryError(const Pose2& a, const Pose2& b, const Pose2& u, Matrix3d* J_e_a, Matrix3d* J_e_b) {
+  const double c = std::cos(a.theta_rad), s = std::sin(a.theta_rad);
+  const double dx = b.x_m - a.x_m, dy = b.y_m - a.y_m;
+  const Eigen::Vector3d e(c * dx + s * dy - u.x_m, -s * dx + c * dy - u.y_m,
+                          wrapAngle(b.theta_rad - a.theta_rad - u.theta_rad));
+  if (J_e_a) *J_e_a << -c, -s, -s * dx + c * dy, s, -c, -c * dx - s * dy, 0.0, 0.0, -1.0;
+  if (J_e_b) *J_e_b << c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0;
+  return e;
+}
+
+std::optional<Eigen::Vector2d> pointBearingError(const slam::BearingMeasurement& z, const Pose2& T_WtoR,
+                                                 const Eigen::Vector3d& p_LinW_m, Eigen::Matrix<double, 2, 3>* J_e_pose,
+                                                 Eigen::Matrix<double, 2, 3>* J_e_landmark) {
+  const auto zhat = slam::predictBearing(p_LinW_m, T_WtoR, z.p_CinR_m, J_e_pose, J_e_landmark);
+  if (!zhat) return std::nullopt;
+  // e = z - h: the Jacobians of e are minus those of h.
+  if (J_e_pose) *J_e_pose = -*J_e_pose;
+  if (J_e_landmark) *J_e_landmark = -*J_e_landmark;
+  return Eigen::Vector2d(wrapAngle(z.azimuth_rad - zhat->x()), wrapAngle(z.elevation_rad - zhat->y()));
+}
+
+std::optional<double> lineAzimuthError(const slam::BearingMeasurement& z, const Pose2& T_WtoR,
+                                       const Eigen::Vector2d& p_LinW_xy_m, Eigen::Matrix<double, 1, 3>* J_e_pose,
+                                       Eigen::Matrix<double, 1, 2>* J_e_landmark) {
+  slam::MeasJac Jp, Jl;
+  const Eigen::Vector3d p(p_LinW_xy_m.x(), p_LinW_xy_m.y(), 0.0);
+  const auto zhat = slam::predictMeasurement(slam::LandmarkKind::kVerticalLine, p, T_WtoR, z.p_CinR_m,
+                                             J_e_pose ? &Jp : nullptr, J_e_landmark ? &Jl : nullptr);
+  if (!zhat) return std::nullopt;
+  if (J_e_pose) *J_e_pose = -Jp.row(0);
+  if (J_e_landmark) *J_e_landmark = -Jl.row(0).head<2>();
+  return wrapAngle(z.azimuth_rad - (*zhat)(0));
+}
+
+// --- Cost functions ---------------------------------------------------------------------------
+
+PosePriorCost::PosePriorCost(const Pose2& prior, const Matrix3d& Sigma)
+    : prior_(prior), W_(whitener<3>(Sigma).value_or(Matrix3d::Zero())) {}
+
+bool PosePriorCost::Evaluate(double const* const* params, double* residuals, double** jacobians) const {
+  Eigen::Map<Eigen::Vector3d>{residuals} = W_ * posePriorError(poseOf(params[0]), prior_);
+  if (jacobians && jacobians[0]) writeJacobian<3, 3>(jacobians[0], W_);
+  return true;
+}
+
+OdometryCost::OdometryCost(const Pose2& u_AtoB, const Matrix3d& Sigma_u)
+    : u_(u_AtoB), W_(whitener<3>(Sigma_u).value_or(Matrix3d::Zero())) {}
+
+bool OdometryCost::Evaluate(double const* const* params, double* residuals, double** jacobians) const {
+  Matrix3d Ja, Jb;
+  const bool want = jacobians != nullptr;
+  const Eigen::Vector3d e =
+      odometryError(poseOf(params[0]), poseOf(params[1]), u_, want ? &Ja : nullptr, want ? &Jb : nullptr);
+  Eigen::Map<Eigen::Vector3d>{residuals} = W_ * e;
+  if (want && jacobians[0]) writeJacobian<3, 3>(jacobians[0], W_ * Ja);
+  if (want && jacobians[1]) writeJacobian<3, 3>(jacobians[1], W_ * Jb);
+  return true;
+}
+
+PointBearingCost::PointBearingCost(const slam::BearingMeasurement& z, const Eigen::Matrix2d& Sigma)
+    : z_(z), W_(whitener<2>(Sigma).value_or(Eigen::Matrix2d::Zero())) {}
+
+bool PointBearingCost::Evaluate(double const* const* params, double* residuals, double** jacobians) const {
+  Eigen::Matrix<double, 2, 3> Jp, Jl;
+  const bool want = jacobians != nullptr;
+  const auto e = pointBearingError(z_, poseOf(params[0]), Eigen::Vector3d(params[1][0], params[1][1], params[1][2]),
+                                   want ? &Jp : nullptr, want ? &Jl : nullptr);
+  if (!e) return false;  // undefined here: Ceres rejects the step
+  Eigen::Map<Eigen::Vector2d>{residuals} = W_ * *e;
+  if (want && jacobians[0]) writeJacobian<2, 3>(jacobians[0], W_ * Jp);
+  if (want && jacobians[1]) writeJacobian<2, 3>(jacobians[1], W_ * Jl);
+  return true;
+}
+
+LineAzimuthCost::LineAzimuthCost(const slam::BearingMeasurement& z, double sigma_rad)
+    : z_(z), inv_sigma_(1.0 / sigma_rad) {}
+
+bool LineAzimuthCost::Evaluate(double const* const* params, double* residuals, double** jacobians) const {
+  Eigen::Matrix<double, 1, 3> Jp;
+  Eigen::Matrix<double, 1, 2> Jl;
+  const bool want = jacobians != nullptr;
+  const auto e = lineAzimuthError(z_, poseOf(params[0]), Eigen::Vector2d(params[1][0], params[1][1]),
+                                  want ? &Jp : nullptr, want ? &Jl : nullptr);
+  if (!e) return false;
+  residuals[0] = inv_sigma_ * *e;
+  if (want && jacobians[0]) Eigen::Map<Eigen::Matrix<double, 1, 3>>{jacobians[0]} = inv_sigma_ * Jp;
+  if (want && jacobians[1]) Eigen::Map<Eigen::Matrix<double, 1, 2>>{jacobians[1]} = inv_sigma_ * Jl;
+  return true;
+}
+
+KnownHeightCost::KnownHeightCost(double height_m, double sigma_m) : height_m_(height_m), inv_sigma_(1.0 / sigma_m) {}
+
+bool KnownHeightCost::Evaluate(double const* const* params, double* residuals, double** jacobians) const {
+  residuals[0] = inv_sigma_ * (params[0][2] - height_m_);
+  if (jacobians && jacobians[0]) {
+    jacobians[0][0] = 0.0;
+    jacobians[0][1] = 0.0;
+    jacobians[0][2] = inv_sigma_;
+  }
+  return true;
+}
+
+FlatCeilingCost::FlatCeilingCost(double sigma_m) : inv_sigma_(1.0 / sigma_m) {}
+
+bool FlatCeilingCost::Evaluate(double const* const* params, double* residuals, double** jacobians) const {
+  residuals[0] = inv_sigma_ * (params[0][2] - params[1][0]);
+  if (jacobians && jacobians[0]) {
+    jacobians[0][0] = 0.0;
+    jacobians[0][1] = 0.0;
+    jacobians[0][2] = inv_sigma_;
+  }
+  if (jacobians && jacobians[1]) jacobians[1][0] = -inv_sigma_;
+  return true;
+}
+
+}  // namespace omnislam::smoothing

@@ -1,0 +1,294 @@
+// One robust solve of the keyframe graph on Ceres (smoother.h): building the problem, solving,
+// removing outlying bearings, and the marginal covariances.
+#include "omnislam/smoothing/smoother.h"
+
+#include <ceres/ceres.h>
+
+#include <array>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "omnislam/core/slam/bearing_model.h"
+#include "omnislam/core/slam/chi_square.h"
+#include "omnislam/smoothing/factors.h"
+
+namespace omnislam::smoothing {
+namespace {
+
+bool isPoint(slam::LandmarkKind k) { return k == slam::LandmarkKind::kPoint3D; }
+
+/// The parameter blocks and residual blocks of one solve.
+struct Blocks {
+  std::vector<std::array<double, 3>> poses, landmarks;
+  double ceiling_height_m = 0.0;
+  std::vector<ceres::ResidualBlockId> bearing_ids;  ///< per Graph::bearings (nullptr once removed)
+  std::vector<int> bearings_of_landmark;            ///< count of bearings still in the graph
+  std::vector<char> landmark_in_problem;
+};
+
+/// The covariance of a bearing as the filter uses it.
+Eigen::Matrix2d bearingSigma(const slam::BearingMeasurement& z, bool inflate) {
+  const slam::MeasMat S = slam::measurementCovariance(z, inflate);
+  Eigen::Matrix2d out = Eigen::Matrix2d::Zero();
+  out.topLeftCorner(S.rows(), S.cols()) = S;
+  return out;
+}
+
+void addBearings(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Blocks& b, ceres::LossFunction* loss) {
+  b.bearing_ids.assign(g.bearings.size(), nullptr);
+  b.bearings_of_landmark.assign(g.landmarks.size(), 0);
+  for (std::size_t i = 0; i < g.bearings.size(); ++i) {
+    const BearingEdge& e = g.bearings[i];
+    double* pose = b.poses[e.keyframe].data();
+    double* lm = b.landmarks[e.landmark].data();
+    const Eigen::Matrix2d S = bearingSigma(e.z, o.inflate_azimuth_near_zenith);
+    ceres::CostFunction* cost = isPoint(e.z.kind)
+                                    ? static_cast<ceres::CostFunction*>(new PointBearingCost(e.z, S))
+                                    : static_cast<ceres::CostFunction*>(new LineAzimuthCost(e.z, std::sqrt(S(0, 0))));
+    b.bearing_ids[i] = pb.AddResidualBlock(cost, o.bearing_loss_sigmas > 0.0 ? loss : nullptr, pose, lm);
+    ++b.bearings_of_landmark[e.landmark];
+  }
+}
+
+void addCeiling(const Graph& g, ceres::Problem& pb, Blocks& b, ceres::LossFunction* loss) {
+  if (std::holds_alternative<NoCeilingPrior>(g.ceiling)) return;
+  double height_sum = 0.0;
+  int n = 0;
+  for (std::size_t j = 0; j < g.landmarks.size(); ++j) {
+    if (!isPoint(g.landmarks[j].kind)) continue;
+    height_sum += g.landmarks[j].p_LinW_m.z();
+    ++n;
+  }
+  if (n == 0) return;
+  b.ceiling_height_m = height_sum / n;  // the flat ceiling's start: the mean landmark height
+  for (std::size_t j = 0; j < g.landmarks.size(); ++j) {
+    if (!isPoint(g.landmarks[j].kind)) continue;
+    if (const auto* known = std::get_if<KnownCeilingHeight>(&g.ceiling)) {
+      pb.AddResidualBlock(new KnownHeightCost(known->height_m, known->sigma_m), loss, b.landmarks[j].data());
+    } else {
+      const auto& flat = std::get<FlatCeiling>(g.ceiling);
+      pb.AddResidualBlock(new FlatCeilingCost(flat.sigma_m), loss, b.landmarks[j].data(), &b.ceiling_height_m);
+    }
+  }
+}
+
+/// Adds every block of the graph; the loss functions are owned by the caller.
+void buildProblem(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Blocks& b,
+                  ceres::LossFunction* bearing_loss, ceres::LossFunction* ceiling_loss) {
+  for (const auto& k : g.keyframes) b.poses.push_back({k.T_WtoR.x_m, k.T_WtoR.y_m, k.T_WtoR.theta_rad});
+  for (const auto& l : g.landmarks) b.landmarks.push_back({l.p_LinW_m.x(), l.p_LinW_m.y(), l.p_LinW_m.z()});
+  for (std::size_t k = 0; k < b.poses.size(); ++k) pb.AddParameterBlock(b.poses[k].data(), 3);
+  for (std::size_t j = 0; j < b.landmarks.size(); ++j)
+    pb.AddParameterBlock(b.landmarks[j].data(), isPoint(g.landmarks[j].kind) ? 3 : 2);
+  for (const auto& p : g.pose_priors)
+    pb.AddResidualBlock(new PosePriorCost(p.mean, p.Sigma), nullptr, b.poses[p.keyframe].data());
+  for (const auto& e : g.odometry)
+    pb.AddResidualBlock(new OdometryCost(e.u_AtoB, e.Sigma_u), nullptr, b.poses[e.from].data(), b.poses[e.to].data());
+  addBearings(g, o, pb, b, bearing_loss);
+  addCeiling(g, pb, b, ceiling_loss);
+  b.landmark_in_problem.assign(g.landmarks.size(), 1);
+}
+
+/// A landmark left with fewer bearings than it needs to be located leaves the problem (with its
+/// other factors), keeping its initial value: points need two rays, lines two azimuths.
+void dropUnderdetermined(const Graph& g, ceres::Problem& pb, Blocks& b) {
+  for (std::size_t j = 0; j < g.landmarks.size(); ++j) {
+    if (!b.landmark_in_problem[j] || b.bearings_of_landmark[j] >= 2) continue;
+    for (std::size_t i = 0; i < g.bearings.size(); ++i) {
+      if (g.bearings[i].landmark != static_cast<int>(j) || !b.bearing_ids[i]) continue;
+      pb.RemoveResidualBlock(b.bearing_ids[i]);
+      b.bearing_ids[i] = nullptr;
+    }
+    pb.RemoveParameterBlock(b.landmarks[j].data());  // removes its ceiling factor too
+    b.landmark_in_problem[j] = 0;
+  }
+}
+
+/// Removes the bearings over the gate; returns how many.
+int removeOutliers(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Blocks& b, Solution& s) {
+  const double gate[3] = {0.0, slam::chiSquareQuantile(1.0 - o.outlier_probability, 1.0),
+                          slam::chiSquareQuantile(1.0 - o.outlier_probability, 2.0)};
+  int removed = 0;
+  for (std::size_t i = 0; i < g.bearings.size(); ++i) {
+    if (!b.bearing_ids[i]) continue;
+    double cost = 0.0;
+    if (!pb.EvaluateResidualBlock(b.bearing_ids[i], false, &cost, nullptr, nullptr)) continue;
+    const double chi2 = 2.0 * cost;
+    if (chi2 <= gate[slam::measurementDim(g.bearings[i].z.kind)]) continue;
+    const BearingEdge& e = g.bearings[i];
+    s.removed.push_back({static_cast<int>(i), g.keyframes[e.keyframe].id, g.landmarks[e.landmark].id, chi2});
+    pb.RemoveResidualBlock(b.bearing_ids[i]);
+    b.bearing_ids[i] = nullptr;
+    --b.bearings_of_landmark[e.landmark];
+    ++removed;
+  }
+  return removed;
+}
+
+bool runSolver(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Blocks& b, Solution& s) {
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::SPARSE_SCHUR;
+  so.max_num_iterations = o.max_iterations;
+  so.function_tolerance = o.function_tolerance;
+  so.num_threads = 1;  // deterministic
+  so.logging_type = ceres::SILENT;
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (std::size_t j = 0; j < b.landmarks.size(); ++j)
+    if (b.landmark_in_problem[j]) ordering->AddElementToGroup(b.landmarks[j].data(), 0);
+  for (auto& p : b.poses) ordering->AddElementToGroup(p.data(), 1);
+  if (pb.HasParameterBlock(&b.ceiling_height_m)) ordering->AddElementToGroup(&b.ceiling_height_m, 1);
+  so.linear_solver_ordering = ordering;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &pb, &summary);
+  if (s.solves == 0) s.initial_cost = summary.initial_cost;
+  s.final_cost = summary.final_cost;
+  s.iterations += static_cast<int>(summary.iterations.size());
+  ++s.solves;
+  (void)g;
+  if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost)) {
+    s.failure = "the solver failed: " + summary.message;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+namespace {
+
+void computeCovariances(const Graph& g, ceres::Problem& pb, Blocks& b, Solution& s) {
+  ceres::Covariance::Options co;
+  co.num_threads = 1;
+  co.algorithm_type = ceres::SPARSE_QR;
+  ceres::Covariance cov(co);
+  std::vector<std::pair<const double*, const double*>> wanted;
+  for (std::size_t j = 0; j < b.landmarks.size(); ++j)
+    if (b.landmark_in_problem[j]) wanted.emplace_back(b.landmarks[j].data(), b.landmarks[j].data());
+  const double* last = b.poses.back().data();
+  wanted.emplace_back(last, last);
+  if (!cov.Compute(wanted, &pb)) {
+    s.covariance_failure = "the information matrix at the solution is rank deficient";
+    return;
+  }
+  s.landmark_cov_m2.assign(g.landmarks.size(), Eigen::Matrix3d::Zero());
+  for (std::size_t j = 0; j < b.landmarks.size(); ++j) {
+    if (!b.landmark_in_problem[j]) continue;
+    if (isPoint(g.landmarks[j].kind)) {
+      Eigen::Matrix<double, 3, 3, Eigen::RowMajor> C;
+      cov.GetCovarianceBlock(b.landmarks[j].data(), b.landmarks[j].data(), C.data());
+      s.landmark_cov_m2[j] = C;
+    } else {
+      Eigen::Matrix<double, 2, 2, Eigen::RowMajor> C;
+      cov.GetCovarianceBlock(b.landmarks[j].data(), b.landmarks[j].data(), C.data());
+      s.landmark_cov_m2[j].topLeftCorner<2, 2>() = C;
+    }
+  }
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> P;
+  cov.GetCovarianceBlock(last, last, P.data());
+  s.last_pose_cov = P;
+}
+
+void readSolution(const Graph& g, const Blocks& b, Solution& s) {
+  for (const auto& p : b.poses) s.keyframe_poses.push_back(Pose2::fromVec(Eigen::Vector3d(p[0], p[1], p[2])));
+  for (std::size_t j = 0; j < b.landmarks.size(); ++j) {
+    const auto& l = b.landmarks[j];
+    s.landmarks_m.emplace_back(l[0], l[1], isPoint(g.landmarks[j].kind) ? l[2] : g.landmarks[j].p_LinW_m.z());
+  }
+  s.bearing_used.assign(g.bearings.size(), 0);
+  for (std::size_t i = 0; i < g.bearings.size(); ++i) s.bearing_used[i] = b.bearing_ids[i] != nullptr;
+  if (std::holds_alternative<FlatCeiling>(g.ceiling)) s.ceiling_height_m = b.ceiling_height_m;
+}
+
+std::string positiveDefinite(const Eigen::Matrix3d& S) { return whitener<3>(S) ? "" : "not positive definite"; }
+
+std::string validateEdges(const Graph& g) {
+  const int K = static_cast<int>(g.keyframes.size()), L = static_cast<int>(g.landmarks.size());
+  auto bad = [](const char* what, std::size_t i, const std::string& why) {
+    std::ostringstream os;
+    os << what << " " << i << ": " << why;
+    return os.str();
+  };
+  for (std::size_t i = 0; i < g.odometry.size(); ++i) {
+    const auto& e = g.odometry[i];
+    if (e.from < 0 || e.from >= K || e.to < 0 || e.to >= K || e.from == e.to) return bad("odometry", i, "index");
+    if (!e.u_AtoB.vec().allFinite()) return bad("odometry", i, "increment not finite");
+    if (const auto why = positiveDefinite(e.Sigma_u); !why.empty()) return bad("odometry", i, "Sigma_u " + why);
+  }
+  for (std::size_t i = 0; i < g.bearings.size(); ++i) {
+    const auto& e = g.bearings[i];
+    if (e.keyframe < 0 || e.keyframe >= K || e.landmark < 0 || e.landmark >= L) return bad("bearing", i, "index");
+    if (e.z.kind != g.landmarks[e.landmark].kind) return bad("bearing", i, "kind differs from its landmark's");
+    if (!std::isfinite(e.z.azimuth_rad) || !std::isfinite(e.z.elevation_rad) || !e.z.p_CinR_m.allFinite())
+      return bad("bearing", i, "not finite");
+    // Inflation only raises the azimuth variance: the raw covariance being PD is enough.
+    if (isPoint(e.z.kind) && !whitener<2>(Eigen::Matrix2d(e.z.cov_rad2))) return bad("bearing", i, "covariance not PD");
+    if (!isPoint(e.z.kind) && !(e.z.cov_rad2(0, 0) > 0.0)) return bad("bearing", i, "variance not positive");
+  }
+  for (std::size_t i = 0; i < g.pose_priors.size(); ++i) {
+    const auto& p = g.pose_priors[i];
+    if (p.keyframe < 0 || p.keyframe >= K) return bad("pose prior", i, "index");
+    if (!p.mean.vec().allFinite()) return bad("pose prior", i, "mean not finite");
+    if (const auto why = positiveDefinite(p.Sigma); !why.empty()) return bad("pose prior", i, "Sigma " + why);
+  }
+  return "";
+}
+
+std::string validateCeiling(const CeilingPrior& c) {
+  if (const auto* k = std::get_if<KnownCeilingHeight>(&c)) {
+    if (!std::isfinite(k->height_m)) return "ceiling: known height not finite";
+    if (!(k->sigma_m > 0.0) || !std::isfinite(k->sigma_m)) return "ceiling: sigma_m must be > 0";
+  }
+  if (const auto* f = std::get_if<FlatCeiling>(&c))
+    if (!(f->sigma_m > 0.0) || !std::isfinite(f->sigma_m)) return "ceiling: sigma_m must be > 0";
+  return "";
+}
+
+}  // namespace
+
+std::string Graph::validate() const {
+  if (keyframes.empty()) return "graph: no keyframe";
+  if (pose_priors.empty()) return "graph: no pose prior (the gauge)";
+  for (std::size_t k = 0; k < keyframes.size(); ++k)
+    if (!keyframes[k].T_WtoR.vec().allFinite()) return "keyframe " + std::to_string(k) + ": pose not finite";
+  for (std::size_t j = 0; j < landmarks.size(); ++j)
+    if (!landmarks[j].p_LinW_m.allFinite()) return "landmark " + std::to_string(j) + ": position not finite";
+  if (auto why = validateEdges(*this); !why.empty()) return why;
+  return validateCeiling(ceiling);
+}
+
+std::string SolverOptions::validate() const {
+  if (max_iterations < 1) return "max_iterations must be >= 1";
+  if (!(bearing_loss_sigmas > 0.0) || !std::isfinite(bearing_loss_sigmas)) return "bearing_loss_sigmas must be > 0";
+  if (!(ceiling_loss_sigmas > 0.0) || !std::isfinite(ceiling_loss_sigmas)) return "ceiling_loss_sigmas must be > 0";
+  if (!(outlier_probability > 0.0 && outlier_probability < 0.5)) return "outlier_probability must be in (0, 0.5)";
+  if (outlier_rounds < 0) return "outlier_rounds must be >= 0";
+  if (!(function_tolerance > 0.0 && function_tolerance < 1.0)) return "function_tolerance must be in (0, 1)";
+  return "";
+}
+
+Solution solve(const Graph& g, const SolverOptions& o) {
+  Solution s;
+  s.failure = o.validate();
+  if (s.failure.empty()) s.failure = g.validate();
+  if (!s.failure.empty()) return s;
+  ceres::Problem::Options po;
+  po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem pb(po);
+  ceres::CauchyLoss bearing_loss(o.bearing_loss_sigmas), ceiling_loss(o.ceiling_loss_sigmas);
+  Blocks b;
+  buildProblem(g, o, pb, b, &bearing_loss, &ceiling_loss);
+  dropUnderdetermined(g, pb, b);
+  if (!runSolver(g, o, pb, b, s)) return s;
+  for (int round = 0; round < o.outlier_rounds; ++round) {
+    if (removeOutliers(g, o, pb, b, s) == 0) break;
+    dropUnderdetermined(g, pb, b);
+    if (!runSolver(g, o, pb, b, s)) return s;
+  }
+  readSolution(g, b, s);
+  if (o.compute_covariances) computeCovariances(g, pb, b, s);
+  s.ok = true;
+  return s;
+}
+
+}  // namespace omnislam::smoothing

@@ -42,6 +42,7 @@ void publishAll(lcmio::Node& node, const DriverResult& r) {
     if (out.map) node.publish(channels::kSlamMap, *out.map);
     node.publish(channels::kSlamParticles, out.particles);
     if (out.associations) node.publish(channels::kSlamAssociations, *out.associations);
+    if (out.trajectory) node.publish(channels::kSlamTrajectory, *out.trajectory);
   }
 }
 
@@ -49,6 +50,7 @@ int runLive(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark>
             const std::string& name) {
   lcmio::Node node(name, url);
   slamproc::SlamRuntime rt(opt, std::move(prior), node.tag());
+  rt.setLive();  // a back-end solve never makes the live filter wait
   rt.resume();
   const auto emit = [&](const DriverResult& r) { publishAll(node, r); };
   // The pairing checks time order itself (duplicates and small steps back are refused, a large step

@@ -4,6 +4,7 @@
 // landmarks. Seeded: the same graph for the same seed.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -23,6 +24,9 @@ struct SimOptions {
   double landmark_perturbation_m = 0.4;  ///< initial landmark estimates off by up to this
   slam::LandmarkKind kind = slam::LandmarkKind::kPoint3D;
   unsigned seed = 1;
+  int laps = 1;                    ///< times round the loop (keyframes: 41 per lap)
+  double max_range_m = 1e9;        ///< bearings only of lights within this horizontal range
+  int lights_x = 4, lights_y = 3;  ///< the grid of lights, 4.5 m x 5 m apart from (-1, -1)
 };
 
 struct SimGraph {
@@ -31,7 +35,7 @@ struct SimGraph {
   std::vector<Eigen::Vector3d> true_landmarks;
 };
 
-inline std::vector<Pose2> loopPath() {
+inline std::vector<Pose2> loopPath(int laps = 1) {
   // A 12 x 8 m rectangle driven anticlockwise from the origin, one keyframe per metre.
   std::vector<Pose2> path;
   const double w = 12.0, h = 8.0;
@@ -39,6 +43,8 @@ inline std::vector<Pose2> loopPath() {
   for (int i = 0; i < 8; ++i) path.push_back({w, double(i), kPi / 2});
   for (int i = 0; i < 12; ++i) path.push_back({w - i, h, kPi});
   for (int i = 0; i < 8; ++i) path.push_back({0.0, h - i, -kPi / 2});
+  const std::vector<Pose2> lap = path;
+  for (int l = 1; l < laps; ++l) path.insert(path.end(), lap.begin(), lap.end());
   path.push_back({0.0, 0.0, 0.0});
   return path;
 }
@@ -48,9 +54,10 @@ inline SimGraph simulateGraph(const SimOptions& o) {
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> n01(0.0, 1.0);
   std::uniform_real_distribution<double> u11(-1.0, 1.0);
-  s.true_poses = loopPath();
-  for (int ix = 0; ix < 4; ++ix)
-    for (int iy = 0; iy < 3; ++iy) s.true_landmarks.emplace_back(-1.0 + 4.5 * ix, -1.0 + 5.0 * iy, o.ceiling_m);
+  s.true_poses = loopPath(o.laps);
+  for (int ix = 0; ix < o.lights_x; ++ix)
+    for (int iy = 0; iy < o.lights_y; ++iy)
+      s.true_landmarks.emplace_back(-1.0 + 4.5 * ix, -1.0 + 5.0 * iy, o.ceiling_m);
   s.true_landmarks[4].z() += o.odd_lamp_offset_m;
   Graph& g = s.graph;
   const Eigen::Vector3d p_CinR(0.1, 0.0, 1.8);
@@ -79,7 +86,9 @@ inline SimGraph simulateGraph(const SimOptions& o) {
   for (std::size_t k = 0; k < s.true_poses.size(); ++k) {
     for (std::size_t j = 0; j < s.true_landmarks.size(); ++j) {
       const auto zt = slam::predictBearing(s.true_landmarks[j], s.true_poses[k], p_CinR);
-      if (!zt) continue;
+      const Eigen::Vector2d d =
+          s.true_landmarks[j].head<2>() - Eigen::Vector2d(s.true_poses[k].x_m, s.true_poses[k].y_m);
+      if (!zt || d.norm() > o.max_range_m) continue;
       slam::BearingMeasurement z;
       z.kind = o.kind;
       z.p_CinR_m = p_CinR;

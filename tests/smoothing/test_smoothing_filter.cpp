@@ -53,7 +53,7 @@ HallRun runHall(std::uint64_t seed, int solve_every) {
     const Solution s = solve(g);
     ++run.solves;
     if (!s.ok) continue;
-    f.applyCorrection(kg.correction(g, s, map));
+    f.applyCorrection(correctionFrom(g, s, map));
     ++run.corrections;
   }
   run.map_error_m = mapError(f.bestMap());

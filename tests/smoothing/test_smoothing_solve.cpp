@@ -151,6 +151,7 @@ TEST(smoothing_Solve, CovariancesAreTheInverseOfTheInformation) {
   SolverOptions so;
   so.bearing_loss_sigmas = 1e6;  // plain least squares: information = J^T J
   so.outlier_rounds = 0;
+  so.covariances = LandmarkCovariance::kMarginal;
   const Solution s = solve(sim.graph, so);
   ASSERT_TRUE(s.ok && s.covariance_failure.empty()) << s.failure << s.covariance_failure;
   // Brute force: the dense Jacobian of every whitened residual at the solution by central differences.
@@ -186,13 +187,24 @@ TEST(smoothing_Solve, CovariancesAreTheInverseOfTheInformation) {
     xm[i] -= 1e-6;
     J.col(static_cast<Eigen::Index>(i)) = (residuals(xp) - residuals(xm)) / 2e-6;
   }
-  const Eigen::MatrixXd C = (J.transpose() * J).inverse();
+  const Eigen::MatrixXd info = J.transpose() * J;
+  const Eigen::MatrixXd C = info.inverse();
   for (int j = 0; j < L; ++j) {
     const Eigen::Matrix3d Cj = C.block<3, 3>(3 * K + 3 * j, 3 * K + 3 * j);
     EXPECT_LT((s.landmark_cov_m2[j] - Cj).norm(), 1e-4 * Cj.norm()) << "landmark " << j;
   }
   const Eigen::Matrix3d Cp = C.block<3, 3>(3 * (K - 1), 3 * (K - 1));
   EXPECT_LT((s.last_pose_cov - Cp).norm(), 1e-4 * Cp.norm());
+  // Given the poses: the inverse of each landmark's own block of the information.
+  so.covariances = LandmarkCovariance::kGivenPoses;
+  const Solution g = solve(sim.graph, so);
+  ASSERT_TRUE(g.ok);
+  for (int j = 0; j < L; ++j) {
+    const Eigen::Matrix3d Gj = info.block<3, 3>(3 * K + 3 * j, 3 * K + 3 * j).inverse();
+    EXPECT_LT((g.landmark_cov_m2[j] - Gj).norm(), 1e-4 * Gj.norm()) << "landmark " << j;
+    // Knowing the poses can only make a landmark surer.
+    EXPECT_LE(g.landmark_cov_m2[j].trace(), s.landmark_cov_m2[j].trace() * (1 + 1e-9));
+  }
 }
 
 TEST(smoothing_Solve, SolvesAreBitForBitRepeatable) {

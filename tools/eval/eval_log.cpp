@@ -14,6 +14,7 @@
 #include "omnislam/map_t.hpp"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "omnislam/slam_trajectory_t.hpp"
 
 namespace omnislam::evaltool {
 
@@ -144,6 +145,14 @@ void readSlamEvent(const std::string& path, const lcmio::LogEvent& ev, PoseMaps&
       keepByUtime(c.associations, m->utime, m->landmark_id, path, ev.channel, c);
   } else if (ev.channel == channels::kSlamMap) {
     readMap(path, ev, true, c);
+  } else if (ev.channel == channels::kSlamTrajectory) {
+    auto m = decodeValid<slam_trajectory_t>(path, ev, c);
+    if (m && m->ok && (!c.smoothed_utime || m->utime >= *c.smoothed_utime)) {  // the newest solve
+      c.smoothed.clear();
+      for (int32_t k = 0; k < m->num_keyframes; ++k)
+        c.smoothed.push_back({m->keyframe_utime[k], Pose2{m->x_m[k], m->y_m[k], m->theta_rad[k]}});
+      c.smoothed_utime = m->utime;
+    }
   } else if (ev.channel == channels::kOmniFeatures) {
     ++c.feature_frames;
     if (auto m = decodeValid<features_t>(path, ev, c)) {

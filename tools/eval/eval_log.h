@@ -24,7 +24,10 @@ struct LogContent {
   bool have_slam_map = false, have_truth_map = false;
   std::optional<int64_t> slam_map_utime, truth_map_utime;  ///< of the maps kept: the newest
   std::vector<int64_t> slam_map_ids, truth_map_ids;
-  std::vector<eval::TimedPose> odometry;                 ///< ODOMETRY (of the first log that has it)
+  std::vector<eval::TimedPose> odometry;  ///< ODOMETRY (of the first log that has it)
+  /// The smoothed keyframe trajectory of the newest valid SLAM_TRAJECTORY (back end), if any.
+  std::vector<eval::TimedPose> smoothed;
+  std::optional<int64_t> smoothed_utime;                 ///< that message's utime
   std::map<int64_t, std::vector<int64_t>> associations;  ///< SLAM_ASSOCIATIONS by frame utime
   std::map<int64_t, std::vector<int64_t>> labels;        ///< GROUND_TRUTH_FEATURE_LABELS by frame utime
   std::map<std::string, int64_t> skipped;  ///< "LOG: CHANNEL: reason" -> messages left out (undecodable, invalid)

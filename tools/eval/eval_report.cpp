@@ -54,6 +54,12 @@ void optionalJson(std::ostream& o, const Scores& s) {
       << ", \"dr_heading_rmse_rad\": " << s.dr.raw.heading_rmse_rad
       << ", \"dr_ate_rmse_aligned_m\": " << s.dr.aligned.ate_rmse_m
       << ", \"dr_ate_max_aligned_m\": " << s.dr.aligned.ate_max_m << ", \"dr_poses_compared\": " << s.dr.raw.pairs;
+  o << ", \"smoothed_available\": " << (s.smoothed ? "true" : "false");
+  if (s.smoothed)
+    o << ", \"smoothed_ate_rmse_m\": " << s.smoothed->ate_rmse_m
+      << ", \"smoothed_ate_max_m\": " << s.smoothed->ate_max_m
+      << ", \"smoothed_heading_rmse_rad\": " << s.smoothed->heading_rmse_rad
+      << ", \"smoothed_poses_compared\": " << s.smoothed->pairs;
   o << ", \"assoc_available\": " << (s.have_assoc ? "true" : "false");
   if (s.have_assoc) {
     const auto& as = s.as;
@@ -102,6 +108,10 @@ void tableOptionalLines(std::ostream& o, const Scores& s) {
     o << "  dead reckoning (ODOMETRY from the start pose): ATE RMSE " << dr.raw.ate_rmse_m << " m, max "
       << dr.raw.ate_max_m << " m; aligned: RMSE " << dr.aligned.ate_rmse_m << " m, max " << dr.aligned.ate_max_m
       << " m\n";
+  if (s.smoothed)
+    o << "  smoothed keyframes (the back end's last SLAM_TRAJECTORY): " << s.smoothed->pairs << " compared, ATE RMSE "
+      << s.smoothed->ate_rmse_m << " m, max " << s.smoothed->ate_max_m << " m, heading RMSE "
+      << s.smoothed->heading_rmse_rad << " rad\n";
   if (s.have_assoc) {
     const auto& as = s.as;
     o << "  association: precision " << ratioText(as.precision(), as.associated) << " (" << as.correct << "/"

@@ -32,6 +32,8 @@ struct Scores {
   eval::AssociationScore as;
   int64_t frames = 0;  ///< OMNI_FEATURES messages, or the number of SLAM poses when there are none
   eval::Coverage coverage;
+  /// The back end's last smoothed keyframe trajectory against the truth (aligned with T), if any.
+  std::optional<eval::TrajectoryErrors> smoothed;
 };
 
 /// The figures as one JSON object on one line (docs/user/evaluation.md lists the keys).

@@ -106,6 +106,7 @@ eval::Rigid2D alignOntoTruth(std::vector<eval::PosePair>& pairs, LogContent& c) 
   for (auto& p : pairs) p.estimate = T->apply(p.estimate);
   for (auto& l : c.slam_map) l = T->apply(l);
   for (auto& p : c.slam) p.pose = T->apply(p.pose);
+  for (auto& p : c.smoothed) p.pose = T->apply(p.pose);
   return *T;
 }
 
@@ -200,6 +201,7 @@ Scores score(const Options& o, LogContent& c) {
   for (const auto& p : c.slam) pose_utimes.push_back(p.utime);
   for (const auto& p : c.truth) truth_utimes.push_back(p.utime);
   s.coverage = eval::coverage(c.frame_utimes, pose_utimes, truth_utimes, o.coverage);
+  if (const auto sp = eval::pairByTime(c.smoothed, c.truth); !sp.empty()) s.smoothed = eval::trajectoryErrors(sp);
   requireFinite(s);
   return s;
 }

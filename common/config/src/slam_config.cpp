@@ -11,6 +11,7 @@
 #include "omnislam/config/slam_options_table.h"
 #include "omnislam/core/angles.h"
 #include "omnislam/core/slam/options_table.h"
+#include "omnislam/smoothing/back_end_options_table.h"
 #include "omnislam/runtime/pairing_options_table.h"
 
 namespace omnislam::slamproc {
@@ -120,6 +121,14 @@ void parseFilter(const Node& n, slam::FastSlamOptions& f) {
   if (!err.empty()) throw validationError(n, err);
 }
 
+void parseBackEnd(const Node& n, smoothing::BackEndOptions& b) {
+  n.rejectUnknownKeysIn(keysOf(smoothing::backEndFields(), {"solver"}));
+  parseFields(n, b, smoothing::backEndFields());
+  if (auto s = n.optChild("solver")) parseSection(*s, b.solver, smoothing::solverFields());
+  const std::string err = b.validate();
+  if (!err.empty()) throw validationError(n, err);
+}
+
 void parsePairing(const Node& n, PairingOptions& p) {
   parseSection(n, p, pairingFields());
   // The one check across keys, in the file's units (PairingOptions::validate() speaks microseconds).
@@ -170,6 +179,7 @@ std::string SlamProcessOptions::validate() const {
     const std::string err = section.check(*this);  // the tables' ranges
     if (!err.empty()) return (section.name.empty() ? "" : section.name + ": ") + err;
   }
+  if (const std::string b = backend.validate(); !b.empty()) return "backend: " + b;
   if (!use_ceiling_lights && !use_vertical_lines) return "at least one feature kind must be used";
   if (localisation_only && load_map_path.empty())
     return "map.localisation_only needs map.load_path (a map to localise in)";
@@ -194,6 +204,7 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
   if (auto r = root.optChild("restart")) parseSection(*r, o.restart, restartFields());
   if (auto f = root.optChild("filter")) parseFilter(*f, o.filter);
   if (auto h = root.optChild("health")) parseSection(*h, o.health, slam::options::healthFields());
+  if (auto b = root.optChild("backend")) parseBackEnd(*b, o.backend);
   return o;
 }
 

@@ -6,6 +6,7 @@
 
 #include "omnislam/core/slam/options_table.h"
 #include "omnislam/runtime/pairing_options_table.h"
+#include "omnislam/smoothing/back_end_options_table.h"
 
 namespace omnislam::slamproc {
 
@@ -187,6 +188,10 @@ const std::vector<ConfigSection>& processSections() {
           "plausibility", plausibilityFields, [](const O& o) -> const auto& { return o.plausibility; }),
       section<slam::HealthOptions>(
           "health", slam::options::healthFields, [](const O& o) -> const auto& { return o.health; }),
+      section<smoothing::BackEndOptions>(
+          "backend", smoothing::backEndFields, [](const O& o) -> const auto& { return o.backend; }),
+      section<smoothing::SolverOptions>(
+          "backend.solver", smoothing::solverFields, [](const O& o) -> const auto& { return o.backend.solver; }),
   };
   return s;
 }

@@ -110,4 +110,12 @@ std::optional<std::string> checkEncodedLengths(const process_status_t*, const ui
   return w.error;
 }
 
+std::optional<std::string> checkEncodedLengths(const slam_trajectory_t*, const uint8_t* body, size_t size) {
+  Walk w(body, size);
+  w.skip(4 * 8 + 1).str("failure").skip(4 * 4 + 8 + 1);
+  const int32_t n = w.i32();
+  w.array("num_keyframes", n, 4 * 8);  // keyframe_utime, x_m, y_m, theta_rad: four arrays of n
+  return w.error;
+}
+
 }  // namespace omnislam::lcmio

@@ -215,4 +215,20 @@ std::optional<std::string> validate(const slam_health_t& m, const Limits& lim) {
   return std::nullopt;
 }
 
+std::optional<std::string> validate(const slam_trajectory_t& m, const Limits&) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (m.num_keyframes < 0) return "negative num_keyframes";
+  for (std::size_t n : {m.keyframe_utime.size(), m.x_m.size(), m.y_m.size(), m.theta_rad.size()})
+    if (auto e = countMismatch("num_keyframes", m.num_keyframes, n)) return e;
+  for (std::size_t k = 0; k < static_cast<std::size_t>(m.num_keyframes); ++k) {
+    if (!finite(m.x_m[k]) || !finite(m.y_m[k]) || !finite(m.theta_rad[k]))
+      return "keyframe " + std::to_string(k) + ": pose not finite";
+    if (k > 0 && m.keyframe_utime[k] <= m.keyframe_utime[k - 1])
+      return "keyframe " + std::to_string(k) + ": utime not after the one before";
+  }
+  if (m.num_landmarks < 0 || m.num_bearings < 0 || m.num_removed < 0 || m.iterations < 0) return "a negative count";
+  if (!finite(m.final_cost) || m.final_cost < 0.0) return "final_cost negative or not finite";
+  return std::nullopt;
+}
+
 }  // namespace omnislam::lcmio

@@ -243,6 +243,8 @@ void SlamDriver::loadState(ByteReader& r) {
   pairer_ = std::move(pairer);
   filter_ = std::move(filters[0]);
   ended_filter_ = std::move(filters[1]);
+  // The back end's keyframes are not in a checkpoint: it starts again at the restored estimate.
+  if (filter_) startBackEnd(filter_->meanPose(), filter_->poseCovariance());
   ended_step_utime_ = ended_step_utime;
   odom_prev_O_ = odom_prev;
   last_step_utime_ = v[0];

@@ -115,7 +115,8 @@ lcmio::LogWriter::Mode outputMode(const std::string& out_path) {
 
 bool isSlamOutput(const std::string& channel) {
   return channel == channels::kSlamPose || channel == channels::kSlamMap || channel == channels::kSlamParticles ||
-         channel == channels::kSlamAssociations || channel == channels::kSlamHealth;
+         channel == channels::kSlamAssociations || channel == channels::kSlamHealth ||
+         channel == channels::kSlamTrajectory;
 }
 
 /// Whether the replay's event number pos.events was read before the checkpoint it resumed from (its
@@ -144,6 +145,7 @@ int64_t writeReplayResult(const DriverResult& r, int64_t ts, lcmio::LogWriter& o
     if (o.map) out.write(ts, channels::kSlamMap, *o.map);
     out.write(ts, channels::kSlamParticles, o.particles);
     if (o.associations) out.write(ts, channels::kSlamAssociations, *o.associations);
+    if (o.trajectory) out.write(ts, channels::kSlamTrajectory, *o.trajectory);
   }
   return static_cast<int64_t>(r.outputs.size());
 }

@@ -41,6 +41,30 @@ std::optional<slam::BearingMeasurement> toMeasurement(const feature_t& f, const 
   return m;
 }
 
+slam_trajectory_t trajectoryMessage(const BackEndReport& r, const Frame& frame, int64_t seq) {
+  slam_trajectory_t m{};
+  m.utime = frame.utime;
+  m.seq = seq;
+  m.input_seq = frame.seq;
+  m.solved_at_utime = r.solved_at_utime;
+  m.ok = r.ok;
+  m.failure = r.ok ? "" : r.failure.substr(0, r.failure.find('\n'));
+  m.num_landmarks = r.num_landmarks;
+  m.num_bearings = r.num_bearings;
+  m.num_removed = r.num_removed;
+  m.iterations = r.iterations;
+  m.final_cost = r.final_cost;
+  m.loop_closure = r.loop_closure;
+  m.num_keyframes = static_cast<int32_t>(r.keyframe_poses.size());
+  for (std::size_t k = 0; k < r.keyframe_poses.size(); ++k) {
+    m.keyframe_utime.push_back(r.keyframe_utimes[k]);
+    m.x_m.push_back(r.keyframe_poses[k].x_m);
+    m.y_m.push_back(r.keyframe_poses[k].y_m);
+    m.theta_rad.push_back(r.keyframe_poses[k].theta_rad);
+  }
+  return m;
+}
+
 Frame toFrame(const features_t& msg, const SlamProcessOptions& options, int64_t* skipped) {
   Frame fr;
   fr.utime = msg.utime;
@@ -228,6 +252,19 @@ void SlamDriver::ensureFilter(const Pose2& odom_O, DriverResult& r) {
   filter_ = std::move(filter);
   odom_prev_O_ = odom_O;
   health_.reset();  // the new filter's start is the health's start
+  startBackEnd(filter_->meanPose(), filter_->poseCovariance());
+}
+
+void SlamDriver::startBackEnd(const Pose2& start_W, const Eigen::Matrix3d& start_cov) {
+  backend_.reset();
+  if (opt_.backend.mode == smoothing::BackEndMode::kOff || !opt_.filter.update_map) return;
+  smoothing::GraphOptions g;
+  g.motion = opt_.filter.motion;
+  g.start = start_W;
+  // The gauge: the filter's start, 1 mm / 1 mrad where it is exact.
+  g.start_cov = start_cov + Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal().toDenseMatrix();
+  g.ceiling = opt_.backend.ceilingPrior();
+  backend_ = std::make_unique<BackEndRunner>(opt_.backend, g, backend_waits_);
 }
 
 // Odometry-only steps: only after the filter has started (the first frame fixes the start), only
@@ -264,6 +301,10 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   if (started && !slam::isKeyframe(opt_.filter.keyframes, odom_prev_O_, odom_O, frame.utime - last_step_utime_))
     return betweenKeyframes(frame, odom_O);
   const slam::StepResult sr = filter_->step(odom_prev_O_, odom_O, frame.z);
+  std::optional<BackEndReport> backend;
+  if (backend_)
+    backend =
+        backend_->afterStep(*filter_, {frame.utime, odom_O, filter_->meanPose(), frame.z, sr.landmark_of_measurement});
   odom_prev_O_ = odom_O;
   last_step_utime_ = last_frame_utime_ = frame.utime;
   ++stats_.frames_processed;
@@ -271,6 +312,7 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   if (sr.weights_degenerate) ++stats_.degenerate_weights;
 
   FrameOutput out = makeOutput(frame.utime, frame.seq, sr.ess);
+  if (backend) out.trajectory = trajectoryMessage(*backend, frame, trajectory_seq_++);
   applyHealth(out, odom_O, &sr);
   if ((stats_.frames_processed - 1) % opt_.map_every_n_frames == 0) {  // the first frame has a map
     map_t m{};
@@ -446,6 +488,12 @@ std::string SlamDriver::summary() const {
     << " diverged " << s.health_diverged << " fallback " << s.health_fallback;
   if (filter_)
     o << "; landmarks " << filter_->bestParticle().map.size() << " candidates " << filter_->bestCandidateCount();
+  if (backend_) {
+    const BackEndStats& b = backend_->stats();
+    o << "; backend: solves " << b.solves_started << " applied " << b.solves_applied << " failed " << b.solves_failed
+      << " loop_closures " << b.loop_closures << " outliers_removed " << b.bearings_removed << " waited " << b.waited
+      << " late " << b.late;
+  }
   return o.str();
 }
 

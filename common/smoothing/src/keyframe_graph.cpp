@@ -41,8 +41,8 @@ Graph KeyframeGraph::build(const std::vector<slam::Landmark>& map) const {
   return g;
 }
 
-slam::MapCorrection KeyframeGraph::correction(const Graph& graph, const Solution& solution,
-                                              const std::vector<slam::Landmark>& map) const {
+slam::MapCorrection correctionFrom(const Graph& graph, const Solution& solution,
+                                   const std::vector<slam::Landmark>& map) {
   slam::MapCorrection c;
   const std::size_t last = graph.keyframes.size() - 1;
   c.T_WtoR_filter = graph.keyframes[last].T_WtoR;

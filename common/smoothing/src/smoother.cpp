@@ -4,6 +4,8 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Cholesky>
+
 #include <array>
 #include <cmath>
 #include <memory>
@@ -128,7 +130,10 @@ int removeOutliers(const Graph& g, const SolverOptions& o, ceres::Problem& pb, B
 
 bool runSolver(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Blocks& b, Solution& s) {
   ceres::Solver::Options so;
-  so.linear_solver_type = ceres::SPARSE_SCHUR;
+  constexpr ceres::LinearSolverType kType[] = {ceres::SPARSE_NORMAL_CHOLESKY, ceres::SPARSE_SCHUR, ceres::DENSE_SCHUR};
+  so.linear_solver_type = kType[static_cast<int>(o.linear_solver)];
+  // Eigen's sparse Cholesky: no OpenMP or BLAS threads behind Ceres' back (SuiteSparse's spin).
+  so.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
   so.max_num_iterations = o.max_iterations;
   so.function_tolerance = o.function_tolerance;
   so.num_threads = 1;  // deterministic
@@ -138,7 +143,7 @@ bool runSolver(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Block
     if (b.landmark_in_problem[j]) ordering->AddElementToGroup(b.landmarks[j].data(), 0);
   for (auto& p : b.poses) ordering->AddElementToGroup(p.data(), 1);
   if (pb.HasParameterBlock(&b.ceiling_height_m)) ordering->AddElementToGroup(&b.ceiling_height_m, 1);
-  so.linear_solver_ordering = ordering;
+  if (o.linear_solver != LinearSolver::kSparseNormalCholesky) so.linear_solver_ordering = ordering;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &pb, &summary);
   if (s.solves == 0) s.initial_cost = summary.initial_cost;
@@ -187,6 +192,40 @@ void computeCovariances(const Graph& g, ceres::Problem& pb, Blocks& b, Solution&
   Eigen::Matrix<double, 3, 3, Eigen::RowMajor> P;
   cov.GetCovarianceBlock(last, last, P.data());
   s.last_pose_cov = P;
+}
+
+/// kGivenPoses: per landmark, the inverse of the information of its bearings still in the graph at
+/// the solution (plain least squares: the loss's weights are not applied).
+void covariancesGivenPoses(const Graph& g, const SolverOptions& o, Solution& s) {
+  std::vector<Eigen::Matrix3d> info(g.landmarks.size(), Eigen::Matrix3d::Zero());
+  for (std::size_t i = 0; i < g.bearings.size(); ++i) {
+    if (!s.bearing_used[i]) continue;
+    const BearingEdge& e = g.bearings[i];
+    const Pose2& x = s.keyframe_poses[e.keyframe];
+    const Eigen::Matrix2d W =
+        whitener<2>(bearingSigma(e.z, o.inflate_azimuth_near_zenith)).value_or(Eigen::Matrix2d::Zero());
+    if (isPoint(e.z.kind)) {
+      Eigen::Matrix<double, 2, 3> Jl;
+      if (!pointBearingError(e.z, x, s.landmarks_m[e.landmark], nullptr, &Jl)) continue;
+      const Eigen::Matrix<double, 2, 3> A = W * Jl;
+      info[e.landmark] += A.transpose() * A;
+    } else {
+      Eigen::Matrix<double, 1, 2> Jl;
+      if (!lineAzimuthError(e.z, x, s.landmarks_m[e.landmark].head<2>(), nullptr, &Jl)) continue;
+      const Eigen::Matrix<double, 1, 2> A = W(0, 0) * Jl;
+      info[e.landmark].topLeftCorner<2, 2>() += A.transpose() * A;
+    }
+  }
+  s.landmark_cov_m2.assign(g.landmarks.size(), Eigen::Matrix3d::Zero());
+  for (std::size_t j = 0; j < g.landmarks.size(); ++j) {
+    const int n = isPoint(g.landmarks[j].kind) ? 3 : 2;
+    const Eigen::MatrixXd I = info[j].topLeftCorner(n, n);
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(I);
+    if (I.isZero(0.0) || ldlt.info() != Eigen::Success || !ldlt.isPositive() ||
+        ldlt.vectorD().minCoeff() <= 1e-12 * I.trace())
+      continue;
+    s.landmark_cov_m2[j].topLeftCorner(n, n) = ldlt.solve(Eigen::MatrixXd::Identity(n, n));
+  }
 }
 
 void readSolution(const Graph& g, const Blocks& b, Solution& s) {
@@ -286,7 +325,8 @@ Solution solve(const Graph& g, const SolverOptions& o) {
     if (!runSolver(g, o, pb, b, s)) return s;
   }
   readSolution(g, b, s);
-  if (o.compute_covariances) computeCovariances(g, pb, b, s);
+  if (o.covariances == LandmarkCovariance::kMarginal) computeCovariances(g, pb, b, s);
+  if (o.covariances == LandmarkCovariance::kGivenPoses) covariancesGivenPoses(g, o, s);
   s.ok = true;
   return s;
 }

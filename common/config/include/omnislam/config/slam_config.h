@@ -12,6 +12,7 @@
 #include "omnislam/core/slam/fastslam.h"
 #include "omnislam/core/slam/health_monitor.h"
 #include "omnislam/runtime/pairing.h"
+#include "omnislam/smoothing/back_end_options.h"
 
 namespace omnislam::slamproc {
 
@@ -56,6 +57,8 @@ struct SlamProcessOptions {
   RestartOptions restart;
   /// Health of the filter and the policy while it is diverged (SLAM_HEALTH; keys `health.*`).
   slam::HealthOptions health;
+  /// The smoothing back end behind the filter (keys `backend.*`; docs/design/smoothing.md).
+  smoothing::BackEndOptions backend;
   /// Where the map frame W is: kOdometry = the odometry frame O (the robot's pose at the first
   /// frame is its odometry pose); kFixed = `start_pose_W` is the robot's pose at the first frame.
   enum class StartSource { kOdometry, kFixed };

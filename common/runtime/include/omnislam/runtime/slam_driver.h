@@ -21,7 +21,9 @@
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/slam_health_t.hpp"
+#include "omnislam/slam_trajectory_t.hpp"
 #include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/back_end_runner.h"
 #include "omnislam/runtime/pairing.h"
 
 namespace omnislam::slamproc {
@@ -37,6 +39,9 @@ struct FrameOutput {
   particles_t particles;
   std::optional<associations_t> associations;  ///< absent for an odometry-only step
   bool odometry_only = false;                  ///< a prediction without a frame (pose.input_seq = -1)
+  /// SLAM_TRAJECTORY: the smoothed keyframes of a back-end solve handed to the filter at this step
+  /// (backend.mode keyframes); the pose, map and particles above are already on its corrected map.
+  std::optional<slam_trajectory_t> trajectory;
 };
 
 /// Everything one input produced: the outputs, the refusal of the input itself, the frames
@@ -78,6 +83,8 @@ struct DriverStats {
 /// ceiling light without elevation.
 std::optional<slam::BearingMeasurement> toMeasurement(const feature_t& f, const double camera_position_m[3],
                                                       const SlamProcessOptions& options);
+/// SLAM_TRAJECTORY of a back-end solve handed over at `frame`.
+slam_trajectory_t trajectoryMessage(const BackEndReport& r, const Frame& frame, int64_t seq);
 /// All usable features of a frame; `skipped` counts the others.
 Frame toFrame(const features_t& msg, const SlamProcessOptions& options, int64_t* skipped = nullptr);
 
@@ -95,6 +102,11 @@ class SlamDriver {
   DriverResult finish();
 
   const DriverStats& stats() const;
+  /// The back end's counters (all zero with backend.mode off).
+  BackEndStats backEndStats() const { return backend_ ? backend_->stats() : BackEndStats{}; }
+  /// Live runs: the filter never waits for a back-end solve (a replay waits at its due keyframe, so
+  /// that its output does not depend on the machine's speed). Call before the first input.
+  void setBackEndWaits(bool wait) { backend_waits_ = wait; }
   /// One line of counts for PROCESS_STATUS.detail and the end-of-replay summary.
   std::string summary() const;
   /// The filter of the current epoch (nothing before the first processed frame).
@@ -153,7 +165,12 @@ class SlamDriver {
   int64_t odom_utime_at_last_frame_ = 0;
   int64_t epoch_ = 0;
   int64_t pose_seq_ = 0, map_seq_ = 0, particles_seq_ = 0, associations_seq_ = 0, health_seq_ = 0;
+  int64_t trajectory_seq_ = 0;  ///< not in checkpoints: a resumed back end starts again
   slam::HealthMonitor health_;  ///< reset with each new filter
+  /// The smoothing back end of the current filter (backend.mode keyframes), started with it.
+  std::unique_ptr<BackEndRunner> backend_;
+  bool backend_waits_ = true;
+  void startBackEnd(const Pose2& start_W, const Eigen::Matrix3d& start_cov);
   mutable DriverStats stats_;
 };
 

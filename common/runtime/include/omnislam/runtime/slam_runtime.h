@@ -88,6 +88,8 @@ class SlamRuntime {
   /// One line of counts for PROCESS_STATUS.detail and the end-of-run summary.
   std::string detail() const;
   const SlamDriver& driver() const { return driver_; }
+  /// A live run: the filter never waits for a back-end solve (SlamDriver::setBackEndWaits).
+  void setLive() { driver_.setBackEndWaits(false); }
 
  private:
   template <class Step>

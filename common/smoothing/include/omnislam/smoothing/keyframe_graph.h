@@ -53,15 +53,15 @@ class KeyframeGraph {
   /// std::logic_error when no keyframe was added.
   Graph build(const std::vector<slam::Landmark>& map) const;
 
-  /// What a solution of build()'s graph hands back: the smoothed landmarks that the solve located
-  /// (covariance from the solution, or the landmark's own when none was computed) and the pose of
-  /// the graph's last keyframe, with the filter's estimate there.
-  slam::MapCorrection correction(const Graph& graph, const Solution& solution,
-                                 const std::vector<slam::Landmark>& map) const;
-
  private:
   GraphOptions options_;
   std::vector<KeyframeRecord> records_;
 };
+
+/// What a solution of KeyframeGraph::build(map)'s graph hands back: the smoothed landmarks that the
+/// solve located (covariance from the solution, or the landmark's own when none was computed) and
+/// the pose of the graph's last keyframe, with the filter's estimate there. Pure (a worker may call it).
+slam::MapCorrection correctionFrom(const Graph& graph, const Solution& solution,
+                                   const std::vector<slam::Landmark>& map);
 
 }  // namespace omnislam::smoothing

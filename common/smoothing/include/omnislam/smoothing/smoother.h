@@ -80,6 +80,28 @@ struct Graph {
   std::string validate() const;
 };
 
+/// The covariance of each landmark a solution carries.
+enum class LandmarkCovariance : std::uint8_t {
+  kNone = 0,
+  /// Given the smoothed poses: the inverse of the information of the landmark's own bearings at the
+  /// solution, (sum_k J_k^T Q_k^-1 J_k)^-1. What a FastSLAM landmark EKF holds (conditional on its
+  /// particle's path), and cheap: 3x3 per landmark.
+  kGivenPoses = 1,
+  /// Marginal over everything (Ceres' covariance estimation, one more sparse factorisation): also
+  /// fills the last keyframe's covariance. Costly on long runs.
+  kMarginal = 2,
+};
+
+/// The linear solver of each Levenberg-Marquardt step (Ceres' names; bench/bench_smoothing.cpp).
+enum class LinearSolver : std::uint8_t {
+  /// Cholesky of the full sparse normal equations (Eigen, AMD ordering): an omnidirectional camera
+  /// sees most landmarks from most keyframes, so eliminating the landmarks first (Schur) makes a
+  /// dense reduced system; the full system stays sparse where the robot does not see everything.
+  kSparseNormalCholesky = 0,
+  kSparseSchur = 1,  ///< landmarks eliminated first, sparse reduced system (Eigen)
+  kDenseSchur = 2,   ///< landmarks eliminated first, dense reduced system
+};
+
 struct SolverOptions {
   int max_iterations = 50;  ///< Levenberg-Marquardt iterations per solve, >= 1
   /// Cauchy loss scale on a bearing's whitened residual [sigmas], > 0: errors beyond it count less
@@ -93,8 +115,9 @@ struct SolverOptions {
   int outlier_rounds = 2;  ///< solves after removing outliers, >= 0
   /// Relative decrease of the cost at which Levenberg-Marquardt stops, in (0, 1).
   double function_tolerance = 1e-10;
-  /// Marginal covariances of the landmarks and the last keyframe (one more factorisation).
-  bool compute_covariances = true;
+  LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;
+  /// Which landmark covariances the solution carries (see LandmarkCovariance).
+  LandmarkCovariance covariances = LandmarkCovariance::kGivenPoses;
   /// A bearing's covariance as the filter's (filter.inflate_azimuth_near_zenith): the azimuth
   /// variance raised to at least var(elevation) / cos^2(elevation) (bearing_model.h).
   bool inflate_azimuth_near_zenith = true;
@@ -114,8 +137,9 @@ struct Solution {
   std::string failure;  ///< why not ok: invalid graph or options, or the solver's own message
   std::vector<Pose2> keyframe_poses;
   std::vector<Eigen::Vector3d> landmarks_m;  ///< a line's z is its initial value
-  /// Marginal covariance of each landmark [m^2] (a line: x-y block, z row and column zero), and of
-  /// the last keyframe's pose; empty / zero when not computed or when covariance_failure is set.
+  /// Covariance of each landmark [m^2] as SolverOptions::covariances says (a line: x-y block, z row
+  /// and column zero; zero for a landmark not located or whose information is singular), and, with
+  /// kMarginal, of the last keyframe's pose; empty when not computed or when covariance_failure is set.
   std::vector<Eigen::Matrix3d> landmark_cov_m2;
   Eigen::Matrix3d last_pose_cov = Eigen::Matrix3d::Zero();
   std::string covariance_failure;          ///< non-empty when the covariances were asked for but are singular

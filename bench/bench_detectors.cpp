@@ -24,7 +24,8 @@
 // After the Google Benchmark runs, the targets of issue 55 (docs/results/benchmarks.md): each detector
 // and its plain operations interleaved in one loop on the same frame (lights <= 1.5x threshold + CC
 // at 640 x 480 and <= 2x at 1280 x 960, threshold 40 as the former fixed detector; lines <= 1.5x
-// remap + Sobel, with BGR -> grey on the BGR 1280 x 960 frames), medians of thread CPU time, one
+// remap + Sobel, with BGR -> grey on the BGR 1280 x 960 frames; and the lights on a real lamp image,
+// frame 002 of opencv-omnidir-fisheye, 1280 x 800, with its camera), medians of thread CPU time, one
 // PASS / FAIL line each and the load average. OMNISLAM_BENCH_ROUNDS (default 60) rounds;
 // OMNISLAM_BENCH_NO_TARGETS=1 skips them.
 // Run: build/bin/bench_detectors (or scripts/run-bench.sh detectors).
@@ -46,7 +47,9 @@
 #include <string>
 #include <vector>
 
+#include "detectors.h"
 #include "omnislam/config/world_config.h"
+#include "omnislam/config/yaml_node.h"
 #include "omnislam/core/camera/pajdla_bakstein.h"
 #include "omnislam/vision/ceiling_lights.h"
 #include "omnislam/vision/image_decode.h"
@@ -555,6 +558,26 @@ void plainRemapSobel(const vision::Panorama& pano, const cv::Mat& image) {
   benchmark::DoNotOptimize(gx.data);
 }
 
+// The real lamp images: frame 002 of opencv-omnidir-fisheye (1280 x 800, three tubes, the most
+// false blobs of the set) with its camera (config/features/opencv_omnidir_fisheye_lights.yaml).
+void printFisheyeTarget(int rounds) {
+  const char* env = std::getenv("OMNISLAM_DATASETS");
+  const std::string root = env && *env ? std::string(env) : std::string(OMNISLAM_SOURCE_DIR) + "/../shared/datasets";
+  const std::string path = root + "/omni-images/opencv-omnidir-fisheye/stereo_pair_002.jpg";
+  const cv::Mat grey = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  if (grey.empty()) {
+    std::printf("  1280 x 800 real fish-eye frame: not run (%s not found; set OMNISLAM_DATASETS)\n", path.c_str());
+    return;
+  }
+  const auto setup = features::ceilingLightSetup(
+      config::Node::loadFile(std::string(OMNISLAM_SOURCE_DIR) + "/config/features/opencv_omnidir_fisheye_lights.yaml"));
+  const vision::CeilingLightDetector det(*setup.camera, setup.mounting, setup.options);
+  printTarget("ceiling lights, 1280 x 800 real fish-eye (002)", "threshold + CC",
+              interleave([&] { benchmark::DoNotOptimize(det.detect(grey).size()); }, [&] { plainThresholdCc(grey); },
+                         rounds, 2),
+              2.0);
+}
+
 void printTargets() {
   const OneOpenCvThread one;
   const int rounds = std::getenv("OMNISLAM_BENCH_ROUNDS") ? std::atoi(std::getenv("OMNISLAM_BENCH_ROUNDS")) : 60;
@@ -580,6 +603,7 @@ void printTargets() {
                            [&] { plainThresholdCc(f.grey); }, rounds, 2),
                 2.0);
   }
+  printFisheyeTarget(rounds);
   const vision::VerticalLineDetector lines(lineOptions(), 640, 480, &cam());
   const vision::Panorama pano(lineOptions().panorama, 640, 480);
   printTarget("vertical lines, 640 x 480 (24 sectors)", "remap + Sobel",

@@ -131,6 +131,7 @@ bool isJunctionChain(const cv::Mat& gx, const LineFit& f, double mid0, int sign,
 std::vector<Sample> peakSamples(const cv::Mat& gx, int sign, int c0, int c1, int r0, int r1, int thr,
                                 const Panorama& pano) {
   std::vector<Sample> samples;
+  samples.reserve(static_cast<size_t>(r1 - r0 + 1));
   const int ca = std::max(1, c0 - 1), cb = std::min(gx.cols - 2, c1 + 1);
   for (int r = r0; r <= r1; ++r) {
     const int16_t* row = gx.ptr<int16_t>(r);
@@ -156,11 +157,13 @@ std::vector<Sample> peakSamples(const cv::Mat& gx, int sign, int c0, int c1, int
 std::optional<LineFit> robustFit(const std::vector<Sample>& samples, std::vector<char>& use, double mid0,
                                  int min_rows) {
   LineFit f;
+  std::vector<double> res;
+  res.reserve(samples.size());
   for (int round = 0; round < 4; ++round) {
     f = fitSamples(samples, use, mid0);
     if (f.rows < min_rows || f.weight <= 0) return std::nullopt;
     if (round == 3) break;
-    std::vector<double> res;
+    res.clear();
     for (size_t i = 0; i < samples.size(); ++i)
       if (use[i]) res.push_back(std::abs(samples[i].c - f.a0 - f.slope * (samples[i].r - mid0)));
     std::nth_element(res.begin(), res.begin() + res.size() / 2, res.end());
@@ -241,7 +244,7 @@ VerticalLineDetector::VerticalLineDetector(const VerticalLineOptions& options, i
 }
 
 bool VerticalLineDetector::usableBetween(int col, int r_from, int r_to) const {
-  if (r_to <= r_from) return true;
+  if (r_to <= r_from || unusable_runs_.empty()) return true;
   const size_t base = static_cast<size_t>(col) * (unusable_.rows + 1);
   return unusable_count_[base + r_to] == unusable_count_[base + r_from];
 }
@@ -282,7 +285,8 @@ std::vector<VerticalLineDetector::Run> VerticalLineDetector::findRuns(const cv::
       runs.push_back({idx < C ? 1 : -1, idx < C ? idx : idx - C, start[idx], last[idx]});
   };
   auto visit = [&](int idx, int r) {
-    if (last[idx] >= 0 && r - last[idx] - 1 <= opt_.max_gap_rows && usableBetween(idx % C, last[idx] + 1, r)) {
+    if (last[idx] >= 0 && r - last[idx] - 1 <= opt_.max_gap_rows &&
+        usableBetween(idx < C ? idx : idx - C, last[idx] + 1, r)) {
       last[idx] = r;
     } else {
       emit(idx);
@@ -490,33 +494,29 @@ VerticalLine VerticalLineDetector::makeLine(const Fit& f, const cv::Mat& image) 
 void VerticalLineDetector::sideColours(const cv::Mat& image, double extra_offset_columns, VerticalLine& L) const {
   // Mean colour of a strip on each side, sampled from the input image through the panorama geometry.
   const auto& po = pano_.options();
+  const double r_min = po.r_min_px, r_step = pano_.radialStepPx();  // radiusOfRow(r) = r_min + r r_step
+  const bool bgr = image.channels() == 3;
   for (int side = 0; side < 2; ++side) {
     const double dir = side == 0 ? 1.0 : -1.0;  // 0: counter-clockwise (larger alpha)
-    double acc[3] = {0, 0, 0};
+    long acc[3] = {0, 0, 0};                    // R, G, B (grey: the same three)
     int n = 0;
     for (int k = 0; k < opt_.colour_width_columns; ++k) {
       const double a = pano_.angleOfColumn(L.column + dir * (extra_offset_columns + opt_.colour_offset_columns + k));
       const double ca = std::cos(a), sa = std::sin(a);
       for (int r = L.row_begin; r <= L.row_end; r += 2) {
-        const double rho = pano_.radiusOfRow(r);
+        const double rho = r_min + r * r_step;
         const int u = roundHalfAway(po.centre_u_px + rho * ca), v = roundHalfAway(po.centre_v_px + rho * sa);
         if (u < 0 || v < 0 || u >= image.cols || v >= image.rows) continue;
-        if (image.channels() == 3) {
-          const cv::Vec3b& bgr = image.at<cv::Vec3b>(v, u);
-          acc[0] += bgr[2];
-          acc[1] += bgr[1];
-          acc[2] += bgr[0];
-        } else {
-          const double gv = image.at<uint8_t>(v, u);
-          acc[0] += gv;
-          acc[1] += gv;
-          acc[2] += gv;
-        }
+        const uint8_t* p = image.ptr<uint8_t>(v) + (bgr ? 3 * u : u);
+        acc[0] += bgr ? p[2] : p[0];
+        acc[1] += bgr ? p[1] : p[0];
+        acc[2] += p[0];
         ++n;
       }
     }
     auto& col = side == 0 ? L.colour_ccw : L.colour_cw;
-    for (int i = 0; i < 3; ++i) col[static_cast<size_t>(i)] = n ? static_cast<float>(acc[i] / n) : 0.0f;
+    for (int i = 0; i < 3; ++i)
+      col[static_cast<size_t>(i)] = n ? static_cast<float>(static_cast<double>(acc[i]) / n) : 0.0f;
   }
 }
 

@@ -83,6 +83,7 @@ CeilingLightDetector::CeilingLightDetector(const camera::CameraModel& camera, co
   for (int v = 0; v < field_of_view_.rows; ++v)
     for (int u = 0; u < field_of_view_.cols; ++u)
       field_of_view_.at<uint8_t>(v, u) = camera.unproject(Eigen::Vector2d(u, v)).has_value() ? 255 : 0;
+  fov_is_whole_image_ = cv::countNonZero(field_of_view_) == field_of_view_.rows * field_of_view_.cols;
   scale_px_per_rad_ = medianPixelScale(camera);
   if (blobs_.background_window_px == 0) {
     if (!(scale_px_per_rad_ > 0.0)) throw std::invalid_argument("ceiling lights: the camera has no field of view");
@@ -97,7 +98,7 @@ std::vector<CeilingLight> CeilingLightDetector::detect(const cv::Mat& grey, cons
     throw std::invalid_argument("ceiling lights: image " + std::to_string(grey.cols) + "x" + std::to_string(grey.rows) +
                                 " does not match the camera's " + std::to_string(camera_.widthPx()) + "x" +
                                 std::to_string(camera_.heightPx()));
-  cv::Mat usable = field_of_view_;
+  cv::Mat usable = fov_is_whole_image_ ? cv::Mat() : field_of_view_;  // empty: every pixel (no pass over a mask)
   if (!mask.empty()) {
     if (mask.type() != CV_8UC1 || mask.size() != grey.size())
       throw std::invalid_argument("ceiling lights: the mask must be CV_8UC1 of the image's size");

@@ -1,6 +1,7 @@
 // Vertical-line detector: see vertical_lines.h.
 #include "omnislam/vision/vertical_lines.h"
 
+#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -76,6 +77,30 @@ LineFit fitSamples(const std::vector<Sample>& s, const std::vector<char>& use, d
   return f;
 }
 
+// std::lround without the library call for 0 <= x < 1e9 (x + 0.5 truncated: the same but for x
+// within one ulp below a half, whose sum rounds up); negative x go to lround.
+inline int roundHalfAway(double x) {
+  return x >= 0.0 && x < 1e9 ? static_cast<int>(x + 0.5) : static_cast<int>(std::lround(x));
+}
+
+// The non-zero pixels of a CV_8U image as runs along its rows: (row, first column, end column).
+std::vector<cv::Vec3i> rowRuns(const cv::Mat& m) {
+  std::vector<cv::Vec3i> runs;
+  for (int r = 0; r < m.rows; ++r) {
+    const uint8_t* p = m.ptr<uint8_t>(r);
+    for (int c = 0; c < m.cols;) {
+      if (!p[c]) {
+        ++c;
+        continue;
+      }
+      const int c0 = c;
+      while (c < m.cols && p[c]) ++c;
+      runs.emplace_back(r, c0, c);
+    }
+  }
+  return runs;
+}
+
 // A line whose column carries the opposite sign (within one column) beyond BOTH its ends, over more
 // than max_fraction of its own length on each side, is one link of a chain of junctions whose
 // polarity alternates along the column (a checkerboard's squares, a grid), not one physical edge. (An
@@ -98,6 +123,60 @@ bool isJunctionChain(const cv::Mat& gx, const LineFit& f, double mid0, int sign,
   const int len = f.r_hi - f.r_lo + 1;
   return opposite(f.r_hi + 1, f.r_hi + len) > max_fraction * len &&
          opposite(f.r_lo - len, f.r_lo - 1) > max_fraction * len;
+}
+
+// Per row of a group (sign, columns c0..c1, rows r0..r1), the parabola through the peak of
+// sign * gx and its neighbours; weight response x rho^2 (a column spans rho 2 pi / columns image
+// pixels, so the same blur covers many columns near the centre, where the peak is flat and uncertain).
+std::vector<Sample> peakSamples(const cv::Mat& gx, int sign, int c0, int c1, int r0, int r1, int thr,
+                                const Panorama& pano) {
+  std::vector<Sample> samples;
+  samples.reserve(static_cast<size_t>(r1 - r0 + 1));
+  const int ca = std::max(1, c0 - 1), cb = std::min(gx.cols - 2, c1 + 1);
+  for (int r = r0; r <= r1; ++r) {
+    const int16_t* row = gx.ptr<int16_t>(r);
+    int best = -1, bv = 0;
+    for (int c = ca; c <= cb; ++c)
+      if (sign * row[c] > bv) {
+        bv = sign * row[c];
+        best = c;
+      }
+    if (best < 0 || bv <= thr) continue;
+    const double l = sign * row[best - 1], m = bv, rr = sign * row[best + 1];
+    const double den = l - 2 * m + rr;
+    const double off = den < 0 ? std::clamp(0.5 * (l - rr) / den, -0.5, 0.5) : 0.0;
+    const double rho = pano.radiusOfRow(r);
+    samples.push_back({r, best + off, m * rho * rho, m});
+  }
+  return samples;
+}
+
+// Robust rounds of fitSamples: rows off the fit by more than max(0.75, 3 x 1.4826 x median
+// |residual|) columns (another edge merged into the group, a kink) are dropped (use[i] = 0) and the
+// fit repeated. nullopt when fewer than min_rows rows or no weight are left.
+std::optional<LineFit> robustFit(const std::vector<Sample>& samples, std::vector<char>& use, double mid0,
+                                 int min_rows) {
+  LineFit f;
+  std::vector<double> res;
+  res.reserve(samples.size());
+  for (int round = 0; round < 4; ++round) {
+    f = fitSamples(samples, use, mid0);
+    if (f.rows < min_rows || f.weight <= 0) return std::nullopt;
+    if (round == 3) break;
+    res.clear();
+    for (size_t i = 0; i < samples.size(); ++i)
+      if (use[i]) res.push_back(std::abs(samples[i].c - f.a0 - f.slope * (samples[i].r - mid0)));
+    std::nth_element(res.begin(), res.begin() + res.size() / 2, res.end());
+    const double gate = std::max(0.75, 3.0 * 1.4826 * res[res.size() / 2]);
+    bool changed = false;
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const bool in = std::abs(samples[i].c - f.a0 - f.slope * (samples[i].r - mid0)) <= gate;
+      changed |= (in != static_cast<bool>(use[i]));
+      use[i] = in;
+    }
+    if (!changed) break;
+  }
+  return f;
 }
 
 }  // namespace
@@ -155,6 +234,7 @@ VerticalLineDetector::VerticalLineDetector(const VerticalLineOptions& options, i
   cv::Mat usable;
   cv::erode(pano_.validMask(mask), usable, cv::Mat(), cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
   unusable_ = usable == 0;
+  unusable_runs_ = rowRuns(unusable_);
   const int R = unusable_.rows, C = unusable_.cols;
   unusable_count_.assign(static_cast<size_t>(C) * (R + 1), 0);
   for (int c = 0; c < C; ++c)
@@ -164,7 +244,7 @@ VerticalLineDetector::VerticalLineDetector(const VerticalLineOptions& options, i
 }
 
 bool VerticalLineDetector::usableBetween(int col, int r_from, int r_to) const {
-  if (r_to <= r_from) return true;
+  if (r_to <= r_from || unusable_runs_.empty()) return true;
   const size_t base = static_cast<size_t>(col) * (unusable_.rows + 1);
   return unusable_count_[base + r_to] == unusable_count_[base + r_from];
 }
@@ -190,13 +270,13 @@ void VerticalLineDetector::response(const cv::Mat& grey, cv::Mat& pano, cv::Mat&
                  std::pow(opt_.contrast_reference_grey + opt_.contrast_offset_grey, opt_.contrast_exponent));
     gf.convertTo(gx, CV_16S);
   }
-  gx.setTo(0, unusable_);
+  for (const cv::Vec3i& run : unusable_runs_)  // what gx.setTo(0, unusable_) does, without a pass over the mask
+    std::fill(gx.ptr<int16_t>(run[0]) + run[1], gx.ptr<int16_t>(run[0]) + run[2], int16_t{0});
 }
 
 std::vector<VerticalLineDetector::Run> VerticalLineDetector::findRuns(const cv::Mat& gx) const {
   // Vertical runs per column and sign, in one row-major pass (runs are closed lazily). A gap is
   // bridged only when it is short and holds no unusable (masked) pixel.
-  thread_local cv::Mat pos, neg;
   const int C = gx.cols, R = gx.rows, thr = opt_.edge_threshold;
   std::vector<int> start(2 * static_cast<size_t>(C), -1), last(2 * static_cast<size_t>(C), -1);
   std::vector<Run> runs;
@@ -204,35 +284,34 @@ std::vector<VerticalLineDetector::Run> VerticalLineDetector::findRuns(const cv::
     if (last[idx] >= 0 && last[idx] - start[idx] + 1 >= opt_.min_run_rows)
       runs.push_back({idx < C ? 1 : -1, idx < C ? idx : idx - C, start[idx], last[idx]});
   };
-  // Thresholding with OpenCV's vectorised compare, then a scan that skips 8 empty bytes at a time.
-  cv::compare(gx, cv::Scalar(thr), pos, cv::CMP_GT);
-  cv::compare(gx, cv::Scalar(-thr), neg, cv::CMP_LT);
   auto visit = [&](int idx, int r) {
-    if (last[idx] >= 0 && r - last[idx] - 1 <= opt_.max_gap_rows && usableBetween(idx % C, last[idx] + 1, r)) {
+    if (last[idx] >= 0 && r - last[idx] - 1 <= opt_.max_gap_rows &&
+        usableBetween(idx < C ? idx : idx - C, last[idx] + 1, r)) {
       last[idx] = r;
     } else {
       emit(idx);
       start[idx] = last[idx] = r;
     }
   };
+  auto pixel = [&](int c, int r, int16_t value) {
+    if (value > thr) visit(c, r);
+    if (value < -thr) visit(C + c, r);
+  };
+  // One pass over the response: a vector of columns is looked at one by one only when one of them
+  // is beyond the threshold (the response is mostly below it).
   for (int r = 0; r < R; ++r) {
-    const uint8_t* p = pos.ptr<uint8_t>(r);
-    const uint8_t* n = neg.ptr<uint8_t>(r);
+    const int16_t* g = gx.ptr<int16_t>(r);
     int c = 0;
-    for (; c + 8 <= C; c += 8) {
-      uint64_t wp, wn;
-      std::memcpy(&wp, p + c, 8);
-      std::memcpy(&wn, n + c, 8);
-      if ((wp | wn) == 0) continue;
-      for (int k = c; k < c + 8; ++k) {
-        if (p[k]) visit(k, r);
-        if (n[k]) visit(C + k, r);
-      }
+#if CV_SIMD
+    const cv::v_int16 hi = cv::vx_setall_s16(static_cast<int16_t>(thr)),
+                      lo = cv::vx_setall_s16(static_cast<int16_t>(-thr));
+    for (; c + cv::v_int16::nlanes <= C; c += cv::v_int16::nlanes) {
+      const cv::v_int16 x = cv::vx_load(g + c);
+      if (!cv::v_check_any((x > hi) | (x < lo))) continue;
+      for (int k = c; k < c + cv::v_int16::nlanes; ++k) pixel(k, r, g[k]);
     }
-    for (; c < C; ++c) {
-      if (p[c]) visit(c, r);
-      if (n[c]) visit(C + c, r);
-    }
+#endif
+    for (; c < C; ++c) pixel(c, r, g[c]);
   }
   for (int idx = 0; idx < 2 * C; ++idx) emit(idx);
   return runs;
@@ -269,69 +348,30 @@ std::vector<VerticalLineDetector::Group> VerticalLineDetector::groupRuns(std::ve
 }
 
 std::optional<VerticalLineDetector::Fit> VerticalLineDetector::fitGroup(const cv::Mat& gx, const Group& g) const {
-  // Per row, parabola through the peak of sign * gx and its neighbours; weight response x rho^2 (a
-  // column spans rho 2 pi / columns image pixels, so the same blur covers many columns near the
-  // centre, where the peak is flat and uncertain).
-  std::vector<Sample> samples;
-  const int C = gx.cols, thr = opt_.edge_threshold;
-  const int ca = std::max(1, g.c0 - 1), cb = std::min(C - 2, g.c1 + 1);
+  const std::vector<Sample> samples = peakSamples(gx, g.sign, g.c0, g.c1, g.r0, g.r1, opt_.edge_threshold, pano_);
   const double mid0 = 0.5 * (g.r0 + g.r1);
-  for (int r = g.r0; r <= g.r1; ++r) {
-    const int16_t* row = gx.ptr<int16_t>(r);
-    int best = -1, bv = 0;
-    for (int c = ca; c <= cb; ++c)
-      if (g.sign * row[c] > bv) {
-        bv = g.sign * row[c];
-        best = c;
-      }
-    if (best < 0 || bv <= thr) continue;
-    const double l = g.sign * row[best - 1], m = bv, rr = g.sign * row[best + 1];
-    const double den = l - 2 * m + rr;
-    const double off = den < 0 ? std::clamp(0.5 * (l - rr) / den, -0.5, 0.5) : 0.0;
-    const double rho = pano_.radiusOfRow(r);
-    samples.push_back({r, best + off, m * rho * rho, m});
-  }
-  // Robust rounds: rows off the fit by more than max(0.75, 3 x 1.4826 x median |residual|) columns
-  // (another edge merged into the group, a kink) are dropped and the fit repeated.
   std::vector<char> use(samples.size(), 1);
-  LineFit f;
-  for (int round = 0; round < 4; ++round) {
-    f = fitSamples(samples, use, mid0);
-    if (f.rows < opt_.min_length_rows / 2 || f.weight <= 0) return std::nullopt;
-    if (round == 3) break;
-    std::vector<double> res;
-    for (size_t i = 0; i < samples.size(); ++i)
-      if (use[i]) res.push_back(std::abs(samples[i].c - f.a0 - f.slope * (samples[i].r - mid0)));
-    std::nth_element(res.begin(), res.begin() + res.size() / 2, res.end());
-    const double gate = std::max(0.75, 3.0 * 1.4826 * res[res.size() / 2]);
-    bool changed = false;
-    for (size_t i = 0; i < samples.size(); ++i) {
-      const bool in = std::abs(samples[i].c - f.a0 - f.slope * (samples[i].r - mid0)) <= gate;
-      changed |= (in != static_cast<bool>(use[i]));
-      use[i] = in;
-    }
-    if (!changed) break;
-  }
-  if (f.r_hi - f.r_lo + 1 < opt_.min_length_rows) return std::nullopt;
+  const auto f = robustFit(samples, use, mid0, opt_.min_length_rows / 2);
+  if (!f || f->r_hi - f->r_lo + 1 < opt_.min_length_rows) return std::nullopt;
   // A line is one column: rows scattered about the fit (runs chained along a curved or slanted edge,
   // several edges merged) are not one radial line; a line drifting across columns is slanted.
   double sw = 0, ss = 0;
   for (size_t i = 0; i < samples.size(); ++i)
     if (use[i]) {
-      const double e = samples[i].c - f.a0 - f.slope * (samples[i].r - mid0);
+      const double e = samples[i].c - f->a0 - f->slope * (samples[i].r - mid0);
       sw += samples[i].m;
       ss += samples[i].m * e * e;
     }
   if (std::sqrt(ss / sw) > opt_.max_rms_columns) return std::nullopt;
-  if (std::abs(f.slope) * (f.r_hi - f.r_lo) > opt_.max_drift_columns) return std::nullopt;
-  if (isJunctionChain(gx, f, mid0, g.sign, thr, opt_.max_opposite_fraction)) return std::nullopt;
+  if (std::abs(f->slope) * (f->r_hi - f->r_lo) > opt_.max_drift_columns) return std::nullopt;
+  if (isJunctionChain(gx, *f, mid0, g.sign, opt_.edge_threshold, opt_.max_opposite_fraction)) return std::nullopt;
   Fit out;
-  out.column_mid = f.a0 + f.slope * (0.5 * (f.r_lo + f.r_hi) - mid0);
-  out.r_lo = f.r_lo;
-  out.r_hi = f.r_hi;
-  out.strength = f.strength_sum / f.rows;
+  out.column_mid = f->a0 + f->slope * (0.5 * (f->r_lo + f->r_hi) - mid0);
+  out.r_lo = f->r_lo;
+  out.r_hi = f->r_hi;
+  out.strength = f->strength_sum / f->rows;
   out.sign = g.sign;
-  out.slope = f.slope;
+  out.slope = f->slope;
   return out;
 }
 
@@ -454,34 +494,29 @@ VerticalLine VerticalLineDetector::makeLine(const Fit& f, const cv::Mat& image) 
 void VerticalLineDetector::sideColours(const cv::Mat& image, double extra_offset_columns, VerticalLine& L) const {
   // Mean colour of a strip on each side, sampled from the input image through the panorama geometry.
   const auto& po = pano_.options();
+  const double r_min = po.r_min_px, r_step = pano_.radialStepPx();  // radiusOfRow(r) = r_min + r r_step
+  const bool bgr = image.channels() == 3;
   for (int side = 0; side < 2; ++side) {
     const double dir = side == 0 ? 1.0 : -1.0;  // 0: counter-clockwise (larger alpha)
-    double acc[3] = {0, 0, 0};
+    long acc[3] = {0, 0, 0};                    // R, G, B (grey: the same three)
     int n = 0;
     for (int k = 0; k < opt_.colour_width_columns; ++k) {
       const double a = pano_.angleOfColumn(L.column + dir * (extra_offset_columns + opt_.colour_offset_columns + k));
       const double ca = std::cos(a), sa = std::sin(a);
       for (int r = L.row_begin; r <= L.row_end; r += 2) {
-        const double rho = pano_.radiusOfRow(r);
-        const int u = static_cast<int>(std::lround(po.centre_u_px + rho * ca));
-        const int v = static_cast<int>(std::lround(po.centre_v_px + rho * sa));
+        const double rho = r_min + r * r_step;
+        const int u = roundHalfAway(po.centre_u_px + rho * ca), v = roundHalfAway(po.centre_v_px + rho * sa);
         if (u < 0 || v < 0 || u >= image.cols || v >= image.rows) continue;
-        if (image.channels() == 3) {
-          const cv::Vec3b& bgr = image.at<cv::Vec3b>(v, u);
-          acc[0] += bgr[2];
-          acc[1] += bgr[1];
-          acc[2] += bgr[0];
-        } else {
-          const double gv = image.at<uint8_t>(v, u);
-          acc[0] += gv;
-          acc[1] += gv;
-          acc[2] += gv;
-        }
+        const uint8_t* p = image.ptr<uint8_t>(v) + (bgr ? 3 * u : u);
+        acc[0] += bgr ? p[2] : p[0];
+        acc[1] += bgr ? p[1] : p[0];
+        acc[2] += p[0];
         ++n;
       }
     }
     auto& col = side == 0 ? L.colour_ccw : L.colour_cw;
-    for (int i = 0; i < 3; ++i) col[static_cast<size_t>(i)] = n ? static_cast<float>(acc[i] / n) : 0.0f;
+    for (int i = 0; i < 3; ++i)
+      col[static_cast<size_t>(i)] = n ? static_cast<float>(static_cast<double>(acc[i]) / n) : 0.0f;
   }
 }
 

@@ -5,13 +5,17 @@
 //  - detectLampBlobs: lamps as light sources, relative to each frame and to the local background,
 //    for auto-exposed real images (docs/design/detectors.md, "Ceiling lights"):
 //      B      = median of the image over a background_window_px square (the lamp-scale background:
-//               a lamp narrower than about window / 2.8 covers less than half of any window on it)
+//               a lamp narrower than about window / 2.8 covers less than half of any window on it),
+//               taken on a grid every window / 9 px over 9 x 9 samples of the image (every window / 9
+//               px), bilinear between the grid points, and only where a blob grows (below); a
+//               window of up to 13 px is taken whole at every pixel
 //      stats  = noise sigma (1.4826 MAD of neighbour differences / sqrt 2), median, black (the dark
 //               level: 0.5th percentile + 2.576 sigma, at most the median)
 //      core   = I - B >= noise_margin_sigma sigma  and  I > threshold_grey  and
 //               (I >= saturation_grey  or  I - black >= min_source_ratio (B - black))
-//      blobs  = connected core pixels; kept when min_area <= area <= max_area, the peak is saturated
-//               or peak - black >= min_peak_ratio (median - black), and the blob stands above its
+//      blobs  = connected core pixels, grown from the core pixels that pass the peak criterion
+//               below (a blob without one is refused by it); kept when min_area <= area <= max_area, the peak is
+//               saturated or peak - black >= min_peak_ratio (median - black), and the blob stands above its
 //               surroundings: (blob median - lower quartile of a 2-px ring) / (blob median - black)
 //               >= min_surround_contrast
 //    Inside a large bright area (window, whiteboard, lamp-lit ceiling) B follows the area, so it

@@ -94,7 +94,8 @@ class CeilingLightDetector {
   CeilingLightOptions opt_;
   LampBlobOptions blobs_;  ///< opt_.blobs with the background window resolved
   double scale_px_per_rad_ = 0.0;
-  cv::Mat field_of_view_;  ///< CV_8U, 255 where the camera model gives a bearing
+  cv::Mat field_of_view_;            ///< CV_8U, 255 where the camera model gives a bearing
+  bool fov_is_whole_image_ = false;  ///< every pixel has a bearing
   mutable FrameStatistics last_stats_;
 };
 

@@ -124,6 +124,9 @@ class VerticalLineDetector {
   /// Per column c, unusable_count_[c * (rows + 1) + r] = unusable pixels in rows [0, r): a gap
   /// of a run, or between two runs, that holds one is not bridged.
   std::vector<int> unusable_count_;
+  /// unusable_ as runs along the rows (row, first column, end column): zeroing them costs what
+  /// they hold, not a pass over the whole response.
+  std::vector<cv::Vec3i> unusable_runs_;
 
   bool usableBetween(int col, int r_from, int r_to) const;  ///< rows [r_from, r_to) all usable
   struct Run;

@@ -19,31 +19,36 @@ using omnislam::options::vec3;
 constexpr Bounds kC = Bounds::kClosed, kLo = Bounds::kLowOpen, kHi = Bounds::kHighOpen;
 using F = FastSlamOptions;
 
-// The FastSLAM 2.0 choices of the proposal, as the bool keys write them (filter_variant.h).
-const FastSlam2Proposal* fastSlam2Of(const F& o) { return std::get_if<FastSlam2Proposal>(&o.proposal); }
-bool predictivePairScore(const F& o) {
-  const FastSlam2Proposal* p = fastSlam2Of(o);
-  return p && std::holds_alternative<stages::PredictivePairScore>(p->pair_score);
+// The FastSLAM 2.0 choices of the proposal, as the bool keys write them (filter_variant.h): `true`
+// is the alternative On of the choice, `false` the paper's; under FastSLAM 1.0 the key reads false
+// and only false can be set (`why` says why true cannot).
+template <class On, class Choice>
+bool fastSlam2Choice(const F& o, Choice FastSlam2Proposal::*choice) {
+  const auto* p = std::get_if<FastSlam2Proposal>(&o.proposal);
+  return p && std::holds_alternative<On>(p->*choice);
 }
-bool weightAtPredictedPose(const F& o) {
-  const FastSlam2Proposal* p = fastSlam2Of(o);
-  return p && std::holds_alternative<stages::WeightAtPredictedPose>(p->weight);
+template <class On, class Off, class Choice>
+const char* setFastSlam2Choice(F& o, Choice FastSlam2Proposal::*choice, bool on, const char* why) {
+  auto* p = std::get_if<FastSlam2Proposal>(&o.proposal);
+  if (!p) return on ? why : nullptr;
+  p->*choice = on ? Choice{On{}} : Choice{Off{}};
+  return nullptr;
+}
+bool predictivePairScore(const F& o) {
+  return fastSlam2Choice<stages::PredictivePairScore>(o, &FastSlam2Proposal::pair_score);
 }
 const char* setPredictivePairScore(F& o, bool on) {
-  auto* p = std::get_if<FastSlam2Proposal>(&o.proposal);
-  if (!p)
-    return on ? "needs proposal kFastSlam2 (FastSLAM 1.0 already scores each pairing at its sampled pose)" : nullptr;
-  if (on) p->pair_score = stages::PredictivePairScore{};
-  else p->pair_score = stages::CorrectedPairScore{};
-  return nullptr;
+  return setFastSlam2Choice<stages::PredictivePairScore, stages::CorrectedPairScore>(
+      o, &FastSlam2Proposal::pair_score, on,
+      "needs proposal kFastSlam2 (FastSLAM 1.0 already scores each pairing at its sampled pose)");
+}
+bool weightAtPredictedPose(const F& o) {
+  return fastSlam2Choice<stages::WeightAtPredictedPose>(o, &FastSlam2Proposal::weight);
 }
 const char* setWeightAtPredictedPose(F& o, bool on) {
-  auto* p = std::get_if<FastSlam2Proposal>(&o.proposal);
-  if (!p)
-    return on ? "needs proposal kFastSlam2 (FastSLAM 1.0 weighs at its sampled pose; it would be ignored)" : nullptr;
-  if (on) p->weight = stages::WeightAtPredictedPose{};
-  else p->weight = stages::WeightAlg4{};
-  return nullptr;
+  return setFastSlam2Choice<stages::WeightAtPredictedPose, stages::WeightAlg4>(
+      o, &FastSlam2Proposal::weight, on,
+      "needs proposal kFastSlam2 (FastSLAM 1.0 weighs at its sampled pose; it would be ignored)");
 }
 // A proposal given its name's index; the same one keeps its FastSLAM 2.0 choices.
 void setProposal(F& o, int i) {

@@ -1,10 +1,10 @@
 // Google Benchmark of the FastSLAM core: time per filter step for M particles and maps of N
 // landmarks (~10 measurements per step), copy-on-write maps against deep-copy resampling in the
-// same run, and memory per particle; FastSLAM 1.0 with sampled association against the Hungarian
-// method and ML on the same frames. The world is a grid of ceiling lights 4.5 m apart at 6.5 m;
-// the robot drives a 2 m circle in the middle; the perceptual range is 9.5 m. Also one association
-// level of many features (split into components against one dense solve) and the candidate
-// costs (a candidate's prediction made once per frame against once per pair).
+// same run (the baseline, DeepCopyFilter: the product's step with resampling that shares nothing), and memory per
+// particle; FastSLAM 1.0 with sampled association against the Hungarian method and ML on the same frames. The world is
+// a grid of ceiling lights 4.5 m apart at 6.5 m; the robot drives a 2 m circle in the middle; the perceptual range
+// is 9.5 m. Also one association level of many features (split into components against one dense solve) and the
+// candidate costs (a candidate's prediction made once per frame against once per pair).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -17,6 +17,7 @@
 #include "omnislam/core/slam/candidate.h"
 #include "omnislam/core/slam/data_association.h"
 #include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/particle_step.h"
 #include "omnislam/core/slam/hungarian.h"
 #include "candidate_per_pair.h"  // tests/support: the baseline of BM_CandidateCosts
 
@@ -93,14 +94,61 @@ const World& world(int n_landmarks) {
   return w;
 }
 
+// The baseline of BM_FilterStep/deep_copy: FastSlam's step from its public parts (particle_step.h)
+// with resampling that deep-copies every drawn map and candidate (no sharing), as a filter without
+// copy-on-write maps would. The product never does this.
+class DeepCopyFilter {
+ public:
+  DeepCopyFilter(const FastSlamOptions& o, std::uint64_t seed) : o_(o), variant_(filterVariantOf(o)), rng_(seed) {}
+  void initialise(const Pose2& start, const std::vector<Landmark>& prior) {
+    LandmarkMap map(o_.map_cell_size_m);
+    map.apply({}, prior);
+    for (const auto& l : prior) next_id_ = std::max(next_id_, l.id + 1);
+    particles_.assign(o_.num_particles, Particle{start, 0.0, map, {}});
+    weights_.assign(particles_.size(), 1.0 / static_cast<double>(particles_.size()));
+  }
+  int step(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z) {
+    std::vector<char> refused;
+    const auto Z = stages::prepareMeasurements(z, o_.inflate_azimuth_near_zenith, o_.p_new_mahalanobis_sq, refused);
+    if (!Z.empty()) p_CinR_m_ = Z.front().p_CinR_m;
+    const StepInput in{odometryIncrement(odom_prev, odom_now), Z, p_CinR_m_, std::nullopt};
+    StepState state{rng_, next_id_, cost_buffer_};
+    const AssociationHook associate = [this](const AssociationInput& a) {
+      return associateAsFilter(variant_, o_.update_map, o_.perception, a);
+    };
+    std::vector<double> step_log_w;
+    for (auto& p : particles_) step_log_w.push_back(processParticle(p, o_, variant_, in, state, associate).log_w);
+    const Weighing w = weighParticles(particles_, step_log_w, weights_);
+    bool resampled = false;
+    const int best = resampleParticles(particles_, weights_, w.best, w.ess, o_.resample_ess_fraction, rng_, resampled);
+    if (!resampled) return best;
+    for (auto& p : particles_) {  // the baseline: no sharing
+      p.map = p.map.deepCopy();
+      for (auto& c : p.candidates) c = std::make_shared<Candidate>(*c);
+    }
+    return best;
+  }
+  StorageStats storageStats() const { return storageStatsOf(particles_); }
+
+ private:
+  FastSlamOptions o_;
+  stages::FilterVariant variant_;
+  Rng rng_;
+  std::vector<Particle> particles_;
+  std::vector<double> weights_, cost_buffer_;
+  std::uint64_t next_id_ = 0;
+  Eigen::Vector3d p_CinR_m_ = o_.perception.default_p_CinR_m;
+};
+
 // One filter step per iteration (resampling every step, as the paper), over the lap's frames.
+template <class Filter>
 void runSteps(benchmark::State& state, FastSlamOptions o) {
   const int m = static_cast<int>(state.range(0));
   const int n = static_cast<int>(state.range(1));
   const World& w = world(n);
   o.num_particles = m;
   o.perception.max_range_m = kRange_m;
-  FastSlam f(o, 1);
+  Filter f(o, 1);
   f.initialise(w.start, w.prior);
   std::size_t k = 0;
   for (auto _ : state) {
@@ -116,17 +164,16 @@ void runSteps(benchmark::State& state, FastSlamOptions o) {
 }
 
 void BM_FilterStep(benchmark::State& state, bool deep_copy) {
-  FastSlamOptions o;
-  o.experimental.resample_deep_copy = deep_copy;
-  runSteps(state, o);
+  if (deep_copy) runSteps<DeepCopyFilter>(state, FastSlamOptions{});
+  else runSteps<FastSlam>(state, FastSlamOptions{});
 }
 
 // FastSLAM 1.0 with each map-level association method.
 void BM_FilterStepFastSlam1(benchmark::State& state, AssociationMethod method) {
   FastSlamOptions o;
-  o.proposal = ProposalKind::kFastSlam1;
+  o.proposal = FastSlam1Proposal{};
   o.association = method;
-  runSteps(state, o);
+  runSteps<FastSlam>(state, o);
 }
 
 // What any design that deep-copies flat landmark vectors pays on resampling alone (a lower bound

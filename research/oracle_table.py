@@ -7,9 +7,7 @@ of the figures, the noise-free bar (map rotation about the start <= 0.3 deg and 
 recomposed filter gave omnislam-slam's JSON. Writes DIR/oracle-table.md and DIR/oracle-summary.json.
 
 usage: oracle_table.py DIR --family F --seeds FIRST LAST --rate-hz R --variants V [V ...]"""
-import argparse
 import json
-import math
 import os
 import sys
 
@@ -88,11 +86,7 @@ def table(aggs, variants, n):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("dir")
-    ap.add_argument("--family", required=True)
-    ap.add_argument("--seeds", nargs=2, type=int, required=True)
-    ap.add_argument("--rate-hz", required=True)
+    ap = wt.world_set_parser(__doc__.splitlines()[0])
     ap.add_argument("--variants", nargs="+", required=True)
     a = ap.parse_args()
     seeds = list(range(a.seeds[0], a.seeds[1] + 1))

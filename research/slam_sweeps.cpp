@@ -61,7 +61,7 @@ void linesSweep() {
     for (int ray = 0; ray < 2; ++ray) {
       for (int noisy = 0; noisy < 2; ++noisy) {
         FastSlamOptions o = roomLineOptions();
-        o.proposal = method > 0 ? ProposalKind::kFastSlam1 : ProposalKind::kFastSlam2;
+        o.proposal = method > 0 ? Proposal{FastSlam1Proposal{}} : Proposal{FastSlam2Proposal{}};
         o.association = method >= 2   ? AssociationMethod::kSampled
                         : method == 1 ? AssociationMethod::kMaximumLikelihood
                                       : AssociationMethod::kHungarian;

@@ -122,12 +122,19 @@ def table(agg, methods, header):
     return "\n".join(lines)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def world_set_parser(description):
+    """The arguments of a table over one family's worlds (DIR --family F --seeds FIRST LAST --rate-hz R),
+    shared with research/oracle_table.py."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("dir")
     ap.add_argument("--family", required=True)
     ap.add_argument("--seeds", nargs=2, type=int, required=True)
     ap.add_argument("--rate-hz", required=True)
+    return ap
+
+
+def main():
+    ap = world_set_parser(__doc__.splitlines()[0])
     ap.add_argument("--methods", nargs="+", required=True, choices=["hungarian", "ml"])
     ap.add_argument("--wall-s", type=float, default=None)
     ap.add_argument("--jobs", type=int, default=None)

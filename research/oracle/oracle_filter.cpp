@@ -1,7 +1,7 @@
-// The shipped filter's step composed from its stages with a choice of association (oracle_filter.h).
-// Every line that is not the association keeps the order of operations and of random draws of
-// fastslam.cpp, so that FilterAssociation reproduces omnislam-slam bit for bit (oracle-worlds.sh
-// --check compares the two on the same worlds).
+// The shipped filter's step with a choice of association and birth (oracle_filter.h): the product's
+// processParticle, weighParticles and resampleParticles (particle_step.h) with the oracle's hooks, so
+// that FilterAssociation reproduces omnislam-slam bit for bit (oracle-worlds.sh --check compares the
+// two on the same worlds).
 #include "oracle_filter.h"
 
 #include <algorithm>
@@ -9,7 +9,6 @@
 #include <unordered_map>
 
 #include "omnislam/core/slam/motion_model.h"
-#include "omnislam/core/slam/resampling.h"
 
 namespace omnislam::research {
 
@@ -32,7 +31,7 @@ std::int64_t labelOf(const slam::ColourDescriptor& d) {
 OracleFilter::OracleFilter(const slam::FastSlamOptions& options, std::uint64_t seed, Association association,
                            Birth birth)
     : options_(options),
-      variant_(stages::filterVariantOf(options_)),
+      variant_(slam::filterVariantOf(options_)),
       association_(association),
       birth_(std::move(birth)),
       rng_(seed) {
@@ -54,103 +53,50 @@ void OracleFilter::initialise(const Pose2& start, const std::vector<Landmark>& p
 OracleStep OracleFilter::step(const Pose2& odom_prev, const Pose2& odom_now,
                               const std::vector<slam::BearingMeasurement>& z) {
   const Pose2 u = slam::odometryIncrement(odom_prev, odom_now);
-  std::vector<stages::Measurement> Z;
-  Z.reserve(z.size());
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    auto q = stages::prepareMeasurement(z[i], i, options_.inflate_azimuth_near_zenith, options_.p_new_mahalanobis_sq);
-    if (q) Z.push_back(std::move(*q));
-  }
+  std::vector<char> refused;
+  const std::vector<stages::Measurement> Z =
+      stages::prepareMeasurements(z, options_.inflate_azimuth_near_zenith, options_.p_new_mahalanobis_sq, refused);
   if (!Z.empty()) last_p_CinR_m_ = Z.front().p_CinR_m;
-  std::vector<ParticleInfo> infos;
-  infos.reserve(particles_.size());
-  for (auto& p : particles_) infos.push_back(processParticle(p, u, Z, last_p_CinR_m_));
+  const slam::StepInput in{u, Z, last_p_CinR_m_,
+                           scale_anchored_ ? std::optional<Eigen::Vector2d>(scale_anchor_xy_) : std::nullopt};
+  slam::StepState state{rng_, next_landmark_id_, candidate_cost_buffer_};
+  slam::AssociationHook associate = [this](const slam::AssociationInput& a) {
+    return slam::associateAsFilter(variant_, options_.update_map, options_.perception, a);
+  };
+  if (std::holds_alternative<TruthAssociation>(association_))
+    associate = [this](const slam::AssociationInput& a) { return associateByLabel(a); };
+  slam::BirthHook birth;  // TruthBirth: the newborn stand at their lamps, after the step's scale anchoring
+  if (const auto* truth = std::get_if<TruthBirth>(&birth_)) {
+    birth = [truth](std::vector<Landmark>& newborn) {
+      for (Landmark& L : newborn)
+        if (const auto it = truth->p_LinW_m.find(labelOf(L.descriptor)); it != truth->p_LinW_m.end())
+          L.p_LinW_m = it->second;
+    };
+  }
+  std::vector<slam::ParticleStepInfo> infos;
+  std::vector<double> step_log_w;
+  for (auto& p : particles_) {
+    infos.push_back(slam::processParticle(p, options_, variant_, in, state, associate, birth));
+    step_log_w.push_back(infos.back().log_w);
+  }
   OracleStep out;
-  const int best = finishStep(infos, out.ess);
+  const slam::Weighing w = slam::weighParticles(particles_, step_log_w, weights_);
+  out.ess = w.ess;
+  bool resampled = false;
+  best_index_ =
+      slam::resampleParticles(particles_, weights_, w.best, w.ess, options_.resample_ess_fraction, rng_, resampled);
   out.landmark_of_measurement.assign(z.size(), -1);
   for (std::size_t l = 0; l < Z.size(); ++l)
-    out.landmark_of_measurement[Z[l].input_index] = infos[best].landmark_of_measurement[l];
+    out.landmark_of_measurement[Z[l].input_index] = infos[w.best].landmark_of_measurement[l];
   return out;
 }
 
-// FastSlam::processParticle with the association as a type.
-OracleFilter::ParticleInfo OracleFilter::processParticle(Particle& p, const Pose2& u,
-                                                         const std::vector<stages::Measurement>& Z,
-                                                         const Eigen::Vector3d& p_CinR_vis_m) {
-  const slam::FastSlamOptions& o = options_;
-  const stages::MotionPrediction pred = stages::predictMotion(p.pose, u, o.motion);  // Alg. 1 line 3
-  std::vector<LandmarkMap::Ref> near, vis;
-  stages::predictVisibleLandmarks(p.map, pred.x_hat, p_CinR_vis_m, o.perception, near, vis);
-  Pose2 x_fs1;
-  if (std::holds_alternative<stages::FastSlam1>(variant_)) x_fs1 = stages::sampleMotionModel(pred, rng_);
-  const stages::HierarchicalAssociation a = std::holds_alternative<TruthAssociation>(association_)
-                                                ? associateByLabel(p, pred, Z, vis, x_fs1)
-                                                : associateAsShipped(p, pred, Z, vis, x_fs1);
-  const Pose2& x_t = a.x_t;
-
-  const stages::Weighting weighting = stages::weightingOf(variant_);  // Alg. 4
-  stages::ParticleUpdate up;
-  stages::updateObservedLandmarks(pred, x_t, vis, Z, a.level1.landmark_of_measurement, o, weighting, up);
-  stages::accountMisses(p.map, x_t, p_CinR_vis_m, o, near, up);
-  up.log_w += stages::unexplainedWeight(a, Z, o);
-
-  ParticleInfo info;
-  info.landmark_of_measurement.assign(Z.size(), -1);
-  for (std::size_t l = 0; l < Z.size(); ++l) {
-    const int j = a.level1.landmark_of_measurement[l];
-    if (j >= 0) info.landmark_of_measurement[l] = static_cast<std::int64_t>(vis[j].landmark->id);
-  }
-  std::vector<Landmark> inserts;
-  if (o.update_map) {
-    stages::CandidateUpdate cu = stages::updateCandidates(p.candidates, x_t, Z, a, o, next_landmark_id_);
-    p.candidates = std::move(cu.candidates);
-    inserts = std::move(cu.inserts);
-  }
-  // TruthBirth: the newborn join after this step's scale anchoring, so that they stand at their lamps.
-  const auto* truth = std::get_if<TruthBirth>(&birth_);
-  p.map.apply(up.edits, truth ? std::vector<Landmark>{} : inserts);
-  p.pose = x_t;
-  if (scale_anchored_) anchorScale(p, pred.x_prev, u, p_CinR_vis_m);
-  if (truth) {
-    for (Landmark& L : inserts)
-      if (const auto it = truth->p_LinW_m.find(labelOf(L.descriptor)); it != truth->p_LinW_m.end())
-        L.p_LinW_m = it->second;
-    p.map.apply({}, inserts);
-  }
-  info.log_w = up.log_w;
-  return info;
-}
-
-Pose2 OracleFilter::propose(const stages::MotionPrediction& pred, const std::vector<LandmarkMap::Ref>& vis,
-                            const std::vector<stages::Measurement>& Z, const std::vector<int>& lm_of_meas,
-                            const Pose2& x_fs1) {
-  if (std::holds_alternative<stages::FastSlam1>(variant_)) return x_fs1;
-  return stages::sampleFastSlam2Pose(pred, vis, Z, lm_of_meas, rng_);
-}
-
-stages::HierarchicalAssociation OracleFilter::associateAsShipped(const Particle& p,
-                                                                 const stages::MotionPrediction& pred,
-                                                                 const std::vector<stages::Measurement>& Z,
-                                                                 const std::vector<LandmarkMap::Ref>& vis,
-                                                                 const Pose2& x_fs1) {
-  const auto* fs2 = std::get_if<stages::FastSlam2>(&variant_);
-  const Eigen::MatrixXd cost = fs2 ? stages::scorePairs(*fs2, vis, Z, pred) : stages::scorePairsAtPose(vis, Z, x_fs1);
-  std::vector<double> cost_new(Z.size());
-  for (std::size_t l = 0; l < Z.size(); ++l) cost_new[l] = Z[l].neg_log_p_new;
-  const stages::DeterministicAssociation method = stages::associationOf(variant_);
-  const stages::MapLevelInput level1{cost, cost_new, method};
-  const stages::CandidateLevelInput level2{p.candidates,           Z, options_, method, options_.update_map,
-                                           &candidate_cost_buffer_};
-  const auto prop = [&](const stages::MapAssociation& l1) {
-    return propose(pred, vis, Z, l1.landmark_of_measurement, x_fs1);
-  };
-  return stages::associateHierarchically(level1, prop, level2);
-}
-
-// Level 1 by label over the whole map (a landmark outside the predicted visible set joins `vis`:
+// Level 1 by label over the whole map (a landmark outside the predicted visible set joins `visible`:
 // the lamp was seen, wherever the particle believes it is); the proposal; level 2 by label.
-stages::HierarchicalAssociation OracleFilter::associateByLabel(const Particle& p, const stages::MotionPrediction& pred,
-                                                               const std::vector<stages::Measurement>& Z,
-                                                               std::vector<LandmarkMap::Ref>& vis, const Pose2& x_fs1) {
+stages::HierarchicalAssociation OracleFilter::associateByLabel(const slam::AssociationInput& in) const {
+  const Particle& p = in.particle;
+  const std::vector<stages::Measurement>& Z = in.Z;
+  std::vector<LandmarkMap::Ref>& vis = in.visible;
   std::vector<LandmarkMap::Ref> all;
   p.map.collectAll(all);
   std::unordered_map<std::int64_t, LandmarkMap::Ref> landmark_of_label;
@@ -166,7 +112,7 @@ stages::HierarchicalAssociation OracleFilter::associateByLabel(const Particle& p
     if (j == vis.size()) vis.push_back(it->second);
     a.level1.landmark_of_measurement[l] = static_cast<int>(j);
   }
-  a.x_t = propose(pred, vis, Z, a.level1.landmark_of_measurement, x_fs1);
+  a.x_t = in.propose(a.level1);
   for (std::size_t l = 0; l < Z.size(); ++l)
     if (a.level1.landmark_of_measurement[l] < 0) a.leftover.push_back(static_cast<int>(l));
   if (!options_.update_map) return a;
@@ -180,106 +126,9 @@ stages::HierarchicalAssociation OracleFilter::associateByLabel(const Particle& p
   return a;
 }
 
-int OracleFilter::finishStep(const std::vector<ParticleInfo>& infos, double& ess) {
-  const int m = static_cast<int>(particles_.size());
-  std::vector<double> log_w(m);
-  for (int k = 0; k < m; ++k) log_w[k] = particles_[k].log_weight + infos[k].log_w;
-  slam::normaliseLogWeights(log_w, weights_);
-  ess = slam::effectiveSampleSize(weights_);
-  const int best_before = static_cast<int>(std::max_element(weights_.begin(), weights_.end()) - weights_.begin());
-  const bool resample =
-      options_.resample_ess_fraction >= 1.0 || ess < options_.resample_ess_fraction * static_cast<double>(m);
-  if (!resample) {
-    for (int k = 0; k < m; ++k) particles_[k].log_weight = std::log(weights_[k]);
-    best_index_ = best_before;
-    return best_before;
-  }
-  const std::vector<int> idx = slam::lowVarianceResample(weights_, rng_.uniform01());
-  std::vector<Particle> next;
-  next.reserve(m);
-  best_index_ = -1;
-  for (int k = 0; k < m; ++k) {
-    next.push_back(particles_[idx[k]]);
-    next.back().log_weight = 0.0;
-    if (idx[k] == best_before && best_index_ < 0) best_index_ = k;
-  }
-  if (best_index_ < 0) best_index_ = 0;
-  particles_ = std::move(next);
-  weights_.assign(m, 1.0 / static_cast<double>(m));
-  return best_before;
-}
+Pose2 OracleFilter::meanPose() const { return slam::weightedMeanPose(particles_, weights_); }
 
-// FastSlam::anchorScale (fastslam.cpp, where the reasoning is written down), copied: it is private there.
-void OracleFilter::anchorScale(Particle& p, const Pose2& x_prev, const Pose2& u,
-                               const Eigen::Vector3d& p_CinR_m) const {
-  const double d_u = std::hypot(u.x_m, u.y_m);
-  if (d_u < 1e-3) return;
-  const Pose2 a = x_prev.between(p.pose);
-  p.scale_path_m += (a.x_m * u.x_m + a.y_m * u.y_m) / d_u;
-  p.scale_odometry_m += d_u;
-  if (!(p.scale_path_m > 0.0)) return;
-  const double lim = options_.scale_correction_max_step;
-  const double s = std::clamp(p.scale_odometry_m / p.scale_path_m, 1.0 - lim, 1.0 + lim);
-  if (std::abs(s - 1.0) < 1e-6) return;
-  p.scale_path_m *= s;
-  const Eigen::Vector2d c = scale_anchor_xy_;
-  const double cz = p_CinR_m.z();
-  const auto scalePose = [&](const Pose2& T) {
-    return Pose2{c.x() + s * (T.x_m - c.x()), c.y() + s * (T.y_m - c.y()), T.theta_rad};
-  };
-  const auto scalePoint = [&](Eigen::Vector3d& m, slam::LandmarkKind kind) {
-    m.x() = c.x() + s * (m.x() - c.x());
-    m.y() = c.y() + s * (m.y() - c.y());
-    if (kind == slam::LandmarkKind::kPoint3D) m.z() = cz + s * (m.z() - cz);
-  };
-  p.pose = scalePose(p.pose);
-  std::vector<LandmarkMap::Ref> all;
-  p.map.collectAll(all);
-  std::vector<LandmarkMap::Edit> edits;
-  edits.reserve(all.size());
-  for (const auto& r : all) {
-    LandmarkMap::Edit ed;
-    ed.ref = r;
-    ed.value = *r.landmark;
-    scalePoint(ed.value.p_LinW_m, ed.value.kind);
-    ed.value.cov_LinW_m2 *= s * s;
-    edits.push_back(ed);
-  }
-  p.map.apply(edits, {});
-  for (auto& cp : p.candidates) {
-    auto nc = std::make_shared<slam::Candidate>(*cp);
-    for (auto& ob : nc->observations)
-      ob = slam::makeObservation(nc->kind, scalePose(ob.T_WtoR), ob.p_CinR_m, ob.z, ob.Q);
-    if (nc->has_estimate) {
-      scalePoint(nc->estimate_W_m, nc->kind);
-      nc->estimate_cov_m2 *= s * s;
-    }
-    cp = std::move(nc);
-  }
-}
-
-Pose2 OracleFilter::meanPose() const {
-  double x = 0, y = 0, s = 0, c = 0;
-  for (std::size_t k = 0; k < particles_.size(); ++k) {
-    const double w = weights_[k];
-    x += w * particles_[k].pose.x_m;
-    y += w * particles_[k].pose.y_m;
-    s += w * std::sin(particles_[k].pose.theta_rad);
-    c += w * std::cos(particles_[k].pose.theta_rad);
-  }
-  return {x, y, std::atan2(s, c)};
-}
-
-Eigen::Matrix3d OracleFilter::poseCovariance() const {
-  const Pose2 mean = meanPose();
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (std::size_t k = 0; k < particles_.size(); ++k) {
-    const Pose2& p = particles_[k].pose;
-    const Eigen::Vector3d d(p.x_m - mean.x_m, p.y_m - mean.y_m, wrapAngle(p.theta_rad - mean.theta_rad));
-    cov += weights_[k] * d * d.transpose();
-  }
-  return cov;
-}
+Eigen::Matrix3d OracleFilter::poseCovariance() const { return slam::weightedPoseCovariance(particles_, weights_); }
 
 std::vector<Landmark> OracleFilter::bestMap() const {
   std::vector<Landmark> out = particles_.at(best_index_).map.landmarks();

@@ -1,5 +1,5 @@
-// The shipped filter's step (the stages of filter_stages.h, composed as FastSlam::processParticle
-// composes them) with a choice of data association, for the oracle runs of issue 45
+// The shipped filter's step (processParticle of particle_step.h, FastSlam's own) with a choice of
+// data association and of birth through its hooks, for the oracle runs of issue 45
 // (research/README.md, "oracle_worlds"): the filter's own hierarchical association, or the truth.
 //
 // Truth association: each measurement carries its lamp's id (the truth label) in its colour
@@ -19,8 +19,8 @@
 #include <vector>
 
 #include "omnislam/core/pose2.h"
-#include "omnislam/core/slam/fastslam.h"
-#include "omnislam/core/slam/filter_stages.h"
+#include "omnislam/core/slam/fastslam_options.h"
+#include "omnislam/core/slam/particle_step.h"
 
 namespace omnislam::research {
 
@@ -46,7 +46,8 @@ struct OracleStep {
   std::vector<std::int64_t> landmark_of_measurement;
 };
 
-/// FastSlam's step (fastslam.cpp) rebuilt from its public stages, with the association as a type.
+/// FastSlam's step (fastslam.cpp): the product's processParticle, weighting and resampling, with the
+/// association and the birth as types.
 class OracleFilter {
  public:
   /// Throws std::invalid_argument when the options are invalid.
@@ -64,29 +65,8 @@ class OracleFilter {
   int numParticles() const { return static_cast<int>(particles_.size()); }
 
  private:
-  struct ParticleInfo {
-    double log_w = 0.0;
-    std::vector<std::int64_t> landmark_of_measurement;
-  };
-  ParticleInfo processParticle(slam::Particle& p, const Pose2& u, const std::vector<slam::stages::Measurement>& Z,
-                               const Eigen::Vector3d& p_CinR_vis_m);
-  /// The two associations: both levels and the pose sampled between them.
-  slam::stages::HierarchicalAssociation associateAsShipped(const slam::Particle& p,
-                                                           const slam::stages::MotionPrediction& pred,
-                                                           const std::vector<slam::stages::Measurement>& Z,
-                                                           const std::vector<slam::LandmarkMap::Ref>& vis,
-                                                           const Pose2& x_fs1);
-  slam::stages::HierarchicalAssociation associateByLabel(const slam::Particle& p,
-                                                         const slam::stages::MotionPrediction& pred,
-                                                         const std::vector<slam::stages::Measurement>& Z,
-                                                         std::vector<slam::LandmarkMap::Ref>& vis, const Pose2& x_fs1);
-  Pose2 propose(const slam::stages::MotionPrediction& pred, const std::vector<slam::LandmarkMap::Ref>& vis,
-                const std::vector<slam::stages::Measurement>& Z, const std::vector<int>& lm_of_meas,
-                const Pose2& x_fs1);
-  /// Weights, ESS, the best particle, resampling: FastSlam::finishStep. Returns the best before resampling.
-  int finishStep(const std::vector<ParticleInfo>& infos, double& ess);
-  /// FastSlam::anchorScale (private there): the odometry scale anchoring, copied.
-  void anchorScale(slam::Particle& p, const Pose2& x_prev, const Pose2& u, const Eigen::Vector3d& p_CinR_m) const;
+  /// The label association (TruthAssociation) as processParticle's hook.
+  slam::stages::HierarchicalAssociation associateByLabel(const slam::AssociationInput& in) const;
 
   slam::FastSlamOptions options_;
   slam::stages::FilterVariant variant_;

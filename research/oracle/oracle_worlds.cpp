@@ -31,6 +31,7 @@
 #include "omnislam/lcmio/log_writer.h"
 #include "omnislam/map_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "omnislam/runtime/map_message.h"
 #include "omnislam/runtime/pairing.h"
 #include "omnislam/runtime/slam_driver.h"
 #include "oracle_filter.h"
@@ -81,25 +82,7 @@ Truth readTruth(const std::string& path) {
 }
 
 map_t mapMessage(const OracleFilter& f, int64_t utime, int64_t seq, int64_t input_seq) {
-  map_t m{};
-  m.utime = utime;
-  m.seq = seq;
-  m.input_seq = input_seq;
-  for (const slam::Landmark& L : f.bestMap()) {
-    landmark_t l{};
-    l.id = static_cast<int64_t>(L.id);
-    for (int i = 0; i < 3; ++i) {
-      l.position_m[i] = L.p_LinW_m(i);
-      for (int j = 0; j < 3; ++j) l.covariance[i][j] = L.cov_LinW_m2(i, j);
-    }
-    l.type = static_cast<int8_t>(L.type == slam::LandmarkType::kTypeI ? 1 : 2);
-    l.times_detected = L.counter;
-    l.kind = feature_t::KIND_CEILING_LIGHT;
-    m.landmarks.push_back(l);
-  }
-  m.num_landmarks = static_cast<int32_t>(m.landmarks.size());
-  m.num_candidates = static_cast<int32_t>(f.bestCandidateCount());
-  return m;
+  return slamproc::toMapMessage(f.bestMap(), f.bestCandidateCount(), utime, seq, input_seq);
 }
 
 pose_t poseMessage(const OracleFilter& f, int64_t utime, int64_t seq, int64_t input_seq, double ess) {

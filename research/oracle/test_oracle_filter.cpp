@@ -19,9 +19,9 @@ namespace {
 FastSlamOptions hallFileOptions() {
   FastSlamOptions o;
   o.resample_ess_fraction = 0.5;
-  o.weight_at_predicted_pose = true;
-  o.weight_term = WeightTerm::kConsistency;
-  o.association_predictive = true;
+  std::get<FastSlam2Proposal>(o.proposal).weight = stages::WeightAtPredictedPose{};
+  o.weight_term = ConsistencyTerm{};
+  std::get<FastSlam2Proposal>(o.proposal).pair_score = stages::PredictivePairScore{};
   o.odometry_scale_correction = true;
   o.candidates.min_ray_baseline_m = 0.2;
   o.perception.detection_probability = 0.9;

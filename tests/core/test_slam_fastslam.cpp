@@ -70,10 +70,8 @@ TEST(slam_FastSlam, OptionsValidate) {
   o.motion.min_sigma_theta_rad = -1;
   EXPECT_NE(o.validate().find("motion.min_sigma_theta_rad"), std::string::npos);
   o = FastSlamOptions{};
-  o.association_predictive = true;
+  std::get<FastSlam2Proposal>(o.proposal).pair_score = stages::PredictivePairScore{};
   EXPECT_EQ(o.validate(), "");
-  o.proposal = ProposalKind::kFastSlam1;
-  EXPECT_NE(o.validate().find("association_predictive needs proposal kFastSlam2"), std::string::npos) << o.validate();
   o = FastSlamOptions{};
   o.resample_ess_fraction = 1.5;
   try {
@@ -227,11 +225,10 @@ TEST(slam_FastSlam, ResamplingSharesMapsCopyOnWrite) {
       prior.push_back(priorLandmark(prior.size(), pts.back()));
     }
   }
-  for (bool deep : {false, true}) {
+  {
     FastSlamOptions o;
     o.num_particles = 50;
     o.perception.max_range_m = 10.0;
-    o.experimental.resample_deep_copy = deep;
     FastSlam f(o, 7);
     f.initialise(Pose2{0.2, 0.1, 0.0}, prior);
     {
@@ -255,17 +252,13 @@ TEST(slam_FastSlam, ResamplingSharesMapsCopyOnWrite) {
       truth = next;
     }
     const StorageStats s = f.storageStats();
-    if (!deep) {
-      // Each particle owns only the cells it edited and the paths above them.
-      EXPECT_LT(s.unique_bytes * 10, s.deep_copy_bytes) << s.unique_bytes << " vs " << s.deep_copy_bytes;
-      // Particles share far-away cells: the cell holding (-100, -100) has one storage for all.
-      std::set<const void*> cells;
-      const auto key = f.particles()[0].map.cellKeyOf(-100.0, -100.0);
-      for (const auto& p : f.particles()) cells.insert(p.map.cellStorage(key));
-      EXPECT_EQ(cells.size(), 1u);
-    } else {
-      EXPECT_GT(s.unique_bytes * 2, s.deep_copy_bytes);
-    }
+    // Each particle owns only the cells it edited and the paths above them.
+    EXPECT_LT(s.unique_bytes * 10, s.deep_copy_bytes) << s.unique_bytes << " vs " << s.deep_copy_bytes;
+    // Particles share far-away cells: the cell holding (-100, -100) has one storage for all.
+    std::set<const void*> cells;
+    const auto key = f.particles()[0].map.cellKeyOf(-100.0, -100.0);
+    for (const auto& p : f.particles()) cells.insert(p.map.cellStorage(key));
+    EXPECT_EQ(cells.size(), 1u);
     for (const auto& p : f.particles()) EXPECT_EQ(p.map.size(), prior.size());
   }
 }
@@ -484,7 +477,7 @@ TEST(slam_FastSlam, RayMotionNoiseWidensTheTriangulationByTheHeadingVariance) {
   auto firstLandmark = [&](bool ray_noise) {
     FastSlamOptions o;
     o.num_particles = 1;
-    o.proposal = ProposalKind::kFastSlam1;
+    o.proposal = FastSlam1Proposal{};
     o.association = AssociationMethod::kMaximumLikelihood;
     o.inflate_azimuth_near_zenith = false;
     o.motion.model = MotionNoiseModel::kTranslateThenRotate;
@@ -567,7 +560,7 @@ TEST(slam_FastSlam, LocalisationOnlyKeepsThePriorMapFixed) {
 TEST(slam_FastSlam, FastSlam1LocalisesAndAssociates) {
   for (const auto method : {AssociationMethod::kMaximumLikelihood}) {
     FastSlamOptions o;
-    o.proposal = ProposalKind::kFastSlam1;
+    o.proposal = FastSlam1Proposal{};
     o.association = method;
     o.num_particles = 200;
     Pose2 truth;
@@ -629,7 +622,7 @@ TwoParticleStep twoParticleStep(FastSlamOptions o, std::uint64_t seed, const Eig
 // resampling equals the ratio of the closed-form likelihoods.
 TEST(slam_FastSlam, FastSlam1WeightIsTheMeasurementLikelihoodAtTheSampledPose) {
   FastSlamOptions o;
-  o.proposal = ProposalKind::kFastSlam1;
+  o.proposal = FastSlam1Proposal{};
   const TwoParticleStep s = twoParticleStep(o, 1, Eigen::Vector3d(0.05, 0.05, 0.01));
   ASSERT_NE(s.x_t[0].x_m, s.x_t[1].x_m);
   ASSERT_EQ(s.w.size(), 2u);
@@ -653,7 +646,8 @@ TEST(slam_FastSlam, PredictiveAssociationChargesThePoseCorrection) {
   for (const bool predictive : {false, true}) {
     FastSlamOptions o;
     o.num_particles = 1;
-    o.association_predictive = predictive;
+    std::get<FastSlam2Proposal>(o.proposal).pair_score =
+        predictive ? stages::PairScore{stages::PredictivePairScore{}} : stages::PairScore{stages::CorrectedPairScore{}};
     o.motion.min_sigma_xy_m = 0.002;
     o.motion.min_sigma_theta_rad = sigma_theta;
     o.motion.trans_sigma_per_m = o.motion.lateral_sigma_per_m = o.motion.trans_sigma_per_rad = 0.0;

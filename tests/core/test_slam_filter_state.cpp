@@ -114,7 +114,7 @@ std::vector<Variant> variants() {
   base.num_particles = 12;
   v.push_back({"fastslam2_hungarian", base});
   FastSlamOptions fs1 = base;
-  fs1.proposal = ProposalKind::kFastSlam1;
+  fs1.proposal = FastSlam1Proposal{};
   fs1.perception.detection_probability = 0.9;
   v.push_back({"fastslam1_hungarian", fs1});
   FastSlamOptions kept = base;  // log weights carried between steps, scale anchoring

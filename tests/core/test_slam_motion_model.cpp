@@ -44,6 +44,31 @@ TEST(slam_MotionModel, JacobianWrtIncrement) {
   }
 }
 
+// propagatePoseCovariance: its J_x is d(x * u)/dx by central differences (ordinary, near-zero and
+// backwards increments, headings across +-pi), and the covariance is J_x P J_x^T + R_W exactly.
+TEST(slam_MotionModel, PoseCovariancePropagationAndItsJacobian) {
+  const Eigen::Matrix3d P =
+      (Eigen::Matrix3d() << 0.04, 0.01, 0.002, 0.01, 0.09, -0.003, 0.002, -0.003, 0.01).finished();
+  const Eigen::Matrix3d R = Eigen::Vector3d(1e-4, 2e-4, 3e-5).asDiagonal();
+  for (const Pose2& x : {Pose2{1.0, -2.0, 2.9}, Pose2{0.0, 0.0, -3.1}, Pose2{5.0, 3.0, 0.0}}) {
+    for (const Pose2& u : {Pose2{0.3, 0.05, 0.4}, Pose2{1e-6, 0.0, 0.0}, Pose2{-0.5, 0.2, -1.0}}) {
+      Eigen::Matrix3d J;
+      const Eigen::Matrix3d out = propagatePoseCovariance(x, P, u, R, &J);
+      const double h = 1e-7;
+      for (int i = 0; i < 3; ++i) {
+        Eigen::Vector3d d = Eigen::Vector3d::Zero();
+        d(i) = h;
+        const Pose2 p = predictPose(Pose2::fromVec(x.vec() + d), u), m = predictPose(Pose2::fromVec(x.vec() - d), u);
+        const Eigen::Vector3d num((p.x_m - m.x_m) / (2 * h), (p.y_m - m.y_m) / (2 * h),
+                                  wrapAngle(p.theta_rad - m.theta_rad) / (2 * h));
+        EXPECT_NEAR((J.col(i) - num).norm(), 0.0, 1e-7);
+      }
+      EXPECT_EQ(out, (J * P * J.transpose() + R).eval());
+      EXPECT_EQ(out, propagatePoseCovariance(x, P, u, R));  // the same without the Jacobian
+    }
+  }
+}
+
 TEST(slam_MotionModel, NoiseGrowsWithDistanceAndRotation) {
   MotionNoiseOptions o;
   EXPECT_EQ(o.validate(), "");

@@ -1,4 +1,4 @@
-// presetDeviations (common/core/include/omnislam/core/slam/fastslam.h): derived from the options tables,
+// presetDeviations (common/core/include/omnislam/core/slam/fastslam_options.h): derived from the options tables,
 // it names every field of every table whose value differs from paper 000 as published, as
 // "key=value" in the key's units with the part's prefix, and nothing else; paper 000 itself has none,
 // and the recommended preset exactly the three deviations presetOptions() gives it.
@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "omnislam/core/angles.h"
-#include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/fastslam_options.h"
 #include "omnislam/core/slam/options_table.h"
 
 using namespace omnislam;
@@ -21,7 +21,7 @@ namespace {
 template <class S>
 void changeField(const slam::options::Field<S>& f, S& s) {
   switch (f.kind) {
-    case slam::options::Kind::kBool: s.*f.flag = !(s.*f.flag); break;
+    case slam::options::Kind::kBool: ASSERT_EQ(f.setFlagMember(s, !f.flagMember(s)), nullptr) << f.key; break;
     case slam::options::Kind::kEnum: f.set_index(s, (f.get_index(s) + 1) % static_cast<int>(f.names->size())); break;
     case slam::options::Kind::kInt: s.*f.integer += 1; break;
     case slam::options::Kind::kReal: s.*f.real = std::isinf(s.*f.real) ? 10.0 : s.*f.real * 1.5 + 0.25; break;
@@ -68,7 +68,7 @@ TEST(PresetDeviations, EveryFieldOfEveryTableIsCompared) {
 
 TEST(PresetDeviations, ValuesInTheKeysUnitsAndNamesAndNoRoundingNoise) {
   FastSlamOptions o = presetOptions(Preset::kPaper000);
-  o.weight_term = WeightTerm::kConsistency;
+  o.weight_term = ConsistencyTerm{};
   o.resample_ess_fraction = 0.5;
   o.motion.model = MotionNoiseModel::kTranslateThenRotate;
   o.perception.azimuth_half_width_rad = deg2rad(34.4);

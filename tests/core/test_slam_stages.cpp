@@ -3,6 +3,7 @@
 // Alg. 4, and the type I/II rule.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -11,6 +12,7 @@
 
 #include "omnislam/core/slam/filter_stages.h"
 #include "omnislam/core/slam/landmark_type.h"
+#include "omnislam/core/slam/options_table.h"
 
 namespace {
 
@@ -61,8 +63,13 @@ TEST(slam_Stages, HierarchicalAssociationLevel1IsTheBruteForceMinimumAndFeedsThe
       for (int j = 0; j < n; ++j) cost(l, j) = u(gen) < 4.0 ? kInf : u(gen);
     }
     const stages::MapLevelInput level1{cost, cost_new, stages::HungarianAssociation{}};
-    const stages::CandidateLevelInput level2{no_candidates, no_measurements, options, stages::HungarianAssociation{},
-                                             false,         nullptr};
+    const stages::CandidateLevelInput level2{
+        no_candidates,
+        no_measurements,
+        RangeLimits{options.perception.min_range_m, options.perception.max_range_m},
+        stages::HungarianAssociation{},
+        false,
+        nullptr};
     int calls = 0;
     const Pose2 proposed{1.0, 2.0, 0.5};
     const auto propose = [&](const stages::MapAssociation& l1) {
@@ -109,7 +116,7 @@ TEST(slam_Stages, MissesCountDownAndDelete) {
   map.apply({}, {seen_often, last_chance, far});
   stages::ParticleUpdate up;
   std::vector<LandmarkMap::Ref> near;
-  stages::accountMisses(map, Pose2{0.0, 0.0, 0.0}, Eigen::Vector3d::Zero(), o, near, up);
+  stages::accountMisses(map, Pose2{0.0, 0.0, 0.0}, Eigen::Vector3d::Zero(), o.perception, o.update_map, near, up);
   EXPECT_DOUBLE_EQ(up.log_w, 2.0 * std::log(1.0 - o.perception.detection_probability));
   ASSERT_EQ(up.edits.size(), 2u);
   EXPECT_EQ(up.num_deleted, 1);
@@ -140,30 +147,39 @@ TEST(slam_Stages, TypeIAndIIRule) {
 }
 
 // The options map to one variant; a combination that makes no sense (a pair score for FastSLAM 1.0,
-// which has none) is refused from the options with validate()'s message.
+// which has none) cannot be written in the options, and the table's key refuses it with its reason.
 TEST(slam_Stages, OptionsMapToOneVariant) {
   FastSlamOptions o;
-  const stages::FilterVariant paper = stages::filterVariantOf(o);
+  const stages::FilterVariant paper = filterVariantOf(o);
   ASSERT_TRUE(std::holds_alternative<stages::FastSlam2>(paper));
   EXPECT_TRUE(std::holds_alternative<stages::CorrectedPairScore>(std::get<stages::FastSlam2>(paper).pair_score));
   EXPECT_TRUE(std::holds_alternative<stages::WeightAlg4>(stages::weightingOf(paper)));
   EXPECT_TRUE(std::holds_alternative<stages::HungarianAssociation>(stages::associationOf(paper)));
 
-  o.proposal = ProposalKind::kFastSlam1;
+  o.proposal = FastSlam1Proposal{};
   o.association = AssociationMethod::kMaximumLikelihood;
-  EXPECT_TRUE(std::holds_alternative<stages::FastSlam1>(stages::filterVariantOf(o)));
-  EXPECT_TRUE(std::holds_alternative<stages::WeightMarginal>(stages::weightingOf(stages::filterVariantOf(o))));
-  EXPECT_TRUE(
-      std::holds_alternative<stages::MaximumLikelihoodAssociation>(stages::associationOf(stages::filterVariantOf(o))));
+  EXPECT_TRUE(std::holds_alternative<stages::FastSlam1>(filterVariantOf(o)));
+  EXPECT_TRUE(std::holds_alternative<stages::WeightMarginal>(stages::weightingOf(filterVariantOf(o))));
+  EXPECT_TRUE(std::holds_alternative<stages::MaximumLikelihoodAssociation>(stages::associationOf(filterVariantOf(o))));
 
-  o.association_predictive = true;
-  try {
-    (void)stages::filterVariantOf(o);
-    FAIL() << "FastSLAM 1.0 with a predictive pair score was accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("association_predictive needs proposal kFastSlam2"), std::string::npos)
-        << e.what();
+  // The keys of FastSLAM 2.0's choices: refused while the proposal is FastSLAM 1.0, "false" accepted.
+  for (const char* key : {"association_predictive", "weight_at_predicted_pose"}) {
+    const auto& table = slam::options::fastSlamFields();
+    const auto f = std::find_if(table.begin(), table.end(), [&](const auto& r) { return std::string(r.key) == key; });
+    ASSERT_NE(f, table.end()) << key;
+    EXPECT_EQ(f->setFlagMember(o, false), nullptr) << key;
+    const char* why = f->setFlagMember(o, true);
+    ASSERT_NE(why, nullptr) << key;
+    EXPECT_NE(std::string(why).find("needs proposal kFastSlam2"), std::string::npos) << why;
+    EXPECT_TRUE(std::holds_alternative<FastSlam1Proposal>(o.proposal)) << key;
+    FastSlamOptions fs2;
+    EXPECT_EQ(f->setFlagMember(fs2, true), nullptr) << key;
+    EXPECT_TRUE(f->flagMember(fs2)) << key;
   }
+  FastSlamOptions fs2;
+  std::get<FastSlam2Proposal>(fs2.proposal).pair_score = stages::PredictivePairScore{};
+  EXPECT_TRUE(std::holds_alternative<stages::PredictivePairScore>(
+      std::get<stages::FastSlam2>(filterVariantOf(fs2)).pair_score));
 }
 
 // The detection counter: +1 at p_in >= 0.5, otherwise enough that the nominal rate does not drift down.
@@ -180,7 +196,7 @@ namespace {
 
 // One type I landmark at p (covariance cov) observed exactly from the true pose: updateObservedLandmarks'
 // weight term under the given weighting and form.
-double exactObservationWeight(const Eigen::Matrix3d& cov, WeightTerm form, const stages::Weighting& weighting) {
+double exactObservationWeight(const Eigen::Matrix3d& cov, const WeightTerm& form, const stages::Weighting& weighting) {
   FastSlamOptions o;
   o.weight_term = form;
   LandmarkMap map(o.map_cell_size_m);
@@ -199,7 +215,7 @@ double exactObservationWeight(const Eigen::Matrix3d& cov, WeightTerm form, const
   MotionNoiseOptions motion;
   const stages::MotionPrediction pred = stages::predictMotion(x, Pose2{0.0, 0.0, 0.0}, motion);
   stages::ParticleUpdate up;
-  stages::updateObservedLandmarks(pred, x, all, Z, {0}, o, weighting, up);
+  stages::updateObservedLandmarks(pred, x, all, Z, {0}, stages::landmarkUpdateOptionsOf(o), weighting, up);
   return up.log_w;
 }
 
@@ -213,10 +229,9 @@ TEST(slam_Stages, ConsistencyWeightTermDoesNotRewardAConfidentMap) {
   for (const stages::Weighting& w :
        {stages::Weighting{stages::WeightAlg4{}}, stages::Weighting{stages::WeightAtPredictedPose{}},
         stages::Weighting{stages::WeightMarginal{}}}) {
-    EXPECT_GT(exactObservationWeight(sure, WeightTerm::kDensity, w),
-              exactObservationWeight(unsure, WeightTerm::kDensity, w) + 1.0);
-    EXPECT_NEAR(exactObservationWeight(sure, WeightTerm::kConsistency, w), 1.0, 1e-9);
-    EXPECT_NEAR(exactObservationWeight(unsure, WeightTerm::kConsistency, w), 1.0, 1e-9);
+    EXPECT_GT(exactObservationWeight(sure, DensityTerm{}, w), exactObservationWeight(unsure, DensityTerm{}, w) + 1.0);
+    EXPECT_NEAR(exactObservationWeight(sure, ConsistencyTerm{}, w), 1.0, 1e-9);
+    EXPECT_NEAR(exactObservationWeight(unsure, ConsistencyTerm{}, w), 1.0, 1e-9);
   }
 }
 
@@ -239,11 +254,12 @@ TEST(slam_Stages, ConsistencyWeightTermIsTheDensityWithoutItsNormaliser) {
   const stages::Measurement m = *stages::prepareMeasurement(b, 0, false, o.p_new_mahalanobis_sq);
   const stages::MotionPrediction pred = stages::predictMotion(x, Pose2{0.0, 0.0, 0.0}, o.motion);
   double log_w[2];
-  for (const WeightTerm form : {WeightTerm::kDensity, WeightTerm::kConsistency}) {
+  for (const WeightTerm& form : {WeightTerm{DensityTerm{}}, WeightTerm{ConsistencyTerm{}}}) {
     o.weight_term = form;
     stages::ParticleUpdate up;
-    stages::updateObservedLandmarks(pred, x, all, {m}, {0}, o, stages::WeightMarginal{}, up);
-    log_w[static_cast<int>(form)] = up.log_w;
+    stages::updateObservedLandmarks(pred, x, all, {m}, {0}, stages::landmarkUpdateOptionsOf(o),
+                                    stages::WeightMarginal{}, up);
+    log_w[form.index()] = up.log_w;
   }
   // WeightMarginal's L is Q~ = Q + H_m Sigma H_m^T at x (the EKF's innovation covariance).
   MeasJac Hx, Hm;
@@ -266,10 +282,11 @@ TEST(slam_Stages, UnexplainedMeasurementsCostTheGatesConsistencyTerm) {
   a.level1.landmark_of_measurement = {0, -1, -1};
   a.leftover = {1, 2};
   a.candidate_of_leftover = {4, -1};  // measurement 1 to candidate 4, measurement 2 new
-  EXPECT_EQ(stages::unexplainedWeight(a, Z, o), 0.0);
-  o.weight_term = WeightTerm::kConsistency;
-  EXPECT_DOUBLE_EQ(stages::unexplainedWeight(a, Z, o), -0.5 * (o.p_new_mahalanobis_sq - 1.0));
+  EXPECT_EQ(stages::unexplainedWeight(a, Z, o.weight_term, o.p_new_mahalanobis_sq), 0.0);
+  o.weight_term = ConsistencyTerm{};
+  EXPECT_DOUBLE_EQ(stages::unexplainedWeight(a, Z, o.weight_term, o.p_new_mahalanobis_sq),
+                   -0.5 * (o.p_new_mahalanobis_sq - 1.0));
   a.candidate_of_leftover.clear();  // no level 2 (localisation only): every leftover is unexplained
-  EXPECT_DOUBLE_EQ(stages::unexplainedWeight(a, Z, o),
+  EXPECT_DOUBLE_EQ(stages::unexplainedWeight(a, Z, o.weight_term, o.p_new_mahalanobis_sq),
                    -0.5 * (o.p_new_mahalanobis_sq - 2.0) - 0.5 * (o.p_new_mahalanobis_sq - 1.0));
 }

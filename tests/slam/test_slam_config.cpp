@@ -230,7 +230,7 @@ TEST(SlamConfig, PresetsSetDefaultsAndKeysOverride) {
   const auto load = [](const std::string& text) { return parseSlamOptions(config::Node::loadString(text, "x")); };
   const slam::FastSlamOptions p0 = load("filter: {preset: paper000}\n").filter;
   EXPECT_EQ(p0.num_particles, 10);
-  EXPECT_EQ(p0.proposal, slam::ProposalKind::kFastSlam2);
+  EXPECT_TRUE(std::holds_alternative<slam::FastSlam2Proposal>(p0.proposal));
   EXPECT_EQ(p0.association, slam::AssociationMethod::kHungarian);
   EXPECT_EQ(p0.candidates.nz_min, 3);
   EXPECT_EQ(p0.candidates.ncross_valid, 5);
@@ -243,12 +243,12 @@ TEST(SlamConfig, PresetsSetDefaultsAndKeysOverride) {
   EXPECT_NE(describe(load("filter: {preset: paper000}\n")).find("deviations from paper 000: none"), std::string::npos);
 
   const slam::FastSlamOptions p2 = load("filter: {preset: paper002}\n").filter;
-  EXPECT_EQ(p2.proposal, slam::ProposalKind::kFastSlam1);
+  EXPECT_TRUE(std::holds_alternative<slam::FastSlam1Proposal>(p2.proposal));
   EXPECT_EQ(p2.association, slam::AssociationMethod::kMaximumLikelihood);
   EXPECT_EQ(p2.motion.model, slam::MotionNoiseModel::kTranslateThenRotate);
   const slam::FastSlamOptions p2_hungarian = load("filter: {preset: paper002, association: hungarian}\n").filter;
   EXPECT_EQ(p2_hungarian.association, slam::AssociationMethod::kHungarian);
-  EXPECT_EQ(p2_hungarian.proposal, slam::ProposalKind::kFastSlam1);
+  EXPECT_TRUE(std::holds_alternative<slam::FastSlam1Proposal>(p2_hungarian.proposal));
 
   const SlamProcessOptions rec = load("filter: {preset: recommended, association_predictive: true}\n");
   EXPECT_EQ(load("filter: {preset: recommended}\n").filter.candidates.refine_initial_point,

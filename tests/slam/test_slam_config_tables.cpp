@@ -253,7 +253,7 @@ void expectFileKeys(const YAML::Node& sec, const std::string& name, const std::s
       continue;
     }
     switch (f.kind) {
-      case Kind::kBool: EXPECT_EQ(parsed.*f.flag, v.as<bool>()) << key; break;
+      case Kind::kBool: EXPECT_EQ(f.flagMember(parsed), v.as<bool>()) << key; break;
       case Kind::kEnum: EXPECT_EQ(options::valueText(f, parsed), v.Scalar()) << key; break;
       case Kind::kPath:
         EXPECT_EQ(parsed.*f.text, (std::filesystem::path(dir) / v.Scalar()).lexically_normal().string()) << key;

@@ -51,7 +51,9 @@ void parseField(const Node& n, S& s, const options::Field<S>& f) {
     case Kind::kSeconds:
       s.*f.micros = static_cast<int64_t>(std::llround(n.getDouble(f.key, f.lo, f.hi, openOf(f.bounds)) * 1e6));
       break;
-    case Kind::kBool: s.*f.flag = n.getBool(f.key); break;
+    case Kind::kBool:  // a choice held as a type may refuse a value the other keys exclude
+      if (const char* why = f.setFlagMember(s, n.getBool(f.key))) throw ConfigError(n.where(f.key) + " " + why);
+      break;
     case Kind::kVec3: {
       const auto v = n.getDoubles(f.key, 3, f.lo, f.hi);
       s.*f.vec3 = Eigen::Vector3d(v[0], v[1], v[2]);

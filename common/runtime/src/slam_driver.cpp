@@ -1,6 +1,8 @@
 // The SLAM process's shared code path: see slam_driver.h and docs/user/slam-process.md.
 #include "omnislam/runtime/slam_driver.h"
 
+#include "omnislam/runtime/map_message.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -315,26 +317,7 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   if (backend) out.trajectory = trajectoryMessage(*backend, frame, trajectory_seq_++);
   applyHealth(out, odom_O, &sr);
   if ((stats_.frames_processed - 1) % opt_.map_every_n_frames == 0) {  // the first frame has a map
-    map_t m{};
-    m.utime = frame.utime;
-    m.seq = map_seq_++;
-    m.input_seq = frame.seq;
-    for (const slam::Landmark& L : filter_->bestMap()) {
-      landmark_t l{};
-      l.id = static_cast<int64_t>(L.id);
-      for (int i = 0; i < 3; ++i) {
-        l.position_m[i] = L.p_LinW_m(i);
-        for (int j = 0; j < 3; ++j) l.covariance[i][j] = L.cov_LinW_m2(i, j);
-      }
-      l.type = static_cast<int8_t>(L.type == slam::LandmarkType::kTypeI ? 1 : 2);
-      l.times_detected = L.counter;
-      l.kind =
-          L.kind == slam::LandmarkKind::kVerticalLine ? feature_t::KIND_VERTICAL_LINE : feature_t::KIND_CEILING_LIGHT;
-      m.landmarks.push_back(l);
-    }
-    m.num_landmarks = static_cast<int32_t>(m.landmarks.size());
-    m.num_candidates = static_cast<int32_t>(filter_->bestCandidateCount());
-    out.map = std::move(m);
+    out.map = toMapMessage(filter_->bestMap(), filter_->bestCandidateCount(), frame.utime, map_seq_++, frame.seq);
   }
 
   associations_t a{};
@@ -384,11 +367,7 @@ FrameOutput SlamDriver::makeOutput(int64_t utime, int64_t input_seq, double ess,
   Pose2 mean = filter_->meanPose();
   Eigen::Matrix3d cov = filter_->poseCovariance();
   if (u) {  // moved by the odometry increment u since the last step: x * u, P -> J_x P J_x^T + R
-    const Eigen::Matrix3d R = slam::motionCovariance(mean, *u, opt_.filter.motion);
-    Eigen::Matrix3d J_x = Eigen::Matrix3d::Identity();
-    J_x(0, 2) = -std::sin(mean.theta_rad) * u->x_m - std::cos(mean.theta_rad) * u->y_m;
-    J_x(1, 2) = std::cos(mean.theta_rad) * u->x_m - std::sin(mean.theta_rad) * u->y_m;
-    cov = J_x * cov * J_x.transpose() + R;
+    cov = slam::propagatePoseCovariance(mean, cov, *u, slam::motionCovariance(mean, *u, opt_.filter.motion));
     mean = slam::predictPose(mean, *u);
   }
   pose_t& p = out.pose;

@@ -10,40 +10,40 @@
 namespace omnislam::slam {
 
 namespace {
+
 int findRoot(std::vector<int>& parent, int i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
   return i;
 }
-}  // namespace
 
-std::vector<int> associate(const Eigen::Ref<const Eigen::MatrixXd>& cost, const std::vector<double>& cost_new,
-                           AssociationMethod method) {
-  const int nz = static_cast<int>(cost.rows());
-  const int n = static_cast<int>(cost.cols());
+// ML: measurements in index order take the free landmark of least cost when below "new".
+std::vector<int> associateMaximumLikelihood(const Eigen::Ref<const Eigen::MatrixXd>& cost,
+                                            const std::vector<double>& cost_new) {
+  const int nz = static_cast<int>(cost.rows()), n = static_cast<int>(cost.cols());
   std::vector<int> out(nz, -1);
-  if (nz == 0) return out;
-  if (method == AssociationMethod::kMaximumLikelihood) {
-    std::vector<char> taken(n, 0);
-    for (int l = 0; l < nz; ++l) {
-      int best = -1;
-      for (int j = 0; j < n; ++j) {
-        if (taken[j] || !std::isfinite(cost(l, j))) continue;
-        if (best < 0 || cost(l, j) < cost(l, best)) best = j;
-      }
-      if (best >= 0 && cost(l, best) < cost_new[l]) {
-        out[l] = best;
-        taken[best] = 1;
-      }
+  std::vector<char> taken(n, 0);
+  for (int l = 0; l < nz; ++l) {
+    int best = -1;
+    for (int j = 0; j < n; ++j) {
+      if (taken[j] || !std::isfinite(cost(l, j))) continue;
+      if (best < 0 || cost(l, j) < cost(l, best)) best = j;
     }
-    return out;
+    if (best >= 0 && cost(l, best) < cost_new[l]) {
+      out[l] = best;
+      taken[best] = 1;
+    }
   }
-  // Only a pair that costs less than "new" can be in the optimum: a row can always take one of
-  // its own "new" columns instead, and one is always free. So the rows and columns are split into
-  // the connected components of those pairs, and each component is its own O(n^3) problem: a
-  // frame of clutter far from every landmark is then no problem at all, and many features spread
-  // over the view cost the sum of the cubes of their groups, not the cube of their number. The
-  // optimum is the union of the components' optima (a pair across two components costs at least
-  // "new"); bench_fastslam's BM_Associate compares it with one dense solve.
+  return out;
+}
+
+// The rows and columns of each connected component of the pairs that cost less than "new" (see
+// associate()): components numbered in the order of their first row; rows and columns in index
+// order, as the dense solve had them.
+struct Components {
+  std::vector<std::vector<int>> rows_of, cols_of;
+};
+Components cheapPairComponents(const Eigen::Ref<const Eigen::MatrixXd>& cost, const std::vector<double>& cost_new) {
+  const int nz = static_cast<int>(cost.rows()), n = static_cast<int>(cost.cols());
   std::vector<int> parent(nz + n);
   for (int i = 0; i < nz + n; ++i) parent[i] = i;
   std::vector<char> row_used(nz, 0), col_used(n, 0);
@@ -55,25 +55,42 @@ std::vector<int> associate(const Eigen::Ref<const Eigen::MatrixXd>& cost, const 
       }
     }
   }
-  // Components numbered in the order of their first row; rows and columns in index order, as the
-  // dense solve had them.
   std::vector<int> comp_of_root(nz + n, -1);
-  std::vector<std::vector<int>> rows_of, cols_of;
+  Components c;
   for (int l = 0; l < nz; ++l) {
     if (!row_used[l]) continue;
     int& k = comp_of_root[findRoot(parent, l)];
     if (k < 0) {
-      k = static_cast<int>(rows_of.size());
-      rows_of.emplace_back();
-      cols_of.emplace_back();
+      k = static_cast<int>(c.rows_of.size());
+      c.rows_of.emplace_back();
+      c.cols_of.emplace_back();
     }
-    rows_of[k].push_back(l);
+    c.rows_of[k].push_back(l);
   }
   for (int j = 0; j < n; ++j)
-    if (col_used[j]) cols_of[comp_of_root[findRoot(parent, nz + j)]].push_back(j);
-  for (size_t k = 0; k < rows_of.size(); ++k) {
-    const std::vector<int>& rows = rows_of[k];
-    const std::vector<int>& cols = cols_of[k];
+    if (col_used[j]) c.cols_of[comp_of_root[findRoot(parent, nz + j)]].push_back(j);
+  return c;
+}
+
+}  // namespace
+
+std::vector<int> associate(const Eigen::Ref<const Eigen::MatrixXd>& cost, const std::vector<double>& cost_new,
+                           AssociationMethod method) {
+  const int nz = static_cast<int>(cost.rows());
+  std::vector<int> out(nz, -1);
+  if (nz == 0) return out;
+  if (method == AssociationMethod::kMaximumLikelihood) return associateMaximumLikelihood(cost, cost_new);
+  // Only a pair that costs less than "new" can be in the optimum: a row can always take one of
+  // its own "new" columns instead, and one is always free. So the rows and columns are split into
+  // the connected components of those pairs, and each component is its own O(n^3) problem: a
+  // frame of clutter far from every landmark is then no problem at all, and many features spread
+  // over the view cost the sum of the cubes of their groups, not the cube of their number. The
+  // optimum is the union of the components' optima (a pair across two components costs at least
+  // "new"); bench_fastslam's BM_Associate compares it with one dense solve.
+  const Components comps = cheapPairComponents(cost, cost_new);
+  for (size_t k = 0; k < comps.rows_of.size(); ++k) {
+    const std::vector<int>& rows = comps.rows_of[k];
+    const std::vector<int>& cols = comps.cols_of[k];
     const int nr = static_cast<int>(rows.size()), nc = static_cast<int>(cols.size());
     Eigen::MatrixXd full(nr, nc + nr);
     for (int a = 0; a < nr; ++a) {

@@ -20,13 +20,6 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 const double kLog2Pi = std::log(2.0 * kPi);
 
-template <class... F>
-struct Overloaded : F... {
-  using F::operator()...;
-};
-template <class... F>
-Overloaded(F...) -> Overloaded<F...>;
-
 // associate()'s enum for a deterministic method.
 AssociationMethod methodEnum(const DeterministicAssociation& m) {
   return std::holds_alternative<HungarianAssociation>(m) ? AssociationMethod::kHungarian
@@ -139,19 +132,6 @@ Eigen::MatrixXd scorePairsAtPrediction(const std::vector<LandmarkMap::Ref>& visi
 }  // namespace
 
 // --- Variants -----------------------------------------------------------------------------------------
-FilterVariant filterVariantOf(const FastSlamOptions& o) {
-  const std::string msg = o.validate();
-  if (!msg.empty()) throw std::invalid_argument("FastSlamOptions: " + msg);
-  const DeterministicAssociation association = o.association == AssociationMethod::kMaximumLikelihood
-                                                   ? DeterministicAssociation{MaximumLikelihoodAssociation{}}
-                                                   : DeterministicAssociation{HungarianAssociation{}};
-  if (o.proposal == ProposalKind::kFastSlam1) return FastSlam1{association};
-  FastSlam2 v{association, CorrectedPairScore{}, WeightAlg4{}};
-  if (o.association_predictive) v.pair_score = PredictivePairScore{};
-  if (o.weight_at_predicted_pose) v.weight = WeightAtPredictedPose{};
-  return v;
-}
-
 Weighting weightingOf(const FilterVariant& v) {
   if (const auto* f = std::get_if<FastSlam2>(&v)) return std::visit([](auto w) { return Weighting{w}; }, f->weight);
   return WeightMarginal{};
@@ -184,6 +164,22 @@ std::optional<Measurement> prepareMeasurement(const BearingMeasurement& m, std::
   for (Eigen::Index d = 0; d < q.Q.rows(); ++d) log_det += 2.0 * std::log(llt.matrixL()(d, d));
   q.neg_log_p_new = 0.5 * (static_cast<double>(q.z.size()) * std::log(2.0 * kPi) + log_det + p_new_mahalanobis_sq);
   return q;
+}
+
+std::vector<Measurement> prepareMeasurements(const std::vector<BearingMeasurement>& z, bool inflate_azimuth_near_zenith,
+                                             double p_new_mahalanobis_sq, std::vector<char>& refused) {
+  std::vector<Measurement> Z;
+  Z.reserve(z.size());
+  refused.assign(z.size(), 0);
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    std::optional<Measurement> q = prepareMeasurement(z[i], i, inflate_azimuth_near_zenith, p_new_mahalanobis_sq);
+    if (!q) {
+      refused[i] = 1;
+      continue;
+    }
+    Z.push_back(std::move(*q));
+  }
+  return Z;
 }
 
 // --- Alg. 1 line 3 ------------------------------------------------------------------------------------
@@ -289,7 +285,6 @@ MapAssociation associateWithMap(const MapLevelInput& in) {
 
 std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Pose2& x_t,
                                          const std::vector<int>& leftover) {
-  const FastSlamOptions& o = in.options;
   const int nl = static_cast<int>(leftover.size());
   const int nc = static_cast<int>(in.candidates.size());
   // The cost matrix of a frame of many features (256 x 1000 doubles: 2 MB) is written once per
@@ -297,8 +292,8 @@ std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Po
   in.cost_buffer->assign(static_cast<size_t>(nl) * static_cast<size_t>(nc), kInf);
   Eigen::Map<Eigen::MatrixXd> cost(in.cost_buffer->data(), nl, nc);
   std::vector<double> cost_new(nl);
-  const double min_range_m = o.perception.min_range_m;
-  const double max_range_m = o.perception.max_range_m;
+  const double min_range_m = in.range.min_m;
+  const double max_range_m = in.range.max_m;
   // What a candidate predicts at x_t does not depend on the measurement: made once per candidate
   // (on its first pair), not once per pair.
   std::vector<CandidatePrediction> predictions(nl > 0 ? nc : 0);
@@ -375,6 +370,11 @@ Pose2 sampleFastSlam2Pose(const MotionPrediction& pred, const std::vector<Landma
 }
 
 // --- Alg. 4 -------------------------------------------------------------------------------------------
+LandmarkUpdateOptions landmarkUpdateOptionsOf(const FastSlamOptions& o) {
+  return {o.descriptor_update_rate, o.perception.detection_probability, o.candidates.d_min_m, o.weight_term,
+          o.update_map};
+}
+
 namespace {
 
 // Lines 5-10 for one pair at x_t: the updated mean and covariance into `out`; false when there is
@@ -402,18 +402,20 @@ std::optional<Innovation> updateLandmarkEkf(const Landmark& L, const Measurement
   return Innovation{nu, Qt, Hx};
 }
 
-// Line 14's term for innovation nu with covariance S, in the options' form (fastslam.h, WeightTerm);
-// -infinity when S is not positive definite.
-double weightTerm(WeightTerm form, const MeasVec& nu, const MeasMat& S) {
+// Line 14's term for innovation nu with covariance S, in the options' form (filter_variant.h,
+// WeightTerm); -infinity when S is not positive definite.
+double weightTerm(const WeightTerm& form, const MeasVec& nu, const MeasMat& S) {
   double m2 = 0.0;
   const double log_density = logGaussian(nu, S, &m2);
-  if (form == WeightTerm::kDensity || !std::isfinite(log_density)) return log_density;
-  return -0.5 * (m2 - static_cast<double>(nu.size()));
+  if (!std::isfinite(log_density)) return log_density;
+  return std::visit(Overloaded{[&](DensityTerm) { return log_density; },
+                               [&](ConsistencyTerm) { return -0.5 * (m2 - static_cast<double>(nu.size())); }},
+                    form);
 }
 
 // Lines 11-14: log w^_j of a type I landmark, or nothing (no prediction at xhat_t).
-std::optional<double> typeIWeight(const Weighting& weighting, WeightTerm form, const Landmark& L, const Measurement& m,
-                                  const Innovation& in, const MotionPrediction& pred) {
+std::optional<double> typeIWeight(const Weighting& weighting, const WeightTerm& form, const Landmark& L,
+                                  const Measurement& m, const Innovation& in, const MotionPrediction& pred) {
   return std::visit(
       Overloaded{[&](WeightMarginal) -> std::optional<double> {
                    return weightTerm(form, in.nu, in.Qt);
@@ -450,7 +452,7 @@ void addPredictiveNis(const Landmark& L, const Measurement& m, const MotionPredi
 
 void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t,
                              const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
-                             const std::vector<int>& landmark_of_measurement, const FastSlamOptions& o,
+                             const std::vector<int>& landmark_of_measurement, const LandmarkUpdateOptions& o,
                              const Weighting& weight, ParticleUpdate& out) {
   for (int l = 0; l < static_cast<int>(landmark_of_measurement.size()); ++l) {
     const int j = landmark_of_measurement[l];
@@ -463,21 +465,21 @@ void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t,
     e.ref = visible[j];
     e.value = L;
     blendDescriptor(e.value.descriptor, m.descriptor, o.descriptor_update_rate);
-    e.value.counter += hitIncrement(o.perception.detection_probability);  // i_j + 1 (p_in >= 0.5)
+    e.value.counter += hitIncrement(o.detection_probability);  // i_j + 1 (p_in >= 0.5)
     addPredictiveNis(L, m, pred, out);
     const std::optional<Innovation> in = updateLandmarkEkf(L, m, x_t, e.value);
     if (in && correctsPoseAndWeighs(L)) {  // lines 11-14
       if (const std::optional<double> log_w_j = typeIWeight(weight, o.weight_term, L, m, *in, pred))
         out.log_w += *log_w_j;
     }
-    e.value.type = promotedLandmarkType(e.value, x_t, o.candidates.d_min_m);  // updateLandmarksType()
+    e.value.type = promotedLandmarkType(e.value, x_t, o.d_min_m);  // updateLandmarksType()
     if (o.update_map) out.edits.push_back(e);
   }
 }
 
 void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector3d& p_CinR_vis_m,
-                   const FastSlamOptions& o, std::vector<LandmarkMap::Ref>& near, ParticleUpdate& out) {
-  const PerceptionOptions& per = o.perception;
+                   const PerceptionOptions& per, bool update_map, std::vector<LandmarkMap::Ref>& near,
+                   ParticleUpdate& out) {
   std::vector<const Landmark*>& updated = out.updated;
   std::sort(updated.begin(), updated.end());
   near.clear();
@@ -494,30 +496,34 @@ void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector
     e.value = *r.landmark;
     --e.value.counter;
     e.erase = e.value.counter < 0;  // deleted when i_j goes negative
-    if (!o.update_map) continue;    // localisation only: the weight counts the miss, the map stays
+    if (!update_map) continue;      // localisation only: the weight counts the miss, the map stays
     if (e.erase) ++out.num_deleted;
     out.edits.push_back(e);
   }
 }
 
-double unexplainedWeight(const HierarchicalAssociation& a, const std::vector<Measurement>& Z,
-                         const FastSlamOptions& o) {
-  if (o.weight_term != WeightTerm::kConsistency) return 0.0;
+double unexplainedWeight(const HierarchicalAssociation& a, const std::vector<Measurement>& Z, const WeightTerm& term,
+                         double p_new_mahalanobis_sq) {
+  if (!std::holds_alternative<ConsistencyTerm>(term)) return 0.0;
   double log_w = 0.0;
   for (std::size_t r = 0; r < a.leftover.size(); ++r) {
     const bool to_candidate = r < a.candidate_of_leftover.size() && a.candidate_of_leftover[r] >= 0;
     if (to_candidate) continue;
-    log_w -= 0.5 * (o.p_new_mahalanobis_sq - static_cast<double>(Z[static_cast<std::size_t>(a.leftover[r])].z.size()));
+    log_w -= 0.5 * (p_new_mahalanobis_sq - static_cast<double>(Z[static_cast<std::size_t>(a.leftover[r])].z.size()));
   }
   return log_w;
 }
 
 // --- Sec. III-F 1 -------------------------------------------------------------------------------------
+CandidateUpdateOptions candidateUpdateOptionsOf(const FastSlamOptions& o) {
+  return {o.candidates, o.perception, o.motion, o.p_new_mahalanobis_sq, o.descriptor_update_rate};
+}
+
 namespace {
 
 // The ray of measurement m from x_t joins the candidate's window (Q widened by the heading noise
 // since its first ray when ray_motion_noise); a full window drops one ray.
-void addRay(Candidate& cand, const Measurement& m, const Pose2& x_t, const FastSlamOptions& o) {
+void addRay(Candidate& cand, const Measurement& m, const Pose2& x_t, const CandidateUpdateOptions& o) {
   MeasMat Q_ray = m.Q;
   if (o.candidates.ray_motion_noise && !cand.observations.empty()) {
     // The ray's azimuth in W also carries the heading error the motion model allows between the
@@ -553,7 +559,8 @@ void addRay(Candidate& cand, const Measurement& m, const Pose2& x_t, const FastS
 
 // Delayed initialisation: the landmark the candidate becomes when its cross-points meet the
 // conditions (evaluateCandidate), else nothing (its best estimate kept for the range test).
-std::optional<Landmark> tryInitialise(Candidate& cand, const FastSlamOptions& o, std::uint64_t& next_landmark_id) {
+std::optional<Landmark> tryInitialise(Candidate& cand, const CandidateUpdateOptions& o,
+                                      std::uint64_t& next_landmark_id) {
   const RangeLimits range{o.perception.min_range_m, o.perception.max_range_m};  // validity d)
   const CandidateEvaluation ev = evaluateCandidate(cand, o.candidates, o.p_new_mahalanobis_sq, range);
   if (ev.ready) {
@@ -579,7 +586,7 @@ std::optional<Landmark> tryInitialise(Candidate& cand, const FastSlamOptions& o,
 
 CandidateUpdate updateCandidates(const std::vector<std::shared_ptr<const Candidate>>& candidates, const Pose2& x_t,
                                  const std::vector<Measurement>& Z, const HierarchicalAssociation& a,
-                                 const FastSlamOptions& o, std::uint64_t& next_landmark_id) {
+                                 const CandidateUpdateOptions& o, std::uint64_t& next_landmark_id) {
   const int nc = static_cast<int>(candidates.size()), nl = static_cast<int>(a.leftover.size());
   std::vector<int> meas_of_cand(nc, -1);
   for (int r = 0; r < nl; ++r) {

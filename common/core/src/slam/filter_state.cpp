@@ -278,7 +278,7 @@ void FastSlam::saveState(ByteWriter& w) const {
   // Options the layout depends on.
   w.i32(options_.num_particles);
   w.f64(options_.map_cell_size_m);
-  w.u8(static_cast<std::uint8_t>(options_.proposal));
+  w.u8(static_cast<std::uint8_t>(options_.proposal.index()));  // 0 FastSLAM 2.0, 1 FastSLAM 1.0
   w.u8(static_cast<std::uint8_t>(options_.association));
   w.boolean(options_.update_map);
   w.boolean(options_.odometry_scale_correction);
@@ -313,8 +313,8 @@ FastSlam FastSlam::loadState(const FastSlamOptions& options, ByteReader& r) {
   const double cell = r.f64("map_cell_size_m");
   checkSame(cell == o.map_cell_size_m, "map_cell_size_m", std::to_string(cell), std::to_string(o.map_cell_size_m));
   const int proposal = r.u8("proposal"), association = r.u8("association");
-  checkSame(proposal == static_cast<int>(o.proposal), "proposal", std::to_string(proposal),
-            std::to_string(static_cast<int>(o.proposal)));
+  checkSame(proposal == static_cast<int>(o.proposal.index()), "proposal", std::to_string(proposal),
+            std::to_string(o.proposal.index()));
   checkSame(association == static_cast<int>(o.association), "association", std::to_string(association),
             std::to_string(static_cast<int>(o.association)));
   const bool update_map = r.boolean("update_map"), scale = r.boolean("odometry_scale_correction");

@@ -62,13 +62,9 @@ const std::vector<std::string>& healthStateNames() {
 }
 
 Eigen::Matrix3d composeCovariance(const Pose2& D, const Eigen::Matrix3d& P, const Pose2& u, const Eigen::Matrix3d& Q) {
-  const double c = std::cos(D.theta_rad), s = std::sin(D.theta_rad);
-  Eigen::Matrix3d J_D, J_u;
-  J_D << 1.0, 0.0, -s * u.x_m - c * u.y_m,  //
-      0.0, 1.0, c * u.x_m - s * u.y_m,      //
-      0.0, 0.0, 1.0;
-  J_u << c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0;
-  const Eigen::Matrix3d out = J_D * P * J_D.transpose() + J_u * Q * J_u.transpose();
+  Eigen::Matrix3d J_u;
+  predictPose(D, u, &J_u);
+  const Eigen::Matrix3d out = propagatePoseCovariance(D, P, u, J_u * Q * J_u.transpose());  // motion_model.h
   return 0.5 * (out + out.transpose());
 }
 

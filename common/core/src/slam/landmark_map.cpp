@@ -198,7 +198,19 @@ void LandmarkMap::apply(const std::vector<Edit>& edits, const std::vector<Landma
     }
     return it->second;
   };
+  std::vector<Landmark> moved;
+  editCells(edits, updates, moved);
+  const auto add = [&](const Landmark& lm) {
+    slot(cellKeyOf(lm.p_LinW_m.x(), lm.p_LinW_m.y())).push_back(lm);
+    ++size_;
+  };
+  for (const auto& lm : moved) add(lm);
+  for (const auto& lm : inserts) add(lm);
+  commitCells(updates);
+}
 
+void LandmarkMap::editCells(const std::vector<Edit>& edits, std::vector<CellUpdate>& updates,
+                            std::vector<Landmark>& moved) {
   // Edits, grouped per cell.
   std::vector<const Edit*> order;
   order.reserve(edits.size());
@@ -206,7 +218,6 @@ void LandmarkMap::apply(const std::vector<Edit>& edits, const std::vector<Landma
   std::sort(order.begin(), order.end(), [](const Edit* a, const Edit* b) {
     return a->ref.cell_key != b->ref.cell_key ? a->ref.cell_key < b->ref.cell_key : a->ref.index < b->ref.index;
   });
-  std::vector<Landmark> moved;
   for (std::size_t i = 0; i < order.size();) {
     const std::uint64_t key = order[i]->ref.cell_key;
     const Node* n = find(key);
@@ -236,14 +247,9 @@ void LandmarkMap::apply(const std::vector<Edit>& edits, const std::vector<Landma
     if (old) updates.emplace_back(key, std::move(fresh));  // keys arrive in increasing order
     i = j;
   }
-  const auto add = [&](const Landmark& lm) {
-    slot(cellKeyOf(lm.p_LinW_m.x(), lm.p_LinW_m.y())).push_back(lm);
-    ++size_;
-  };
-  for (const auto& lm : moved) add(lm);
-  for (const auto& lm : inserts) add(lm);
+}
 
-  // Existing cells in one path-copying pass, then the new cells one by one.
+void LandmarkMap::commitCells(std::vector<CellUpdate>& updates) {
   std::vector<CellUpdate> existing, created;
   for (auto& u : updates) (find(u.first) ? existing : created).push_back(std::move(u));
   root_ = replaceCells(root_, existing.begin(), existing.end());

@@ -67,4 +67,14 @@ Eigen::Matrix3d motionCovariance(const Pose2& x_prev, const Pose2& u, const Moti
   return 0.5 * (R + R.transpose());
 }
 
+Eigen::Matrix3d propagatePoseCovariance(const Pose2& x, const Eigen::Matrix3d& P_x, const Pose2& u,
+                                        const Eigen::Matrix3d& R_W, Eigen::Matrix3d* J_x_x) {
+  const double c = std::cos(x.theta_rad), s = std::sin(x.theta_rad);
+  Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
+  J(0, 2) = -s * u.x_m - c * u.y_m;
+  J(1, 2) = c * u.x_m - s * u.y_m;
+  if (J_x_x != nullptr) *J_x_x = J;
+  return J * P_x * J.transpose() + R_W;  // 3x3 * 3x3 * 3x3
+}
+
 }  // namespace omnislam::slam

@@ -3,18 +3,63 @@
 // preset, docs/slam-core.md "Presets").
 #include "omnislam/core/slam/options_table.h"
 
+#include <variant>
+
 namespace omnislam::slam::options {
 
 namespace {
 
 using omnislam::options::enumeration;
 using omnislam::options::flag;
+using omnislam::options::flagVia;
 using omnislam::options::integer;
 using omnislam::options::real;
 using omnislam::options::vec3;
 
 constexpr Bounds kC = Bounds::kClosed, kLo = Bounds::kLowOpen, kHi = Bounds::kHighOpen;
 using F = FastSlamOptions;
+
+// The FastSLAM 2.0 choices of the proposal, as the bool keys write them (filter_variant.h): `true`
+// is the alternative On of the choice, `false` the paper's; under FastSLAM 1.0 the key reads false
+// and only false can be set (`why` says why true cannot).
+template <class On, class Choice>
+bool fastSlam2Choice(const F& o, Choice FastSlam2Proposal::*choice) {
+  const auto* p = std::get_if<FastSlam2Proposal>(&o.proposal);
+  return p && std::holds_alternative<On>(p->*choice);
+}
+template <class On, class Off, class Choice>
+const char* setFastSlam2Choice(F& o, Choice FastSlam2Proposal::*choice, bool on, const char* why) {
+  auto* p = std::get_if<FastSlam2Proposal>(&o.proposal);
+  if (!p) return on ? why : nullptr;
+  p->*choice = on ? Choice{On{}} : Choice{Off{}};
+  return nullptr;
+}
+bool predictivePairScore(const F& o) {
+  return fastSlam2Choice<stages::PredictivePairScore>(o, &FastSlam2Proposal::pair_score);
+}
+const char* setPredictivePairScore(F& o, bool on) {
+  return setFastSlam2Choice<stages::PredictivePairScore, stages::CorrectedPairScore>(
+      o, &FastSlam2Proposal::pair_score, on,
+      "needs proposal kFastSlam2 (FastSLAM 1.0 already scores each pairing at its sampled pose)");
+}
+bool weightAtPredictedPose(const F& o) {
+  return fastSlam2Choice<stages::WeightAtPredictedPose>(o, &FastSlam2Proposal::weight);
+}
+const char* setWeightAtPredictedPose(F& o, bool on) {
+  return setFastSlam2Choice<stages::WeightAtPredictedPose, stages::WeightAlg4>(
+      o, &FastSlam2Proposal::weight, on,
+      "needs proposal kFastSlam2 (FastSLAM 1.0 weighs at its sampled pose; it would be ignored)");
+}
+// A proposal given its name's index; the same one keeps its FastSLAM 2.0 choices.
+void setProposal(F& o, int i) {
+  if (i == static_cast<int>(o.proposal.index())) return;
+  if (i == 1) o.proposal = FastSlam1Proposal{};
+  else o.proposal = FastSlam2Proposal{};
+}
+void setWeightTerm(F& o, int i) {
+  if (i == 1) o.weight_term = ConsistencyTerm{};
+  else o.weight_term = DensityTerm{};
+}
 using M = MotionNoiseOptions;
 using P = PerceptionOptions;
 using C = CandidateOptions;
@@ -48,8 +93,8 @@ const std::vector<Field<FastSlamOptions>>& fastSlamFields() {
           [](F& o, int i) { o.association = static_cast<AssociationMethod>(i); },
           "level-1 and level-2 association: Hungarian (paper 000) or per-measurement maximum likelihood (paper 002)"),
       enumeration<F>(
-          "proposal", "proposal", proposalNames(), [](const F& o) { return static_cast<int>(o.proposal); },
-          [](F& o, int i) { o.proposal = static_cast<ProposalKind>(i); },
+          "proposal", "proposal", proposalNames(), [](const F& o) { return static_cast<int>(o.proposal.index()); },
+          setProposal,
           "FastSLAM 2.0 (paper 000, Alg. 3) or 1.0 (paper 002: poses from the motion model alone)"),
       real<F>("p_new_mahalanobis_sq", &F::p_new_mahalanobis_sq, "p_new_mahalanobis_sq", "", 0.0, 1e6, kLo,
               "P_new = N at this squared Mahalanobis distance (paper: 64)"),
@@ -57,13 +102,13 @@ const std::vector<Field<FastSlamOptions>>& fastSlamFields() {
               "resample when ESS < fraction * M (1 = every step, the paper)"),
       flag<F>("inflate_azimuth_near_zenith", &F::inflate_azimuth_near_zenith, "inflate_azimuth_near_zenith",
               "deviation: azimuth variance at least var(el) / cos^2(el) (slam-core.md, \"Azimuth near the zenith\")"),
-      flag<F>("association_predictive", &F::association_predictive, "association_predictive",
+      flagVia<F>("association_predictive", predictivePairScore, setPredictivePairScore, "proposal.pair_score",
               "deviation, FastSLAM 2.0 only: a pairing scored with the pose correction it needs (slam-core.md)"),
-      flag<F>("weight_at_predicted_pose", &F::weight_at_predicted_pose, "weight_at_predicted_pose",
+      flagVia<F>("weight_at_predicted_pose", weightAtPredictedPose, setWeightAtPredictedPose, "proposal.weight",
               "deviation, FastSLAM 2.0 only: weigh at the predicted pose (Probabilistic Robotics Table 13.3)"),
       enumeration<F>(
-          "weight_term", "weight_term", weightTermNames(), [](const F& o) { return static_cast<int>(o.weight_term); },
-          [](F& o, int i) { o.weight_term = static_cast<WeightTerm>(i); },
+          "weight_term", "weight_term", weightTermNames(), [](const F& o) { return static_cast<int>(o.weight_term.index()); },
+          setWeightTerm,
           "density (paper: log N(nu; 0, L)) or consistency (deviation: -1/2 (nu^T L^-1 nu - dim); slam-core.md, \"Weight term\")"),
       real<F>("descriptor_update_rate", &F::descriptor_update_rate, "descriptor_update_rate", "", 0.0, 1.0, kLo,
               "weight of a measurement in the running mean of a landmark's colour descriptor (published, not used)"),

@@ -53,6 +53,11 @@ struct Field {
   // `real` is null.
   double (*get_real)(const S&) = nullptr;
   void (*set_real)(S&, double) = nullptr;
+  // kBool of a choice held as a type (a variant's alternative) when `flag` is null: read through
+  // get_flag; set_flag returns null, or why the value cannot be held with the struct's other fields
+  // (e.g. a FastSLAM 2.0 choice while the proposal is FastSLAM 1.0), which the parser reports.
+  bool (*get_flag)(const S&) = nullptr;
+  const char* (*set_flag)(S&, bool) = nullptr;
   // kEnum: the names in the order of the enum's values, and the member read and written as an index.
   const std::vector<std::string>* names = nullptr;
   int (*get_index)(const S&) = nullptr;
@@ -64,12 +69,20 @@ struct Field {
     if (real) s.*real = v;
     else set_real(s, v);
   }
+  /// kBool: the member.
+  bool flagMember(const S& s) const { return flag ? s.*flag : get_flag(s); }
+  /// kBool: sets the member; null, or why the value cannot be held (the member is then unchanged).
+  const char* setFlagMember(S& s, bool v) const {
+    if (!flag) return set_flag(s, v);
+    s.*flag = v;
+    return nullptr;
+  }
   /// The member's value in the key's unit (kBool as 0/1, kEnum as the index; 0 for kVec3, kPath).
   double value(const S& s) const {
     switch (kind) {
       case Kind::kReal: return degrees ? rad2deg(realMember(s)) : realMember(s);
       case Kind::kInt: return static_cast<double>(s.*integer);
-      case Kind::kBool: return s.*flag ? 1.0 : 0.0;
+      case Kind::kBool: return flagMember(s) ? 1.0 : 0.0;
       case Kind::kEnum: return static_cast<double>(get_index(s));
       case Kind::kSeconds: return static_cast<double>(s.*micros) * 1e-6;
       case Kind::kUint64: return static_cast<double>(s.*u64);
@@ -139,6 +152,14 @@ Field<S> flag(const char* key, bool S::*m, const char* field, const char* doc) {
   f.key = key, f.field = field, f.kind = Kind::kBool, f.doc = doc, f.flag = m;
   return f;
 }
+/// kBool of a choice held as a type, read through get and set through set (Field::set_flag).
+template <class S>
+Field<S> flagVia(const char* key, bool (*get)(const S&), const char* (*set)(S&, bool), const char* field,
+                 const char* doc) {
+  Field<S> f;
+  f.key = key, f.field = field, f.kind = Kind::kBool, f.doc = doc, f.get_flag = get, f.set_flag = set;
+  return f;
+}
 template <class S>
 Field<S> vec3(const char* key, Eigen::Vector3d S::*m, const char* field, const char* unit, double lo, double hi,
               const char* doc) {
@@ -199,7 +220,7 @@ std::string rangeText(const Field<S>& f) {
 template <class S>
 std::string valueText(const Field<S>& f, const S& s) {
   switch (f.kind) {
-    case Kind::kBool: return s.*f.flag ? "true" : "false";
+    case Kind::kBool: return f.flagMember(s) ? "true" : "false";
     case Kind::kEnum: return f.names->at(static_cast<std::size_t>(f.get_index(s)));
     case Kind::kVec3: {
       const Eigen::Vector3d& v = s.*f.vec3;

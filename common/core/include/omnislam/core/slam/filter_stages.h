@@ -1,5 +1,5 @@
 // The stages of one particle's step of the filter (paper 000, Alg. 1 lines 3-7, Alg. 2-4), each a
-// function that a test can call on its own; FastSlam::processParticle runs them in this order:
+// function that a test can call on its own; processParticle (particle_step.h) runs them in this order:
 //
 //   predictMotion            Alg. 1 line 3     xhat_t = g(x_{t-1}, u_t), R_t
 //   predictVisibleLandmarks  (before Alg. 2)   the landmarks that can be seen from xhat_t
@@ -12,8 +12,9 @@
 //   accountMisses            Alg. 4 lines 18-25 counters of unseen landmarks in range, deletion
 //   updateCandidates         Sec. III-F 1      candidate rays, delayed initialisation, new candidates
 //
-// Pure functions of their arguments (the random generator passed in); the filter's behaviour is
-// the composition, bit for bit (scripts/check-replay-regression.sh). Frames and units: fastslam.h.
+// Pure functions of their arguments (the random generator passed in), each given the part of the
+// options it reads; the filter's behaviour is the composition (processParticle, particle_step.h),
+// bit for bit (scripts/check-replay-regression.sh). Frames and units: fastslam.h.
 #pragma once
 
 #include <Eigen/Core>
@@ -28,7 +29,7 @@
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/candidate.h"
 #include "omnislam/core/slam/data_association.h"
-#include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/fastslam_options.h"
 #include "omnislam/core/slam/filter_variant.h"
 #include "omnislam/core/slam/landmark_map.h"
 #include "omnislam/core/slam/random.h"
@@ -50,11 +51,12 @@ struct Measurement {
 /// covariance not symmetric positive definite). p_new_mahalanobis_sq: FastSlamOptions'.
 std::optional<Measurement> prepareMeasurement(const BearingMeasurement& m, std::size_t input_index,
                                               bool inflate_azimuth_near_zenith, double p_new_mahalanobis_sq);
+/// The step's measurements prepared in input order, the refused ones left out and marked 1 in
+/// `refused` (one entry per input measurement).
+std::vector<Measurement> prepareMeasurements(const std::vector<BearingMeasurement>& z, bool inflate_azimuth_near_zenith,
+                                             double p_new_mahalanobis_sq, std::vector<char>& refused);
 
-// --- The filter's variants (filter_variant.h) -------------------------------------------------------
-/// The variant the options name. Throws std::invalid_argument (with validate()'s message) when
-/// they name none; FastSlam's constructor has validated them before.
-FilterVariant filterVariantOf(const FastSlamOptions& o);
+// --- The filter's variants (filter_variant.h; the options' mapping: filterVariantOf) --------------------
 /// The weighting the variant implies.
 Weighting weightingOf(const FilterVariant& v);
 /// The association method of both levels (the map, then the candidates).
@@ -114,7 +116,7 @@ struct MapLevelInput {
 struct CandidateLevelInput {
   const std::vector<std::shared_ptr<const Candidate>>& candidates;
   const std::vector<Measurement>& Z;
-  const FastSlamOptions& options;
+  RangeLimits range;                 ///< the perceptual range (PerceptionOptions' min_range_m, max_range_m)
   DeterministicAssociation method;   ///< associationOf()
   bool enabled = true;               ///< false (localisation only): no level 2
   std::vector<double>* cost_buffer;  ///< scratch for the cost matrix, reused across calls
@@ -145,6 +147,16 @@ Pose2 sampleFastSlam2Pose(const MotionPrediction& pred, const std::vector<Landma
                           const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement, Rng& rng);
 
 // --- Alg. 4: landmark updates and the weight ---------------------------------------------------------
+/// What updateObservedLandmarks reads of FastSlamOptions (landmarkUpdateOptionsOf).
+struct LandmarkUpdateOptions {
+  double descriptor_update_rate;  ///< FastSlamOptions::descriptor_update_rate
+  double detection_probability;   ///< PerceptionOptions::detection_probability (the counter's increment)
+  double d_min_m;                 ///< CandidateOptions::d_min_m (updateLandmarksType)
+  WeightTerm weight_term;         ///< FastSlamOptions::weight_term
+  bool update_map;                ///< FastSlamOptions::update_map
+};
+LandmarkUpdateOptions landmarkUpdateOptionsOf(const FastSlamOptions& o);
+
 struct ParticleUpdate {
   std::vector<LandmarkMap::Edit> edits;  ///< to apply to the particle's map
   std::vector<const Landmark*> updated;  ///< the observed landmarks (sorted by accountMisses)
@@ -160,21 +172,33 @@ struct ParticleUpdate {
 /// are kept only when update_map.
 void updateObservedLandmarks(const MotionPrediction& pred, const Pose2& x_t,
                              const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
-                             const std::vector<int>& landmark_of_measurement, const FastSlamOptions& o,
+                             const std::vector<int>& landmark_of_measurement, const LandmarkUpdateOptions& o,
                              const Weighting& weight, ParticleUpdate& out);
 /// Alg. 4 lines 18-25: w *= 1 - p_in and i_j - 1 for each unseen landmark inside the perceptual
 /// range of x_t; deleted when i_j < 0. Only the weight when !update_map.
 void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector3d& p_CinR_vis_m,
-                   const FastSlamOptions& o, std::vector<LandmarkMap::Ref>& near, ParticleUpdate& out);
+                   const PerceptionOptions& per, bool update_map, std::vector<LandmarkMap::Ref>& near,
+                   ParticleUpdate& out);
 
-/// WeightTerm::kConsistency only (else 0): each measurement that neither a map landmark nor a candidate
+/// ConsistencyTerm only (else 0): each measurement that neither a map landmark nor a candidate
 /// takes (it starts a new candidate) adds -1/2 (p_new_mahalanobis_sq - dim), the consistency term of
 /// an association at the P_new gate, so that the weight stays continuous across the association
 /// decision and a particle that explains its measurements outweighs one that leaves them unexplained
 /// (the density's normaliser did this before; without it a mislocalised particle lost nothing).
-double unexplainedWeight(const HierarchicalAssociation& a, const std::vector<Measurement>& Z, const FastSlamOptions& o);
+double unexplainedWeight(const HierarchicalAssociation& a, const std::vector<Measurement>& Z, const WeightTerm& term,
+                         double p_new_mahalanobis_sq);
 
 // --- Sec. III-F 1: updateCandidateLandmarks() --------------------------------------------------------
+/// What updateCandidates reads of FastSlamOptions (candidateUpdateOptionsOf).
+struct CandidateUpdateOptions {
+  const CandidateOptions& candidates;
+  const PerceptionOptions& perception;  ///< the range, p_in (the counter's increment)
+  const MotionNoiseOptions& motion;     ///< CandidateOptions::ray_motion_noise's heading variance
+  double p_new_mahalanobis_sq;          ///< FastSlamOptions' (the initialisation's gate)
+  double descriptor_update_rate;        ///< FastSlamOptions'
+};
+CandidateUpdateOptions candidateUpdateOptionsOf(const FastSlamOptions& o);
+
 struct CandidateUpdate {
   std::vector<std::shared_ptr<const Candidate>> candidates;  ///< the particle's next candidates
   std::vector<Landmark> inserts;                             ///< candidates initialised as landmarks
@@ -185,7 +209,7 @@ struct CandidateUpdate {
 /// leftover measurements of no candidate start new candidates.
 CandidateUpdate updateCandidates(const std::vector<std::shared_ptr<const Candidate>>& candidates, const Pose2& x_t,
                                  const std::vector<Measurement>& Z, const HierarchicalAssociation& a,
-                                 const FastSlamOptions& o, std::uint64_t& next_landmark_id);
+                                 const CandidateUpdateOptions& o, std::uint64_t& next_landmark_id);
 
 // --- Small rules shared by the stages ---------------------------------------------------------------
 /// Counter increment of a detection: 1 (the paper) when p_in >= 0.5, else ceil((1 - p_in) / p_in).

@@ -86,7 +86,14 @@ class LandmarkMap {
   void accumulateStorage(std::unordered_set<const void*>& seen, std::size_t& bytes) const;
 
  private:
+  using CellLandmarks = std::pair<std::uint64_t, std::vector<Landmark>>;  ///< a cell's key and its new landmarks
   const Node* find(std::uint64_t key) const;
+  /// apply()'s edits: each edited cell's new landmarks, in increasing key order, into `updates`; the
+  /// edited landmarks that left their cell into `moved`.
+  void editCells(const std::vector<Edit>& edits, std::vector<CellLandmarks>& updates, std::vector<Landmark>& moved);
+  /// apply()'s end: the cells of `updates` into the tree, existing ones in one path-copying pass, then
+  /// the new ones one by one.
+  void commitCells(std::vector<CellLandmarks>& updates);
   double cell_size_m_;
   NodePtr root_;
   std::size_t size_ = 0;

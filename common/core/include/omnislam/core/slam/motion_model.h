@@ -81,4 +81,12 @@ Pose2 predictPose(const Pose2& x_prev, const Pose2& u, Eigen::Matrix3d* J_x_u = 
 /// R_t = J_u Sigma_u J_u^T: covariance of x_t around g(x_prev, u) in W [m^2, rad^2].
 Eigen::Matrix3d motionCovariance(const Pose2& x_prev, const Pose2& u, const MotionNoiseOptions& options);
 
+/// The covariance of g(x, u) = x * u given the covariance P_x of x: J_x P_x J_x^T + R_W, where R_W
+/// is what the motion adds in W (motionCovariance(), or J_u Sigma_u J_u^T with predictPose's J_x_u)
+/// and J_x = d g / d x = [1 0 -s u_x - c u_y; 0 1 c u_x - s u_y; 0 0 1] (c, s of x's heading), filled
+/// when non-null [m^2, m rad, rad^2]. The SLAM's pose between keyframes and the health monitor's
+/// odometry windows move their covariances with it.
+Eigen::Matrix3d propagatePoseCovariance(const Pose2& x, const Eigen::Matrix3d& P_x, const Pose2& u,
+                                        const Eigen::Matrix3d& R_W, Eigen::Matrix3d* J_x_x = nullptr);
+
 }  // namespace omnislam::slam

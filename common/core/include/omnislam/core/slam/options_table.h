@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "omnislam/core/options_field.h"
-#include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/fastslam_options.h"
 #include "omnislam/core/slam/health_monitor.h"
 
 namespace omnislam::slam::options {

@@ -1,13 +1,13 @@
 // The tables of the SLAM process's own keys (see slam_options_table.h): one row per key; the
 // defaults are the structs' in-class values (slam_config.h), the ranges the accepted ones.
-#include "omnislam/config/slam_options_table.h"
+#include "omnislam/runtime/slam_options_table.h"
 
 #include <sstream>
 
 #include "omnislam/core/slam/options_table.h"
 #include "omnislam/runtime/pairing_options_table.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 namespace {
 
@@ -191,4 +191,4 @@ const std::vector<ConfigSection>& processSections() {
   return s;
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

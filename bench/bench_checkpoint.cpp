@@ -21,7 +21,7 @@
 #include "omnislam/lcmio/validate.h"
 
 using namespace omnislam;
-using namespace omnislam::slamproc;
+using namespace omnislam::runtime;
 
 namespace {
 

@@ -15,7 +15,7 @@
 
 #include "omnislam/core/angles.h"
 #include "omnislam/core/slam/fastslam.h"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 #include "slam_scenarios.h"
 
 using namespace omnislam;
@@ -93,7 +93,7 @@ int main(int argc, char** argv) {
     else if (a == "--set" && i + 1 < argc) sets.push_back(argv[++i]);
     else if (a == "--trace") trace = true;
   }
-  const auto po = slamproc::loadSlamOptions(argv[1], sets);
+  const auto po = runtime::loadSlamOptions(argv[1], sets);
   const double sigma = std::max(po.min_sigma_rad, 1e-6);
   const double v = 0.27, L = scenarios::loopLength();
   double sum_abs_rot = 0;

@@ -13,10 +13,12 @@ line per undocumented key, 0 when all are named.
 
 The SLAM process's keys come from its options tables (common/core/.../options_field.h; the
 filter's in common/core/.../slam/options_table.h, the pairing's beside PairingOptions, the others in
-common/config/.../slam_options_table.h), not from literal lists: with --table-tool (the
-omnislam-config-table program, which prints them as Markdown tables) each generated block of
-docs/user/slam-process.md (between its BEGIN and END markers, below) must be the tool's output for
-that block, byte for byte; --update rewrites the blocks instead.
+common/runtime/.../slam_options_table.h), not from literal lists; so do the detectors' sections
+(procs/features/detector_options_table.h) and the world camera's intrinsics
+(common/config/.../world_camera_table.h), beside the literal lists of their other keys. With
+--table-tool (the omnislam-config-table program, which prints them as Markdown tables) each generated
+block of the pages in TABLE_BLOCKS (between its BEGIN and END markers, below) must be the tool's
+output for that block, byte for byte; --update rewrites the blocks instead.
 """
 import os
 import re
@@ -24,7 +26,7 @@ import sys
 
 # Parser source -> the page that documents its keys.
 PAGES = {
-    "common/config/src/slam_config.cpp": "docs/user/slam-process.md",
+    "common/runtime/src/slam_config.cpp": "docs/user/slam-process.md",
     "common/runtime/src/map_file.cpp": "docs/user/slam-process.md",
     "procs/features/detectors.cpp": "docs/design/detectors.md",
     "procs/launch/launcher.cpp": "docs/user/launch-file.md",
@@ -45,11 +47,14 @@ def parser_keys(source_text):
 
 # Sources whose keys are read through options tables (checked by the generated blocks): literal
 # lists are optional there.
-TABLE_SOURCES = {"common/config/src/slam_config.cpp"}
+TABLE_SOURCES = {"common/runtime/src/slam_config.cpp"}
 
-TABLE_PAGE = "docs/user/slam-process.md"
-# The generated blocks of TABLE_PAGE: omnislam-config-table NAME prints the block NAME.
-TABLE_BLOCKS = ("process", "filter")
+# The generated blocks, per page: omnislam-config-table NAME prints the block NAME.
+TABLE_BLOCKS = {
+    "docs/user/slam-process.md": ("process", "filter"),
+    "docs/design/detectors.md": ("lights", "lines"),
+    "docs/user/world-file.md": ("world_camera", "world_camera_scaramuzza"),
+}
 
 
 def markers(name):
@@ -57,35 +62,40 @@ def markers(name):
             f"<!-- end of the generated {name} keys -->\n")
 
 
-def check_table(root, tool, update):
-    """The number of generated blocks of TABLE_PAGE that differ from the tool's output (0 after --update)."""
+def check_page(root, tool, update, page, names):
+    """The number of generated blocks of `page` that differ from the tool's output (0 after --update)."""
     import subprocess
-    path = os.path.join(root, TABLE_PAGE)
+    path = os.path.join(root, page)
     with open(path, encoding="utf-8") as f:
         text = f.read()
     differ = 0
-    for name in TABLE_BLOCKS:
+    for name in names:
         table = subprocess.run([tool, name], check=True, capture_output=True, text=True).stdout
         begin_marker, end_marker = markers(name)
         begin, end = text.find(begin_marker), text.find(end_marker)
         if begin < 0 or end < begin:
-            print(f"check-config-docs: {TABLE_PAGE} has no generated {name}-key block (markers missing)")
+            print(f"check-config-docs: {page} has no generated {name}-key block (markers missing)")
             differ += 1
             continue
         current = text[begin + len(begin_marker):end]
         if current == table:
-            print(f"check-config-docs: {TABLE_PAGE}: the {name}-key table is the generated one")
+            print(f"check-config-docs: {page}: the {name}-key table is the generated one")
         elif update:
             text = text[:begin + len(begin_marker)] + table + text[end:]
-            print(f"check-config-docs: {TABLE_PAGE}: {name}-key table rewritten")
+            print(f"check-config-docs: {page}: {name}-key table rewritten")
         else:
-            print(f"check-config-docs: {TABLE_PAGE}: the {name}-key table differs from omnislam-config-table's "
+            print(f"check-config-docs: {page}: the {name}-key table differs from omnislam-config-table's "
                   "output (run scripts/check-config-docs.py ROOT --table-tool BIN --update)")
             differ += 1
     if update:
         with open(path, "w", encoding="utf-8") as f:
             f.write(text)
     return differ
+
+
+def check_table(root, tool, update):
+    """The number of generated blocks that differ from the tool's output, over every page."""
+    return sum(check_page(root, tool, update, page, names) for page, names in TABLE_BLOCKS.items())
 
 
 def documented_words(page_text):

@@ -1,21 +1,24 @@
 #!/usr/bin/env python3
-"""Lists the C++ functions longer than a limit (default 80 lines, the project's hard limit) in
-common/, procs/ and tools/ (tests and benchmarks are not scanned), longest first, and their count.
+"""Lists the C++ functions longer than a limit (default 60 lines, the project's limit) in common/,
+procs/, tools/ and bench/ (tests are not scanned), longest first, and their count.
 
-  python3 scripts/check-function-length.py [--limit N] [--strict] [ROOT]
+  python3 scripts/check-function-length.py [--limit N] [--strict] [--except PATH:NAME ...] [ROOT]
 
 A function's length counts every line from the first line of its signature to its closing brace
 (lambdas and local classes count towards the function they are in). Exit status 0, or with
---strict 1 when any function is over the limit. The scanner is lexical: comments, string and
-character literals are blanked first, then braces are classified as namespace, class, function or
-inner blocks by the text before them; it does not need a compiler or a build directory.
+--strict 1 when any function is over the limit. --except PATH:NAME (e.g.
+common/core/src/slam/landmark_map.cpp:LandmarkMap::apply) lists a function over the limit without
+failing --strict: for one whose split is under way on another branch, named in the test that passes
+it (tests/CMakeLists.txt), never a way to keep a long function. The scanner is lexical: comments,
+string and character literals are blanked first, then braces are classified as namespace, class,
+function or inner blocks by the text before them; it does not need a compiler or a build directory.
 """
 import argparse
 import os
 import re
 import sys
 
-DIRS = ("common", "procs", "tools")
+DIRS = ("common", "procs", "tools", "bench")
 EXTS = (".cpp", ".cc", ".h", ".hpp")
 FUNC_HEAD = re.compile(r"\)\s*(const|noexcept|override|final|mutable|->[^{]*|\s)*$")
 INIT_LIST = re.compile(r"\)\s*(noexcept\s*)?:")
@@ -111,8 +114,10 @@ def functions(text):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("root", nargs="?", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-    ap.add_argument("--limit", type=int, default=80, help="longest allowed function [lines] (default 80)")
+    ap.add_argument("--limit", type=int, default=60, help="longest allowed function [lines] (default 60)")
     ap.add_argument("--strict", action="store_true", help="exit 1 when a function is over the limit")
+    ap.add_argument("--except", dest="excepted", action="append", default=[], metavar="PATH:NAME",
+                    help="a function over the limit that does not fail --strict (listed, marked 'excepted')")
     args = ap.parse_args()
     root = os.path.abspath(args.root)
     over = []
@@ -129,10 +134,14 @@ def main():
                     if b - a + 1 > args.limit:
                         over.append((b - a + 1, os.path.relpath(path, root), a, name))
     over.sort(key=lambda t: (-t[0], t[1], t[2]))
+    failing = 0
     for n, path, line, name in over:
-        print(f"{n:5d}  {path}:{line}  {name}")
-    print(f"check-function-length: {len(over)} function(s) over {args.limit} lines in {', '.join(DIRS)}")
-    return 1 if args.strict and over else 0
+        excepted = f"{path}:{name}" in args.excepted
+        failing += 0 if excepted else 1
+        print(f"{n:5d}  {path}:{line}  {name}" + ("  (excepted)" if excepted else ""))
+    print(f"check-function-length: {len(over)} function(s) over {args.limit} lines in {', '.join(DIRS)}"
+          + (f", {len(over) - failing} of them excepted" if failing < len(over) else ""))
+    return 1 if args.strict and failing else 0
 
 
 if __name__ == "__main__":

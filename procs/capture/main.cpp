@@ -31,6 +31,7 @@
 #include "omnislam/lcmio/pacing.h"
 #include "omnislam/lcmio/plausibility_flags.h"
 #include "omnislam/lcmio/signals.h"
+#include "omnislam/lcmio/truth_stream.h"
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/sim/image_clock.h"
 #include "omnislam/vision/image_decode.h"
@@ -70,39 +71,59 @@ int64_t wallUtime() {
       .count();
 }
 
+/// The renderer of a simulated world: the room's colour catadioptric image, or the ceiling lights.
+struct SimRenderer {
+  SimRenderer(const sim::World& w, uint64_t seed) : world(w), cam(sim::makeCamera(w.camera)), rng(seed) {
+    if (world.room)
+      room = std::make_unique<vision::RoomRenderer>(*cam, world.camera.mounting, *world.room, world.nuisance);
+    else lights = std::make_unique<vision::CeilingLightRenderer>(*cam, world.camera.mounting, world.nuisance);
+  }
+  /// Renders and publishes the image at the true pose p; the node's detail says what it drew.
+  void publishAt(lcmio::Node& node, Publisher& pub, const pose_t& p) {
+    const Pose2 T_RinW{p.x_m, p.y_m, p.theta_rad};
+    if (room) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const cv::Mat img = room->render(T_RinW, &rng);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      pub.publish(img, p.utime);
+      ++frames;
+      node.setDetail("frame " + std::to_string(frames) + ": room rendered in " + std::to_string(std::lround(ms)) +
+                     " ms");
+    } else {
+      vision::RenderReport rep;
+      const cv::Mat img = lights->render(T_RinW, world.lights, rng, &rep);
+      pub.publish(img, p.utime);
+      ++frames;
+      node.setDetail("frame " + std::to_string(frames) + ": " + std::to_string(rep.lights_drawn) + " lights, " +
+                     std::to_string(rep.lights_missed) + " missed, " + std::to_string(rep.false_blobs) +
+                     " false blobs");
+    }
+  }
+  const sim::World& world;
+  std::unique_ptr<camera::CameraModel> cam;
+  std::unique_ptr<vision::CeilingLightRenderer> lights;
+  std::unique_ptr<vision::RoomRenderer> room;
+  std::mt19937_64 rng;
+  int64_t frames = 0;
+};
+
 int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uint64_t seed, bool format_given,
            bool name_given, const lcmio::PosePlausibility& plausible) {
   const sim::World world = config::loadWorld(world_path);
   if (!name_given) pub.camera_name = world.camera.name;
-  const std::unique_ptr<camera::CameraModel> cam = sim::makeCamera(world.camera);
-  std::unique_ptr<vision::CeilingLightRenderer> lights;
-  std::unique_ptr<vision::RoomRenderer> room;
-  if (world.room) {
-    room = std::make_unique<vision::RoomRenderer>(*cam, world.camera.mounting, *world.room, world.nuisance);
-    if (!format_given) pub.format = image_t::FORMAT_BGR8;  // the room is in colour
-  } else {
-    lights = std::make_unique<vision::CeilingLightRenderer>(*cam, world.camera.mounting, world.nuisance);
-  }
-  std::mt19937_64 rng(seed);
+  SimRenderer renderer(world, seed);
+  if (world.room && !format_given) pub.format = image_t::FORMAT_BGR8;  // the room is in colour
   sim::ImageClock clock(world.start_utime, world.image_rate_hz, world.truth_rate_hz);
-  int64_t frames = 0;
   bool have_truth = false;
   int64_t last_truth_utime = 0;
-  lcmio::PoseStreamCheck truth_check;
-  lcmio::InputOptions truth_opt;
-  truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
+  lcmio::TruthStreamGate gate(plausible);
   node.subscribe<pose_t>(
       channels::kGroundTruthPose,
       [&](const pose_t& p) {
         const bool new_timeline = have_truth && p.utime <= last_truth_utime;
         // Checked before anything changes: a refused pose (thrown) is never rendered and leaves the
-        // image clock and the channel's time order as they were (docs/user/messages.md, "Plausibility").
-        lcmio::PoseStreamCheck check = new_timeline ? lcmio::PoseStreamCheck{} : truth_check;
-        if (auto why = check.admit(p.utime, p.x_m, p.y_m, p.theta_rad, plausible))
-          throw lcmio::Refused("seq " + std::to_string(p.seq) + " utime " + std::to_string(p.utime) + ": " + *why);
-        if (check.jumpsTaken() != truth_check.jumpsTaken() && !new_timeline)
-          std::cerr << node.tag() << "GROUND_TRUTH_POSE: " << check.lastJump() << std::endl;
-        truth_check = check;
+        // image clock and the channel's time order as they were.
+        gate.admit(node, p, new_timeline);
         if (new_timeline) {
           // The node took a new timeline (the simulation run again, a truth log replayed again): a new
           // run. Its image times start again, and so does seq, as a new capture process would; the
@@ -114,37 +135,15 @@ int runSim(lcmio::Node& node, Publisher& pub, const std::string& world_path, uin
         }
         have_truth = true;
         last_truth_utime = p.utime;
-        if (!clock.take(p.utime)) return;  // not an image time (the clock moves on when it is)
-        const Pose2 T_RinW{p.x_m, p.y_m, p.theta_rad};
-        if (room) {
-          const auto t0 = std::chrono::steady_clock::now();
-          const cv::Mat img = room->render(T_RinW, &rng);
-          const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-          pub.publish(img, p.utime);
-          ++frames;
-          node.setDetail("frame " + std::to_string(frames) + ": room rendered in " + std::to_string(std::lround(ms)) +
-                         " ms");
-        } else {
-          vision::RenderReport rep;
-          const cv::Mat img = lights->render(T_RinW, world.lights, rng, &rep);
-          pub.publish(img, p.utime);
-          ++frames;
-          node.setDetail("frame " + std::to_string(frames) + ": " + std::to_string(rep.lights_drawn) + " lights, " +
-                         std::to_string(rep.lights_missed) + " missed, " + std::to_string(rep.false_blobs) +
-                         " false blobs");
-        }
+        if (clock.take(p.utime)) renderer.publishAt(node, pub, p);  // else not an image time
       },
-      truth_opt);
+      lcmio::truthInputOptions());
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
-  std::cerr << node.tag() << "rendering '" << world.name << "' (" << (room ? "room, colour" : "ceiling lights")
-            << ") at " << world.image_rate_hz << " Hz, " << cam->widthPx() << "x" << cam->heightPx() << ", seed "
-            << seed << std::endl;
+  std::cerr << node.tag() << "rendering '" << world.name << "' (" << (renderer.room ? "room, colour" : "ceiling lights")
+            << ") at " << world.image_rate_hz << " Hz, " << renderer.cam->widthPx() << "x" << renderer.cam->heightPx()
+            << ", seed " << seed << std::endl;
   node.spin();
-  // Stopped by a signal (the only way out of spin): the last status says so, with the count.
-  node.setState(process_status_t::STATE_STOPPING);
-  node.setDetail("stopped after " + std::to_string(frames) + " images");
-  node.publishStatus();
-  std::cerr << node.tag() << "stopped after " << frames << " images" << std::endl;
+  lcmio::reportStopped(node, std::to_string(renderer.frames) + " images");
   return app::kOk;
 }
 

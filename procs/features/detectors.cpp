@@ -8,6 +8,8 @@
 #include <sstream>
 #include <utility>
 
+#include "detector_options_table.h"
+#include "omnislam/config/options_parse.h"
 #include "omnislam/config/world_config.h"
 #include "omnislam/core/angles.h"
 #include "omnislam/core/camera/pajdla_bakstein.h"
@@ -220,8 +222,12 @@ std::string checkSizeAndFormat(const cv::Mat& img, int w, int h, bool colour_ok)
 class LightsDetector final : public Detector {
  public:
   LightsDetector(CameraSetup cam, const vision::CeilingLightOptions& opt, int max_features)
-      : cam_(std::move(cam)), det_(*cam_.model, cam_.mounting, opt), max_features_(max_features) {}
+      : cam_(std::move(cam)),
+        det_(*cam_.model, cam_.mounting, opt),
+        max_features_(max_features),
+        options_(describeOptions(opt)) {}
   std::string name() const override { return "ceiling_lights"; }
+  std::string options() const override { return options_; }
   std::optional<std::string> check(const cv::Mat& img) const override {
     auto why = checkSizeAndFormat(img, cam_.width_px, cam_.height_px, false);
     return why.empty() ? std::nullopt : std::optional<std::string>(why);
@@ -261,6 +267,7 @@ class LightsDetector final : public Detector {
   CameraSetup cam_;
   vision::CeilingLightDetector det_;
   int max_features_;
+  std::string options_;
   mutable std::vector<vision::CeilingLight> last_;
 };
 
@@ -269,8 +276,10 @@ class LinesDetector final : public Detector {
   LinesDetector(CameraSetup cam, const vision::VerticalLineOptions& opt, int max_features)
       : cam_(std::move(cam)),
         det_(opt, cam_.width_px, cam_.height_px, cam_.model.get(), cam_.mounting, cam_.mask),
-        max_features_(max_features) {}
+        max_features_(max_features),
+        options_(describeOptions(opt)) {}
   std::string name() const override { return "vertical_lines"; }
+  std::string options() const override { return options_; }
   std::optional<std::string> check(const cv::Mat& img) const override {
     auto why = checkSizeAndFormat(img, cam_.width_px, cam_.height_px, true);
     return why.empty() ? std::nullopt : std::optional<std::string>(why);
@@ -323,27 +332,16 @@ class LinesDetector final : public Detector {
   CameraSetup cam_;
   vision::VerticalLineDetector det_;
   int max_features_;
+  std::string options_;
   mutable std::vector<vision::VerticalLine> last_;
 };
 
-vision::LampBlobOptions parseLampBlobs(const Node& n) {
-  vision::LampBlobOptions o;
-  o.background_window_px = static_cast<int>(n.getInt("background_window_px", 0, 255, o.background_window_px));
+/// The checks across keys of the lamp criteria (each key's own range is its table's).
+void checkLampBlobs(const Node& n, const vision::LampBlobOptions& o) {
   if (o.background_window_px != 0 && (o.background_window_px < 3 || o.background_window_px % 2 == 0))
     throw ConfigError(n.where("background_window_px") + " must be 0 (from background_window_rad) or odd, in [3, 255]");
-  o.noise_margin_sigma = n.getDouble("noise_margin_sigma", 0.1, 100.0, o.noise_margin_sigma);
-  o.min_noise_sigma_grey = n.getDouble("min_noise_sigma_grey", 0.01, 100.0, o.min_noise_sigma_grey);
-  o.min_source_ratio = n.getDouble("min_source_ratio", 1.0, 1000.0, o.min_source_ratio);
-  o.saturation_grey = static_cast<int>(n.getInt("saturation_grey", 1, 255, o.saturation_grey));
-  o.min_peak_ratio = n.getDouble("min_peak_ratio", 0.0, 1000.0, o.min_peak_ratio);
-  o.min_surround_contrast = n.getDouble("min_surround_contrast", 0.0, 1.0, o.min_surround_contrast);
-  o.threshold_grey = static_cast<int>(n.getInt("threshold_grey", 0, 254, o.threshold_grey));
-  o.min_area_px = static_cast<int>(n.getInt("min_area_px", 1, 1'000'000, o.min_area_px));
-  o.max_area_px = static_cast<int>(n.getInt("max_area_px", 1, 10'000'000, o.max_area_px));
   if (o.max_area_px < o.min_area_px) throw ConfigError(n.where("max_area_px") + " must be >= min_area_px");
-  o.connectivity = static_cast<int>(n.getInt("connectivity", 4, 8, o.connectivity));
   if (o.connectivity != 4 && o.connectivity != 8) throw ConfigError(n.where("connectivity") + " must be 4 or 8");
-  return o;
 }
 
 vision::CeilingLightOptions parseLights(const Node& n) {
@@ -351,59 +349,26 @@ vision::CeilingLightOptions parseLights(const Node& n) {
     throw ConfigError(n.where("background_grey") +
                       " was removed: the background is now measured around each blob (a median over"
                       " background_window_px / background_window_rad); delete the key");
-  n.rejectUnknownKeys({"background_window_px", "background_window_rad", "noise_margin_sigma", "min_noise_sigma_grey",
-                       "min_source_ratio", "saturation_grey", "min_peak_ratio", "min_surround_contrast",
-                       "threshold_grey", "min_area_px", "max_area_px", "connectivity", "max_elongation",
-                       "max_clipped_elongation", "noise_sigma_grey", "pixel_sigma_floor_px", "truncated_blobs"});
+  std::vector<std::string> known = config::keysOf(ceilingLightFields(), config::keysOf(lampBlobFields()));
+  known.emplace_back("noise_sigma_grey");
+  n.rejectUnknownKeysIn(known);
   vision::CeilingLightOptions o;
-  o.blobs = parseLampBlobs(n);
-  o.background_window_rad = n.getDouble("background_window_rad", 1e-3, 1.0, o.background_window_rad);
-  o.max_elongation = n.getDouble("max_elongation", 1.0, 100.0, o.max_elongation);
-  o.max_clipped_elongation =
-      n.getDouble("max_clipped_elongation", 1.0, 100.0, std::max(o.max_elongation, o.max_clipped_elongation));
+  config::parseFields(n, o.blobs, lampBlobFields());
+  checkLampBlobs(n, o.blobs);
+  const double clipped_default = o.max_clipped_elongation;
+  config::parseFields(n, o, ceilingLightFields());
+  // Not given: at least max_elongation.
+  if (!n.has("max_clipped_elongation")) o.max_clipped_elongation = std::max(o.max_elongation, clipped_default);
   if (o.max_clipped_elongation < o.max_elongation)
     throw ConfigError(n.where("max_clipped_elongation") + " must be >= max_elongation");
   // "auto" (or absent): the frame's own noise estimate.
   if (n.has("noise_sigma_grey") && n.getString("noise_sigma_grey") != "auto")
     o.noise_sigma_grey = n.getDouble("noise_sigma_grey", 0.0, 100.0);
-  o.pixel_sigma_floor_px = n.getDouble("pixel_sigma_floor_px", 1e-3, 100.0, o.pixel_sigma_floor_px);
-  o.truncated_blobs = n.getEnum("truncated_blobs", {"drop", "keep"}, "drop") == "drop" ? vision::TruncatedBlobs::kDrop
-                                                                                       : vision::TruncatedBlobs::kKeep;
   return o;
 }
 
-vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
-  n.rejectUnknownKeys({"centre_u_px",
-                       "centre_v_px",
-                       "r_min_px",
-                       "r_max_px",
-                       "columns",
-                       "rows",
-                       "pad_columns",
-                       "edge_threshold",
-                       "min_run_rows",
-                       "max_gap_rows",
-                       "merge_columns",
-                       "merge_gap_rows",
-                       "min_length_rows",
-                       "max_drift_columns",
-                       "max_rms_columns",
-                       "colour_offset_columns",
-                       "colour_width_columns",
-                       "pixel_sigma_px",
-                       "max_opposite_fraction",
-                       "bar_max_width_px",
-                       "cell_row_min_lines",
-                       "cell_max_aspect",
-                       "cell_max_spacing_ratio",
-                       "contrast_exponent",
-                       "contrast_reference_grey",
-                       "contrast_offset_grey",
-                       "contrast_window_columns",
-                       "clahe_clip_limit",
-                       "clahe_tile_columns"});
-  vision::VerticalLineOptions o;
-  auto& p = o.panorama;
+/// The panorama's centre (the camera model's when neither key is given), radii, size and padding.
+void parsePanorama(const Node& n, const CameraSetup& cam, vision::PanoramaOptions& p) {
   if (cam.centre_px && !n.has("centre_u_px") && !n.has("centre_v_px")) {
     p.centre_u_px = cam.centre_px->x();
     p.centre_v_px = cam.centre_px->y();
@@ -411,38 +376,22 @@ vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
     p.centre_u_px = n.getDouble("centre_u_px", -0.5, cam.width_px - 0.5);
     p.centre_v_px = n.getDouble("centre_v_px", -0.5, cam.height_px - 0.5);
   }
-  p.r_min_px = n.getDouble("r_min_px", 0.0, 1e5);
-  p.r_max_px = n.getDouble("r_max_px", 1.0, 1e5);
+  config::parseFields(n, p, panoramaFields(), {"r_min_px", "r_max_px"});
   if (!(p.r_max_px > p.r_min_px + 1.0)) throw ConfigError(n.where("r_max_px") + " must be > r_min_px + 1");
-  p.columns = static_cast<int>(n.getInt("columns", 36, 20000, p.columns));
-  p.rows = static_cast<int>(n.getInt("rows", 0, 20000, p.rows));
   if (p.rows == 1) throw ConfigError(n.where("rows") + " must be 0 (auto) or >= 2");
   p.pad_columns = static_cast<int>(n.getInt("pad_columns", 2, p.columns / 4, p.pad_columns));  // 2: the seam
   // The panorama's size (rows 0 follows the radii): refused here with the file, not as an
   // allocation of gigabytes when the detector is built.
   if (auto why = vision::validate(p)) throw ConfigError(n.where(n.has("rows") ? "rows" : "r_max_px") + ": " + *why);
-  o.edge_threshold = static_cast<int>(n.getInt("edge_threshold", 1, 1020, o.edge_threshold));
-  o.min_run_rows = static_cast<int>(n.getInt("min_run_rows", 1, 100000, o.min_run_rows));
-  o.max_gap_rows = static_cast<int>(n.getInt("max_gap_rows", 0, 100000, o.max_gap_rows));
-  o.merge_columns = static_cast<int>(n.getInt("merge_columns", 0, 20, o.merge_columns));
-  o.merge_gap_rows = static_cast<int>(n.getInt("merge_gap_rows", 0, 100000, o.merge_gap_rows));
-  o.min_length_rows = static_cast<int>(n.getInt("min_length_rows", 1, 100000, o.min_length_rows));
-  o.max_drift_columns = n.getDouble("max_drift_columns", 0.01, 1000.0, o.max_drift_columns);
-  o.max_rms_columns = n.getDouble("max_rms_columns", 0.01, 1000.0, o.max_rms_columns);
-  o.colour_offset_columns = static_cast<int>(n.getInt("colour_offset_columns", 1, 1000, o.colour_offset_columns));
-  o.colour_width_columns = static_cast<int>(n.getInt("colour_width_columns", 1, 1000, o.colour_width_columns));
-  o.pixel_sigma_px = n.getDouble("pixel_sigma_px", 1e-3, 100.0, o.pixel_sigma_px);
-  o.max_opposite_fraction = n.getDouble("max_opposite_fraction", 0.0, 1.0, o.max_opposite_fraction);
-  o.bar_max_width_px = n.getDouble("bar_max_width_px", 0.0, 1000.0, o.bar_max_width_px);
-  o.cell_row_min_lines = static_cast<int>(n.getInt("cell_row_min_lines", 0, 100, o.cell_row_min_lines));
-  o.cell_max_aspect = n.getDouble("cell_max_aspect", 1.0, 10.0, o.cell_max_aspect);
-  o.cell_max_spacing_ratio = n.getDouble("cell_max_spacing_ratio", 1.0, 10.0, o.cell_max_spacing_ratio);
-  o.contrast_exponent = n.getDouble("contrast_exponent", 0.0, 1.0, o.contrast_exponent);
-  o.contrast_reference_grey = n.getDouble("contrast_reference_grey", 1.0, 255.0, o.contrast_reference_grey);
-  o.contrast_offset_grey = n.getDouble("contrast_offset_grey", 0.0, 255.0, o.contrast_offset_grey);
-  o.contrast_window_columns = static_cast<int>(n.getInt("contrast_window_columns", 1, 100, o.contrast_window_columns));
-  o.clahe_clip_limit = n.getDouble("clahe_clip_limit", 0.0, 100.0, o.clahe_clip_limit);
-  o.clahe_tile_columns = static_cast<int>(n.getInt("clahe_tile_columns", 8, 20000, o.clahe_tile_columns));
+}
+
+vision::VerticalLineOptions parseLines(const Node& n, const CameraSetup& cam) {
+  std::vector<std::string> known = config::keysOf(panoramaFields(), {"centre_u_px", "centre_v_px"});
+  known.emplace_back("pad_columns");
+  n.rejectUnknownKeysIn(config::keysOf(verticalLineFields(), known));
+  vision::VerticalLineOptions o;
+  parsePanorama(n, cam, o.panorama);
+  config::parseFields(n, o, verticalLineFields());
   return o;
 }
 

@@ -33,6 +33,9 @@ class Detector {
   virtual camera::CameraMounting mounting() const = 0;
   /// One line describing the detector and its camera, for the log.
   virtual std::string describe() const = 0;
+  /// Every key of its config section as used, "key=value ..." (the start-up echo,
+  /// detector_options_table.h).
+  virtual std::string options() const = 0;
 };
 
 /// Builds the detector a features config file describes; throws config::ConfigError naming the

@@ -84,6 +84,7 @@ int runBus(const features::Detector& det, const std::string& url, const std::str
   });
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
   std::cerr << node.tag() << det.describe() << std::endl;
+  std::cerr << node.tag() << det.name() << ": " << det.options() << std::endl;
   node.spin();
   return app::kOk;
 }
@@ -183,6 +184,7 @@ int runImages(const features::Detector& det, const std::string& dir, const std::
            "colour_a_r,colour_a_g,colour_a_b,colour_b_r,colour_b_g,colour_b_b\n";
   }
   std::cerr << det.describe() << std::endl;
+  std::cerr << det.name() << ": " << det.options() << std::endl;
   // A stop (Ctrl-C, SIGTERM) ends the loop after the current image; what was written is kept.
   lcmio::installStopHandlers();
   size_t done = 0, skipped = 0, corrupt = 0;

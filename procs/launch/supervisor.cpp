@@ -59,6 +59,31 @@ bool groupAlive(const Child& c) {
   return false;
 }
 
+/// In the forked child: own process group (so a terminal's Ctrl-C reaches only the launcher, which
+/// stops the children in order, and a stop reaches what the child starts), SIGTERM when the launcher
+/// dies (SIGTERM rather than SIGKILL: the recorder still closes its log; docs/user/launch-file.md),
+/// output into the pipe, then the program. Never returns.
+[[noreturn]] void execChild(std::vector<std::string>& args, const int fds[2], const std::string& url, pid_t parent,
+                            const sigset_t& old_mask) {
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  setpgid(0, 0);
+  prctl(PR_SET_PDEATHSIG, SIGTERM);
+  if (getppid() != parent) _exit(127);  // the launcher died before prctl took effect
+  pthread_sigmask(SIG_SETMASK, &old_mask, nullptr);
+  dup2(fds[1], STDOUT_FILENO);
+  dup2(fds[1], STDERR_FILENO);
+  close(fds[0]);
+  close(fds[1]);
+  setenv("LCM_DEFAULT_URL", url.c_str(), 1);
+  std::vector<char*> cargs;
+  for (auto& a : args) cargs.push_back(a.data());
+  cargs.push_back(nullptr);
+  execvp(cargs[0], cargs.data());
+  std::fprintf(stderr, "cannot start '%s': %s\n", cargs[0], std::strerror(errno));
+  _exit(127);
+}
+
 }  // namespace
 
 Child spawn(const std::string& name, const std::vector<std::string>& argv, const std::string& url,
@@ -86,29 +111,7 @@ Child spawn(const std::string& name, const std::vector<std::string>& argv, const
     close(fds[1]);
     throw std::runtime_error("fork failed: " + std::string(std::strerror(err)));
   }
-  if (pid == 0) {
-    // Child: own process group (so a terminal's Ctrl-C reaches only the launcher, which stops
-    // the children in order, and a stop reaches what the child starts), SIGTERM when the launcher
-    // dies (SIGTERM rather than SIGKILL: the recorder still closes its log; docs/user/launch-file.md),
-    // output into the pipe.
-    std::signal(SIGINT, SIG_DFL);
-    std::signal(SIGTERM, SIG_DFL);
-    setpgid(0, 0);
-    prctl(PR_SET_PDEATHSIG, SIGTERM);
-    if (getppid() != parent) _exit(127);  // the launcher died before prctl took effect
-    pthread_sigmask(SIG_SETMASK, &old_mask, nullptr);
-    dup2(fds[1], STDOUT_FILENO);
-    dup2(fds[1], STDERR_FILENO);
-    close(fds[0]);
-    close(fds[1]);
-    setenv("LCM_DEFAULT_URL", url.c_str(), 1);
-    std::vector<char*> cargs;
-    for (auto& a : args) cargs.push_back(a.data());
-    cargs.push_back(nullptr);
-    execvp(cargs[0], cargs.data());
-    std::fprintf(stderr, "cannot start '%s': %s\n", cargs[0], std::strerror(errno));
-    _exit(127);
-  }
+  if (pid == 0) execChild(args, fds, url, parent, old_mask);
   // The group is set on both sides of the fork (the usual way): a stop sent to the group before the
   // child has run setpgid would otherwise find no group.
   setpgid(pid, pid);

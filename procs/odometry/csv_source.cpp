@@ -3,22 +3,63 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 
 namespace omnislam::odometry {
 
-std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::string& source) {
-  std::vector<WheelSample> out;
-  // Line ends: "\n", "\r\n" or a lone "\r" (old Mac files), which getline alone reads as one line.
+namespace {
+
+/// The text with every line ending "\n": "\r\n" and a lone "\r" (old Mac files), which getline
+/// alone reads as one line, become "\n".
+std::string unixLineEnds(const std::string& text) {
   std::string lines = text;
   for (size_t i = 0; i < lines.size(); ++i)
     if (lines[i] == '\r' && (i + 1 == lines.size() || lines[i + 1] != '\n')) lines[i] = '\n';
-  std::istringstream in(lines);
+  return lines;
+}
+
+/// One data row as a sample, or the reason it is refused (the caller adds file and line).
+WheelSample parseRow(const std::string& line, const std::function<void(const std::string&)>& fail) {
+  // Columns are counted by their commas: a trailing comma ("1000,0.1,0.0,") is a fourth, empty
+  // column, which reading three fields and looking for more let through.
+  const auto columns = std::count(line.begin(), line.end(), ',') + 1;
+  if (columns != 3)
+    fail("expected 3 columns (utime,v_mps,omega_radps), got " + std::to_string(columns) + " in '" + line + "'");
+  std::istringstream row(line);
+  std::string f[3];
+  for (auto& field : f) std::getline(row, field, ',');
+  WheelSample s;
+  try {
+    size_t pos = 0;
+    s.utime = std::stoll(f[0], &pos);
+    if (pos != f[0].size()) throw std::invalid_argument("");
+    s.v_mps = std::stod(f[1], &pos);
+    if (pos != f[1].size()) throw std::invalid_argument("");
+    s.omega_radps = std::stod(f[2], &pos);
+    if (pos != f[2].size()) throw std::invalid_argument("");
+  } catch (const std::exception&) {
+    fail("non-numeric field in '" + line + "'");
+  }
+  if (!std::isfinite(s.v_mps) || !std::isfinite(s.omega_radps)) fail("non-finite value in '" + line + "'");
+  if (std::abs(s.v_mps) > kMaxCsvSpeedMps || std::abs(s.omega_radps) > kMaxCsvTurnRateRadps)
+    fail("v_mps must be in [-100, 100] and omega_radps in [-100, 100], got '" + line + "'");
+  // The contract's utime is >= 0; the bound (year 2096) keeps every difference and sum exact.
+  if (s.utime < 0 || s.utime > kMaxCsvUtime)
+    fail("utime " + std::to_string(s.utime) + " outside 0.." + std::to_string(kMaxCsvUtime));
+  return s;
+}
+
+}  // namespace
+
+std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::string& source) {
+  std::vector<WheelSample> out;
+  std::istringstream in(unixLineEnds(text));
   std::string line;
   int lineno = 0;
   bool header = false;
-  auto fail = [&](const std::string& why) {
+  const std::function<void(const std::string&)> fail = [&](const std::string& why) {
     throw std::invalid_argument(source + ":" + std::to_string(lineno) + ": " + why);
   };
   while (std::getline(in, line)) {
@@ -32,32 +73,7 @@ std::vector<WheelSample> parseWheelCsv(const std::string& text, const std::strin
       header = true;
       continue;
     }
-    // Columns are counted by their commas: a trailing comma ("1000,0.1,0.0,") is a fourth, empty
-    // column, which reading three fields and looking for more let through.
-    const auto columns = std::count(line.begin(), line.end(), ',') + 1;
-    if (columns != 3)
-      fail("expected 3 columns (utime,v_mps,omega_radps), got " + std::to_string(columns) + " in '" + line + "'");
-    std::istringstream row(line);
-    std::string f[3];
-    for (auto& field : f) std::getline(row, field, ',');
-    WheelSample s;
-    try {
-      size_t pos = 0;
-      s.utime = std::stoll(f[0], &pos);
-      if (pos != f[0].size()) throw std::invalid_argument("");
-      s.v_mps = std::stod(f[1], &pos);
-      if (pos != f[1].size()) throw std::invalid_argument("");
-      s.omega_radps = std::stod(f[2], &pos);
-      if (pos != f[2].size()) throw std::invalid_argument("");
-    } catch (const std::exception&) {
-      fail("non-numeric field in '" + line + "'");
-    }
-    if (!std::isfinite(s.v_mps) || !std::isfinite(s.omega_radps)) fail("non-finite value in '" + line + "'");
-    if (std::abs(s.v_mps) > kMaxCsvSpeedMps || std::abs(s.omega_radps) > kMaxCsvTurnRateRadps)
-      fail("v_mps must be in [-100, 100] and omega_radps in [-100, 100], got '" + line + "'");
-    // The contract's utime is >= 0; the bound (year 2096) keeps every difference and sum exact.
-    if (s.utime < 0 || s.utime > kMaxCsvUtime)
-      fail("utime " + std::to_string(s.utime) + " outside 0.." + std::to_string(kMaxCsvUtime));
+    const WheelSample s = parseRow(line, fail);
     if (!out.empty() && s.utime <= out.back().utime)
       fail("utime " + std::to_string(s.utime) + " does not increase (previous " + std::to_string(out.back().utime) +
            ")");

@@ -19,6 +19,7 @@
 #include "omnislam/lcmio/pacing.h"
 #include "omnislam/lcmio/plausibility_flags.h"
 #include "omnislam/lcmio/signals.h"
+#include "omnislam/lcmio/truth_stream.h"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/sim/odometry_sim.h"
 
@@ -38,26 +39,38 @@ odometry_t makeMsg(int64_t utime, int64_t seq, const Pose2& p, double v, double 
   return m;
 }
 
+/// What the simulated odometry says of its noise, on stderr and as the node's detail.
+void describeNoise(lcmio::Node& node, const sim::World& world, const sim::OdometrySimulator& odo, uint64_t seed) {
+  const auto& nz = world.odometry_noise;
+  if (nz.model == sim::OdometryModel::kTranslateRotate) {
+    std::cerr << node.tag() << "simulating odometry of '" << world.name << "', seed " << seed
+              << ": translate-then-rotate model, err_tran " << nz.err_tran_m_per_sqrt_m << " m/sqrt(m), err_rot "
+              << nz.err_rot_rad_per_sqrt_rad << " rad/sqrt(rad), err_drift " << nz.err_drift_rad_per_sqrt_m
+              << " rad/sqrt(m)" << std::endl;
+    node.setDetail("model=translate_rotate err_tran=" + std::to_string(nz.err_tran_m_per_sqrt_m) +
+                   " err_rot=" + std::to_string(nz.err_rot_rad_per_sqrt_rad) +
+                   " err_drift=" + std::to_string(nz.err_drift_rad_per_sqrt_m));
+  } else {
+    std::cerr << node.tag() << "simulating odometry of '" << world.name << "', seed " << seed << ": scale error "
+              << odo.scaleError() << ", heading drift " << odo.headingDrift_rad_per_m() << " rad/m" << std::endl;
+    node.setDetail("scale_error=" + std::to_string(odo.scaleError()) +
+                   " heading_drift_rad_per_m=" + std::to_string(odo.headingDrift_rad_per_m()));
+  }
+}
+
 int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed, const lcmio::PosePlausibility& plausible) {
   const sim::World world = config::loadWorld(world_path);
   sim::OdometrySimulator odo(world.odometry_noise, seed);
   int64_t seq = 0, last_utime = 0, published = 0;
   Pose2 last;
-  lcmio::PoseStreamCheck truth_check;
-  lcmio::InputOptions truth_opt;
-  truth_opt.queue_capacity = 5000;  // ~150 bytes each: bursts at high speed-ups must not be dropped
+  lcmio::TruthStreamGate gate(plausible);
   node.subscribe<pose_t>(
       channels::kGroundTruthPose,
       [&](const pose_t& p) {
         const bool new_timeline = seq > 0 && p.utime <= last_utime;
         // Checked before anything changes: a refused pose (thrown) leaves the integration, the check
-        // and the channel's time order as they were (docs/user/messages.md, "Plausibility").
-        lcmio::PoseStreamCheck check = new_timeline ? lcmio::PoseStreamCheck{} : truth_check;
-        if (auto why = check.admit(p.utime, p.x_m, p.y_m, p.theta_rad, plausible))
-          throw lcmio::Refused("seq " + std::to_string(p.seq) + " utime " + std::to_string(p.utime) + ": " + *why);
-        if (check.jumpsTaken() != truth_check.jumpsTaken() && !new_timeline)
-          std::cerr << node.tag() << "GROUND_TRUTH_POSE: " << check.lastJump() << std::endl;
-        truth_check = check;
+        // and the channel's time order as they were.
+        gate.admit(node, p, new_timeline);
         if (new_timeline) {
           // The node took a new timeline (the simulation run again, a truth log replayed again): a new
           // run, as a new odometry process would see it. Integrating the jump back to the start as one
@@ -79,29 +92,11 @@ int runSim(lcmio::Node& node, const std::string& world_path, uint64_t seed, cons
         last = now;
         last_utime = p.utime;
       },
-      truth_opt);
+      lcmio::truthInputOptions());
   node.publishStatus();  // subscribed: announce ourselves (the simulator waits for its consumers)
-  const auto& nz = world.odometry_noise;
-  if (nz.model == sim::OdometryModel::kTranslateRotate) {
-    std::cerr << node.tag() << "simulating odometry of '" << world.name << "', seed " << seed
-              << ": translate-then-rotate model, err_tran " << nz.err_tran_m_per_sqrt_m << " m/sqrt(m), err_rot "
-              << nz.err_rot_rad_per_sqrt_rad << " rad/sqrt(rad), err_drift " << nz.err_drift_rad_per_sqrt_m
-              << " rad/sqrt(m)" << std::endl;
-    node.setDetail("model=translate_rotate err_tran=" + std::to_string(nz.err_tran_m_per_sqrt_m) +
-                   " err_rot=" + std::to_string(nz.err_rot_rad_per_sqrt_rad) +
-                   " err_drift=" + std::to_string(nz.err_drift_rad_per_sqrt_m));
-  } else {
-    std::cerr << node.tag() << "simulating odometry of '" << world.name << "', seed " << seed << ": scale error "
-              << odo.scaleError() << ", heading drift " << odo.headingDrift_rad_per_m() << " rad/m" << std::endl;
-    node.setDetail("scale_error=" + std::to_string(odo.scaleError()) +
-                   " heading_drift_rad_per_m=" + std::to_string(odo.headingDrift_rad_per_m()));
-  }
+  describeNoise(node, world, odo, seed);
   node.spin();
-  // Stopped by a signal (the only way out of spin): the last status says so, with the count.
-  node.setState(process_status_t::STATE_STOPPING);
-  node.setDetail("stopped after " + std::to_string(published) + " messages");
-  node.publishStatus();
-  std::cerr << node.tag() << "stopped after " << published << " messages" << std::endl;
+  lcmio::reportStopped(node, std::to_string(published) + " messages");
   return app::kOk;
 }
 

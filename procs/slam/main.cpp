@@ -21,12 +21,12 @@
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/log_writer.h"
 #include "omnislam/lcmio/node.h"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 #include "omnislam/runtime/replay.h"
 #include "omnislam/runtime/slam_runtime.h"
 
 using namespace omnislam;
-using slamproc::DriverResult;
+using runtime::DriverResult;
 
 namespace {
 
@@ -46,10 +46,10 @@ void publishAll(lcmio::Node& node, const DriverResult& r) {
   }
 }
 
-int runLive(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark> prior, const std::string& url,
+int runLive(const runtime::SlamProcessOptions& opt, std::vector<slam::Landmark> prior, const std::string& url,
             const std::string& name) {
   lcmio::Node node(name, url);
-  slamproc::SlamRuntime rt(opt, std::move(prior), node.tag());
+  runtime::SlamRuntime rt(opt, std::move(prior), node.tag());
   rt.setLive();  // a back-end solve never makes the live filter wait
   rt.resume();
   const auto emit = [&](const DriverResult& r) { publishAll(node, r); };
@@ -79,7 +79,7 @@ int runLive(const slamproc::SlamProcessOptions& opt, std::vector<slam::Landmark>
 
 /// Outputs are checked before any work whose result would be lost at the end; the checkpoint's
 /// folder is made (a run's log folder may not exist yet).
-void checkOutputs(const slamproc::SlamProcessOptions& opt, const std::string& out) {
+void checkOutputs(const runtime::SlamProcessOptions& opt, const std::string& out) {
   if (!opt.save_map_path.empty()) lcmio::requireWritableFile(opt.save_map_path, "--save-map (map.save_path)");
   if (!out.empty()) lcmio::requireWritableFile(out, "--out");
   if (!opt.checkpoint_path.empty()) {
@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.001, 1e6));
   cli.add_flag("--localise", localise, "localisation only: keep the loaded map fixed (needs a map to load)");
   cli.add_option("--association", association, "override filter.association")
-      ->check(CLI::IsMember(slamproc::associationNames()));
+      ->check(CLI::IsMember(runtime::associationNames()));
   cli.add_option("--particles", particles, "override filter.particles")->check(CLI::Range(1, 100000));
   cli.add_flag("--progress", progress,
                "offline: print progress (frames, rate, time left) every 2 s (default when stderr is a terminal)");
@@ -129,24 +129,24 @@ int main(int argc, char** argv) {
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-slam", [&]() -> int {
     if (replay.empty() != out.empty()) throw std::invalid_argument("--replay IN.lcm and --out OUT.lcm go together");
-    slamproc::SlamProcessOptions opt;
+    runtime::SlamProcessOptions opt;
     if (!sets.empty() && config_path.empty()) throw std::invalid_argument("--set needs --config FILE");
-    if (!config_path.empty()) opt = slamproc::loadSlamOptions(config_path, sets);
+    if (!config_path.empty()) opt = runtime::loadSlamOptions(config_path, sets);
     if (*seed_opt) opt.seed = seed;
     if (!save_map.empty()) opt.save_map_path = save_map;
     if (!load_map.empty()) opt.load_map_path = load_map;
     if (localise) opt.localisation_only = true;
-    if (!association.empty()) opt.filter.association = slamproc::associationFromName(association);
+    if (!association.empty()) opt.filter.association = runtime::associationFromName(association);
     if (particles > 0) opt.filter.num_particles = particles;
     if (!checkpoint.empty()) opt.checkpoint_path = checkpoint;
     if (checkpoint_interval_s > 0.0)
       opt.checkpoint_interval_us = static_cast<int64_t>(std::llround(checkpoint_interval_s * 1e6));
     if (const std::string err = opt.validate(); !err.empty()) throw std::invalid_argument(err);
     checkOutputs(opt, out);
-    std::vector<slam::Landmark> prior = slamproc::loadPriorMap(opt, "[" + name + "] ");
-    std::cerr << "[" << name << "] " << slamproc::describe(opt) << std::endl;
+    std::vector<slam::Landmark> prior = runtime::loadPriorMap(opt, "[" + name + "] ");
+    std::cerr << "[" << name << "] " << runtime::describe(opt) << std::endl;
     const bool show_progress = !no_progress && (progress || ::isatty(STDERR_FILENO));
     if (replay.empty()) return runLive(opt, std::move(prior), app::lcmUrl(url), name);
-    return slamproc::runReplay(opt, std::move(prior), {replay, out, show_progress}) ? app::kOk : app::kFailure;
+    return runtime::runReplay(opt, std::move(prior), {replay, out, show_progress}) ? app::kOk : app::kFailure;
   });
 }

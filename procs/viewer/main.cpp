@@ -95,12 +95,15 @@ class Viewer {
 
 // ---- live (window or headless) ---------------------------------------------------------------
 
-int runLive(const Settings& s) {
-  lcmio::Node node(s.name, app::lcmUrl(s.url));
-  Viewer v(s, "omnislam live" + (s.url.empty() ? std::string() : "  " + s.url));
+/// The PNG frames that could not be written: their count and the first one's reason.
+struct PngFailures {
+  int64_t count = 0;
+  std::string first;
+};
+
+/// Subscribes the viewer's state to every channel it shows.
+void subscribeLive(lcmio::Node& node, Viewer& v, PngFailures& failures) {
   auto& st = v.state();
-  int64_t png_failures = 0;
-  std::string first_png_failure;
   lcmio::InputOptions truth_opt;
   truth_opt.queue_capacity = 2000;  // 50 Hz: a slow redraw must not lose truth poses
   node.subscribe<pose_t>(channels::kSlamPose, [&](const pose_t& m) {
@@ -109,7 +112,7 @@ int runLive(const Settings& s) {
     try {
       v.beforePose(m);
     } catch (const std::exception& e) {
-      if (png_failures++ == 0) first_png_failure = e.what();
+      if (failures.count++ == 0) failures.first = e.what();
       node.error(e.what());
     }
     st.onSlamPose(m);
@@ -125,6 +128,39 @@ int runLive(const Settings& s) {
     if (!st.onImage(m, &why)) node.reject(channels::kOmniImage, "frame seq " + std::to_string(m.seq) + ": " + why);
   });
   node.subscribe<features_t>(channels::kOmniFeatures, [&](const features_t& m) { st.onFeatures(m); });
+}
+
+/// Handles the bus and redraws the window (if any) at s.fps until a stop, 'q', Esc or a closed window.
+void loopLive(lcmio::Node& node, const Settings& s, Viewer& v, const std::string& win) {
+  const bool window = !s.headless;
+  const auto period = std::chrono::duration<double>(1.0 / s.fps);
+  auto next_draw = std::chrono::steady_clock::now();
+  while (!lcmio::stopRequested()) {
+    if (!node.handleFor(0.01)) break;
+    // Drain what is queued before drawing: one message per loop would fall behind a fast bus
+    // (truth at 50 Hz times the simulator's speed-up) and LCM would drop the rest.
+    const auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(50);
+    while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < drain_until &&
+           node.lcm().handleTimeout(0) > 0) {
+    }
+    node.setDetail(std::to_string(v.state().steps()) + " SLAM steps, " + std::to_string(v.written()) + " PNG files");
+    if (!window) continue;
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= next_draw) {
+      cv::imshow(win, v.render());
+      next_draw = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
+    }
+    const int key = cv::waitKey(1);
+    if (key == 'q' || key == 'Q' || key == 27) break;
+    if (cv::getWindowProperty(win, cv::WND_PROP_VISIBLE) < 1.0) break;  // closed by the user
+  }
+}
+
+int runLive(const Settings& s) {
+  lcmio::Node node(s.name, app::lcmUrl(s.url));
+  Viewer v(s, "omnislam live" + (s.url.empty() ? std::string() : "  " + s.url));
+  PngFailures failures;
+  subscribeLive(node, v, failures);
   node.setState(process_status_t::STATE_RUNNING);
   node.publishStatus();
 
@@ -136,38 +172,18 @@ int runLive(const Settings& s) {
   }
   std::cerr << node.tag() << (window ? "window" : "headless") << " on " << (s.url.empty() ? "$LCM_DEFAULT_URL" : s.url)
             << (s.out_dir.empty() ? std::string() : ", PNG files into " + s.out_dir) << std::endl;
-  const auto period = std::chrono::duration<double>(1.0 / s.fps);
-  auto next_draw = std::chrono::steady_clock::now();
-  while (!lcmio::stopRequested()) {
-    if (!node.handleFor(0.01)) break;
-    // Drain what is queued before drawing: one message per loop would fall behind a fast bus
-    // (truth at 50 Hz times the simulator's speed-up) and LCM would drop the rest.
-    const auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(50);
-    while (!lcmio::stopRequested() && std::chrono::steady_clock::now() < drain_until &&
-           node.lcm().handleTimeout(0) > 0) {
-    }
-    node.setDetail(std::to_string(st.steps()) + " SLAM steps, " + std::to_string(v.written()) + " PNG files");
-    if (!window) continue;
-    const auto now = std::chrono::steady_clock::now();
-    if (now >= next_draw) {
-      cv::imshow(win, v.render());
-      next_draw = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
-    }
-    const int key = cv::waitKey(1);
-    if (key == 'q' || key == 'Q' || key == 27) break;
-    if (cv::getWindowProperty(win, cv::WND_PROP_VISIBLE) < 1.0) break;  // closed by the user
-  }
+  loopLive(node, s, v, win);
   node.setState(process_status_t::STATE_STOPPING);
   v.writeFinal();
   node.setState(process_status_t::STATE_FINISHED);
   node.publishStatus();
   if (window) cv::destroyAllWindows();
   const auto& c = node.counters();
-  std::cerr << node.tag() << st.steps() << " SLAM steps, " << v.written() << " PNG files written; " << c.messages_in
-            << " messages in, " << c.decode_errors << " decode errors, " << c.rejected_inputs << " rejected"
-            << std::endl;
-  if (png_failures > 0) {
-    std::cerr << node.tag() << png_failures << " PNG FILES NOT WRITTEN (the first: " << first_png_failure << ")"
+  std::cerr << node.tag() << v.state().steps() << " SLAM steps, " << v.written() << " PNG files written; "
+            << c.messages_in << " messages in, " << c.decode_errors << " decode errors, " << c.rejected_inputs
+            << " rejected" << std::endl;
+  if (failures.count > 0) {
+    std::cerr << node.tag() << failures.count << " PNG FILES NOT WRITTEN (the first: " << failures.first << ")"
               << std::endl;
     return app::kFailure;
   }

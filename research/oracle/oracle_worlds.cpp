@@ -23,7 +23,7 @@
 #include <stdexcept>
 
 #include "omnislam/associations_t.hpp"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 #include "omnislam/feature_labels_t.hpp"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/decode.h"
@@ -82,7 +82,7 @@ Truth readTruth(const std::string& path) {
 }
 
 map_t mapMessage(const OracleFilter& f, int64_t utime, int64_t seq, int64_t input_seq) {
-  return slamproc::toMapMessage(f.bestMap(), f.bestCandidateCount(), utime, seq, input_seq);
+  return runtime::toMapMessage(f.bestMap(), f.bestCandidateCount(), utime, seq, input_seq);
 }
 
 pose_t poseMessage(const OracleFilter& f, int64_t utime, int64_t seq, int64_t input_seq, double ess) {
@@ -111,10 +111,10 @@ research::Birth birthOf(const Args& a, const Truth& t) {
 }
 
 /// The replay: input events copied to the output, frames paired with odometry as omnislam-slam
-/// pairs them (slamproc::Pairer), one filter step per paired frame, its outputs at the event's time.
+/// pairs them (runtime::Pairer), one filter step per paired frame, its outputs at the event's time.
 class Replay {
  public:
-  Replay(const slamproc::SlamProcessOptions& opt, const Args& a, Truth truth)
+  Replay(const runtime::SlamProcessOptions& opt, const Args& a, Truth truth)
       : opt_(opt),
         truth_(std::move(truth)),
         by_label_(a.association == "truth"),
@@ -129,19 +129,19 @@ class Replay {
     if (ev.channel.rfind("SLAM_", 0) == 0) return;
     out_.write(ev.log_utime, ev.channel, ev.data.data(), static_cast<int32_t>(ev.data.size()));
     last_ts_ = ev.log_utime;
-    std::vector<slamproc::PairEvent> events;
+    std::vector<runtime::PairEvent> events;
     if (ev.channel == channels::kOdometry) {
       if (auto m = lcmio::decodeValid<odometry_t>(ev))
         pairer_.addOdometry(m->utime, Pose2{m->x_m, m->y_m, m->theta_rad}, events);
     } else if (ev.channel == channels::kOmniFeatures) {
-      if (auto m = lcmio::decodeValid<features_t>(ev)) pairer_.addFrame(slamproc::toFrame(*m, opt_), events);
+      if (auto m = lcmio::decodeValid<features_t>(ev)) pairer_.addFrame(runtime::toFrame(*m, opt_), events);
     }
     apply(events);
   }
 
   /// End of input: pending frames decided, the log committed; the final best map.
   std::vector<slam::Landmark> finish() {
-    std::vector<slamproc::PairEvent> events;
+    std::vector<runtime::PairEvent> events;
     pairer_.finish(events);
     apply(events);
     out_.commit();
@@ -151,16 +151,16 @@ class Replay {
   }
 
  private:
-  void apply(std::vector<slamproc::PairEvent>& events) {
+  void apply(std::vector<runtime::PairEvent>& events) {
     for (auto& e : events) {
-      if (e.kind == slamproc::PairEvent::Kind::kReset) throw std::runtime_error("input restarted: not supported");
-      if (e.kind == slamproc::PairEvent::Kind::kDropped) ++dropped_;
-      if (e.kind == slamproc::PairEvent::Kind::kPaired) process(e.frame, e.odom_O);
+      if (e.kind == runtime::PairEvent::Kind::kReset) throw std::runtime_error("input restarted: not supported");
+      if (e.kind == runtime::PairEvent::Kind::kDropped) ++dropped_;
+      if (e.kind == runtime::PairEvent::Kind::kPaired) process(e.frame, e.odom_O);
     }
   }
 
   /// The features the filter sees: all (filter association), or the labelled ones carrying their label.
-  std::vector<slam::BearingMeasurement> measurements(const slamproc::Frame& fr, std::vector<int32_t>& index) const {
+  std::vector<slam::BearingMeasurement> measurements(const runtime::Frame& fr, std::vector<int32_t>& index) const {
     if (!by_label_) {
       index = fr.feature_index;
       return fr.z;
@@ -178,9 +178,9 @@ class Replay {
     return z;
   }
 
-  void process(const slamproc::Frame& fr, const Pose2& odom_O) {
+  void process(const runtime::Frame& fr, const Pose2& odom_O) {
     if (frames_ == 0) {
-      const bool fixed = opt_.start_source == slamproc::SlamProcessOptions::StartSource::kFixed;
+      const bool fixed = opt_.start_source == runtime::SlamProcessOptions::StartSource::kFixed;
       filter_.initialise(fixed ? opt_.start_pose_W : odom_O, truth_map_ ? truth_.lamps : std::vector<slam::Landmark>{});
       odom_prev_ = odom_O;
     }
@@ -207,11 +207,11 @@ class Replay {
     ++frames_;
   }
 
-  const slamproc::SlamProcessOptions& opt_;
+  const runtime::SlamProcessOptions& opt_;
   Truth truth_;
   bool by_label_, truth_map_;
   OracleFilter filter_;
-  slamproc::Pairer pairer_;
+  runtime::Pairer pairer_;
   lcmio::LogWriter out_;
   Pose2 odom_prev_;
   int64_t last_ts_ = 0, frames_ = 0, dropped_ = 0, map_seq_ = 0;
@@ -325,9 +325,9 @@ int run(const Args& a) {
   if (a.map != "build" && a.map != "truth") throw std::invalid_argument("--map build|truth");
   if (a.birth != "filter" && !(a.birth == "truth" && a.association == "truth"))
     throw std::invalid_argument("--birth filter|truth (truth needs --association truth)");
-  slamproc::SlamProcessOptions opt = slamproc::loadSlamOptions(a.config, a.sets);
+  runtime::SlamProcessOptions opt = runtime::loadSlamOptions(a.config, a.sets);
   opt.seed = a.seed;
-  if (!a.method.empty()) opt.filter.association = slamproc::associationFromName(a.method);
+  if (!a.method.empty()) opt.filter.association = runtime::associationFromName(a.method);
   if (a.map == "truth") opt.filter.update_map = false;  // localisation only
   if (const std::string err = opt.validate(); !err.empty()) throw std::invalid_argument(err);
   Truth truth = readTruth(a.in);

@@ -9,7 +9,7 @@
 
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 #include "smooth_log.h"
 
 using namespace omnislam;
@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 100000));
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return app::runMain("omnislam-smooth", [&]() -> int {
-    const auto slam_options = slamproc::loadSlamOptions(config_path, sets);
+    const auto slam_options = runtime::loadSlamOptions(config_path, sets);
     opt.motion = slam_options.filter.motion;
     opt.max_odometry_gap_us = slam_options.pairing.max_odometry_gap_us;
     opt.progress = [](const std::string& line) { std::cerr << "omnislam-smooth: " << line << std::endl; };

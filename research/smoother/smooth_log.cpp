@@ -12,7 +12,7 @@
 
 #include "omnislam/associations_t.hpp"
 #include "omnislam/core/angles.h"
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/metrics.h"
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/validation.h"
 #include "omnislam/feature_labels_t.hpp"

@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "omnislam/core/eval/coverage.h"
+#include "omnislam/eval/coverage.h"
 
 using namespace omnislam::eval;
 

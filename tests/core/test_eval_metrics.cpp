@@ -8,7 +8,7 @@
 
 #include <Eigen/Geometry>
 
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/metrics.h"
 #include "omnislam/core/slam/hungarian.h"
 
 using namespace omnislam;

@@ -11,7 +11,7 @@
 
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/metrics.h"
 #include "eval_json.h"
 #include "proc_util.h"
 #include "slam_log.h"

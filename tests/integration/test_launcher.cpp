@@ -109,8 +109,8 @@ TEST(Launcher, RecordsTheBusWithLcmLoggerOrOmnislamRecord) {
     // The sample publisher covers every channel of the contract, each decodable by its type.
     namespace ch = omnislam::channels;
     for (const char* c : {ch::kOmniImage, ch::kOmniFeatures, ch::kOdometry, ch::kSlamPose, ch::kSlamMap,
-                          ch::kSlamParticles, ch::kSlamAssociations, ch::kGroundTruthPose, ch::kGroundTruthMap,
-                          ch::kProcessStatus, ch::kGroundTruthFeatureLabels}) {
+                          ch::kSlamParticles, ch::kSlamAssociations, ch::kSlamHealth, ch::kGroundTruthPose,
+                          ch::kGroundTruthMap, ch::kProcessStatus, ch::kGroundTruthFeatureLabels}) {
       const std::vector<std::string> row = t::wordsOfLine(stat.output, c);  // channel type messages gaps bad ...
       ASSERT_GE(row.size(), 5u) << c << " not recorded: " << stat.output;
       EXPECT_NE(row[1], "?") << c;

@@ -1,10 +1,14 @@
 // omnislam-logstat on a log the test writes: the per-channel table and, per process, its last
 // PROCESS_STATUS (counters, state, detail, last error), with an undecodable status event counted
-// as bad and not taken for a process.
+// as bad and not taken for a process; and a decoder for every message type of lcmtypes/.
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <limits>
+#include <regex>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -13,6 +17,7 @@
 #include "omnislam/image_t.hpp"
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/process_status_t.hpp"
+#include "omnislam/slam_health_t.hpp"
 #include "proc_util.h"
 
 using namespace omnislam;
@@ -217,3 +222,76 @@ TEST(Logstat, SeveralPartsAreOneRecordingAndTheGapBetweenThemIsCounted) {
 }
 
 }  // namespace
+
+namespace {
+
+/// The struct names of lcmtypes/*.lcm, and those of them used as a field of another (element types
+/// such as feature_t, never published alone).
+struct ContractTypes {
+  std::set<std::string> all, nested;
+};
+
+ContractTypes contractTypes() {
+  ContractTypes types;
+  std::vector<std::string> bodies;
+  for (const auto& entry : std::filesystem::directory_iterator(t::sourcePath("lcmtypes"))) {
+    if (entry.path().extension() != ".lcm") continue;
+    std::ifstream in(entry.path());
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::smatch m;
+    if (std::regex_search(text, m, std::regex(R"(\bstruct\s+(\w+))"))) types.all.insert(m[1]);
+    bodies.push_back(text);
+  }
+  const std::regex field(R"(^\s*(\w+)\s+\w+\s*(\[[^\]]*\])?\s*;)", std::regex::multiline);
+  for (const std::string& text : bodies)
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), field); it != std::sregex_iterator(); ++it)
+      if (types.all.count((*it)[1])) types.nested.insert((*it)[1]);
+  return types;
+}
+
+}  // namespace
+
+// Every message type of lcmtypes/ (all but the element types nested in another) is decoded by
+// omnislam-logstat on a channel of the contract, and every type it names exists there: a type
+// added to lcmtypes/ without a decoder fails here. lcm-spy decodes by the classes of the types
+// jar, which must hold one per type. SLAM_HEALTH, printed "?" before, is shown with its type.
+TEST(Logstat, DecodesEveryTypeOfTheContract) {
+  const ContractTypes types = contractTypes();
+  ASSERT_GE(types.all.size(), 12u);
+  EXPECT_EQ(types.nested, (std::set<std::string>{"feature_t", "landmark_t"}));
+  const auto r = t::run({t::binPath("omnislam-logstat"), "--list-types"}, 10);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::set<std::string> decoded;
+  std::istringstream lines(r.output);
+  for (std::string channel, type; lines >> channel >> type;) {
+    EXPECT_TRUE(types.all.count(type)) << channel << " " << type << " is not in lcmtypes/";
+    decoded.insert(type);
+  }
+  for (const std::string& type : types.all)
+    if (!types.nested.count(type)) EXPECT_TRUE(decoded.count(type)) << type << ": no decoder in logstat\n" << r.output;
+  const std::string jar = t::binPath("../java/omnislam-lcmtypes.jar");
+  if (std::filesystem::exists(jar)) {  // built when javac and lcm.jar are found (lcmtypes/CMakeLists.txt)
+    const auto listing = t::run({"unzip", "-l", jar}, 30);
+    ASSERT_EQ(listing.exit_code, 0) << listing.output;
+    for (const std::string& type : types.all)
+      EXPECT_NE(listing.output.find("omnislam/" + type + ".class"), std::string::npos) << type << " not in " << jar;
+  }
+  t::TempDir dir;
+  const std::string path = dir.file("health.lcm");
+  {
+    lcmio::LogWriter log(path);
+    slam_health_t h{};
+    h.reason = "ok";
+    h.num_particles = 10;
+    h.effective_sample_size = 9.5;
+    for (int k = 0; k < 3; ++k) {
+      h.utime = 1'000'000 + k * 100'000;
+      h.seq = k;
+      log.write(h.utime, channels::kSlamHealth, h);
+    }
+  }
+  const auto stat = t::run({t::binPath("omnislam-logstat"), path}, 10);
+  ASSERT_EQ(stat.exit_code, 0) << stat.output;
+  const std::vector<std::string> row{"SLAM_HEALTH", "slam_health_t", "3", "0", "0", "0.20", "10.00", "0.00"};
+  EXPECT_EQ(t::wordsOfLine(stat.output, "SLAM_HEALTH"), row) << stat.output;
+}

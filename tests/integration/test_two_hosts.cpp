@@ -16,7 +16,7 @@
 
 #include "eval_json.h"
 #include "netns_pair.h"
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/metrics.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "proc_util.h"

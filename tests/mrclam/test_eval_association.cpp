@@ -8,7 +8,7 @@
 #include <regex>
 
 #include "omnislam/associations_t.hpp"
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/metrics.h"
 #include "omnislam/feature_labels_t.hpp"
 #include "omnislam/features_t.hpp"
 #include "omnislam/lcmio/channels.h"

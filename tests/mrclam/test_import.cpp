@@ -187,10 +187,10 @@ TEST(MrclamImport, TruthLandmarksForLocalisationInTheTrueMap) {
   EXPECT_EQ(L[1].id, 7u);
   EXPECT_DOUBLE_EQ(L[1].p_LinW_m.x(), -1.0);
   // A saved map the SLAM process loads back unchanged.
-  slamproc::SavedMap m;
+  runtime::SavedMap m;
   m.landmarks = L;
-  slamproc::saveMapAtomically(m, d.file("truth_map.yaml"));
-  const slamproc::SavedMap back = slamproc::loadMap(d.file("truth_map.yaml"));
+  runtime::saveMapAtomically(m, d.file("truth_map.yaml"));
+  const runtime::SavedMap back = runtime::loadMap(d.file("truth_map.yaml"));
   ASSERT_EQ(back.landmarks.size(), 2u);
   EXPECT_EQ(back.landmarks[1].p_LinW_m, L[1].p_LinW_m);
   EXPECT_EQ(back.landmarks[1].cov_LinW_m2, L[1].cov_LinW_m2);

@@ -20,7 +20,7 @@
 
 #include "omnislam/runtime/atomic_file.h"
 
-using namespace omnislam::slamproc;
+using namespace omnislam::runtime;
 namespace fs = std::filesystem;
 
 namespace {

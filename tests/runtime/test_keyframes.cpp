@@ -9,7 +9,7 @@
 #include "omnislam/runtime/slam_driver.h"
 
 using namespace omnislam;
-using namespace omnislam::slamproc;
+using namespace omnislam::runtime;
 
 namespace {
 

@@ -11,7 +11,7 @@
 #include "omnislam/config/yaml_node.h"
 
 using namespace omnislam;
-using namespace omnislam::slamproc;
+using namespace omnislam::runtime;
 namespace fs = std::filesystem;
 
 namespace {

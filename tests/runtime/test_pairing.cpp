@@ -7,7 +7,7 @@
 #include "omnislam/runtime/pairing.h"
 
 using namespace omnislam;
-using namespace omnislam::slamproc;
+using namespace omnislam::runtime;
 
 namespace {
 

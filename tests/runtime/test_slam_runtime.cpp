@@ -21,7 +21,7 @@
 #include "slam_inputs.h"
 
 using namespace omnislam;
-using namespace omnislam::slamproc;
+using namespace omnislam::runtime;
 using namespace omnislam::testing;
 
 namespace {

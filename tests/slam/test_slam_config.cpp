@@ -1,4 +1,4 @@
-// The SLAM process config (config/slam/*.yaml, common/config/include/omnislam/config/slam_config.h): the shipped file
+// The SLAM process config (config/slam/*.yaml, common/config/include/omnislam/runtime/slam_config.h): the shipped file
 // loads with the paper's values, and every mistake names its key.
 #include <gtest/gtest.h>
 
@@ -9,11 +9,11 @@
 #include <sstream>
 
 #include "omnislam/core/angles.h"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 #include "omnislam/core/slam/options_table.h"
 
 using namespace omnislam;
-using namespace omnislam::slamproc;
+using namespace omnislam::runtime;
 
 namespace {
 
@@ -161,7 +161,7 @@ namespace {
 // the same checks as in the file; a malformed override is named.
 TEST(SlamConfig, OverridesApplyOnTopOfTheFile) {
   const std::string file = std::string(OMNISLAM_SOURCE_DIR) + "/config/slam/sports_hall.yaml";
-  using omnislam::slamproc::loadSlamOptions;
+  using omnislam::runtime::loadSlamOptions;
   const auto base = loadSlamOptions(file);
   const auto o = loadSlamOptions(file, {"filter.resample_ess_fraction=0.25", "filter.association=ml",
                                         "filter.perception.default_camera_position_m=[0, 0, 2]",
@@ -217,7 +217,7 @@ TEST(SlamConfig, FileErrorsKeepTheirLineBesideOverrides) {
   const std::string file = ::testing::TempDir() + "/slam_config_bad_particles.yaml";
   std::ofstream(file) << body;
   try {
-    omnislam::slamproc::loadSlamOptions(file, {"filter.resample_ess_fraction=0.25"});
+    omnislam::runtime::loadSlamOptions(file, {"filter.resample_ess_fraction=0.25"});
     ADD_FAILURE() << "particles: -4 accepted";
   } catch (const omnislam::config::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("got -4 (line " + std::to_string(line) + ")"), std::string::npos) << e.what();

@@ -1,4 +1,4 @@
-// The options tables of the SLAM config's own sections (omnislam/config/slam_options_table.h and the
+// The options tables of the SLAM config's own sections (omnislam/runtime/slam_options_table.h and the
 // pairing's, omnislam/runtime/pairing_options_table.h) drive the parser, SlamProcessOptions::validate()
 // and the start-up echo: every numeric key accepts its range's end and refuses beyond it naming the
 // key, the member beyond its range fails validate() naming the field, every key of every shipped
@@ -17,14 +17,14 @@
 #include <utility>
 #include <vector>
 
-#include "omnislam/config/slam_config.h"
-#include "omnislam/config/slam_options_table.h"
+#include "omnislam/runtime/slam_config.h"
+#include "omnislam/runtime/slam_options_table.h"
 #include "omnislam/core/angles.h"
 #include "omnislam/core/slam/options_table.h"
 #include "omnislam/runtime/pairing_options_table.h"
 
 using namespace omnislam;
-using namespace omnislam::slamproc;
+using namespace omnislam::runtime;
 using options::Kind;
 
 namespace {

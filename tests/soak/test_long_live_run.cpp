@@ -17,7 +17,7 @@
 #include <sstream>
 #include <thread>
 
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/metrics.h"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"
 #include "eval_json.h"

@@ -96,7 +96,7 @@ std::vector<uint8_t> encoded(const Msg& m) {
 using InputMessage = std::variant<odometry_t, features_t>;
 
 /// `m` fed to the driver on its stream.
-inline slamproc::DriverResult feedDriver(slamproc::SlamDriver& d, const InputMessage& m) {
+inline runtime::DriverResult feedDriver(runtime::SlamDriver& d, const InputMessage& m) {
   if (const auto* o = std::get_if<odometry_t>(&m)) return d.onOdometry(*o);
   return d.onFeatures(std::get<features_t>(m));
 }

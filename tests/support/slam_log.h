@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/metrics.h"
 #include "omnislam/features_t.hpp"
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/lcmio/log_reader.h"

@@ -1,21 +1,34 @@
-// omnislam-config-table: prints the SLAM config's keys as the Markdown tables of
-// docs/user/slam-process.md, generated from the options tables (scripts/check-config-docs.py compares).
-//   omnislam-config-table filter    the `filter.*` keys
-//   omnislam-config-table process   every other key (seed, start_pose.*, features.*, ...)
+// omnislam-config-table: prints config keys as the Markdown tables of the docs, generated from the
+// options tables (scripts/check-config-docs.py compares them with the pages' generated blocks).
+//   omnislam-config-table filter                   the SLAM's `filter.*` keys (docs/user/slam-process.md)
+//   omnislam-config-table process                  the SLAM's other keys (seed, start_pose.*, features.*, ...)
+//   omnislam-config-table lights                   the features config's `ceiling_lights.*` (docs/design/detectors.md)
+//   omnislam-config-table lines                    its `vertical_lines.*`
+//   omnislam-config-table world_camera             a world file's Pajdla-Bakstein camera (docs/user/world-file.md)
+//   omnislam-config-table world_camera_scaramuzza  a world file's Scaramuzza camera keys with a default
+#include <functional>
 #include <iostream>
+#include <map>
 #include <string>
 
-#include "omnislam/config/slam_config.h"
+#include "detector_options_table.h"
+#include "omnislam/config/world_camera_table.h"
+#include "omnislam/runtime/slam_config.h"
 
 int main(int argc, char** argv) {
-  const std::string which = argc == 2 ? argv[1] : "";
-  if (which == "filter") {
-    std::cout << omnislam::slamproc::filterKeysMarkdown();
-  } else if (which == "process") {
-    std::cout << omnislam::slamproc::processKeysMarkdown();
-  } else {
-    std::cerr << "usage: omnislam-config-table filter|process (the keys of docs/user/slam-process.md)\n";
+  const std::map<std::string, std::function<std::string()>> tables{
+      {"filter", omnislam::runtime::filterKeysMarkdown},
+      {"process", omnislam::runtime::processKeysMarkdown},
+      {"lights", omnislam::features::lightsKeysMarkdown},
+      {"lines", omnislam::features::linesKeysMarkdown},
+      {"world_camera", omnislam::config::worldCameraKeysMarkdown},
+      {"world_camera_scaramuzza", omnislam::config::worldScaramuzzaKeysMarkdown},
+  };
+  const auto it = tables.find(argc == 2 ? argv[1] : "");
+  if (it == tables.end()) {
+    std::cerr << "usage: omnislam-config-table filter|process|lights|lines|world_camera|world_camera_scaramuzza\n";
     return 2;
   }
+  std::cout << it->second();
   return 0;
 }

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/metrics.h"
 
 namespace omnislam::evaltool {
 

@@ -184,7 +184,7 @@ void writeTum(const std::string& path, const std::vector<eval::TimedPose>& poses
     f << p.utime * 1e-6 << " " << p.pose.x_m << " " << p.pose.y_m << " 0 0 0 " << std::sin(0.5 * p.pose.theta_rad)
       << " " << std::cos(0.5 * p.pose.theta_rad) << "\n";
   const std::string text = f.str();
-  slamproc::writeFileAtomically(path, text.data(), text.size());
+  runtime::writeFileAtomically(path, text.data(), text.size());
 }
 
 void writePlots(const Scores& s, const LogContent& c, const std::string& log, const std::string& prefix) {

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "eval_log.h"
-#include "omnislam/core/eval/coverage.h"
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/coverage.h"
+#include "omnislam/eval/metrics.h"
 
 namespace omnislam::evaltool {
 

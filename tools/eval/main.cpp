@@ -17,8 +17,8 @@
 
 #include "eval_log.h"
 #include "eval_report.h"
-#include "omnislam/core/eval/coverage.h"
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/coverage.h"
+#include "omnislam/eval/metrics.h"
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
 

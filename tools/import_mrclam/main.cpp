@@ -16,7 +16,7 @@
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
 #include "omnislam/lcmio/log_writer.h"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 
 using namespace omnislam;
 
@@ -55,10 +55,33 @@ void writeSlamConfig(const std::string& tmpl, const std::string& out_path, const
     << em.c_str() << "\n";
   try {
     const std::string text = f.str();
-    slamproc::writeFileAtomically(out_path, text.data(), text.size());
+    runtime::writeFileAtomically(out_path, text.data(), text.size());
   } catch (const std::exception& e) {
     throw std::runtime_error(std::string("--slam-config-out: ") + e.what());
   }
+}
+
+/// The import options the flags give in other units or forms: degrees, the duplicate-times policy,
+/// the camera position (x y z) and the still-frame thresholds (M DEG), each when given.
+void finishOptions(mrclam::ImportOptions& o, double sigma_deg, const std::string& dup, const std::vector<double>& cam,
+                   const std::vector<double>& still) {
+  o.bearing_sigma_rad = deg2rad(sigma_deg);
+  o.duplicate_times = dup == "keep-last" ? mrclam::DuplicateTimes::kKeepLast : mrclam::DuplicateTimes::kError;
+  if (!cam.empty()) o.camera_position_m = {cam[0], cam[1], cam[2]};
+  if (!still.empty()) {
+    o.still_frame_m = still[0];
+    o.still_frame_rad = deg2rad(still[1]);
+  }
+}
+
+/// The dataset's true landmarks as a saved map at `utime`: localisation in the true map separates
+/// localisation (association, clutter, odometry) from mapping.
+void writeTruthMap(const std::string& dir, int64_t utime, const std::string& path) {
+  runtime::SavedMap m;
+  m.utime = utime;
+  m.landmarks = mrclam::truthLandmarks(dir);
+  runtime::saveMapAtomically(m, path);
+  std::cerr << "[import-mrclam] wrote the true map (" << m.landmarks.size() << " landmarks) to " << path << std::endl;
 }
 
 }  // namespace
@@ -102,16 +125,10 @@ int main(int argc, char** argv) {
   return app::runMain("omnislam-import-mrclam", [&]() -> int {
     if (tmpl.empty() != cfg_out.empty())
       throw std::invalid_argument("--slam-config-template and --slam-config-out go together");
-    o.bearing_sigma_rad = deg2rad(sigma_deg);
-    o.duplicate_times = dup == "keep-last" ? mrclam::DuplicateTimes::kKeepLast : mrclam::DuplicateTimes::kError;
-    if (!cam.empty()) o.camera_position_m = {cam[0], cam[1], cam[2]};
-    if (!still.empty()) {
-      o.still_frame_m = still[0];
-      o.still_frame_rad = deg2rad(still[1]);
-    }
+    finishOptions(o, sigma_deg, dup, cam, still);
     if (!tmpl.empty())  // the first processed frame depends on the SLAM process's pairing gap; the
                         // SLAM process's own parser checks the template (a bad key: exit 2, naming it)
-      o.max_odometry_gap_s = static_cast<double>(slamproc::loadSlamOptions(tmpl).pairing.max_odometry_gap_us) * 1e-6;
+      o.max_odometry_gap_s = static_cast<double>(runtime::loadSlamOptions(tmpl).pairing.max_odometry_gap_us) * 1e-6;
     const auto log = mrclam::importRobot(dir, o);
     writeLog(out, log);
     std::cerr << "[import-mrclam] robot " << o.robot << " of " << dir << " -> " << out << " (" << log.events.size()
@@ -121,15 +138,7 @@ int main(int argc, char** argv) {
       writeSlamConfig(tmpl, cfg_out, log.report, dir, o.robot);
       std::cerr << "[import-mrclam] wrote " << cfg_out << std::endl;
     }
-    if (!truth_map_out.empty()) {
-      // Localisation in the true map separates localisation (association, clutter, odometry) from mapping.
-      slamproc::SavedMap m;
-      m.utime = log.report.start_frame_utime;
-      m.landmarks = mrclam::truthLandmarks(dir);
-      slamproc::saveMapAtomically(m, truth_map_out);
-      std::cerr << "[import-mrclam] wrote the true map (" << m.landmarks.size() << " landmarks) to " << truth_map_out
-                << std::endl;
-    }
+    if (!truth_map_out.empty()) writeTruthMap(dir, log.report.start_frame_utime, truth_map_out);
     return app::kOk;
   });
 }

@@ -19,6 +19,7 @@
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
+#include "omnislam/slam_health_t.hpp"
 
 namespace omnislam::tools {
 namespace {
@@ -130,21 +131,27 @@ class Accumulator {
 
   LogSummary summary;
 
+  /// One contract channel (PROCESS_STATUS apart: tracked per process) and how its events are accounted.
+  struct Decoder {
+    const char* channel;
+    const char* (*type)();  ///< the decoded type's name
+    bool (Accumulator::*account)(const lcmio::LogEvent&, ChannelStats&, const std::string&);
+  };
+  template <class Msg>
+  static Decoder row(const char* channel) {
+    return {channel, &Msg::getTypeName, &Accumulator::accountTracked<Msg>};
+  }
+  static const std::vector<Decoder>& decoders();
+
  private:
   /// Accounts an event of a contract channel; false for a channel not in the contract.
   bool accountByChannel(const lcmio::LogEvent& ev, ChannelStats& s, const std::string& track, bool& ok) {
-    namespace ch = channels;
-    const std::string& c = ev.channel;
-    if (c == ch::kOmniImage) ok = accountTracked<image_t>(ev, s, track);
-    else if (c == ch::kOmniFeatures) ok = accountTracked<features_t>(ev, s, track);
-    else if (c == ch::kOdometry) ok = accountTracked<odometry_t>(ev, s, track);
-    else if (c == ch::kSlamPose || c == ch::kGroundTruthPose) ok = accountTracked<pose_t>(ev, s, track);
-    else if (c == ch::kSlamMap || c == ch::kGroundTruthMap) ok = accountTracked<map_t>(ev, s, track);
-    else if (c == ch::kSlamParticles) ok = accountTracked<particles_t>(ev, s, track);
-    else if (c == ch::kSlamAssociations) ok = accountTracked<associations_t>(ev, s, track);
-    else if (c == ch::kGroundTruthFeatureLabels) ok = accountTracked<feature_labels_t>(ev, s, track);
-    else return false;
-    return true;
+    for (const Decoder& d : decoders()) {
+      if (ev.channel != d.channel) continue;
+      ok = (this->*d.account)(ev, s, track);
+      return true;
+    }
+    return false;
   }
 
   /// account(), and what it counted across the gap at a publisher's first message of a new part.
@@ -170,7 +177,32 @@ class Accumulator {
   int64_t last_log_utime_ = -1;
 };
 
+// Every channel of the contract but PROCESS_STATUS (docs/user/messages.md): contractChannels() lists
+// them with their types, and the test Logstat.DecodesEveryTypeOfTheContract checks them against lcmtypes/.
+const std::vector<Accumulator::Decoder>& Accumulator::decoders() {
+  static const std::vector<Decoder> t{
+      row<image_t>(channels::kOmniImage),
+      row<features_t>(channels::kOmniFeatures),
+      row<odometry_t>(channels::kOdometry),
+      row<pose_t>(channels::kSlamPose),
+      row<pose_t>(channels::kGroundTruthPose),
+      row<map_t>(channels::kSlamMap),
+      row<map_t>(channels::kGroundTruthMap),
+      row<particles_t>(channels::kSlamParticles),
+      row<associations_t>(channels::kSlamAssociations),
+      row<slam_health_t>(channels::kSlamHealth),
+      row<feature_labels_t>(channels::kGroundTruthFeatureLabels),
+  };
+  return t;
+}
+
 }  // namespace
+
+std::vector<std::pair<std::string, std::string>> contractChannels() {
+  std::vector<std::pair<std::string, std::string>> out{{channels::kProcessStatus, process_status_t::getTypeName()}};
+  for (const auto& d : Accumulator::decoders()) out.emplace_back(d.channel, d.type());
+  return out;
+}
 
 LogSummary logStats(const std::string& path) { return logStats(std::vector<std::string>{path}); }
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "omnislam/process_status_t.hpp"
@@ -52,6 +53,10 @@ struct LogSummary {
   std::string unreadable;     ///< "" or why a log's tail could not be read (lcmio::LogReadResult::problem), per file
   std::vector<PartGap> gaps;  ///< between consecutive files, when several are read
 };
+
+/// The channels of the contract it decodes and the type of each, PROCESS_STATUS first (a channel
+/// outside them is listed with the type "?"). `omnislam-logstat --list-types` prints them.
+std::vector<std::pair<std::string, std::string>> contractChannels();
 
 /// Reads the whole log once. Throws std::runtime_error if it cannot be opened.
 LogSummary logStats(const std::string& path);

@@ -17,6 +17,43 @@
 #include "omnislam/lcmio/image_msg.h"
 #include "omnislam/lcmio/log_reader.h"
 
+namespace {
+
+/// Writes every valid OMNI_IMAGE frame of the logs as PNG into export_dir: the exit code.
+int exportImages(const std::vector<std::string>& paths, const std::string& export_dir) {
+  std::filesystem::create_directories(export_dir);
+  int n = 0, failed = 0;
+  std::set<std::string> names;
+  for (const auto& path : paths)
+    omnislam::lcmio::forEachEvent(path, [&](const omnislam::lcmio::LogEvent& ev) {
+      if (ev.channel != omnislam::channels::kOmniImage) return;
+      // Only what a process would accept: decodeImage trusts the sizes that validate checks.
+      const auto msg = omnislam::lcmio::decodeValid<omnislam::image_t>(ev);
+      if (!msg) return;  // counted as bad in the table
+      std::string why;
+      const auto img = omnislam::lcmio::decodeImage(*msg, &why);
+      char name[96];
+      std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(msg->seq));
+      if (!names.insert(name).second)  // a repeated seq: keep both, named by the log's event number
+        std::snprintf(name, sizeof name, "/frame_%06lld_event_%lld.png", static_cast<long long>(msg->seq),
+                      static_cast<long long>(ev.event_number));
+      if (!img || !cv::imwrite(export_dir + name, *img)) {
+        std::cerr << "omnislam-logstat: "
+                  << (img ? "cannot write " + export_dir + name : "image seq " + std::to_string(msg->seq) + ": " + why)
+                  << "\n";
+        ++failed;
+        return;
+      }
+      ++n;
+    });
+  std::cout << n << " images written to " << export_dir;
+  if (failed > 0) std::cout << ", " << failed << " could not be (stderr)";
+  std::cout << "\n";
+  return failed > 0 ? omnislam::app::kFailure : 0;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App cli{"omnislam-logstat: per-channel statistics of an omnislam LCM log"};
   std::vector<std::string> paths;
@@ -27,6 +64,15 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   std::string export_dir;
   cli.add_option("--export-images", export_dir, "also write every OMNI_IMAGE frame as PNG into this folder");
+  // A callback runs before the check of required options: --list-types needs no log.
+  cli.add_flag_callback(
+      "--list-types",
+      [] {
+        for (const auto& [channel, type] : omnislam::tools::contractChannels())
+          std::cout << channel << " " << type << "\n";
+        throw CLI::Success();
+      },
+      "print each channel of the contract it decodes and its message type, one per line, and exit");
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
   return omnislam::app::runMain("omnislam-logstat", [&]() -> int {
     const auto summary = omnislam::tools::logStats(paths);
@@ -37,38 +83,7 @@ int main(int argc, char** argv) {
     const std::string processes = omnislam::tools::formatProcesses(summary.processes);
     if (!processes.empty()) std::cout << "\n" << processes;
     if (!summary.unreadable.empty()) std::cout << "\nwarning: " << summary.unreadable << "\n";
-    if (!export_dir.empty()) {
-      std::filesystem::create_directories(export_dir);
-      int n = 0, failed = 0;
-      std::set<std::string> names;
-      for (const auto& path : paths)
-        omnislam::lcmio::forEachEvent(path, [&](const omnislam::lcmio::LogEvent& ev) {
-          if (ev.channel != omnislam::channels::kOmniImage) return;
-          // Only what a process would accept: decodeImage trusts the sizes that validate checks.
-          const auto msg = omnislam::lcmio::decodeValid<omnislam::image_t>(ev);
-          if (!msg) return;  // counted as bad in the table
-          std::string why;
-          const auto img = omnislam::lcmio::decodeImage(*msg, &why);
-          char name[96];
-          std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(msg->seq));
-          if (!names.insert(name).second)  // a repeated seq: keep both, named by the log's event number
-            std::snprintf(name, sizeof name, "/frame_%06lld_event_%lld.png", static_cast<long long>(msg->seq),
-                          static_cast<long long>(ev.event_number));
-          if (!img || !cv::imwrite(export_dir + name, *img)) {
-            std::cerr << "omnislam-logstat: "
-                      << (img ? "cannot write " + export_dir + name
-                              : "image seq " + std::to_string(msg->seq) + ": " + why)
-                      << "\n";
-            ++failed;
-            return;
-          }
-          ++n;
-        });
-      std::cout << n << " images written to " << export_dir;
-      if (failed > 0) std::cout << ", " << failed << " could not be (stderr)";
-      std::cout << "\n";
-      if (failed > 0) return omnislam::app::kFailure;
-    }
+    if (!export_dir.empty()) return exportImages(paths, export_dir);
     return 0;
   });
 }

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <set>
 
+#include "omnislam/config/options_parse.h"
+#include "omnislam/config/world_camera_table.h"
 #include "omnislam/core/angles.h"
 #include "omnislam/core/limits.h"
 
@@ -110,64 +112,52 @@ std::vector<double> fitInvpol(camera::ScaramuzzaParams p) {
   return std::vector<double>(x.data(), x.data() + x.size());
 }
 
+/// The Scaramuzza model of a room world: polynomials, size and distortion centre by hand (their
+/// ranges depend on each other), the other keys through scaramuzzaFields().
+camera::ScaramuzzaParams parseScaramuzza(const Node& n) {
+  camera::ScaramuzzaParams p;
+  p.optics = n.getEnum("optics", {"catadioptric", "dioptric"}, "catadioptric") == "catadioptric"
+                 ? camera::OcamOptics::kCatadioptric
+                 : camera::OcamOptics::kDioptric;
+  p.pol = n.getDoubles("pol", n.getStrings("pol").size(), -1e6, 1e6);
+  if (p.pol.size() < 2 || p.pol.size() > 16)
+    throw ConfigError(n.where("pol") + " must have 2 to 16 coefficients (got " + std::to_string(p.pol.size()) + ")");
+  p.width_px = static_cast<int>(n.getInt("width_px", 16, 8192));
+  p.height_px = static_cast<int>(n.getInt("height_px", 16, 8192));
+  p.xc_row_px = n.getDouble("xc_row_px", -0.5, p.height_px - 0.5);
+  p.yc_col_px = n.getDouble("yc_col_px", -0.5, p.width_px - 0.5);
+  parseFields(n, p, scaramuzzaFields());
+  if (!(p.max_elevation_rad > p.min_elevation_rad))
+    throw ConfigError(n.where("max_elevation_deg") + " must be > min_elevation_deg");
+  if (n.has("invpol")) {
+    p.invpol = n.getDoubles("invpol", n.getStrings("invpol").size(), -1e6, 1e6);
+    if (p.invpol.size() > 64) throw ConfigError(n.where("invpol") + " must have 1 to 64 coefficients");
+  } else {
+    p.invpol = {1.0};
+    if (auto err = camera::ScaramuzzaCamera::validate(p))
+      throw ConfigError(n.where("pol") + " (camera model): " + *err);
+    p.invpol = fitInvpol(p);
+  }
+  if (auto err = camera::ScaramuzzaCamera::validate(p)) throw ConfigError(n.where("pol") + " (camera model): " + *err);
+  return p;
+}
+
 sim::CameraSetup parseCamera(const Node& n) {
   sim::CameraSetup c;
   const std::string model = n.getEnum("model", {"pajdla_bakstein", "scaramuzza"}, "pajdla_bakstein");
   if (model == "scaramuzza") {
-    n.rejectUnknownKeys({"name", "model", "optics", "pol", "invpol", "xc_row_px", "yc_col_px", "affine_c", "affine_d",
-                         "affine_e", "width_px", "height_px", "min_radius_px", "max_radius_px", "min_elevation_deg",
-                         "max_elevation_deg", "mounting"});
+    n.rejectUnknownKeysIn(keysOf(scaramuzzaFields(), {"name", "model", "optics", "pol", "invpol", "xc_row_px",
+                                                      "yc_col_px", "width_px", "height_px", "mounting"}));
     c.name = n.getString("name", "catadioptric");
     c.model = sim::CameraModelKind::kScaramuzza;
-    auto& p = c.scaramuzza;
-    p.optics = n.getEnum("optics", {"catadioptric", "dioptric"}, "catadioptric") == "catadioptric"
-                   ? camera::OcamOptics::kCatadioptric
-                   : camera::OcamOptics::kDioptric;
-    p.pol = n.getDoubles("pol", n.getStrings("pol").size(), -1e6, 1e6);
-    if (p.pol.size() < 2 || p.pol.size() > 16)
-      throw ConfigError(n.where("pol") + " must have 2 to 16 coefficients (got " + std::to_string(p.pol.size()) + ")");
-    p.width_px = static_cast<int>(n.getInt("width_px", 16, 8192));
-    p.height_px = static_cast<int>(n.getInt("height_px", 16, 8192));
-    p.xc_row_px = n.getDouble("xc_row_px", -0.5, p.height_px - 0.5);
-    p.yc_col_px = n.getDouble("yc_col_px", -0.5, p.width_px - 0.5);
-    p.c = n.getDouble("affine_c", 0.5, 2.0, 1.0);
-    p.d = n.getDouble("affine_d", -0.5, 0.5, 0.0);
-    p.e = n.getDouble("affine_e", -0.5, 0.5, 0.0);
-    p.min_radius_px = n.getDouble("min_radius_px", 0.0, 1e4, 0.0);
-    if (n.has("max_radius_px")) p.max_radius_px = n.getDouble("max_radius_px", 1.0, 1e4);
-    p.min_elevation_rad = deg2rad(n.getDouble("min_elevation_deg", -90.0, 90.0, -90.0));
-    p.max_elevation_rad = deg2rad(n.getDouble("max_elevation_deg", -90.0, 90.0, 90.0));
-    if (!(p.max_elevation_rad > p.min_elevation_rad))
-      throw ConfigError(n.where("max_elevation_deg") + " must be > min_elevation_deg");
-    if (n.has("invpol")) {
-      p.invpol = n.getDoubles("invpol", n.getStrings("invpol").size(), -1e6, 1e6);
-      if (p.invpol.size() > 64) throw ConfigError(n.where("invpol") + " must have 1 to 64 coefficients");
-    } else {
-      p.invpol = {1.0};
-      if (auto err = camera::ScaramuzzaCamera::validate(p))
-        throw ConfigError(n.where("pol") + " (camera model): " + *err);
-      p.invpol = fitInvpol(p);
-    }
-    if (auto err = camera::ScaramuzzaCamera::validate(p))
-      throw ConfigError(n.where("pol") + " (camera model): " + *err);
+    c.scaramuzza = parseScaramuzza(n);
     c.mounting = parseMounting(n);
     return c;
   }
-  n.rejectUnknownKeys({"name", "model", "a_px", "b", "c_px", "d", "u0_px", "v0_px", "beta", "width_px", "height_px",
-                       "max_zenith_deg", "mounting"});
+  n.rejectUnknownKeysIn(keysOf(pajdlaBaksteinFields(), {"name", "model", "mounting"}));
   c.name = n.getString("name", "fisheye");
-  auto& p = c.intrinsics;
-  p.a_px = n.getDouble("a_px", -1e5, 1e5, p.a_px);
-  p.b = n.getDouble("b", 1e-3, 1e3, p.b);
-  p.c_px = n.getDouble("c_px", -1e5, 1e5, p.c_px);
-  p.d = n.getDouble("d", 1e-3, 1e3, p.d);
-  p.u0_px = n.getDouble("u0_px", -1e4, 1e5, p.u0_px);
-  p.v0_px = n.getDouble("v0_px", -1e4, 1e5, p.v0_px);
-  p.beta = n.getDouble("beta", 0.1, 10.0, p.beta);
-  p.width_px = static_cast<int>(n.getInt("width_px", 16, 8192, p.width_px));
-  p.height_px = static_cast<int>(n.getInt("height_px", 16, 8192, p.height_px));
-  p.max_zenith_rad = deg2rad(n.getDouble("max_zenith_deg", 1.0, 179.0, rad2deg(p.max_zenith_rad)));
-  if (auto err = camera::PajdlaBaksteinCamera::validate(p))
+  parseFields(n, c.intrinsics, pajdlaBaksteinFields());
+  if (auto err = camera::PajdlaBaksteinCamera::validate(c.intrinsics))
     throw ConfigError(n.where("a_px") + " (camera model): " + *err);
   c.mounting = parseMounting(n);
   return c;

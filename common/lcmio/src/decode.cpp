@@ -110,6 +110,14 @@ std::optional<std::string> checkEncodedLengths(const process_status_t*, const ui
   return w.error;
 }
 
+std::optional<std::string> checkEncodedLengths(const slam_health_t*, const uint8_t* body, size_t size) {
+  Walk w(body, size);
+  // utime, seq, input_seq, state; reason; fallback, num_particles, effective_sample_size, resampled,
+  // the 6 NIS and 4 departure doubles, divergence_threshold, exceedances.
+  w.skip(3 * 8 + 1).str("reason").skip(1 + 4 + 8 + 1 + 6 * 8 + 4 * 8 + 8 + 4);
+  return w.error;
+}
+
 std::optional<std::string> checkEncodedLengths(const slam_trajectory_t*, const uint8_t* body, size_t size) {
   Walk w(body, size);
   w.skip(4 * 8 + 1).str("failure").skip(4 * 4 + 8 + 1);

@@ -63,17 +63,29 @@ bool LogReader::stop(const std::string& why) {
   return false;
 }
 
+size_t LogReader::readHeader(unsigned char* h) {
+  if (!synced_) return std::fread(h, 1, kHeaderBytes, f_);
+  // The sync word was read after the previous event.
+  for (int i = 0; i < 4; ++i) h[i] = static_cast<unsigned char>(kSyncWord >> (8 * (3 - i)));
+  synced_ = false;
+  return 4 + std::fread(h + 4, 1, kHeaderBytes - 4, f_);
+}
+
+bool LogReader::readData(size_t bytes, std::vector<uint8_t>& data) {
+  const size_t chunk = sized_ ? bytes : size_t{1} << 20;
+  while (data.size() < bytes) {
+    const size_t have = data.size();
+    const size_t want = std::min(chunk, bytes - have);
+    data.resize(have + want);
+    if (std::fread(data.data() + have, 1, want, f_) != want) return false;
+  }
+  return true;
+}
+
 bool LogReader::next(LogEvent& ev) {
   if (done_) return false;
   unsigned char h[kHeaderBytes];
-  size_t got = 0;
-  if (synced_) {  // the sync word was read after the previous event
-    for (int i = 0; i < 4; ++i) h[i] = static_cast<unsigned char>(kSyncWord >> (8 * (3 - i)));
-    got = 4 + std::fread(h + 4, 1, sizeof h - 4, f_);
-    synced_ = false;
-  } else {
-    got = std::fread(h, 1, sizeof h, f_);
-  }
+  const size_t got = readHeader(h);
   if (got == 0 && std::feof(f_)) {
     done_ = true;
     if (!sized_) result_.file_bytes = result_.bytes_read;
@@ -99,13 +111,7 @@ bool LogReader::next(LogEvent& ev) {
   // Checked against the file's size, the data is allocated at once; from a pipe it grows by at most
   // 1 MiB ahead of what has arrived, so a corrupt length costs no more memory than the input.
   std::vector<uint8_t> data;
-  const size_t chunk = sized_ ? static_cast<size_t>(data_bytes) : size_t{1} << 20;
-  while (data.size() < static_cast<size_t>(data_bytes)) {
-    const size_t have = data.size();
-    const size_t want = std::min(chunk, static_cast<size_t>(data_bytes) - have);
-    data.resize(have + want);
-    if (std::fread(data.data() + have, 1, want, f_) != want) return stop("an event cut short" + at);
-  }
+  if (!readData(static_cast<size_t>(data_bytes), data)) return stop("an event cut short" + at);
   // As LCM's reader: an event must be followed by the next one's sync word or by the end, or its
   // lengths are not to be trusted.
   unsigned char sync[4];

@@ -55,6 +55,40 @@ void Node::report(const std::string& line) {
               << std::endl;
 }
 
+bool Node::admitTime(ChannelState& cs, const std::string& channel, int64_t utime, const UtimeOrderOptions& order) {
+  const int64_t restarts = cs.time.restarts(), strays = cs.time.strays();
+  const auto why = cs.time.admit(utime, order);
+  counters_.utime_strays += cs.time.strays() - strays;
+  if (why) {
+    reject(channel, *why);
+    return false;
+  }
+  if (cs.time.restarts() != restarts) {
+    ++counters_.utime_restarts;
+    report(channel + ": " + cs.time.lastRestart());
+  }
+  return true;
+}
+
+bool Node::callHandler(ChannelState& cs, ChannelState before, const std::string& channel,
+                       const std::function<void()>& call) {
+  try {
+    call();
+    return true;
+  } catch (const Refused& e) {
+    cs = std::move(before);
+    ++counters_.implausible;
+    reject(channel, e.what());
+  } catch (const std::exception& e) {
+    cs = std::move(before);
+    reject(channel, std::string("handling it failed: ") + e.what());
+  } catch (...) {
+    cs = std::move(before);
+    reject(channel, "handling it failed: an unknown exception");
+  }
+  return false;
+}
+
 void Node::reject(const std::string& channel, const std::string& reason) {
   ++counters_.rejected_inputs;
   counters_.last_error = oneLine(channel + ": " + reason);

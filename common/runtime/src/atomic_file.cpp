@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 namespace {
 
@@ -85,4 +85,4 @@ std::vector<std::uint8_t> readWholeFile(const std::string& path) {
   return out;
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <chrono>
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 namespace {
 
@@ -110,4 +110,4 @@ std::optional<BackEndReport> BackEndRunner::afterStep(slam::FastSlam& filter, sm
   return report;
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 namespace {
 
@@ -352,4 +352,4 @@ bool CheckpointSchedule::due(int64_t step_utime) {
   return true;
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

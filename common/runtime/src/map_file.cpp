@@ -11,7 +11,7 @@
 #include "omnislam/config/yaml_node.h"
 #include "omnislam/runtime/atomic_file.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 namespace {
 
@@ -83,4 +83,4 @@ SavedMap loadMap(const std::string& path) {
   return m;
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -3,7 +3,7 @@
 
 #include "omnislam/features_t.hpp"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 map_t toMapMessage(const std::vector<slam::Landmark>& landmarks, std::size_t num_candidates, std::int64_t utime,
                    std::int64_t seq, std::int64_t input_seq) {
@@ -29,4 +29,4 @@ map_t toMapMessage(const std::vector<slam::Landmark>& landmarks, std::size_t num
   return m;
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -6,7 +6,7 @@
 
 #include "omnislam/runtime/pairing_options_table.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 namespace {
 std::string us(int64_t v) { return std::to_string(v); }
@@ -394,4 +394,4 @@ void Pairer::decide(std::vector<PairEvent>& out, bool at_end) {
   }
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

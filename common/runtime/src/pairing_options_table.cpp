@@ -2,7 +2,7 @@
 // those of docs/user/slam-process.md, "Pairing rules".
 #include "omnislam/runtime/pairing_options_table.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 const std::vector<options::Field<PairingOptions>>& pairingFields() {
   using options::integer, options::real, options::seconds;
@@ -25,4 +25,4 @@ const std::vector<options::Field<PairingOptions>>& pairingFields() {
   return t;
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

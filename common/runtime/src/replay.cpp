@@ -21,7 +21,7 @@
 #include "omnislam/lcmio/validate.h"
 #include "omnislam/runtime/slam_runtime.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 namespace {
 
@@ -234,4 +234,4 @@ bool runReplay(const SlamProcessOptions& options, std::vector<slam::Landmark> pr
   return checkpoint_ok;
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 std::optional<slam::BearingMeasurement> toMeasurement(const feature_t& f, const double camera_position_m[3],
                                                       const SlamProcessOptions& options) {
@@ -121,6 +121,16 @@ std::string num(double v) {
   o << v;
   return o.str();
 }
+
+/// The pose and its covariance (x, y in metres, theta in radians) written into p.
+void setPose(pose_t& p, const Pose2& pose_W, const Eigen::Matrix3d& cov) {
+  p.x_m = pose_W.x_m;
+  p.y_m = pose_W.y_m;
+  p.theta_rad = pose_W.theta_rad;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) p.covariance[i][j] = cov(i, j);
+}
+
 }  // namespace
 
 std::optional<std::string> SlamDriver::checkOdometry(const odometry_t& msg) {
@@ -320,12 +330,7 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
     out.map = toMapMessage(filter_->bestMap(), filter_->bestCandidateCount(), frame.utime, map_seq_++, frame.seq);
   }
 
-  associations_t a{};
-  a.utime = frame.utime;
-  a.seq = associations_seq_++;
-  a.input_seq = frame.seq;
-  a.num_features = frame.num_features;
-  a.landmark_id.assign(static_cast<std::size_t>(frame.num_features), +associations_t::NOT_USED);
+  associations_t a = associationsFor(frame);
   for (std::size_t k = 0; k < frame.feature_index.size(); ++k) {
     const std::int64_t id = k < sr.landmark_of_measurement.size() ? sr.landmark_of_measurement[k] : -1;
     const bool refused = k < sr.measurement_refused.size() && sr.measurement_refused[k];
@@ -346,20 +351,20 @@ FrameOutput SlamDriver::betweenKeyframes(const Frame& frame, const Pose2& odom_O
   FrameOutput out = makeOutput(frame.utime, frame.seq, filter_->ess(), &u);
   if (const auto fallback = health_.fallbackAt(odom_O)) {  // health.policy fallback_odometry while diverged
     ++stats_.health_fallback;
-    out.pose.x_m = fallback->first.x_m;
-    out.pose.y_m = fallback->first.y_m;
-    out.pose.theta_rad = fallback->first.theta_rad;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) out.pose.covariance[i][j] = fallback->second(i, j);
+    setPose(out.pose, fallback->first, fallback->second);
   }
+  out.associations = associationsFor(frame);
+  return out;
+}
+
+associations_t SlamDriver::associationsFor(const Frame& frame) {
   associations_t a{};
   a.utime = frame.utime;
   a.seq = associations_seq_++;
   a.input_seq = frame.seq;
   a.num_features = frame.num_features;
   a.landmark_id.assign(static_cast<std::size_t>(frame.num_features), +associations_t::NOT_USED);
-  out.associations = std::move(a);
-  return out;
+  return a;
 }
 
 FrameOutput SlamDriver::makeOutput(int64_t utime, int64_t input_seq, double ess, const Pose2* u) {
@@ -418,11 +423,7 @@ void SlamDriver::applyHealth(FrameOutput& out, const Pose2& odom_O, const slam::
   const slam::HealthReport r = health_.update(in);
   if (r.fallback) {  // health.policy fallback_odometry while diverged
     ++stats_.health_fallback;
-    p.x_m = r.pose_W.x_m;
-    p.y_m = r.pose_W.y_m;
-    p.theta_rad = r.pose_W.theta_rad;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) p.covariance[i][j] = r.pose_cov(i, j);
+    setPose(p, r.pose_W, r.pose_cov);
   }
   stats_.health_uncertain += r.state == slam::HealthState::kUncertain;
   stats_.health_diverged += r.state == slam::HealthState::kDiverged;
@@ -476,4 +477,4 @@ std::string SlamDriver::summary() const {
   return o.str();
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

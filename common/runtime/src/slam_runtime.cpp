@@ -10,7 +10,7 @@
 #include "omnislam/lcmio/channels.h"
 #include "omnislam/runtime/map_file.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 namespace {
 
@@ -150,4 +150,4 @@ void SlamRuntime::saveMap() const {
 
 std::string SlamRuntime::detail() const { return driver_.summary() + ckpt_.summary() + alreadyProcessedNote(clock_); }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

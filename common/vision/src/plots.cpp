@@ -48,6 +48,18 @@ std::vector<double> gridValues(double lo, double hi, double step) {
   return out;
 }
 
+/// The map plot's legend with its top-left corner near (lx, ly).
+void drawMapLegend(cv::Mat& img, int lx, int ly) {
+  cv::line(img, {lx, ly}, {lx + 25, ly}, kTruth, 2);
+  text(img, "true trajectory", {lx + 32, ly + 5}, 0.45);
+  cv::line(img, {lx, ly + 18}, {lx + 25, ly + 18}, kEst, 1);
+  text(img, "estimated trajectory", {lx + 32, ly + 23}, 0.45);
+  cv::circle(img, {lx + 12, ly + 36}, 6, kTrueLm, 1);
+  text(img, "true landmarks", {lx + 32, ly + 41}, 0.45);
+  cv::drawMarker(img, {lx + 12, ly + 54}, kLm, cv::MARKER_CROSS, 10, 2);
+  text(img, "estimated (2-sigma)", {lx + 32, ly + 59}, 0.45);
+}
+
 }  // namespace
 
 cv::Mat renderMapPlot(const MapPlot& plot, int W, int H) {
@@ -101,15 +113,7 @@ cv::Mat renderMapPlot(const MapPlot& plot, int W, int H) {
     }
   }
   text(img, plot.title, {left, 24}, 0.6);
-  const int lx = W - 260, ly = 20;
-  cv::line(img, {lx, ly}, {lx + 25, ly}, kTruth, 2);
-  text(img, "true trajectory", {lx + 32, ly + 5}, 0.45);
-  cv::line(img, {lx, ly + 18}, {lx + 25, ly + 18}, kEst, 1);
-  text(img, "estimated trajectory", {lx + 32, ly + 23}, 0.45);
-  cv::circle(img, {lx + 12, ly + 36}, 6, kTrueLm, 1);
-  text(img, "true landmarks", {lx + 32, ly + 41}, 0.45);
-  cv::drawMarker(img, {lx + 12, ly + 54}, kLm, cv::MARKER_CROSS, 10, 2);
-  text(img, "estimated (2-sigma)", {lx + 32, ly + 59}, 0.45);
+  drawMapLegend(img, W - 260, 20);
   text(img, "x [m]", {W / 2, H - 10}, 0.5);
   text(img, "y [m]", {6, top - 6}, 0.5);
   return img;

@@ -39,6 +39,53 @@ void splat(cv::Mat& acc, const Eigen::Vector2d& px, float w) {
   add(u + 1, v + 1, w * a * b);
 }
 
+/// Splats the disc of light L seen from a camera at p_CinW_m (R_CfromW its rotation) into acc, its
+/// brightness spread over its image's area; false when the disc's edge does not project.
+bool drawDisc(cv::Mat& acc, const camera::CameraModel& camera, const Eigen::Vector3d& p_CinW_m,
+              const Eigen::Matrix3d& R_CfromW, const sim::Light& L, const Eigen::Vector2d& centre_px, double peak_grey,
+              int samples) {
+  // Local area scale of the disc's image: |det| of the plane-to-pixel Jacobian, by differences.
+  const double h = 0.25 * L.radius_m;
+  const auto pu = camera.project(R_CfromW * (L.p_LinW_m + Eigen::Vector3d(h, 0, 0) - p_CinW_m));
+  const auto pv = camera.project(R_CfromW * (L.p_LinW_m + Eigen::Vector3d(0, h, 0) - p_CinW_m));
+  if (!pu || !pv) return false;
+  Eigen::Matrix2d J;
+  J.col(0) = (*pu - centre_px) / h;
+  J.col(1) = (*pv - centre_px) / h;
+  const double area_px = kPi * L.radius_m * L.radius_m * std::abs(J.determinant());
+  const int n = std::max(16, samples);
+  const float w = static_cast<float>(peak_grey * L.intensity * area_px / n);
+  for (int i = 0; i < n; ++i) {
+    const double rho = L.radius_m * std::sqrt((i + 0.5) / n);
+    const double ang = i * kGoldenAngle;
+    const Eigen::Vector3d p = L.p_LinW_m + Eigen::Vector3d(rho * std::cos(ang), rho * std::sin(ang), 0.0);
+    if (const auto px = camera.project(R_CfromW * (p - p_CinW_m))) splat(acc, *px, w);
+  }
+  return true;
+}
+
+/// Sun reflections: a Poisson number of Gaussian spots at random places inside the image (drawn
+/// from rng after the lights'); how many.
+int addFalseBlobs(cv::Mat& acc, const sim::ImageNuisance& nz, std::mt19937_64& rng,
+                  std::uniform_real_distribution<double>& u01) {
+  const int W = acc.cols, H = acc.rows;
+  std::poisson_distribution<int> nfalse(std::max(0.0, nz.false_blobs_per_frame));
+  const int nf = nz.false_blobs_per_frame > 0 ? nfalse(rng) : 0;
+  for (int i = 0; i < nf; ++i) {
+    const double cu = u01(rng) * W, cv_ = u01(rng) * H;
+    const double r = std::max(0.5, nz.false_blob_radius_px);
+    const int R = static_cast<int>(std::ceil(3 * r));
+    for (int dv = -R; dv <= R; ++dv)
+      for (int du = -R; du <= R; ++du) {
+        const int uu = static_cast<int>(cu) + du, vv = static_cast<int>(cv_) + dv;
+        if (uu < 0 || vv < 0 || uu >= W || vv >= H) continue;
+        const double d2 = (uu - cu) * (uu - cu) + (vv - cv_) * (vv - cv_);
+        acc.at<float>(vv, uu) += static_cast<float>(nz.false_blob_peak_grey * std::exp(-0.5 * d2 / (r * r)));
+      }
+  }
+  return nf;
+}
+
 }  // namespace
 
 CameraPoseInWorld cameraInWorld(const Pose2& T_RinW, const camera::CameraMounting& m) {
@@ -84,42 +131,11 @@ cv::Mat CeilingLightRenderer::render(const Pose2& T_RinW, const std::vector<sim:
       ++rep.lights_missed;
       continue;
     }
-    // Local area scale of the disc's image: |det| of the plane-to-pixel Jacobian, by differences.
-    const double h = 0.25 * L.radius_m;
-    const auto pu = camera.project(R_CfromW * (L.p_LinW_m + Eigen::Vector3d(h, 0, 0) - cam.p_CinW_m));
-    const auto pv = camera.project(R_CfromW * (L.p_LinW_m + Eigen::Vector3d(0, h, 0) - cam.p_CinW_m));
-    if (!pu || !pv) continue;
-    Eigen::Matrix2d J;
-    J.col(0) = (*pu - *centre_px) / h;
-    J.col(1) = (*pv - *centre_px) / h;
-    const double area_px = kPi * L.radius_m * L.radius_m * std::abs(J.determinant());
-    const int n = std::max(16, nz.samples_per_light);
-    const float w = static_cast<float>(nz.light_peak_grey * L.intensity * area_px / n);
-    for (int i = 0; i < n; ++i) {
-      const double rho = L.radius_m * std::sqrt((i + 0.5) / n);
-      const double ang = i * kGoldenAngle;
-      const Eigen::Vector3d p = L.p_LinW_m + Eigen::Vector3d(rho * std::cos(ang), rho * std::sin(ang), 0.0);
-      if (const auto px = camera.project(R_CfromW * (p - cam.p_CinW_m))) splat(acc, *px, w);
-    }
-    ++rep.lights_drawn;
+    if (drawDisc(acc, camera, cam.p_CinW_m, R_CfromW, L, *centre_px, nz.light_peak_grey, nz.samples_per_light))
+      ++rep.lights_drawn;
   }
 
-  // Sun reflections: a Poisson number of Gaussian spots at random places inside the image.
-  std::poisson_distribution<int> nfalse(std::max(0.0, nz.false_blobs_per_frame));
-  const int nf = nz.false_blobs_per_frame > 0 ? nfalse(rng) : 0;
-  for (int i = 0; i < nf; ++i) {
-    const double cu = u01(rng) * W, cv_ = u01(rng) * H;
-    const double r = std::max(0.5, nz.false_blob_radius_px);
-    const int R = static_cast<int>(std::ceil(3 * r));
-    for (int dv = -R; dv <= R; ++dv)
-      for (int du = -R; du <= R; ++du) {
-        const int uu = static_cast<int>(cu) + du, vv = static_cast<int>(cv_) + dv;
-        if (uu < 0 || vv < 0 || uu >= W || vv >= H) continue;
-        const double d2 = (uu - cu) * (uu - cu) + (vv - cv_) * (vv - cv_);
-        acc.at<float>(vv, uu) += static_cast<float>(nz.false_blob_peak_grey * std::exp(-0.5 * d2 / (r * r)));
-      }
-    ++rep.false_blobs;
-  }
+  rep.false_blobs += addFalseBlobs(acc, nz, rng, u01);
 
   if (nz.blur_sigma_px > 0) cv::GaussianBlur(acc, acc, cv::Size(0, 0), nz.blur_sigma_px);
 

@@ -36,28 +36,11 @@ Eigen::Matrix2d pixelToSensor(const ScaramuzzaParams& p) {
 
 }  // namespace
 
-// ---------------------------------------------------------------------------------------------
-// Model
+// Parts of ScaramuzzaCamera::validate.
+namespace {
 
-double ScaramuzzaCamera::effectiveMaxRadius(const Params& p) {
-  const Eigen::Matrix2d Q = pixelToSensor(p);
-  double rho_corner = 0.0;
-  for (const double u : {-0.5, p.width_px - 0.5}) {
-    for (const double v : {-0.5, p.height_px - 0.5}) {
-      rho_corner = std::max(rho_corner, (Q * Eigen::Vector2d(u - p.yc_col_px, v - p.xc_row_px)).norm());
-    }
-  }
-  return std::min(p.max_radius_px, rho_corner);
-}
-
-std::optional<std::string> ScaramuzzaCamera::validate(const Params& p) {
-  if (p.width_px <= 0) return "width_px must be > 0 (got " + std::to_string(p.width_px) + ")";
-  if (p.height_px <= 0) return "height_px must be > 0 (got " + std::to_string(p.height_px) + ")";
-  if (p.pol.empty() || p.pol.size() > 64)
-    return "pol must have 1 to 64 coefficients (got " + std::to_string(p.pol.size()) + ")";
-  if (p.invpol.empty() || p.invpol.size() > 64) {
-    return "invpol must have 1 to 64 coefficients (got " + std::to_string(p.invpol.size()) + ")";
-  }
+/// Every coefficient and the other real parameters finite, and pol[0] = f(0) < 0.
+std::optional<std::string> checkFinite(const ScaramuzzaParams& p) {
   for (std::size_t i = 0; i < p.pol.size(); ++i) {
     if (!std::isfinite(p.pol[i])) return "pol[" + std::to_string(i) + "] must be finite";
   }
@@ -81,6 +64,54 @@ std::optional<std::string> ScaramuzzaCamera::validate(const Params& p) {
   for (const auto& f : finite) {
     if (!std::isfinite(f.v)) return std::string(f.name) + " must be finite (got " + str(f.v) + ")";
   }
+  return std::nullopt;
+}
+
+/// beta(rho) = atan2(rho, -f) increases strictly on [min_radius_px, rho_hi] (<=> rho f'(rho) - f(rho)
+/// > 0), checked at four samples per pixel (rho_hi <= 1e6 px: the caller caps the count).
+std::optional<std::string> checkMonotonic(const ScaramuzzaParams& p, double rho_hi) {
+  const int n = std::max(2, static_cast<int>(std::ceil(4.0 * (rho_hi - p.min_radius_px))));
+  for (int i = 0; i <= n; ++i) {
+    const double rho = p.min_radius_px + (rho_hi - p.min_radius_px) * i / n;
+    double f = 0.0, df = 0.0;
+    for (std::size_t k = p.pol.size(); k-- > 0;) {
+      df = df * rho + f;
+      f = f * rho + p.pol[k];
+    }
+    if (!(rho * df - f > 0.0)) {
+      return "pol: the ray angle atan2(rho, -f(rho)) must increase strictly with rho on [min_radius_px, " +
+             str(rho_hi) + "] px; it does not at rho = " + str(rho) +
+             " px (lower max_radius_px to the polynomial's usable range)";
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Model
+
+double ScaramuzzaCamera::effectiveMaxRadius(const Params& p) {
+  const Eigen::Matrix2d Q = pixelToSensor(p);
+  double rho_corner = 0.0;
+  for (const double u : {-0.5, p.width_px - 0.5}) {
+    for (const double v : {-0.5, p.height_px - 0.5}) {
+      rho_corner = std::max(rho_corner, (Q * Eigen::Vector2d(u - p.yc_col_px, v - p.xc_row_px)).norm());
+    }
+  }
+  return std::min(p.max_radius_px, rho_corner);
+}
+
+std::optional<std::string> ScaramuzzaCamera::validate(const Params& p) {
+  if (p.width_px <= 0) return "width_px must be > 0 (got " + std::to_string(p.width_px) + ")";
+  if (p.height_px <= 0) return "height_px must be > 0 (got " + std::to_string(p.height_px) + ")";
+  if (p.pol.empty() || p.pol.size() > 64)
+    return "pol must have 1 to 64 coefficients (got " + std::to_string(p.pol.size()) + ")";
+  if (p.invpol.empty() || p.invpol.size() > 64) {
+    return "invpol must have 1 to 64 coefficients (got " + std::to_string(p.invpol.size()) + ")";
+  }
+  if (auto why = checkFinite(p)) return why;
   const double det = p.c - p.d * p.e;
   if (!(std::abs(det) > 1e-9)) {
     return "affine c, d, e: c - d*e must be non-zero so that A = [c d; e 1] is invertible (got " + str(det) + ")";
@@ -104,21 +135,7 @@ std::optional<std::string> ScaramuzzaCamera::validate(const Params& p) {
   // count overflowed int (undefined; on x86 it became 2 and a non-monotonic polynomial passed).
   if (!(rho_hi <= 1e6))
     return "the usable max radius " + str(rho_hi) + " px is beyond 1e6 px (a near-singular affine c, d, e?)";
-  const int n = std::max(2, static_cast<int>(std::ceil(4.0 * (rho_hi - p.min_radius_px))));
-  for (int i = 0; i <= n; ++i) {
-    const double rho = p.min_radius_px + (rho_hi - p.min_radius_px) * i / n;
-    double f = 0.0, df = 0.0;
-    for (std::size_t k = p.pol.size(); k-- > 0;) {
-      df = df * rho + f;
-      f = f * rho + p.pol[k];
-    }
-    if (!(rho * df - f > 0.0)) {
-      return "pol: the ray angle atan2(rho, -f(rho)) must increase strictly with rho on [min_radius_px, " +
-             str(rho_hi) + "] px; it does not at rho = " + str(rho) +
-             " px (lower max_radius_px to the polynomial's usable range)";
-    }
-  }
-  return std::nullopt;
+  return checkMonotonic(p, rho_hi);
 }
 
 ScaramuzzaCamera::ScaramuzzaCamera(const Params& params) : p_(params) {
@@ -270,6 +287,22 @@ bool toNumber(std::string_view tok, T& out) {
   return res.ec == std::errc() && res.ptr == end;
 }
 
+/// A polynomial's line "N c0 c1 ... cN-1" into coeffs; nothing, or why it is refused.
+std::optional<std::string> readPolynomial(const DataLine& l, std::vector<double>& coeffs) {
+  int count = 0;
+  if (!toNumber(l.tokens[0], count) || count < 1 || count > 64)
+    return "the coefficient count '" + std::string(l.tokens[0]) + "' must be an integer in [1, 64]";
+  if (l.tokens.size() != static_cast<std::size_t>(count) + 1)
+    return "the count says " + std::to_string(count) + " coefficients, found " + std::to_string(l.tokens.size() - 1);
+  coeffs.resize(static_cast<std::size_t>(count));
+  for (int i = 0; i < count; ++i) {
+    if (!toNumber(l.tokens[static_cast<std::size_t>(i) + 1], coeffs[static_cast<std::size_t>(i)]))
+      return "coefficient " + std::to_string(i) + " '" + std::string(l.tokens[static_cast<std::size_t>(i) + 1]) +
+             "' is not a number";
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 OcamCalibParseResult parseOcamCalib(const std::string& text) {
@@ -293,26 +326,9 @@ OcamCalibParseResult parseOcamCalib(const std::string& text) {
   ScaramuzzaParams p;
   // pol and invpol: "N c0 c1 ... cN-1"
   for (int field = 0; field < 2; ++field) {
-    const DataLine& l = lines[field];
-    int count = 0;
-    if (!toNumber(l.tokens[0], count) || count < 1 || count > 64) {
-      result.error =
-          where(l, field) + "the coefficient count '" + std::string(l.tokens[0]) + "' must be an integer in [1, 64]";
+    if (auto why = readPolynomial(lines[field], field == 0 ? p.pol : p.invpol)) {
+      result.error = where(lines[field], field) + *why;
       return result;
-    }
-    if (l.tokens.size() != static_cast<std::size_t>(count) + 1) {
-      result.error = where(l, field) + "the count says " + std::to_string(count) + " coefficients, found " +
-                     std::to_string(l.tokens.size() - 1);
-      return result;
-    }
-    std::vector<double>& coeffs = field == 0 ? p.pol : p.invpol;
-    coeffs.resize(static_cast<std::size_t>(count));
-    for (int i = 0; i < count; ++i) {
-      if (!toNumber(l.tokens[static_cast<std::size_t>(i) + 1], coeffs[static_cast<std::size_t>(i)])) {
-        result.error = where(l, field) + "coefficient " + std::to_string(i) + " '" +
-                       std::string(l.tokens[static_cast<std::size_t>(i) + 1]) + "' is not a number";
-        return result;
-      }
     }
   }
   // centre "row col" and affine "c d e"

@@ -22,6 +22,7 @@
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
+#include "omnislam/slam_health_t.hpp"
 #include "omnislam/slam_trajectory_t.hpp"
 
 namespace omnislam::lcmio {
@@ -36,6 +37,7 @@ std::optional<std::string> checkEncodedLengths(const particles_t*, const uint8_t
 std::optional<std::string> checkEncodedLengths(const associations_t*, const uint8_t* body, size_t size);
 std::optional<std::string> checkEncodedLengths(const feature_labels_t*, const uint8_t* body, size_t size);
 std::optional<std::string> checkEncodedLengths(const process_status_t*, const uint8_t* body, size_t size);
+std::optional<std::string> checkEncodedLengths(const slam_health_t*, const uint8_t* body, size_t size);
 std::optional<std::string> checkEncodedLengths(const slam_trajectory_t*, const uint8_t* body, size_t size);
 inline std::optional<std::string> checkEncodedLengths(const pose_t*, const uint8_t*, size_t) { return std::nullopt; }
 inline std::optional<std::string> checkEncodedLengths(const odometry_t*, const uint8_t*, size_t) {

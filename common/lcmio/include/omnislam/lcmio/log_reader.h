@@ -63,6 +63,10 @@ class LogReader {
 
  private:
   bool stop(const std::string& why);
+  /// The next event header (28 bytes) into h, after the sync word already read if any: bytes read.
+  size_t readHeader(unsigned char* h);
+  /// `bytes` of event data into `data`; false when the file ends first.
+  bool readData(size_t bytes, std::vector<uint8_t>& data);
   std::FILE* f_ = nullptr;
   LogReadResult result_;
   bool sized_ = false;  ///< the file's size is known (a regular file)

@@ -119,6 +119,15 @@ class Node {
   };
   static void dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel, RawSubscription* sub);
   void noteSequence(ChannelState& cs, const std::string& channel, int64_t seq, int64_t max_gap);
+  /// The time-order check of a message's utime (its strays and restarts counted, a restart
+  /// reported); false when it is refused (counted and reported).
+  bool admitTime(ChannelState& cs, const std::string& channel, int64_t utime, const UtimeOrderOptions& order);
+  /// Calls a subscription's handler. An exception must not unwind through LCM's C dispatch: LCM
+  /// would stay "inside a handler" and abort on its next handle() (assert !lcm->in_handle). The
+  /// message counts as refused, with the exception's text as the reason, the channel's state is put
+  /// back to `before`, and the process goes on: false.
+  bool callHandler(ChannelState& cs, ChannelState before, const std::string& channel,
+                   const std::function<void()>& call);
   void report(const std::string& line);
 
   std::string name_;
@@ -158,38 +167,8 @@ void Node::subscribe(const std::string& channel, std::function<void(const Msg&)>
     // any other refused message: the next one is judged against the last one handled, and the same
     // message sent again is not "a duplicate" of one that never took effect.
     ChannelState before = cs;
-    if (opt.require_increasing_utime) {
-      const int64_t restarts = cs.time.restarts(), strays = cs.time.strays();
-      const auto why = cs.time.admit(msg.utime, opt.time_order);
-      counters_.utime_strays += cs.time.strays() - strays;
-      if (why) {
-        reject(channel, *why);
-        return;
-      }
-      if (cs.time.restarts() != restarts) {
-        ++counters_.utime_restarts;
-        report(channel + ": " + cs.time.lastRestart());
-      }
-    }
-    // An exception must not unwind through LCM's C dispatch: LCM would stay "inside a handler" and
-    // abort on its next handle() (assert !lcm->in_handle). The message counts as refused, with
-    // the exception's text as the reason, and the process goes on.
-    try {
-      handler(msg);
-    } catch (const Refused& e) {
-      cs = std::move(before);
-      ++counters_.implausible;
-      reject(channel, e.what());
-      return;
-    } catch (const std::exception& e) {
-      cs = std::move(before);
-      reject(channel, std::string("handling it failed: ") + e.what());
-      return;
-    } catch (...) {
-      cs = std::move(before);
-      reject(channel, "handling it failed: an unknown exception");
-      return;
-    }
+    if (opt.require_increasing_utime && !admitTime(cs, channel, msg.utime, opt.time_order)) return;
+    if (!callHandler(cs, std::move(before), channel, [&] { handler(msg); })) return;
     // The seq of a message taken only: a refused copy of a real message (the same seq) is no
     // "sequence restart".
     if (opt.track_sequence) noteSequence(cs, channel, msg.seq, opt.max_sequence_gap);

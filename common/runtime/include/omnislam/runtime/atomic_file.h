@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 /// Replaces the file at `path` by `size` bytes so that a reader, or a crash at any point, sees the old
 /// file or the new one, never a part of either: a temporary file PATH.tmp.<pid> in the same folder is
@@ -26,4 +26,4 @@ inline void writeFileAtomically(const std::string& path, const std::vector<std::
 /// The whole file; throws std::runtime_error naming the path and the system's reason.
 std::vector<std::uint8_t> readWholeFile(const std::string& path);
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -16,7 +16,7 @@
 #include "omnislam/smoothing/back_end_options.h"
 #include "omnislam/smoothing/keyframe_graph.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 /// A solve handed to the filter: what the back end did, for SLAM_HEALTH and the smoothed trajectory.
 struct BackEndReport {
@@ -74,4 +74,4 @@ class BackEndRunner {
   BackEndStats stats_;
 };
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "omnislam/core/byte_codec.h"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 #include "omnislam/runtime/atomic_file.h"  // writeFileAtomically, readWholeFile: the checkpoint file
 #include "omnislam/runtime/slam_driver.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 /// Magic and version of the checkpoint file (envelope: omnislam/core/byte_codec.h).
 inline constexpr StateMagic kCheckpointMagic{'O', 'S', 'L', 'M', 'C', 'K', 'P', 'T'};
@@ -88,4 +88,4 @@ class CheckpointSchedule {
   int64_t base_ = -1;
 };
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

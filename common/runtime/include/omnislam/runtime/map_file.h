@@ -20,7 +20,7 @@
 #include "omnislam/core/limits.h"
 #include "omnislam/core/slam/types.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 struct SavedMap {
   int64_t utime = 0;
@@ -42,4 +42,4 @@ inline constexpr std::size_t kMaxSavedLandmarks = kMaxMapLandmarks;
 /// kMaxSavedLandmarks landmarks throws config::ConfigError naming the file, the key and the landmark.
 SavedMap loadMap(const std::string& path);
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -18,7 +18,7 @@
 #include "omnislam/core/slam/types.h"
 #include "omnislam/core/utime_order.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 /// Keys `pairing.*`, ranges and units: pairing_options_table.h.
 struct PairingOptions {
@@ -236,4 +236,4 @@ class Pairer {
   PairingStats stats_;
 };
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -9,9 +9,9 @@
 #include "omnislam/core/options_field.h"
 #include "omnislam/runtime/pairing.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 /// Keys `pairing.*`, in the order the docs and the echo list them.
 const std::vector<options::Field<PairingOptions>>& pairingFields();
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

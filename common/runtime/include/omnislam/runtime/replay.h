@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "omnislam/core/slam/types.h"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 struct ReplayArgs {
   std::string in_path;         ///< the log read
@@ -23,4 +23,4 @@ struct ReplayArgs {
 /// checkpoint of another log (std::invalid_argument).
 bool runReplay(const SlamProcessOptions& options, std::vector<slam::Landmark> prior_map, const ReplayArgs& args);
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

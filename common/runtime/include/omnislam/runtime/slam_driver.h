@@ -22,11 +22,11 @@
 #include "omnislam/pose_t.hpp"
 #include "omnislam/slam_health_t.hpp"
 #include "omnislam/slam_trajectory_t.hpp"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 #include "omnislam/runtime/back_end_runner.h"
 #include "omnislam/runtime/pairing.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 /// What answers one processed frame, in publishing order: pose, health, map (every n-th frame),
 /// particles, associations.
@@ -138,6 +138,8 @@ class SlamDriver {
   /// The outputs of the filter's estimate; moved by the odometry increment *u when given.
   FrameOutput makeOutput(int64_t utime, int64_t input_seq, double ess, const Pose2* u = nullptr);
   FrameOutput betweenKeyframes(const Frame& frame, const Pose2& odom_O);
+  /// The SLAM_ASSOCIATIONS header of a frame (the next seq), every feature NOT_USED.
+  associations_t associationsFor(const Frame& frame);
   /// SLAM_HEALTH of the step (sr: nothing for an odometry-only step), and with the fallback policy
   /// while diverged the fallback pose in out.pose.
   void applyHealth(FrameOutput& out, const Pose2& odom_O, const slam::StepResult* sr);
@@ -174,4 +176,4 @@ class SlamDriver {
   mutable DriverStats stats_;
 };
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

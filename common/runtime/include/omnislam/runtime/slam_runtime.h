@@ -14,9 +14,9 @@
 #include "omnislam/odometry_t.hpp"
 #include "omnislam/runtime/checkpoint.h"
 #include "omnislam/runtime/slam_driver.h"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 /// Checkpoints of one run (checkpoint.h): the resume at start, the periodic writes, the write at a
 /// stop. A write that fails is reported on one line and counted; the run goes on.
@@ -103,4 +103,4 @@ class SlamRuntime {
   ReplayPosition position_;
 };
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -1,6 +1,6 @@
 // The tables of the SLAM process's own keys (see slam_options_table.h): one row per key; the
 // defaults are the structs' in-class values (slam_config.h), the ranges the accepted ones.
-#include "omnislam/config/slam_options_table.h"
+#include "omnislam/runtime/slam_options_table.h"
 
 #include <sstream>
 
@@ -8,7 +8,7 @@
 #include "omnislam/runtime/pairing_options_table.h"
 #include "omnislam/smoothing/back_end_options_table.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 namespace {
 
@@ -196,4 +196,4 @@ const std::vector<ConfigSection>& processSections() {
   return s;
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

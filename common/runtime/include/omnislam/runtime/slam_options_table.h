@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 #include "omnislam/core/options_field.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 /// Tables over SlamProcessOptions itself: its sections hold members of the struct, not parts of it.
 using ProcessField = options::Field<SlamProcessOptions>;
@@ -48,4 +48,4 @@ const std::vector<ConfigSection>& filterSections();
 /// features, output, map, checkpoint, pairing, restart, plausibility.
 const std::vector<ConfigSection>& processSections();
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

@@ -1,5 +1,5 @@
 // Evaluation metrics: see metrics.h.
-#include "omnislam/core/eval/metrics.h"
+#include "omnislam/eval/metrics.h"
 
 #include <algorithm>
 #include <cmath>

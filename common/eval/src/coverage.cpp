@@ -1,5 +1,5 @@
 // The coverage of a run by the SLAM output (coverage.h): answered frames and covered span.
-#include "omnislam/core/eval/coverage.h"
+#include "omnislam/eval/coverage.h"
 
 #include <algorithm>
 

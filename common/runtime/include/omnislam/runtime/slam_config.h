@@ -14,7 +14,7 @@
 #include "omnislam/runtime/pairing.h"
 #include "omnislam/smoothing/back_end_options.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 /// Plausibility bounds on valid inputs (lcmio::validate checks only that they are finite); a
 /// message beyond them is refused, counted (`implausible`) and reported, and changes nothing
@@ -121,4 +121,4 @@ const std::vector<std::string>& associationNames();
 /// The method of one of associationNames(); throws std::invalid_argument for any other name.
 slam::AssociationMethod associationFromName(const std::string& name);
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

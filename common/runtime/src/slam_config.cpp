@@ -1,6 +1,6 @@
 // SLAM process config parsing: see slam_config.h and docs/user/slam-process.md. Every key is read
 // through its options table (slam_options_table.h, the core's options_table.h, pairing_options_table.h).
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,13 +8,14 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "omnislam/config/slam_options_table.h"
+#include "omnislam/config/options_parse.h"
+#include "omnislam/runtime/slam_options_table.h"
 #include "omnislam/core/angles.h"
 #include "omnislam/core/slam/options_table.h"
 #include "omnislam/smoothing/back_end_options_table.h"
 #include "omnislam/runtime/pairing_options_table.h"
 
-namespace omnislam::slamproc {
+namespace omnislam::runtime {
 
 namespace {
 
@@ -22,74 +23,10 @@ using config::ConfigError;
 using config::Node;
 using options::Kind;
 
-Node::Open openOf(options::Bounds b) {
-  return b == options::Bounds::kLowOpen    ? Node::Open::kLow
-         : b == options::Bounds::kHighOpen ? Node::Open::kHigh
-                                           : Node::Open::kNone;
-}
-
-// A range end as config::Node::getInt takes it (2^63 and beyond: INT64_MAX).
-int64_t wholeEnd(double v) {
-  constexpr double kTwo63 = 9223372036854775808.0;
-  if (v >= kTwo63) return INT64_MAX;
-  if (v <= -kTwo63) return INT64_MIN;
-  return static_cast<int64_t>(v);
-}
-
-// One key of a table from section n, read within its range and converted to the member's units
-// (radians for a _deg key, microseconds for a duration in seconds); a missing key is an error.
-template <class S>
-void parseField(const Node& n, S& s, const options::Field<S>& f) {
-  switch (f.kind) {
-    case Kind::kReal: {
-      const double v = n.getDouble(f.key, f.lo, f.hi, openOf(f.bounds));
-      f.setRealMember(s, f.degrees ? deg2rad(v) : v);
-      break;
-    }
-    case Kind::kInt: s.*f.integer = static_cast<int>(n.getInt(f.key, wholeEnd(f.lo), wholeEnd(f.hi))); break;
-    case Kind::kUint64: s.*f.u64 = static_cast<std::uint64_t>(n.getInt(f.key, wholeEnd(f.lo), wholeEnd(f.hi))); break;
-    case Kind::kSeconds:
-      s.*f.micros = static_cast<int64_t>(std::llround(n.getDouble(f.key, f.lo, f.hi, openOf(f.bounds)) * 1e6));
-      break;
-    case Kind::kBool:  // a choice held as a type may refuse a value the other keys exclude
-      if (const char* why = f.setFlagMember(s, n.getBool(f.key))) throw ConfigError(n.where(f.key) + " " + why);
-      break;
-    case Kind::kVec3: {
-      const auto v = n.getDoubles(f.key, 3, f.lo, f.hi);
-      s.*f.vec3 = Eigen::Vector3d(v[0], v[1], v[2]);
-      break;
-    }
-    case Kind::kEnum: {
-      const std::string v = n.getEnum(f.key, *f.names);
-      f.set_index(s, static_cast<int>(std::find(f.names->begin(), f.names->end(), v) - f.names->begin()));
-      break;
-    }
-    case Kind::kPath: s.*f.text = n.getPath(f.key); break;
-  }
-}
-
-// The keys of one options table given in section n; a key not given keeps the member's value (the
-// preset's or the default).
-template <class S>
-void parseFields(const Node& n, S& s, const std::vector<options::Field<S>>& table) {
-  for (const auto& f : table) {
-    if (n.has(f.key)) parseField(n, s, f);
-  }
-}
-
-// The keys a section accepts: its table's and the names of its subsections.
-template <class S>
-std::vector<std::string> keysOf(const std::vector<options::Field<S>>& table, std::vector<std::string> extra = {}) {
-  for (const auto& f : table) extra.emplace_back(f.key);
-  return extra;
-}
-
-// A section of only table keys: an unknown key is refused with the accepted list.
-template <class S>
-void parseSection(const Node& n, S& s, const std::vector<options::Field<S>>& table) {
-  n.rejectUnknownKeysIn(keysOf(table));
-  parseFields(n, s, table);
-}
+using config::keysOf;
+using config::parseField;
+using config::parseFields;
+using config::parseSection;
 
 void parsePerception(const Node& n, slam::PerceptionOptions& p) {
   parseSection(n, p, slam::options::perceptionFields());
@@ -267,4 +204,4 @@ std::string processKeysMarkdown() {
   return s;
 }
 
-}  // namespace omnislam::slamproc
+}  // namespace omnislam::runtime

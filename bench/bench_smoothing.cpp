@@ -34,8 +34,8 @@ void BM_Solve(benchmark::State& state) {
   state.counters["landmarks"] = static_cast<double>(g.graph.landmarks.size());
   state.counters["bearings"] = static_cast<double>(g.graph.bearings.size());
   state.counters["lm_iterations"] = iterations;
-  state.counters["per_keyframe"] = benchmark::Counter(K, benchmark::Counter::kIsIterationInvariantRate |
-                                                             benchmark::Counter::kInvert);
+  state.counters["per_keyframe"] =
+      benchmark::Counter(K, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 // laps (41 keyframes each) x linear solver (0 sparse normal Cholesky, 1 sparse Schur, 2 dense Schur)
 BENCHMARK(BM_Solve)->ArgsProduct({{1, 4, 16}, {0, 1, 2}})->Unit(benchmark::kMillisecond);

@@ -11,15 +11,18 @@
 
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/motion_model.h"
+#include "omnislam/smoothing/factors.h"
 #include "omnislam/smoothing/smoother.h"
 
 namespace omnislam::smoothing::sim {
 
 struct SimOptions {
-  bool noise = true;                 ///< bearing and odometry noise (false: exact inputs)
-  double bearing_sigma_rad = 0.005;  ///< azimuth and elevation std
-  double odometry_scale = 1.0;       ///< the odometry's length scale error (1.03: 3 % long)
+  bool noise = true;                     ///< bearing and odometry noise (false: exact inputs)
+  double bearing_sigma_rad = 0.005;      ///< azimuth and elevation std
+  double odometry_scale = 1.0;           ///< the odometry's length scale error (1.03: 3 % long)
+  double heading_drift_rad_per_m = 0.0;  ///< the odometry's heading drift (a constant of the run)
   double ceiling_m = 6.5;
+  slam::MotionNoiseOptions motion;       ///< the odometry's per-step noise and its covariance
   double odd_lamp_offset_m = 0.0;        ///< landmark 4 this much above (negative: below) the ceiling
   double landmark_perturbation_m = 0.4;  ///< initial landmark estimates off by up to this
   slam::LandmarkKind kind = slam::LandmarkKind::kPoint3D;
@@ -61,13 +64,12 @@ inline SimGraph simulateGraph(const SimOptions& o) {
   s.true_landmarks[4].z() += o.odd_lamp_offset_m;
   Graph& g = s.graph;
   const Eigen::Vector3d p_CinR(0.1, 0.0, 1.8);
-  slam::MotionNoiseOptions motion;
+  const slam::MotionNoiseOptions& motion = o.motion;
   Pose2 dead = s.true_poses.front();
   for (std::size_t k = 0; k < s.true_poses.size(); ++k) {
     if (k > 0) {
-      Pose2 u = s.true_poses[k - 1].between(s.true_poses[k]);
-      u.x_m *= o.odometry_scale;
-      u.y_m *= o.odometry_scale;
+      Pose2 u = calibratedIncrement(s.true_poses[k - 1].between(s.true_poses[k]), o.odometry_scale,
+                                    o.heading_drift_rad_per_m);
       const Eigen::Matrix3d Su = slam::incrementCovariance(u, motion);
       if (o.noise) {
         const Eigen::Vector3d d = Su.llt().matrixL() * Eigen::Vector3d(n01(rng), n01(rng), n01(rng));

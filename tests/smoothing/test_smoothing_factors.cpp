@@ -92,8 +92,28 @@ TEST(smoothing_Factors, LineOdometryPriorAndCeilingJacobiansMatchCentralDifferen
   S << 4e-4, 1e-5, 2e-6, 1e-5, 2e-4, 3e-6, 2e-6, 3e-6, 1e-4;
   checkCostJacobians(OdometryCost(Pose2{0.5, 0.1, 0.2}, S), {{1.0, 2.0, 3.0}, {1.4, 2.6, -3.1}}, 1e-6);
   checkCostJacobians(PosePriorCost(Pose2{0.0, 0.0, 3.1}, S), {{0.1, -0.2, -3.1}}, 1e-6);
+  checkCostJacobians(CalibratedOdometryCost(Pose2{0.5, 0.1, 0.2}, S),
+                     {{1.0, 2.0, 3.0}, {1.4, 2.6, -3.1}, {1.02, 0.004}}, 1e-6);
+  checkCostJacobians(CalibratedOdometryCost(Pose2{0.0, 0.0, 0.3}, S),
+                     {{1.0, 2.0, 3.0}, {1.0, 2.0, -2.9}, {0.98, -0.01}},
+                     1e-6);  // turning on the spot: no distance, no drift
+  checkCostJacobians(CalibrationPriorCost(0.01, 0.003), {{1.02, -0.002}}, 1e-6);
   checkCostJacobians(KnownHeightCost(6.5, 0.05), {{1.0, 2.0, 6.3}}, 1e-6);
   checkCostJacobians(FlatCeilingCost(0.05), {{1.0, 2.0, 6.3}, {6.6}}, 1e-6);
+}
+
+TEST(smoothing_Factors, TheCalibratedIncrementIsTheOdometryAtScaleOneAndNoDrift) {
+  const Pose2 u{0.3, -0.1, 0.2};
+  const Pose2 same = calibratedIncrement(u, 1.0, 0.0);
+  EXPECT_EQ(same.x_m, u.x_m);
+  EXPECT_EQ(same.theta_rad, u.theta_rad);
+  // 2 % long and 0.01 rad/m of drift: the distance grows by 2 %, the heading by 0.01 rad per metre,
+  // and the chord turns by half of that.
+  const double d = std::hypot(u.x_m, u.y_m);
+  const Pose2 c = calibratedIncrement(u, 1.02, 0.01);
+  EXPECT_NEAR(std::hypot(c.x_m, c.y_m), 1.02 * d, 1e-12);
+  EXPECT_NEAR(c.theta_rad - u.theta_rad, 0.01 * d, 1e-12);
+  EXPECT_NEAR(std::atan2(c.y_m, c.x_m) - std::atan2(u.y_m, u.x_m), 0.005 * d, 1e-12);
 }
 
 TEST(smoothing_Factors, WhitenedResidualIsTheMahalanobisDistance) {

@@ -112,6 +112,54 @@ TEST(smoothing_Solve, AKnownCeilingHeightGivesTheScaleTheOdometryGetsWrong) {
   EXPECT_LT(maxLandmarkError(known, sim.true_landmarks), 0.03);
 }
 
+/// Odometry whose only per-step noise is the random walk (what KeyframeGraph keeps when it calibrates).
+SimOptions randomWalkOdometry() {
+  SimOptions o;
+  o.motion.trans_sigma_per_m = o.motion.rot_sigma_per_m = o.motion.lateral_sigma_per_m = 0.0;
+  o.motion.trans_sigma_per_rad = o.motion.rot_sigma_per_rad = 0.0;
+  o.motion.trans_sigma_per_sqrt_m = 0.02;
+  o.motion.rot_sigma_per_sqrt_m = 0.005;
+  o.motion.rot_sigma_per_sqrt_rad = 0.02;
+  return o;
+}
+
+TEST(smoothing_Solve, TheOdometrysDriftIsEstimatedWhereItIsAnUnknown) {
+  // Exact bearings, an odometry that drifts 0.004 rad/m, three laps: as an unknown of the run the
+  // drift is found (the calibration maps the odometry onto the motion: -0.004 rad/m), and the map is
+  // no worse than with the odometry taken as measured.
+  SimOptions o = randomWalkOdometry();
+  o.noise = false;
+  o.laps = 3;
+  o.heading_drift_rad_per_m = 0.004;
+  auto sim = simulateGraph(o);
+  const Solution plain = solve(sim.graph);
+  sim.graph.odometry_calibration = OdometryCalibrationPrior{0.01, 0.003};
+  const Solution calibrated = solve(sim.graph);
+  ASSERT_TRUE(plain.ok && calibrated.ok) << plain.failure << calibrated.failure;
+  ASSERT_TRUE(calibrated.odometry_calibration.has_value());
+  EXPECT_NEAR((*calibrated.odometry_calibration)(1), -0.004, 1e-4);
+  EXPECT_NEAR((*calibrated.odometry_calibration)(0), 1.0, 1e-3);  // no scale error, none found
+  std::printf("max landmark error: %.3f m as per-step noise, %.3f m calibrated (drift %.5f rad/m)\n",
+              maxLandmarkError(plain, sim.true_landmarks), maxLandmarkError(calibrated, sim.true_landmarks),
+              (*calibrated.odometry_calibration)(1));
+  EXPECT_LE(maxLandmarkError(calibrated, sim.true_landmarks), maxLandmarkError(plain, sim.true_landmarks) + 1e-3);
+}
+
+TEST(smoothing_Solve, WithAKnownCeilingTheOdometrysScaleIsEstimatedToo) {
+  SimOptions o = randomWalkOdometry();
+  o.noise = false;
+  o.laps = 3;
+  o.odometry_scale = 1.015;
+  o.heading_drift_rad_per_m = 0.004;
+  auto sim = simulateGraph(o);
+  sim.graph.odometry_calibration = OdometryCalibrationPrior{0.01, 0.003};
+  sim.graph.ceiling = KnownCeilingHeight{6.5, 0.02};
+  const Solution s = solve(sim.graph);
+  ASSERT_TRUE(s.ok) << s.failure;
+  EXPECT_NEAR((*s.odometry_calibration)(0), 1.0 / 1.015, 1e-3);
+  EXPECT_LT(maxLandmarkError(s, sim.true_landmarks), 0.03);
+}
+
 TEST(smoothing_Solve, AFlatCeilingIsEstimatedAndTheOddLampAtAnotherHeightIsTolerated) {
   SimOptions o;
   o.landmark_perturbation_m = 0.2;

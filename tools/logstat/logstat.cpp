@@ -20,6 +20,7 @@
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
 #include "omnislam/slam_health_t.hpp"
+#include "omnislam/slam_trajectory_t.hpp"
 
 namespace omnislam::tools {
 namespace {
@@ -191,6 +192,7 @@ const std::vector<Accumulator::Decoder>& Accumulator::decoders() {
       row<particles_t>(channels::kSlamParticles),
       row<associations_t>(channels::kSlamAssociations),
       row<slam_health_t>(channels::kSlamHealth),
+      row<slam_trajectory_t>(channels::kSlamTrajectory),
       row<feature_labels_t>(channels::kGroundTruthFeatureLabels),
   };
   return t;

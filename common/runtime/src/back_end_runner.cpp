@@ -9,8 +9,7 @@ namespace omnislam::runtime {
 namespace {
 
 /// The solve of one graph, on the worker: the correction for the filter and the report.
-std::pair<slam::MapCorrection, BackEndReport> solveJob(smoothing::Graph graph,
-                                                       std::vector<slam::Landmark> map,
+std::pair<slam::MapCorrection, BackEndReport> solveJob(smoothing::Graph graph, std::vector<slam::Landmark> map,
                                                        smoothing::SolverOptions options) {
   const smoothing::Solution s = smoothing::solve(graph, options);
   BackEndReport r;

@@ -276,6 +276,7 @@ void SlamDriver::startBackEnd(const Pose2& start_W, const Eigen::Matrix3d& start
   // The gauge: the filter's start, 1 mm / 1 mrad where it is exact.
   g.start_cov = start_cov + Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal().toDenseMatrix();
   g.ceiling = opt_.backend.ceilingPrior();
+  g.calibrate_odometry = opt_.backend.odometry_calibration == smoothing::OdometryCalibration::kScaleAndDrift;
   backend_ = std::make_unique<BackEndRunner>(opt_.backend, g, backend_waits_);
 }
 

@@ -20,6 +20,10 @@ const std::vector<std::string>& backEndModeNames() {
   static const std::vector<std::string> n{"off", "keyframes"};
   return n;
 }
+const std::vector<std::string>& odometryCalibrationNames() {
+  static const std::vector<std::string> n{"none", "scale_and_drift"};
+  return n;
+}
 const std::vector<std::string>& ceilingNames() {
   static const std::vector<std::string> n{"none", "known_height", "flat"};
   return n;
@@ -36,6 +40,9 @@ const std::vector<Field<BackEndOptions>>& backEndFields() {
       real<B>("bearings_per_keyframe", &B::bearings_per_keyframe, "bearings_per_keyframe", "", 0, 1e9, kC, "... and no sooner than (bearings in the graph) / this keyframes after the last (a bounded cost per keyframe; 0 = no budget)"),
       integer<B>("loop_closure_keyframes", &B::loop_closure_keyframes, "loop_closure_keyframes", 1, 1000000, "a landmark associated again after this many keyframes unseen starts a solve at once"),
       integer<B>("apply_after_keyframes", &B::apply_after_keyframes, "apply_after_keyframes", 0, 1000, "a solve started at keyframe k is handed to the filter at keyframe k + this (a replay waits for it; a live run hands it over when done, never waiting)"),
+      enumeration<B>("odometry_calibration", "odometry_calibration", odometryCalibrationNames(), [](const B& o) { return static_cast<int>(o.odometry_calibration); },
+                     [](B& o, int i) { o.odometry_calibration = static_cast<OdometryCalibration>(i); },
+                     "scale_and_drift: the run's odometry scale and heading drift are unknowns of the graph, their priors filter.motion's trans_sigma_per_m and rot_sigma_per_m (the per-run errors, then left out of the per-step noise); none: the odometry as the filter models it"),
       enumeration<B>("ceiling", "ceiling", ceilingNames(), [](const B& o) { return static_cast<int>(o.ceiling); },
                      [](B& o, int i) { o.ceiling = static_cast<CeilingKind>(i); },
                      "none; known_height: every light at ceiling_height_m (gives the map's scale); flat: every light on one ceiling of unknown height"),

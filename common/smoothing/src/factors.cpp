@@ -48,6 +48,18 @@ Eigen::Vector3d odometryError(const Pose2& a, const Pose2& b, const Pose2& u, Ma
   return e;
 }
 
+Pose2 calibratedIncrement(const Pose2& u, double scale, double drift, Eigen::Matrix<double, 3, 2>* J_u_c) {
+  const double d = std::hypot(u.x_m, u.y_m), phi = 0.5 * drift * d;
+  const double c = std::cos(phi), s = std::sin(phi);
+  const Eigen::Vector2d r(c * u.x_m - s * u.y_m, s * u.x_m + c * u.y_m);  // R(phi) u_xy
+  if (J_u_c) {
+    const Eigen::Vector2d dr(-s * u.x_m - c * u.y_m, c * u.x_m - s * u.y_m);  // d R(phi) u_xy / d phi
+    J_u_c->col(0) << r, 0.0;
+    J_u_c->col(1) << scale * 0.5 * d * dr, d;
+  }
+  return {scale * r.x(), scale * r.y(), u.theta_rad + drift * d};
+}
+
 std::optional<Eigen::Vector2d> pointBearingError(const slam::BearingMeasurement& z, const Pose2& T_WtoR,
                                                  const Eigen::Vector3d& p_LinW_m, Eigen::Matrix<double, 2, 3>* J_e_pose,
                                                  Eigen::Matrix<double, 2, 3>* J_e_landmark) {
@@ -94,6 +106,40 @@ bool OdometryCost::Evaluate(double const* const* params, double* residuals, doub
   Eigen::Map<Eigen::Vector3d>{residuals} = W_ * e;
   if (want && jacobians[0]) writeJacobian<3, 3>(jacobians[0], W_ * Ja);
   if (want && jacobians[1]) writeJacobian<3, 3>(jacobians[1], W_ * Jb);
+  return true;
+}
+
+CalibratedOdometryCost::CalibratedOdometryCost(const Pose2& u_AtoB, const Matrix3d& Sigma_u)
+    : u_(u_AtoB), W_(whitener<3>(Sigma_u).value_or(Matrix3d::Zero())) {}
+
+bool CalibratedOdometryCost::Evaluate(double const* const* params, double* residuals, double** jacobians) const {
+  Matrix3d Ja, Jb;
+  Eigen::Matrix<double, 3, 2> Ju;
+  const bool want = jacobians != nullptr;
+  const Pose2 u = calibratedIncrement(u_, params[2][0], params[2][1], want ? &Ju : nullptr);
+  // The increment enters the error with a minus sign (odometryError: e = measured - u).
+  Eigen::Vector3d e = odometryError(poseOf(params[0]), poseOf(params[1]), Pose2{u.x_m, u.y_m, 0.0},
+                                    want ? &Ja : nullptr, want ? &Jb : nullptr);
+  e(2) = wrapAngle(params[1][2] - params[0][2] - u.theta_rad);
+  Eigen::Map<Eigen::Vector3d>{residuals} = W_ * e;
+  if (want && jacobians[0]) writeJacobian<3, 3>(jacobians[0], W_ * Ja);
+  if (want && jacobians[1]) writeJacobian<3, 3>(jacobians[1], W_ * Jb);
+  if (want && jacobians[2]) writeJacobian<3, 2>(jacobians[2], Eigen::Matrix<double, 3, 2>(-W_ * Ju));
+  return true;
+}
+
+CalibrationPriorCost::CalibrationPriorCost(double scale_sigma, double drift_sigma)
+    : inv_s_(1.0 / scale_sigma), inv_d_(1.0 / drift_sigma) {}
+
+bool CalibrationPriorCost::Evaluate(double const* const* params, double* residuals, double** jacobians) const {
+  residuals[0] = inv_s_ * (params[0][0] - 1.0);
+  residuals[1] = inv_d_ * params[0][1];
+  if (jacobians && jacobians[0]) {
+    jacobians[0][0] = inv_s_;
+    jacobians[0][1] = 0.0;
+    jacobians[0][2] = 0.0;
+    jacobians[0][3] = inv_d_;
+  }
   return true;
 }
 

@@ -11,17 +11,32 @@ KeyframeGraph::KeyframeGraph(const GraphOptions& options) : options_(options) {}
 
 void KeyframeGraph::add(KeyframeRecord record) { records_.push_back(std::move(record)); }
 
+namespace {
+
+/// Whether the options ask for, and the motion model allows, the odometry calibration.
+bool calibrates(const GraphOptions& o) {
+  return o.calibrate_odometry && o.motion.model == slam::MotionNoiseModel::kChord && o.motion.trans_sigma_per_m > 0.0 &&
+         o.motion.rot_sigma_per_m > 0.0;
+}
+
+}  // namespace
+
 Graph KeyframeGraph::build(const std::vector<slam::Landmark>& map) const {
   if (records_.empty()) throw std::logic_error("KeyframeGraph::build without keyframes");
   Graph g;
   g.ceiling = options_.ceiling;
+  slam::MotionNoiseOptions motion = options_.motion;
+  if (calibrates(options_)) {  // the per-run terms become the calibration's priors
+    g.odometry_calibration = OdometryCalibrationPrior{motion.trans_sigma_per_m, motion.rot_sigma_per_m};
+    motion.trans_sigma_per_m = 0.0;
+    motion.rot_sigma_per_m = 0.0;
+  }
   for (std::size_t k = 0; k < records_.size(); ++k) {
     const KeyframeRecord& r = records_[k];
     g.keyframes.push_back({k, r.utime, r.T_WtoR_filter});
     if (k == 0) continue;
     const Pose2 u = slam::odometryIncrement(records_[k - 1].odom_O, r.odom_O);
-    g.odometry.push_back(
-        {static_cast<int>(k - 1), static_cast<int>(k), u, slam::incrementCovariance(u, options_.motion)});
+    g.odometry.push_back({static_cast<int>(k - 1), static_cast<int>(k), u, slam::incrementCovariance(u, motion)});
   }
   g.pose_priors.push_back({0, options_.start, options_.start_cov});
   std::map<std::uint64_t, int> index_of_id;

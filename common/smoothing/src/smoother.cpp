@@ -24,6 +24,7 @@ bool isPoint(slam::LandmarkKind k) { return k == slam::LandmarkKind::kPoint3D; }
 struct Blocks {
   std::vector<std::array<double, 3>> poses, landmarks;
   double ceiling_height_m = 0.0;
+  std::array<double, 2> calibration{1.0, 0.0};      ///< odometry scale, heading drift [rad/m]
   std::vector<ceres::ResidualBlockId> bearing_ids;  ///< per Graph::bearings (nullptr once removed)
   std::vector<int> bearings_of_landmark;            ///< count of bearings still in the graph
   std::vector<char> landmark_in_problem;
@@ -75,6 +76,19 @@ void addCeiling(const Graph& g, ceres::Problem& pb, Blocks& b, ceres::LossFuncti
   }
 }
 
+void addOdometry(const Graph& g, ceres::Problem& pb, Blocks& b) {
+  if (!g.odometry_calibration) {
+    for (const auto& e : g.odometry)
+      pb.AddResidualBlock(new OdometryCost(e.u_AtoB, e.Sigma_u), nullptr, b.poses[e.from].data(), b.poses[e.to].data());
+    return;
+  }
+  const OdometryCalibrationPrior& c = *g.odometry_calibration;
+  pb.AddResidualBlock(new CalibrationPriorCost(c.scale_sigma, c.drift_sigma_rad_per_m), nullptr, b.calibration.data());
+  for (const auto& e : g.odometry)
+    pb.AddResidualBlock(new CalibratedOdometryCost(e.u_AtoB, e.Sigma_u), nullptr, b.poses[e.from].data(),
+                        b.poses[e.to].data(), b.calibration.data());
+}
+
 /// Adds every block of the graph; the loss functions are owned by the caller.
 void buildProblem(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Blocks& b,
                   ceres::LossFunction* bearing_loss, ceres::LossFunction* ceiling_loss) {
@@ -85,8 +99,7 @@ void buildProblem(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Bl
     pb.AddParameterBlock(b.landmarks[j].data(), isPoint(g.landmarks[j].kind) ? 3 : 2);
   for (const auto& p : g.pose_priors)
     pb.AddResidualBlock(new PosePriorCost(p.mean, p.Sigma), nullptr, b.poses[p.keyframe].data());
-  for (const auto& e : g.odometry)
-    pb.AddResidualBlock(new OdometryCost(e.u_AtoB, e.Sigma_u), nullptr, b.poses[e.from].data(), b.poses[e.to].data());
+  addOdometry(g, pb, b);
   addBearings(g, o, pb, b, bearing_loss);
   addCeiling(g, pb, b, ceiling_loss);
   b.landmark_in_problem.assign(g.landmarks.size(), 1);
@@ -143,6 +156,7 @@ bool runSolver(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Block
     if (b.landmark_in_problem[j]) ordering->AddElementToGroup(b.landmarks[j].data(), 0);
   for (auto& p : b.poses) ordering->AddElementToGroup(p.data(), 1);
   if (pb.HasParameterBlock(&b.ceiling_height_m)) ordering->AddElementToGroup(&b.ceiling_height_m, 1);
+  if (pb.HasParameterBlock(b.calibration.data())) ordering->AddElementToGroup(b.calibration.data(), 1);
   if (o.linear_solver != LinearSolver::kSparseNormalCholesky) so.linear_solver_ordering = ordering;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &pb, &summary);
@@ -237,6 +251,7 @@ void readSolution(const Graph& g, const Blocks& b, Solution& s) {
   s.bearing_used.assign(g.bearings.size(), 0);
   for (std::size_t i = 0; i < g.bearings.size(); ++i) s.bearing_used[i] = b.bearing_ids[i] != nullptr;
   if (std::holds_alternative<FlatCeiling>(g.ceiling)) s.ceiling_height_m = b.ceiling_height_m;
+  if (g.odometry_calibration) s.odometry_calibration = Eigen::Vector2d(b.calibration[0], b.calibration[1]);
 }
 
 std::string positiveDefinite(const Eigen::Matrix3d& S) { return whitener<3>(S) ? "" : "not positive definite"; }
@@ -293,6 +308,10 @@ std::string Graph::validate() const {
   for (std::size_t j = 0; j < landmarks.size(); ++j)
     if (!landmarks[j].p_LinW_m.allFinite()) return "landmark " + std::to_string(j) + ": position not finite";
   if (auto why = validateEdges(*this); !why.empty()) return why;
+  if (odometry_calibration &&
+      !(odometry_calibration->scale_sigma > 0.0 && odometry_calibration->drift_sigma_rad_per_m > 0.0 &&
+        std::isfinite(odometry_calibration->scale_sigma + odometry_calibration->drift_sigma_rad_per_m)))
+    return "odometry calibration: sigmas must be > 0";
   return validateCeiling(ceiling);
 }
 

@@ -21,15 +21,15 @@ namespace omnislam::runtime {
 /// A solve handed to the filter: what the back end did, for SLAM_HEALTH and the smoothed trajectory.
 struct BackEndReport {
   bool ok = false;
-  std::string failure;                   ///< why the solve failed (the filter went on without it)
-  std::int64_t solved_at_utime = 0;      ///< utime of the solve's last keyframe
+  std::string failure;               ///< why the solve failed (the filter went on without it)
+  std::int64_t solved_at_utime = 0;  ///< utime of the solve's last keyframe
   int num_keyframes = 0, num_landmarks = 0, num_bearings = 0;
-  int num_removed = 0;                   ///< bearings removed as outliers
+  int num_removed = 0;  ///< bearings removed as outliers
   int iterations = 0;
   double final_cost = 0.0;
-  bool loop_closure = false;             ///< started by a loop closure
+  bool loop_closure = false;  ///< started by a loop closure
   std::vector<std::int64_t> keyframe_utimes;
-  std::vector<Pose2> keyframe_poses;     ///< the smoothed trajectory, W
+  std::vector<Pose2> keyframe_poses;  ///< the smoothed trajectory, W
 };
 
 struct BackEndStats {
@@ -42,8 +42,7 @@ struct BackEndStats {
 class BackEndRunner {
  public:
   /// `wait_for_solves`: true in a replay (deterministic), false live.
-  BackEndRunner(const smoothing::BackEndOptions& options, const smoothing::GraphOptions& graph,
-                bool wait_for_solves);
+  BackEndRunner(const smoothing::BackEndOptions& options, const smoothing::GraphOptions& graph, bool wait_for_solves);
   ~BackEndRunner();  ///< waits for a running solve
   BackEndRunner(const BackEndRunner&) = delete;
   BackEndRunner& operator=(const BackEndRunner&) = delete;

@@ -16,6 +16,9 @@ enum class BackEndMode : std::uint8_t {
   kKeyframes = 1,  ///< solves over all keyframes on a schedule and at loop closures
 };
 
+/// Whether the graph estimates the odometry's systematic errors (`backend.odometry_calibration`).
+enum class OdometryCalibration : std::uint8_t { kNone = 0, kScaleAndDrift = 1 };
+
 /// Which ceiling prior the graph carries (`backend.ceiling`): see smoother.h's CeilingPrior.
 enum class CeilingKind : std::uint8_t { kNone = 0, kKnownHeight = 1, kFlat = 2 };
 
@@ -35,6 +38,9 @@ struct BackEndOptions {
   /// live run never waits: it hands it over at the first keyframe at or after k + this at which the
   /// solve has finished.
   int apply_after_keyframes = 1;
+  /// Estimate the odometry's per-run scale and heading drift in the graph (GraphOptions::
+  /// calibrate_odometry; the priors are filter.motion's trans_sigma_per_m and rot_sigma_per_m).
+  OdometryCalibration odometry_calibration = OdometryCalibration::kScaleAndDrift;
   CeilingKind ceiling = CeilingKind::kNone;
   double ceiling_height_m = 0.0;  ///< kKnownHeight: the measured height of the lamps above the floor [m]
   double ceiling_sigma_m = 0.05;  ///< how far a lamp may sit from that plane [m], > 0

@@ -41,6 +41,12 @@ Eigen::Vector3d posePriorError(const Pose2& T_WtoR, const Pose2& prior, Matrix3d
 Eigen::Vector3d odometryError(const Pose2& T_WtoA, const Pose2& T_WtoB, const Pose2& u_AtoB, Matrix3d* J_e_a = nullptr,
                               Matrix3d* J_e_b = nullptr);
 
+/// The odometry increment corrected by the run's systematic errors: a scale factor s on the distance
+/// and a heading drift b [rad/m] over the distance d = |u_xy| (the chord turned by half of it):
+/// uhat = (s R(b d / 2) u_xy, u_theta + b d). d uhat / d (s, b) (3x2) when non-null.
+Pose2 calibratedIncrement(const Pose2& u, double scale, double drift_rad_per_m,
+                          Eigen::Matrix<double, 3, 2>* J_u_c = nullptr);
+
 /// Bearing error of a point landmark: (wrap(az - az_hat), el - el_hat) [rad], with d e / d pose (2x3)
 /// and d e / d p_LinW (2x3) when non-null; std::nullopt where the model is undefined (landmark
 /// above the optical centre).
@@ -80,6 +86,28 @@ class OdometryCost final : public ceres::SizedCostFunction<3, 3, 3> {
  private:
   Pose2 u_;
   Matrix3d W_;
+};
+
+/// Odometry with the run's systematic errors as an unknown c = (scale, drift_rad_per_m) shared by all
+/// odometry factors: the error of odometryError() with the increment calibratedIncrement(u, c).
+class CalibratedOdometryCost final : public ceres::SizedCostFunction<3, 3, 3, 2> {
+ public:
+  CalibratedOdometryCost(const Pose2& u_AtoB, const Matrix3d& Sigma_u);
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override;
+
+ private:
+  Pose2 u_;
+  Matrix3d W_;
+};
+
+/// Prior on the odometry calibration c = (scale, drift): ((scale - 1) / sigma_s, drift / sigma_d).
+class CalibrationPriorCost final : public ceres::SizedCostFunction<2, 2> {
+ public:
+  CalibrationPriorCost(double scale_sigma, double drift_sigma_rad_per_m);
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override;
+
+ private:
+  double inv_s_, inv_d_;
 };
 
 /// (azimuth, elevation) of a point landmark from a keyframe pose: residual L^-1 e.

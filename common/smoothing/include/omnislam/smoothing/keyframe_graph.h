@@ -37,6 +37,11 @@ struct GraphOptions {
   /// Its covariance: the filter's start covariance, or 1 mm / 1 mrad when the start is exact.
   Eigen::Matrix3d start_cov = Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal();
   CeilingPrior ceiling;
+  /// Estimate the run's odometry scale and heading drift (OdometryCalibrationPrior): their priors'
+  /// sigmas are the motion model's per-metre terms (trans_sigma_per_m, rot_sigma_per_m: the per-run
+  /// scale error and heading drift of the odometry), which then leave the per-step covariance; the
+  /// random-walk terms and the floors stay. Only for the chord noise model with both terms > 0.
+  bool calibrate_odometry = false;
 };
 
 class KeyframeGraph {

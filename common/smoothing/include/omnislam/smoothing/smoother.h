@@ -67,6 +67,15 @@ struct FlatCeiling {
 };
 using CeilingPrior = std::variant<NoCeilingPrior, KnownCeilingHeight, FlatCeiling>;
 
+/// The odometry's systematic errors of the run as unknowns (factors.h, CalibratedOdometryCost): a
+/// scale factor on distance and a heading drift per metre, with Gaussian priors around (1, 0). Wheel
+/// radius and wheel-base errors are constant over a run; modelled as independent per-step noise they
+/// would average down over many steps and the graph would trust the odometry too much.
+struct OdometryCalibrationPrior {
+  double scale_sigma = 0.01;             ///< std of the scale factor about 1, > 0
+  double drift_sigma_rad_per_m = 0.003;  ///< std of the heading drift about 0 [rad/m], > 0
+};
+
 struct Graph {
   std::vector<KeyframeNode> keyframes;
   std::vector<LandmarkNode> landmarks;
@@ -74,6 +83,7 @@ struct Graph {
   std::vector<BearingEdge> bearings;
   std::vector<PosePrior> pose_priors;  ///< at least one (the gauge)
   CeilingPrior ceiling;
+  std::optional<OdometryCalibrationPrior> odometry_calibration;  ///< none: the odometry as measured
 
   /// Empty when every index is in range, every value finite and every covariance positive definite,
   /// otherwise a one-line message naming the first bad element.
@@ -144,6 +154,8 @@ struct Solution {
   Eigen::Matrix3d last_pose_cov = Eigen::Matrix3d::Zero();
   std::string covariance_failure;          ///< non-empty when the covariances were asked for but are singular
   std::optional<double> ceiling_height_m;  ///< FlatCeiling: the estimated height
+  /// With Graph::odometry_calibration: the estimated (scale, drift_rad_per_m).
+  std::optional<Eigen::Vector2d> odometry_calibration;
   std::vector<RemovedBearing> removed;
   std::vector<char> bearing_used;               ///< per Graph::bearings: 1 if still in the graph at the end
   double initial_cost = 0.0, final_cost = 0.0;  ///< Ceres' cost (1/2 sum of robustified squares)

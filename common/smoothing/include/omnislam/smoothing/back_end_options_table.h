@@ -13,7 +13,7 @@ namespace omnislam::smoothing {
 
 const std::vector<options::Field<BackEndOptions>>& backEndFields();  ///< keys `backend.*`
 const std::vector<options::Field<SolverOptions>>& solverFields();    ///< keys `backend.solver.*`
-const std::vector<std::string>& backEndModeNames();                   ///< "off", "keyframes"
-const std::vector<std::string>& ceilingNames();                       ///< "none", "known_height", "flat"
+const std::vector<std::string>& backEndModeNames();                  ///< "off", "keyframes"
+const std::vector<std::string>& ceilingNames();                      ///< "none", "known_height", "flat"
 
 }  // namespace omnislam::smoothing

@@ -116,6 +116,20 @@ TEST(smoothing_Factors, TheCalibratedIncrementIsTheOdometryAtScaleOneAndNoDrift)
   EXPECT_NEAR(std::atan2(c.y_m, c.x_m) - std::atan2(u.y_m, u.x_m), 0.005 * d, 1e-12);
 }
 
+TEST(smoothing_Factors, LandmarkPriorJacobiansMatchAndItsSquareIsTheQuadraticForm) {
+  const Eigen::Vector2d dir(std::cos(0.7), std::sin(0.7));
+  const Eigen::Matrix2d rank1 = dir * dir.transpose() / 0.25;  // a depth prior along one ray only
+  const Eigen::Matrix3d full{{50.0, 10.0, 1.0}, {10.0, 20.0, 2.0}, {1.0, 2.0, 5.0}};
+  checkCostJacobians(LandmarkPriorCost<2>(Eigen::Vector2d(1.0, -2.0), rank1), {{1.3, -2.4}}, 1e-6);
+  checkCostJacobians(LandmarkPriorCost<3>(Eigen::Vector3d(1.0, -2.0, 3.0), full), {{1.3, -2.4, 2.5}}, 1e-6);
+  const Eigen::Vector2d mean(1.0, -2.0), l(1.3, -2.4);
+  const LandmarkPriorCost<2> cost(mean, rank1);
+  const double* params[] = {l.data()};
+  Eigen::Vector2d r;
+  ASSERT_TRUE(cost.Evaluate(params, r.data(), nullptr));
+  EXPECT_NEAR(r.squaredNorm(), (l - mean).dot(rank1 * (l - mean)), 1e-12);
+}
+
 TEST(smoothing_Factors, WhitenedResidualIsTheMahalanobisDistance) {
   const auto z = pointMeasurement(0.4, 0.9);
   const PointBearingCost cost(z, z.cov_rad2);

@@ -281,7 +281,15 @@ TEST(smoothing_Solve, InvalidGraphsAndOptionsAreRefusedNamingTheElement) {
   g = sim.graph;
   g.keyframes[1].T_WtoR.x_m = std::nan("");
   EXPECT_EQ(solve(g).failure, "keyframe 1: pose not finite");
+  g = sim.graph;
+  g.landmark_priors.push_back({42, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity()});
+  EXPECT_EQ(solve(g).failure, "landmark prior 0: index");
+  g.landmark_priors = {{0, Eigen::Vector3d::Zero(), Eigen::Vector3d(1.0, 0.0, -1.0).asDiagonal()}};
+  EXPECT_EQ(solve(g).failure, "landmark prior 0: information not symmetric positive semi-definite");
   SolverOptions so;
+  so.bearing_loss_sigmas = -1.0;
+  EXPECT_EQ(solve(sim.graph, so).failure, "bearing_loss_sigmas must be >= 0");
+  so = SolverOptions{};
   so.outlier_probability = 0.7;
   EXPECT_EQ(solve(sim.graph, so).failure, "outlier_probability must be in (0, 0.5)");
   EXPECT_FALSE(solve(g).ok);
@@ -300,6 +308,32 @@ TEST(smoothing_Solve, ALandmarkSeenOnceStaysOutOfTheSolveAtItsStart) {
   EXPECT_EQ(s.landmarks_m.back(), start);
   EXPECT_EQ(s.bearing_used.back(), 0);
   EXPECT_TRUE(s.covariance_failure.empty()) << s.covariance_failure;
+}
+
+// A landmark seen once joins the solve when it has a prior: a depth prior along its one ray (rank 1)
+// puts it at the prior's point on the ray, where the single azimuth cannot.
+TEST(smoothing_Solve, ALandmarkSeenOnceWithADepthPriorIsPlacedOnItsRay) {
+  const Pose2 x{1.0, 2.0, 0.4};
+  const double azimuth = 0.3, depth_m = 3.5;
+  const Eigen::Vector2d u(std::cos(x.theta_rad + azimuth), std::sin(x.theta_rad + azimuth));
+  const Eigen::Vector2d expected = Eigen::Vector2d(x.x_m, x.y_m) + depth_m * u;
+  Graph g;
+  g.keyframes.push_back({0, 0, x});
+  g.pose_priors.push_back({0, x, Eigen::Matrix3d::Identity() * 1e-6});
+  const Eigen::Vector2d start = expected + Eigen::Vector2d(0.4, -0.9);
+  g.landmarks.push_back({7, slam::LandmarkKind::kVerticalLine, Eigen::Vector3d(start.x(), start.y(), 0.0)});
+  slam::BearingMeasurement z;
+  z.kind = slam::LandmarkKind::kVerticalLine;
+  z.azimuth_rad = azimuth;
+  z.cov_rad2(0, 0) = 1e-4;
+  g.bearings.push_back({0, 0, z});
+  Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
+  info.topLeftCorner<2, 2>() = u * u.transpose() / 4.0;
+  g.landmark_priors.push_back({0, Eigen::Vector3d(expected.x(), expected.y(), 0.0), info});
+  const Solution s = solve(g);
+  ASSERT_TRUE(s.ok) << s.failure;
+  EXPECT_EQ(s.bearing_used[0], 1);
+  EXPECT_LT((s.landmarks_m[0].head<2>() - expected).norm(), 1e-6);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include "omnislam/smoothing/factors.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <cmath>
 
 #include "omnislam/core/angles.h"
@@ -198,5 +199,29 @@ bool FlatCeilingCost::Evaluate(double const* const* params, double* residuals, d
   if (jacobians && jacobians[1]) jacobians[1][0] = -inv_sigma_;
   return true;
 }
+
+template <int N>
+LandmarkPriorCost<N>::LandmarkPriorCost(const Eigen::Matrix<double, N, 1>& mean_m,
+                                        const Eigen::Matrix<double, N, N>& information)
+    : mean_(mean_m) {
+  // information = V diag(lambda) V^T: S = diag(sqrt(lambda)) V^T (negative round-off clamped to 0).
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(information);
+  S_ = es.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * es.eigenvectors().transpose();
+}
+
+template <int N>
+bool LandmarkPriorCost<N>::Evaluate(double const* const* params, double* residuals, double** jacobians) const {
+  const Eigen::Map<const Eigen::Matrix<double, N, 1>> l(params[0]);
+  Eigen::Map<Eigen::Matrix<double, N, 1>> r(residuals);
+  r = S_ * (l - mean_);
+  if (jacobians && jacobians[0]) {
+    Eigen::Map<Eigen::Matrix<double, N, N, Eigen::RowMajor>> J(jacobians[0]);
+    J = S_;
+  }
+  return true;
+}
+
+template class LandmarkPriorCost<2>;
+template class LandmarkPriorCost<3>;
 
 }  // namespace omnislam::smoothing

@@ -5,7 +5,9 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
@@ -28,6 +30,7 @@ struct Blocks {
   std::vector<ceres::ResidualBlockId> bearing_ids;  ///< per Graph::bearings (nullptr once removed)
   std::vector<int> bearings_of_landmark;            ///< count of bearings still in the graph
   std::vector<char> landmark_in_problem;
+  std::vector<char> has_prior;  ///< per landmark: 1 with a LandmarkPrior
 };
 
 /// The covariance of a bearing as the filter uses it.
@@ -89,6 +92,21 @@ void addOdometry(const Graph& g, ceres::Problem& pb, Blocks& b) {
                         b.poses[e.to].data(), b.calibration.data());
 }
 
+/// Landmark priors, never down-weighted; a landmark with one counts as located (see dropUnderdetermined).
+void addLandmarkPriors(const Graph& g, ceres::Problem& pb, Blocks& b) {
+  b.has_prior.assign(g.landmarks.size(), 0);
+  for (const auto& p : g.landmark_priors) {
+    double* lm = b.landmarks[p.landmark].data();
+    ceres::CostFunction* cost =
+        isPoint(g.landmarks[p.landmark].kind)
+            ? static_cast<ceres::CostFunction*>(new LandmarkPriorCost<3>(p.mean_m, p.information))
+            : static_cast<ceres::CostFunction*>(
+                  new LandmarkPriorCost<2>(p.mean_m.head<2>(), p.information.topLeftCorner<2, 2>()));
+    pb.AddResidualBlock(cost, nullptr, lm);
+    b.has_prior[p.landmark] = 1;
+  }
+}
+
 /// Adds every block of the graph; the loss functions are owned by the caller.
 void buildProblem(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Blocks& b,
                   ceres::LossFunction* bearing_loss, ceres::LossFunction* ceiling_loss) {
@@ -102,14 +120,16 @@ void buildProblem(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Bl
   addOdometry(g, pb, b);
   addBearings(g, o, pb, b, bearing_loss);
   addCeiling(g, pb, b, ceiling_loss);
+  addLandmarkPriors(g, pb, b);
   b.landmark_in_problem.assign(g.landmarks.size(), 1);
 }
 
 /// A landmark left with fewer bearings than it needs to be located leaves the problem (with its
-/// other factors), keeping its initial value: points need two rays, lines two azimuths.
+/// other factors), keeping its initial value: points need two rays, lines two azimuths. A landmark
+/// with a prior stays: the prior is the caller's word that it is located with what it has.
 void dropUnderdetermined(const Graph& g, ceres::Problem& pb, Blocks& b) {
   for (std::size_t j = 0; j < g.landmarks.size(); ++j) {
-    if (!b.landmark_in_problem[j] || b.bearings_of_landmark[j] >= 2) continue;
+    if (!b.landmark_in_problem[j] || b.bearings_of_landmark[j] >= 2 || b.has_prior[j]) continue;
     for (std::size_t i = 0; i < g.bearings.size(); ++i) {
       if (g.bearings[i].landmark != static_cast<int>(j) || !b.bearing_ids[i]) continue;
       pb.RemoveResidualBlock(b.bearing_ids[i]);
@@ -256,6 +276,20 @@ void readSolution(const Graph& g, const Blocks& b, Solution& s) {
 
 std::string positiveDefinite(const Eigen::Matrix3d& S) { return whitener<3>(S) ? "" : "not positive definite"; }
 
+std::string validateLandmarkPriors(const Graph& g) {
+  const int L = static_cast<int>(g.landmarks.size());
+  for (std::size_t i = 0; i < g.landmark_priors.size(); ++i) {
+    const auto& p = g.landmark_priors[i];
+    const std::string who = "landmark prior " + std::to_string(i) + ": ";
+    if (p.landmark < 0 || p.landmark >= L) return who + "index";
+    if (!p.mean_m.allFinite() || !p.information.allFinite()) return who + "not finite";
+    const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(p.information).eigenvalues();
+    if (!p.information.isApprox(p.information.transpose(), 1e-9) || ev(0) < -1e-9 * std::max(1.0, std::abs(ev(2))))
+      return who + "information not symmetric positive semi-definite";
+  }
+  return "";
+}
+
 std::string validateEdges(const Graph& g) {
   const int K = static_cast<int>(g.keyframes.size()), L = static_cast<int>(g.landmarks.size());
   auto bad = [](const char* what, std::size_t i, const std::string& why) {
@@ -285,7 +319,7 @@ std::string validateEdges(const Graph& g) {
     if (!p.mean.vec().allFinite()) return bad("pose prior", i, "mean not finite");
     if (const auto why = positiveDefinite(p.Sigma); !why.empty()) return bad("pose prior", i, "Sigma " + why);
   }
-  return "";
+  return validateLandmarkPriors(g);
 }
 
 std::string validateCeiling(const CeilingPrior& c) {
@@ -317,7 +351,7 @@ std::string Graph::validate() const {
 
 std::string SolverOptions::validate() const {
   if (max_iterations < 1) return "max_iterations must be >= 1";
-  if (!(bearing_loss_sigmas > 0.0) || !std::isfinite(bearing_loss_sigmas)) return "bearing_loss_sigmas must be > 0";
+  if (!(bearing_loss_sigmas >= 0.0) || !std::isfinite(bearing_loss_sigmas)) return "bearing_loss_sigmas must be >= 0";
   if (!(ceiling_loss_sigmas > 0.0) || !std::isfinite(ceiling_loss_sigmas)) return "ceiling_loss_sigmas must be > 0";
   if (!(outlier_probability > 0.0 && outlier_probability < 0.5)) return "outlier_probability must be in (0, 0.5)";
   if (outlier_rounds < 0) return "outlier_rounds must be >= 0";

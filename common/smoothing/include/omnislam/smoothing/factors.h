@@ -12,6 +12,7 @@
 //   bearing      e = wrap(z - h(l, T_WtoR)) with h the filter's measurement model (bearing_model.h):
 //                (azimuth, elevation) of a point, azimuth of a vertical line; Sigma = the feature's
 //                own covariance (measurementCovariance(), with the filter's zenith inflation)
+//   landmark     e = S (l - mean), S^T S = the prior's information (PSD, may be rank-deficient)
 //   ceiling      e = z_l - h_m (known height: h_m a constant; flat ceiling: h_m an unknown)
 // Robust losses are applied by the graph (smoother.h) to bearings and ceiling factors only: the
 // gauge (pose prior) and the odometry are never down-weighted (../shared/docs/smoothing-notes.md).
@@ -131,6 +132,19 @@ class LineAzimuthCost final : public ceres::SizedCostFunction<1, 3, 2> {
  private:
   slam::BearingMeasurement z_;
   double inv_sigma_ = 1.0;
+};
+
+/// Prior on a landmark (N = 3: a point; N = 2: a vertical line's x-y): residual S (l - mean) with
+/// S^T S = information, a symmetric positive semi-definite matrix (rank-deficient allowed).
+template <int N>
+class LandmarkPriorCost final : public ceres::SizedCostFunction<N, N> {
+ public:
+  LandmarkPriorCost(const Eigen::Matrix<double, N, 1>& mean_m, const Eigen::Matrix<double, N, N>& information);
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override;
+
+ private:
+  Eigen::Matrix<double, N, 1> mean_;
+  Eigen::Matrix<double, N, N> S_;  ///< square root of the information
 };
 
 /// A point landmark on a ceiling of known height: residual (z_l - height_m) / sigma_m.

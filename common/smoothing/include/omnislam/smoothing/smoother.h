@@ -54,6 +54,15 @@ struct PosePrior {
   Eigen::Matrix3d Sigma = Eigen::Matrix3d::Identity() * 1e-6;
 };
 
+/// Gaussian prior on one landmark: cost (l - mean)^T information (l - mean). The information may be
+/// rank-deficient (e.g. a depth prior along a landmark's first ray only). For a vertical line only
+/// the x-y blocks of mean and information are used.
+struct LandmarkPrior {
+  int landmark = 0;
+  Eigen::Vector3d mean_m = Eigen::Vector3d::Zero();       ///< in W [m]
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  ///< [1/m^2], symmetric positive semi-definite
+};
+
 /// Where the building gives the map's scale (docs/design/smoothing.md, "Ceiling priors").
 struct NoCeilingPrior {};
 /// Every point landmark on a ceiling of this measured height (W's z, above the floor) +- sigma.
@@ -81,7 +90,8 @@ struct Graph {
   std::vector<LandmarkNode> landmarks;
   std::vector<OdometryEdge> odometry;
   std::vector<BearingEdge> bearings;
-  std::vector<PosePrior> pose_priors;  ///< at least one (the gauge)
+  std::vector<PosePrior> pose_priors;          ///< at least one (the gauge)
+  std::vector<LandmarkPrior> landmark_priors;  ///< optional; a landmark with one keeps its place in the solve
   CeilingPrior ceiling;
   std::optional<OdometryCalibrationPrior> odometry_calibration;  ///< none: the odometry as measured
 
@@ -114,8 +124,8 @@ enum class LinearSolver : std::uint8_t {
 
 struct SolverOptions {
   int max_iterations = 50;  ///< Levenberg-Marquardt iterations per solve, >= 1
-  /// Cauchy loss scale on a bearing's whitened residual [sigmas], > 0: errors beyond it count less
-  /// than quadratically (a wrong association's pull is bounded).
+  /// Cauchy loss scale on a bearing's whitened residual [sigmas], >= 0: errors beyond it count less
+  /// than quadratically (a wrong association's pull is bounded); 0: plain least squares (no loss).
   double bearing_loss_sigmas = 3.0;
   /// Cauchy loss scale on a ceiling factor [sigmas], > 0: the odd lamp at another height.
   double ceiling_loss_sigmas = 3.0;

@@ -27,9 +27,8 @@ void fuzzSlamConfig(const uint8_t* data, size_t size) {
 }
 
 void fuzzWorldConfig(const uint8_t* data, size_t size) {
-  guard<config::ConfigError>("world_config", [&] {
-    (void)config::parseWorld(config::Node::loadString(text(data, size), "fuzz-world.yaml"));
-  });
+  guard<config::ConfigError>(
+      "world_config", [&] { (void)config::parseWorld(config::Node::loadString(text(data, size), "fuzz-world.yaml")); });
 }
 
 void fuzzFeaturesConfig(const uint8_t* data, size_t size) {
@@ -44,9 +43,8 @@ void fuzzFeaturesConfig(const uint8_t* data, size_t size) {
 void fuzzLaunchFile(const uint8_t* data, size_t size) {
   const std::string path = scratchFile("launch_file", data, size);
   // --set k=v overrides are the user's own; the file's ${var} substitution throws invalid_argument.
-  guard<config::ConfigError, std::invalid_argument>("launch_file", [&] {
-    (void)launch::loadPlan(path, {}, "", "", "", false);
-  });
+  guard<config::ConfigError, std::invalid_argument>("launch_file",
+                                                    [&] { (void)launch::loadPlan(path, {}, "", "", "", false); });
 }
 
 }  // namespace omnislam::fuzz

@@ -23,14 +23,15 @@ void checkDecoded(const vision::DecodedImage& d, const char* target) {
   if (!d.ok()) return;
   if (!d.header || d.image.empty()) reportUnexpected(target, "accepted", "an image without header or pixels");
   if (d.image.cols != d.header->width_px || d.image.rows != d.header->height_px)
-    reportUnexpected(target, "accepted", "decoded " + std::to_string(d.image.cols) + "x" +
-                                             std::to_string(d.image.rows) + " from " + d.header->describe());
+    reportUnexpected(target, "accepted",
+                     "decoded " + std::to_string(d.image.cols) + "x" + std::to_string(d.image.rows) + " from " +
+                         d.header->describe());
 }
 
 /// A few rays through the camera, as the detectors use it: none may crash or give a non-unit ray.
 void exerciseCamera(const camera::CameraModel& cam, const char* target) {
   for (const Eigen::Vector2d& px : {Eigen::Vector2d(0.5 * cam.widthPx(), 0.5 * cam.heightPx()),
-                                   Eigen::Vector2d(1.0, 1.0), Eigen::Vector2d(cam.widthPx() - 1.0, 2.0)}) {
+                                    Eigen::Vector2d(1.0, 1.0), Eigen::Vector2d(cam.widthPx() - 1.0, 2.0)}) {
     const auto d = cam.unproject(px);
     if (!d) continue;
     if (!(std::abs(d->norm() - 1.0) < 1e-6)) reportUnexpected(target, "camera", "unproject gave a non-unit ray");

@@ -65,7 +65,8 @@ void fuzzCheckpoint(const uint8_t* data, size_t size) {
     try {
       again = loadAndWrite(written, opt);
     } catch (const StateFormatError& e) {
-      reportUnexpected("checkpoint", "round trip", std::string("what a loaded checkpoint writes is refused: ") + e.what());
+      reportUnexpected("checkpoint", "round trip",
+                       std::string("what a loaded checkpoint writes is refused: ") + e.what());
     }
     if (again != written) {
       const auto diff = std::mismatch(again.begin(), again.end(), written.begin(), written.end());

@@ -23,7 +23,8 @@ const std::vector<Target>& targets() {
       {"launch_file", fuzzLaunchFile, "launch::loadPlan"},
       {"saved_map", fuzzSavedMap, "slamproc::loadMap, its round trip, a SlamDriver on it"},
       {"checkpoint", fuzzCheckpoint, "slamproc::decodeCheckpoint (envelope, options, state), its round trip"},
-      {"mrclam", fuzzMrclam, "mrclam::readOdometry / readGroundtruth / readMeasurements / readLandmarks / readBarcodes"},
+      {"mrclam", fuzzMrclam,
+       "mrclam::readOdometry / readGroundtruth / readMeasurements / readLandmarks / readBarcodes"},
       {"wheel_csv", fuzzWheelCsv, "odometry::parseWheelCsv"},
   };
   return all;

@@ -17,9 +17,9 @@ namespace omnislam::fuzz {
 using EntryPoint = void (*)(const uint8_t* data, size_t size);
 
 struct Target {
-  const char* name;     ///< the executable is fuzz_<name>; the corpus tests/fuzz/corpus/<name>/
-  EntryPoint entry;     ///< the code under test
-  const char* covers;   ///< one line: what it calls (for docs and the test's messages)
+  const char* name;    ///< the executable is fuzz_<name>; the corpus tests/fuzz/corpus/<name>/
+  EntryPoint entry;    ///< the code under test
+  const char* covers;  ///< one line: what it calls (for docs and the test's messages)
 };
 
 /// Every target, in the order scripts/fuzz.sh runs them.

@@ -79,9 +79,8 @@ void message(const std::string& name, const Msg& m) {
 }
 
 void imageMessages() {
-  const std::vector<std::pair<const char*, int8_t>> formats{{"gray", image_t::FORMAT_GRAY8},
-                                                            {"jpeg", image_t::FORMAT_JPEG},
-                                                            {"png", image_t::FORMAT_PNG}};
+  const std::vector<std::pair<const char*, int8_t>> formats{
+      {"gray", image_t::FORMAT_GRAY8}, {"jpeg", image_t::FORMAT_JPEG}, {"png", image_t::FORMAT_PNG}};
   for (const auto& [name, f] : formats) {
     image_t m;
     m.utime = kT0;

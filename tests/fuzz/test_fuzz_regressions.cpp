@@ -5,6 +5,7 @@
 // report does too).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,11 @@
 
 namespace fs = std::filesystem;
 using omnislam::fuzz::Target;
+
+namespace omnislam::fuzz {
+/// The test's parameter by its name in CTest's output.
+void PrintTo(const Target& t, std::ostream* os) { *os << t.name; }
+}  // namespace omnislam::fuzz
 
 namespace {
 

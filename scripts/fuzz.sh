@@ -10,7 +10,8 @@
 # only), with the target's dictionary tests/fuzz/dict/TARGET.dict when there is one. Per input:
 # -rss_limit_mb=2048 (the malloc limit too), -timeout=10 s, -max_len (the table below): an input that
 # takes more is a finding, not slowness. A finding (crash, sanitizer report, leak, timeout, out of
-# memory) is written by libFuzzer as a file and copied to tests/fuzz/regressions/TARGET/, where the
+# memory) is written by libFuzzer as a file and copied to tests/fuzz/regressions/TARGET/ (a slow-unit
+# file, libFuzzer's slowest input under the limit, stays in build-fuzz/fuzz-work/), where the
 # normal suite's fuzz_test_regressions replays it: commit it with the fix. Exit 1 when any target
 # had a finding. --make-seeds rewrites the seed corpora from the project's files (then exits).
 # OMNISLAM_FUZZ_BUILD_DIR (default build-fuzz), OMNISLAM_FUZZ_CXX / _CC (default clang++-14 / clang-14).
@@ -99,6 +100,9 @@ run_target() {
   edges=$(grep -o ' cov: [0-9]*' "$log" | grep -o '[0-9]*$' | tail -1 || true)
   for f in "$work/artifacts"/*; do
     [ -f "$f" ] || continue
+    case "$(basename "$f")" in  # libFuzzer's slowest input so far: under the time limit, not a finding
+      slow-unit-*) echo "fuzz.sh: $t: slow input $(basename "$f") kept in $work/artifacts (log: $log)" >&2; continue ;;
+    esac
     findings=$((findings + 1))
     mkdir -p "$root/tests/fuzz/regressions/$t"
     cp "$f" "$root/tests/fuzz/regressions/$t/"

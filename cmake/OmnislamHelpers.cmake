@@ -9,6 +9,9 @@ function(omnislam_add_gtest name)
     set(main omnislam_gtest_main_whole)  # tests/CMakeLists.txt: skips reported to CTest as 77
   endif()
   add_executable(${name} ${T_SOURCES})
+  if("unit" IN_LIST T_LABELS)  # the target unit_tests (tests/CMakeLists.txt) builds only these
+    set_property(GLOBAL APPEND PROPERTY OMNISLAM_UNIT_TEST_TARGETS ${name})
+  endif()
   target_link_libraries(${name} PRIVATE ${T_LIBS} GTest::gtest ${main})
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests/support)
   target_compile_definitions(${name} PRIVATE

@@ -20,6 +20,8 @@ PKGS=(
   xvfb xauth x11-apps imagemagick                     # headless lcm-spy check and its screenshot
   python3                                             # small test helpers
   clang-format                                        # scripts/format.sh: the style check CI runs
+  clang-14                                            # scripts/fuzz.sh: the libFuzzer build (build-fuzz/)
+  libclang-rt-14-dev                                  # libFuzzer and the sanitizer runtimes for clang-14
   iproute2                                            # ip: check-multicast.sh adds a multicast route
 )
 

@@ -3,6 +3,8 @@
 # Long soaks are opt-in: OMNISLAM_SOAK=1 bash scripts/run-tests.sh. Extra arguments go to ctest.
 # OMNISLAM_SANITIZE=1 runs the suite on an AddressSanitizer + UndefinedBehaviorSanitizer build in
 # build-sanitize/ (any other value is taken as the -fsanitize= list); a report fails its test.
+# OMNISLAM_CI_FUZZ=1 adds, after the suite, the sanitized unit label and a short run of every fuzz
+# target (scripts/ci-hardening.sh; docs/design/fuzzing.md).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -42,5 +44,9 @@ if [ ${#excluded[@]} -gt 0 ]; then
   joined="$(IFS='|'; echo "${excluded[*]}")"
   exclude=(-LE "$joined")
 fi
-cd "$build"
-ctest --output-on-failure -j"$(nproc)" "${exclude[@]}" "${args[@]}"
+status=0
+(cd "$build" && ctest --output-on-failure -j"$(nproc)" "${exclude[@]}" "${args[@]}") || status=$?
+if [ "${OMNISLAM_CI_FUZZ:-0}" = 1 ]; then
+  bash scripts/ci-hardening.sh || status=1
+fi
+exit "$status"

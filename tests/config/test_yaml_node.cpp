@@ -155,6 +155,24 @@ TEST(YamlNode, AKeyWithNoValueAndASecondDocumentAreRefused) {
   std::remove(path.c_str());
 }
 
+// A stray ',' (found by tests/fuzz, regressions/world_config and saved_map): yaml-cpp 0.7's LoadAll
+// never returned on it, appending empty documents until memory ran out (2.8 GB in 100 s). Now it is
+// refused at once, in a string, a file and an override's value.
+TEST(YamlNode, AStrayCommaIsRefusedNotParsedForever) {
+  for (const char* text : {",", " ,\n", "{a: 1}, ", "a: 1\n---\n,\n"}) {
+    SCOPED_TRACE(text);
+    const std::string e = errorOf([&] { Node::loadString(text, "comma.yaml"); });
+    EXPECT_EQ(e.rfind("comma.yaml: not valid YAML: the parser does not advance past a stray ','", 0), 0u) << e;
+  }
+  const std::string path = "/tmp/omnislam-yaml-node-comma-" + std::to_string(::getpid()) + ".yaml";
+  std::ofstream(path) << "seed: 4\n,\n";
+  EXPECT_NE(errorOf([&] { Node::loadFile(path); }).find(path + ": not valid YAML"), std::string::npos);
+  std::ofstream(path) << "seed: 4\n";
+  EXPECT_NE(errorOf([&] { Node::loadFileWithOverrides(path, {"seed=,"}); }).find("override 'seed=,'"),
+            std::string::npos);
+  std::remove(path.c_str());
+}
+
 // Whole numbers are decimal: YAML 1.1's octal and hexadecimal readings surprise ("0100" would be 64).
 TEST(YamlNode, WholeNumbersAreDecimal) {
   const Node root = Node::loadString("a: 0100\nb: 0x10\nc: +7\nd: 12abc\ne: -3\n", "i.yaml");

@@ -311,6 +311,14 @@ TEST(CalibrationFiles, MalformedOpenCvFilesNameTheKey) {
       {opencvYaml(kKYaml + kDYaml + "xi: 1.0\nimage_width: 0\nimage_height: 480\n"),
        "key 'image_width' must be an integer"},
       {opencvYaml("rms: 0.4\n"), "key 'camera_matrix' is missing"},
+      // Found by tests/fuzz (regressions/calibration): OpenCV allocated the declared 3 x 2^31 doubles
+      // (48 GB) before reading the data; the declared shape is refused first.
+      {opencvYaml("camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 2147483647\n   dt: d\n   data: [ 1. ]\n" +
+                  kDYaml + "xi: 1.0\n"),
+       "key 'camera_matrix' must be a 3x3 matrix, found 3x2147483647 (declared)"},
+      // Found by tests/fuzz (regressions/calibration): a list at the top level made OpenCV's
+      // FileNode::operator[] throw cv::Exception out of the reader.
+      {opencvYaml("- 1\n- 2\n"), "not a readable OpenCV FileStorage file"},
   };
   for (const Case& c : cases) {
     writeText(path, c.text);

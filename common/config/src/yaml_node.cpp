@@ -3,12 +3,15 @@
 
 #include <algorithm>
 #include <yaml-cpp/depthguard.h>
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
 
 #include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -60,15 +63,54 @@ void rejectRepeatedKeys(const YAML::Node& n, const std::string& source, const st
   walkRepeatedKeys(n, source, path, containers);
 }
 
-/// The first document of `docs`; a later one that holds anything is refused (yaml-cpp's Load reads
-/// only the first, so everything after a '---' line would be ignored without a word).
-YAML::Node onlyDocument(const std::vector<YAML::Node>& docs, const std::string& source) {
-  for (size_t i = 1; i < docs.size(); ++i)
-    if (!docs[i].IsNull())
-      throw ConfigError(source + ": a second YAML document starts" +
-                        (docs[i].Mark().line >= 0 ? " near line " + std::to_string(docs[i].Mark().line + 1) : "") +
-                        " (after a '---' line); a config is one document: join them or remove the '---'");
-  return docs.empty() ? YAML::Node() : docs.front();
+/// The events of a YAML stream reduced to what onlyDocument needs: the documents begun, and where
+/// the first node of a later document is (one that holds anything: an empty one after '---' is fine).
+class LaterDocuments : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark&) override { ++documents; }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { note(m); }
+  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t, const std::string&) override { note(m); }
+  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    note(m);
+  }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    note(m);
+  }
+  void OnMapEnd() override {}
+
+  std::ptrdiff_t documents = 0;
+  std::optional<YAML::Mark> later;  ///< the first node of a document after the first
+
+ private:
+  void note(const YAML::Mark& m) {
+    if (documents > 1 && !later) later = m;
+  }
+};
+
+/// The first document of `text`; a later one that holds anything is refused (yaml-cpp's Load reads
+/// only the first, so everything after a '---' line would be ignored without a word). Not LoadAll:
+/// yaml-cpp 0.7's LoadAll never ends on a stray ',' (the 1-byte file ","), appending empty documents
+/// until memory runs out (jbeder/yaml-cpp#1040; fixed upstream by #1319, after Debian's 0.7.0; found
+/// by tests/fuzz). The documents are counted here instead, at most one per line ('---' starts a
+/// line) plus one: a parse that reaches that bound is the runaway one, and refused.
+YAML::Node onlyDocument(const std::string& text, const std::string& source) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  LaterDocuments scan;
+  const std::ptrdiff_t max_documents = std::count(text.begin(), text.end(), '\n') + 2;
+  while (scan.documents < max_documents && !scan.later && parser.HandleNextDocument(scan)) {
+  }
+  if (!scan.later && scan.documents >= max_documents)
+    throw ConfigError(source +
+                      ": not valid YAML: the parser does not advance past a stray ',' (one outside a [list] "
+                      "or {map})");
+  if (scan.later)
+    throw ConfigError(source + ": a second YAML document starts near line " + std::to_string(scan.later->line + 1) +
+                      " (after a '---' line); a config is one document: join them or remove the '---'");
+  return YAML::Load(text);
 }
 
 /// yaml-cpp's message, except for its nesting guard, whose message (0.7) is "bad file".
@@ -110,7 +152,10 @@ Node Node::loadFile(const std::string& path) {
   // A folder (or a device) would fail inside the stream with an exception that names no file.
   if (!std::filesystem::is_regular_file(path)) throw ConfigError(path + ": not a file");
   try {
-    YAML::Node root = onlyDocument(YAML::LoadAllFromFile(path), path);
+    std::ifstream file(path, std::ios::binary);
+    std::ostringstream text;
+    text << file.rdbuf();
+    YAML::Node root = onlyDocument(text.str(), path);
     if (!root.IsMap()) throw ConfigError(path + ": the top level must be a map of keys");
     rejectRepeatedKeys(root, path, "");
     return Node(root, std::make_shared<const std::string>(path), "");
@@ -131,7 +176,7 @@ Node Node::loadFileWithOverrides(const std::string& path, const std::vector<std:
       throw ConfigError("override '" + ov + "': expected dotted.key=value");
     YAML::Node value;
     try {
-      value = onlyDocument(YAML::LoadAll(ov.substr(eq + 1)), "override '" + ov + "'");
+      value = onlyDocument(ov.substr(eq + 1), "override '" + ov + "'");
     } catch (const YAML::Exception& e) {
       throw ConfigError("override '" + ov + "': the value is not valid YAML: " + yamlError(e));
     }
@@ -161,7 +206,7 @@ Node Node::loadFileWithOverrides(const std::string& path, const std::vector<std:
 
 Node Node::loadString(const std::string& text, const std::string& source) {
   try {
-    YAML::Node root = onlyDocument(YAML::LoadAll(text), source);
+    YAML::Node root = onlyDocument(text, source);
     if (!root.IsMap()) throw ConfigError(source + ": the top level must be a map of keys");
     rejectRepeatedKeys(root, source, "");
     return Node(root, std::make_shared<const std::string>(source), "");

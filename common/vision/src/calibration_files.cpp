@@ -73,18 +73,26 @@ cv::Mat readMatrix(const cv::FileStorage& fs, const std::string& key, int rows, 
                    const std::string& source) {
   const cv::FileNode n = fs[key];
   if (n.empty() || n.isNone()) fail(source, "key '" + key + "' is missing");
+  const auto shapeOk = [&](int r, int c) {
+    return (r == rows && c == cols) || (either_orientation && r == cols && c == rows);
+  };
+  const auto wrongShape = [&](int r, int c, const std::string& more) {
+    fail(source, "key '" + key + "' must be a " + std::to_string(rows) + "x" + std::to_string(cols) + " matrix" +
+                     (either_orientation ? " (or its transpose)" : "") + ", found " + std::to_string(r) + "x" +
+                     std::to_string(c) + more);
+  };
+  // OpenCV allocates the declared rows x cols before it reads the data: 3 KB declaring 2^31 columns
+  // asked for 48 GB (found by tests/fuzz, regressions/calibration). The declared shape comes first.
+  if (n.isMap() && !shapeOk(static_cast<int>(n["rows"]), static_cast<int>(n["cols"])))
+    wrongShape(static_cast<int>(n["rows"]), static_cast<int>(n["cols"]), " (declared)");
   cv::Mat m;
   try {
     n >> m;
   } catch (const cv::Exception& e) {
     fail(source, "key '" + key + "' is not an OpenCV matrix: " + oneLine(e.err));
   }
-  const std::string want = std::to_string(rows) + "x" + std::to_string(cols);
-  const bool shape_ok = (m.rows == rows && m.cols == cols) || (either_orientation && m.rows == cols && m.cols == rows);
-  if (m.empty() || m.channels() != 1 || !shape_ok)
-    fail(source, "key '" + key + "' must be a " + want + " matrix" + (either_orientation ? " (or its transpose)" : "") +
-                     ", found " + std::to_string(m.rows) + "x" + std::to_string(m.cols) +
-                     (m.channels() > 1 ? " with " + std::to_string(m.channels()) + " channels" : ""));
+  if (m.empty() || m.channels() != 1 || !shapeOk(m.rows, m.cols))
+    wrongShape(m.rows, m.cols, m.channels() > 1 ? " with " + std::to_string(m.channels()) + " channels" : "");
   m.convertTo(m, CV_64F);
   for (int i = 0; i < m.rows; ++i)
     for (int j = 0; j < m.cols; ++j)
@@ -131,10 +139,9 @@ std::optional<double> readXi(const cv::FileStorage& fs, const std::string& sourc
   return xi;
 }
 
-/// An OpenCV file as `want`, or (nullopt) as what it holds: omnidir with xi, fisheye without.
-CameraCalibration parseOpencv(const std::string& text, const std::string& source,
-                              std::optional<CalibrationFormat> want) {
-  const cv::FileStorage fs = openStorage(text, source);
+/// parseOpencv's reading of an opened storage (OpenCV's own checks throw cv::Exception).
+CameraCalibration readOpencv(const cv::FileStorage& fs, const std::string& source,
+                             std::optional<CalibrationFormat> want) {
   CameraCalibration c;
   double fx = 0, fy = 0, cx = 0, cy = 0, skew = 0;
   readCameraMatrix(fs, source, &fx, &fy, &cx, &cy, &skew);
@@ -162,6 +169,19 @@ CameraCalibration parseOpencv(const std::string& text, const std::string& source
     c.description = "OpenCV fisheye (Kannala-Brandt) calibration '" + source + "'";
   }
   return c;
+}
+
+/// An OpenCV file as `want`, or (nullopt) as what it holds: omnidir with xi, fisheye without. OpenCV's
+/// assertions become ConfigErrors too: a top level that is a list, not a map, made fs["camera_matrix"]
+/// throw cv::Exception "isMap()" out of the reader (found by tests/fuzz, regressions/calibration).
+CameraCalibration parseOpencv(const std::string& text, const std::string& source,
+                              std::optional<CalibrationFormat> want) {
+  const cv::FileStorage fs = openStorage(text, source);
+  try {
+    return readOpencv(fs, source, want);
+  } catch (const cv::Exception& e) {
+    fail(source, "not a readable OpenCV FileStorage file: " + oneLine(e.err));
+  }
 }
 
 /// The Kalibr camera map: the one named, else the first key of the file whose value is a map.

@@ -8,7 +8,7 @@
 #include "entry_points.h"
 #include "guard.h"
 #include "launcher.h"
-#include "omnislam/config/slam_config.h"
+#include "omnislam/runtime/slam_config.h"
 #include "omnislam/config/world_config.h"
 #include "omnislam/config/yaml_node.h"
 
@@ -22,7 +22,7 @@ std::string text(const uint8_t* data, size_t size) { return std::string(reinterp
 void fuzzSlamConfig(const uint8_t* data, size_t size) {
   guard<config::ConfigError>("slam_config", [&] {
     const auto root = config::Node::loadString(text(data, size), "fuzz-slam.yaml");
-    (void)slamproc::describe(slamproc::parseSlamOptions(root));  // echoed at start
+    (void)runtime::describe(runtime::parseSlamOptions(root));  // echoed at start
   });
 }
 

@@ -20,18 +20,18 @@ namespace {
 
 /// The options of the checkpoint seeds (fuzz_make_seeds): the defaults with 4 particles, so that
 /// each input is fast; a checkpoint must have been written with the options it is read with.
-slamproc::SlamProcessOptions checkpointFuzzOptions() {
-  slamproc::SlamProcessOptions o;
+runtime::SlamProcessOptions checkpointFuzzOptions() {
+  runtime::SlamProcessOptions o;
   o.filter.num_particles = 4;
   return o;
 }
 
 /// decodeCheckpoint into a fresh driver and clock, then encodeCheckpoint of what was loaded.
-std::vector<uint8_t> loadAndWrite(const std::vector<uint8_t>& file, const slamproc::SlamProcessOptions& opt) {
-  slamproc::SlamDriver driver(opt);
-  slamproc::InputClock clock(opt.pairing.restart_jump_us);
-  const slamproc::ReplayPosition pos = slamproc::decodeCheckpoint(file, opt, driver, clock);
-  return slamproc::encodeCheckpoint(opt, driver, clock, pos);
+std::vector<uint8_t> loadAndWrite(const std::vector<uint8_t>& file, const runtime::SlamProcessOptions& opt) {
+  runtime::SlamDriver driver(opt);
+  runtime::InputClock clock(opt.pairing.restart_jump_us);
+  const runtime::ReplayPosition pos = runtime::decodeCheckpoint(file, opt, driver, clock);
+  return runtime::encodeCheckpoint(opt, driver, clock, pos);
 }
 
 }  // namespace
@@ -39,13 +39,13 @@ std::vector<uint8_t> loadAndWrite(const std::vector<uint8_t>& file, const slampr
 void fuzzSavedMap(const uint8_t* data, size_t size) {
   const std::string path = scratchFile("saved_map", data, size);
   guard<config::ConfigError>("saved_map", [&] {
-    const slamproc::SavedMap m = slamproc::loadMap(path);
+    const runtime::SavedMap m = runtime::loadMap(path);
     // A map that loads is written back byte for byte the same (mapToYaml is deterministic).
-    const std::string yaml = slamproc::mapToYaml(m);
+    const std::string yaml = runtime::mapToYaml(m);
     const std::string again = scratchFile("saved_map", reinterpret_cast<const uint8_t*>(yaml.data()), yaml.size());
-    if (slamproc::mapToYaml(slamproc::loadMap(again)) != yaml)
+    if (runtime::mapToYaml(runtime::loadMap(again)) != yaml)
       reportUnexpected("saved_map", "round trip", "a loaded map does not read back as written");
-    const slamproc::SlamDriver driver(checkpointFuzzOptions(), m.landmarks);  // --load-map's prior map
+    const runtime::SlamDriver driver(checkpointFuzzOptions(), m.landmarks);  // --load-map's prior map
   });
 }
 
@@ -55,8 +55,8 @@ void fuzzCheckpoint(const uint8_t* data, size_t size) {
   // payload, sealed here with a correct size and CRC so that the fuzzer reaches the state's decoding.
   const std::vector<uint8_t> rest(data + 1, data + size);
   const std::vector<uint8_t> file =
-      (data[0] & 1) != 0 ? rest : sealState(slamproc::kCheckpointMagic, slamproc::kCheckpointVersion, rest);
-  const slamproc::SlamProcessOptions opt = checkpointFuzzOptions();
+      (data[0] & 1) != 0 ? rest : sealState(runtime::kCheckpointMagic, runtime::kCheckpointVersion, rest);
+  const runtime::SlamProcessOptions opt = checkpointFuzzOptions();
   guard<StateFormatError>("checkpoint", [&] {
     const std::vector<uint8_t> written = loadAndWrite(file, opt);
     // What a resumed run writes reads back as the same state: the second round trip is exact. (The

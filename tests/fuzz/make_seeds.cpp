@@ -98,10 +98,10 @@ void imageMessages() {
 /// 5 s of the sports-hall drive through a driver: its inputs and outputs as messages, a log of
 /// them, checkpoints along the way and the best particle's map.
 void driveSeeds() {
-  slamproc::SlamProcessOptions opt;  // = checkpointFuzzOptions() of entries_state.cpp
+  runtime::SlamProcessOptions opt;  // = checkpointFuzzOptions() of entries_state.cpp
   opt.filter.num_particles = 4;
-  slamproc::SlamDriver d(opt);
-  slamproc::InputClock clock(opt.pairing.restart_jump_us);
+  runtime::SlamDriver d(opt);
+  runtime::InputClock clock(opt.pairing.restart_jump_us);
   fs::create_directories(g_out / "lcm_log");
   lcmio::LogWriter log((g_out / "lcm_log" / "drive.lcm").string());
   int64_t oseq = 0, fseq = 0;
@@ -114,7 +114,7 @@ void driveSeeds() {
     const features_t f = hallFeatures(t, fseq++);
     log.write(t, "OMNI_FEATURES", f);
     clock.admit(true, t);
-    for (const slamproc::FrameOutput& out : d.onFeatures(f).outputs) {
+    for (const runtime::FrameOutput& out : d.onFeatures(f).outputs) {
       log.write(t, "SLAM_POSE", out.pose);
       if (out.map) log.write(t, "SLAM_MAP", *out.map);
       if (fseq == 3 || fseq == 5) {
@@ -127,9 +127,9 @@ void driveSeeds() {
     if (fseq == 1 || fseq == 4) {
       message("odometry_" + std::to_string(fseq), o);
       message("features_" + std::to_string(fseq), f);
-      const auto file = slamproc::encodeCheckpoint(opt, d, clock, slamproc::ReplayPosition{});
+      const auto file = runtime::encodeCheckpoint(opt, d, clock, runtime::ReplayPosition{});
       std::vector<uint8_t> payload{0};
-      const auto st = openState(slamproc::kCheckpointMagic, slamproc::kCheckpointVersion, file.data(), file.size());
+      const auto st = openState(runtime::kCheckpointMagic, runtime::kCheckpointVersion, file.data(), file.size());
       payload.insert(payload.end(), st.payload.begin(), st.payload.end());
       put("checkpoint", "payload_" + std::to_string(fseq), payload);
       std::vector<uint8_t> whole{1};
@@ -157,7 +157,7 @@ void otherMessages() {
 }
 
 void mapSeed() {
-  slamproc::SavedMap m;
+  runtime::SavedMap m;
   m.utime = kT0;
   for (int i = 0; i < 3; ++i) {
     slam::Landmark L;
@@ -167,7 +167,7 @@ void mapSeed() {
     L.cov_LinW_m2 = Eigen::Matrix3d::Identity() * 0.01;
     m.landmarks.push_back(L);
   }
-  const std::string yaml = slamproc::mapToYaml(m);
+  const std::string yaml = runtime::mapToYaml(m);
   put("saved_map", "three_lights.yaml", std::vector<uint8_t>(yaml.begin(), yaml.end()));
 }
 

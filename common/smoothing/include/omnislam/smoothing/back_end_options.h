@@ -39,8 +39,9 @@ struct BackEndOptions {
   /// solve has finished.
   int apply_after_keyframes = 1;
   /// Estimate the odometry's per-run scale and heading drift in the graph (GraphOptions::
-  /// calibrate_odometry; the priors are filter.motion's trans_sigma_per_m and rot_sigma_per_m).
-  OdometryCalibration odometry_calibration = OdometryCalibration::kScaleAndDrift;
+  /// calibrate_odometry; the priors are filter.motion's trans_sigma_per_m and rot_sigma_per_m). Off by
+  /// default: on eight generated halls it made the back end worse (docs/results/world-families.md).
+  OdometryCalibration odometry_calibration = OdometryCalibration::kNone;
   CeilingKind ceiling = CeilingKind::kNone;
   double ceiling_height_m = 0.0;  ///< kKnownHeight: the measured height of the lamps above the floor [m]
   double ceiling_sigma_m = 0.05;  ///< how far a lamp may sit from that plane [m], > 0

@@ -161,7 +161,7 @@ int removeOutliers(const Graph& g, const SolverOptions& o, ceres::Problem& pb, B
   return removed;
 }
 
-bool runSolver(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Blocks& b, Solution& s) {
+bool runSolver(const SolverOptions& o, ceres::Problem& pb, Blocks& b, Solution& s) {
   ceres::Solver::Options so;
   constexpr ceres::LinearSolverType kType[] = {ceres::SPARSE_NORMAL_CHOLESKY, ceres::SPARSE_SCHUR, ceres::DENSE_SCHUR};
   so.linear_solver_type = kType[static_cast<int>(o.linear_solver)];
@@ -184,7 +184,6 @@ bool runSolver(const Graph& g, const SolverOptions& o, ceres::Problem& pb, Block
   s.final_cost = summary.final_cost;
   s.iterations += static_cast<int>(summary.iterations.size());
   ++s.solves;
-  (void)g;
   if (summary.termination_type == ceres::FAILURE || !std::isfinite(summary.final_cost)) {
     s.failure = "the solver failed: " + summary.message;
     return false;
@@ -371,11 +370,11 @@ Solution solve(const Graph& g, const SolverOptions& o) {
   Blocks b;
   buildProblem(g, o, pb, b, &bearing_loss, &ceiling_loss);
   dropUnderdetermined(g, pb, b);
-  if (!runSolver(g, o, pb, b, s)) return s;
+  if (!runSolver(o, pb, b, s)) return s;
   for (int round = 0; round < o.outlier_rounds; ++round) {
     if (removeOutliers(g, o, pb, b, s) == 0) break;
     dropUnderdetermined(g, pb, b);
-    if (!runSolver(g, o, pb, b, s)) return s;
+    if (!runSolver(o, pb, b, s)) return s;
   }
   readSolution(g, b, s);
   if (o.covariances == LandmarkCovariance::kMarginal) computeCovariances(g, pb, b, s);

@@ -389,6 +389,9 @@ TEST(camera_Scaramuzza, BadParametersAreRejectedNamingTheField) {
   p.max_elevation_rad = 0.2;
   expectRejected(p, "min_elevation_rad");
   p = syntheticParams();
+  p.pol = {-180.0, 0.0, 2e173};  // a fuzzed file (tests/fuzz/regressions/ocamcalib): f reaches 1e178 px,
+  expectRejected(p, "|f(rho)| must stay within");  // and (q, f) overflowed to a ray that was not unit
+  p = syntheticParams();
   p.pol = {-180.0, 0.0, -2e-3};  // f falls: the ray angle turns back at rho = 300 px
   expectRejected(p, "must increase strictly with rho");
   p.max_radius_px = 250.0;  // ... but is usable up to 250 px

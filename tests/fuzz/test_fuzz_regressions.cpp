@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,12 +46,19 @@ std::vector<uint8_t> bytesOf(const fs::path& p) {
 class FuzzRegressions : public ::testing::TestWithParam<Target> {
  protected:
   void SetUp() override {  // the readers that take a path get scratch files here, removed after
+    const char* tmp = std::getenv("TMPDIR");
+    saved_tmpdir_ = tmp ? std::optional<std::string>(tmp) : std::nullopt;
     scratch_ = fs::temp_directory_path() / ("omnislam-fuzz-test-" + std::string(GetParam().name));
     fs::create_directories(scratch_);
     ::setenv("TMPDIR", scratch_.c_str(), 1);
   }
-  void TearDown() override { fs::remove_all(scratch_); }
+  void TearDown() override {  // TMPDIR as it was: the next test's temp_directory_path() must exist
+    if (saved_tmpdir_) ::setenv("TMPDIR", saved_tmpdir_->c_str(), 1);
+    else ::unsetenv("TMPDIR");
+    fs::remove_all(scratch_);
+  }
   fs::path scratch_;
+  std::optional<std::string> saved_tmpdir_;
 };
 
 TEST_P(FuzzRegressions, SavedInputsAndSeedsAreRefusedOrAcceptedWithoutAFinding) {

@@ -56,15 +56,20 @@ bool isOpencvStorage(const std::string& text) {
          (t.substr(0, 5) == "<?xml" && t.find("<opencv_storage>") != std::string_view::npos);
 }
 
-/// cv::FileStorage over the text; its parse errors become one-line ConfigErrors.
+/// cv::FileStorage over the text; its parse errors become one-line ConfigErrors. OpenCV 4.6's parser
+/// also lets standard exceptions out on some malformed files (std::length_error from a string it
+/// sizes from the input: found by tests/fuzz, regressions/calibration): they are parse errors too.
 cv::FileStorage openStorage(const std::string& text, const std::string& source) {
+  std::string why;
   try {
     cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
-    if (!fs.isOpened()) fail(source, "not a readable OpenCV FileStorage file");
-    return fs;
+    if (fs.isOpened()) return fs;
   } catch (const cv::Exception& e) {
-    fail(source, "not a readable OpenCV FileStorage file: " + oneLine(e.err));
+    why = ": " + oneLine(e.err);
+  } catch (const std::exception& e) {
+    why = ": " + oneLine(e.what());
   }
+  fail(source, "not a readable OpenCV FileStorage file" + why);
 }
 
 /// A numeric matrix node as CV_64F; fails naming the key unless it is rows x cols (or cols x rows
@@ -425,7 +430,7 @@ std::optional<CalibrationFormat> detectCalibrationFormat(const std::string& text
       const cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
       if (!fs.isOpened() || fs["camera_matrix"].isNone()) return std::nullopt;
       return fs["xi"].isNone() ? CalibrationFormat::kOpencvFisheye : CalibrationFormat::kOpencvOmnidir;
-    } catch (const cv::Exception&) {
+    } catch (const std::exception&) {  // cv::Exception, and what OpenCV's parser lets out (openStorage)
       return std::nullopt;
     }
   }

@@ -67,8 +67,13 @@ std::optional<std::string> checkFinite(const ScaramuzzaParams& p) {
   return std::nullopt;
 }
 
+/// The largest |f(rho)| a camera may have [px]: f is the distance of the unit sphere's image plane in
+/// pixels, a few hundred for a fish-eye; at 1e9 px the whole image would fall within 1e-3 rad of the
+/// axis (1e6 px / 1e9 px), and the ray (q, f) would lose its q in floating point.
+constexpr double kMaxAbsFPx = 1e9;
+
 /// beta(rho) = atan2(rho, -f) increases strictly on [min_radius_px, rho_hi] (<=> rho f'(rho) - f(rho)
-/// > 0), checked at four samples per pixel (rho_hi <= 1e6 px: the caller caps the count).
+/// > 0) and |f| <= kMaxAbsFPx, checked at four samples per pixel (rho_hi <= 1e6 px: the caller caps the count).
 std::optional<std::string> checkMonotonic(const ScaramuzzaParams& p, double rho_hi) {
   const int n = std::max(2, static_cast<int>(std::ceil(4.0 * (rho_hi - p.min_radius_px))));
   for (int i = 0; i <= n; ++i) {
@@ -77,6 +82,11 @@ std::optional<std::string> checkMonotonic(const ScaramuzzaParams& p, double rho_
     for (std::size_t k = p.pol.size(); k-- > 0;) {
       df = df * rho + f;
       f = f * rho + p.pol[k];
+    }
+    if (!(std::abs(f) <= kMaxAbsFPx)) {  // found by tests/fuzz (regressions/ocamcalib): pol[2] = 2e173
+      return "pol: |f(rho)| must stay within " + str(kMaxAbsFPx) + " px on [min_radius_px, " + str(rho_hi) +
+             "] px (a focal length of more would make the whole image see one direction); it is " + str(f) +
+             " at rho = " + str(rho) + " px";
     }
     if (!(rho * df - f > 0.0)) {
       return "pol: the ray angle atan2(rho, -f(rho)) must increase strictly with rho on [min_radius_px, " +

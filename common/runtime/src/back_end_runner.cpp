@@ -92,6 +92,7 @@ std::optional<BackEndReport> BackEndRunner::collect(slam::FastSlam& filter) {
     return report;
   }
   filter.applyCorrection(correction);
+  graph_.adoptSolution(report.keyframe_poses, slam::correctionTransform(correction));
   ++stats_.solves_applied;
   stats_.bearings_removed += report.num_removed;
   return report;

@@ -277,6 +277,10 @@ void SlamDriver::startBackEnd(const Pose2& start_W, const Eigen::Matrix3d& start
   g.start_cov = start_cov + Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal().toDenseMatrix();
   g.ceiling = opt_.backend.ceilingPrior();
   g.calibrate_odometry = opt_.backend.odometry_calibration == smoothing::OdometryCalibration::kScaleAndDrift;
+  g.odometry_covariance_at = opt_.backend.odometry_covariance == smoothing::OdometryCovariance::kMeasured
+                                 ? smoothing::OdometryCovarianceAt::kMeasured
+                                 : smoothing::OdometryCovarianceAt::kEstimate;
+  g.covariance_window = opt_.backend.odometry_covariance_window;
   backend_ = std::make_unique<BackEndRunner>(opt_.backend, g, backend_waits_);
 }
 
@@ -316,8 +320,8 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   const slam::StepResult sr = filter_->step(odom_prev_O_, odom_O, frame.z);
   std::optional<BackEndReport> backend;
   if (backend_)
-    backend =
-        backend_->afterStep(*filter_, {frame.utime, odom_O, filter_->meanPose(), frame.z, sr.landmark_of_measurement});
+    backend = backend_->afterStep(*filter_,
+                                  {frame.utime, odom_O, filter_->meanPose(), frame.z, sr.landmark_of_measurement, {}});
   odom_prev_O_ = odom_O;
   last_step_utime_ = last_frame_utime_ = frame.utime;
   ++stats_.frames_processed;

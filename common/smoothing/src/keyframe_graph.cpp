@@ -2,6 +2,7 @@
 #include "omnislam/smoothing/keyframe_graph.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <stdexcept>
 
@@ -21,6 +22,37 @@ bool calibrates(const GraphOptions& o) {
 
 }  // namespace
 
+void KeyframeGraph::adoptSolution(const std::vector<Pose2>& poses, const Pose2& T_corr) {
+  for (std::size_t k = 0; k < records_.size(); ++k) {
+    if (k < poses.size()) records_[k].T_WtoR_smoothed = poses[k];
+    else records_[k].T_WtoR_filter = T_corr.compose(records_[k].T_WtoR_filter);
+  }
+}
+
+Pose2 KeyframeGraph::estimate(std::size_t k) const {
+  const KeyframeRecord& r = records_[k];
+  return r.T_WtoR_smoothed && k + 1 < records_.size() ? *r.T_WtoR_smoothed : r.T_WtoR_filter;
+}
+
+Pose2 KeyframeGraph::covariancePoint(std::size_t k, const Pose2& u_measured) const {
+  if (options_.odometry_covariance_at == OdometryCovarianceAt::kMeasured) return u_measured;
+  const auto length = [&](std::size_t i) {
+    const Pose2 d = slam::odometryIncrement(estimate(i - 1), estimate(i));
+    return std::hypot(d.x_m, d.y_m);
+  };
+  const auto w = static_cast<std::size_t>(std::max(0, options_.covariance_window));
+  const std::size_t lo = k > w ? k - w : 1, hi = std::min(records_.size() - 1, k + w);
+  double sum = 0.0;
+  for (std::size_t i = lo; i <= hi; ++i) sum += length(i);
+  Pose2 at = slam::odometryIncrement(estimate(k - 1), estimate(k));
+  const double d = std::hypot(at.x_m, at.y_m), mean = sum / static_cast<double>(hi - lo + 1);
+  if (d > 1e-9) {  // the estimate's direction and rotation, the window's length
+    at.x_m *= mean / d;
+    at.y_m *= mean / d;
+  }
+  return at;
+}
+
 Graph KeyframeGraph::build(const std::vector<slam::Landmark>& map) const {
   if (records_.empty()) throw std::logic_error("KeyframeGraph::build without keyframes");
   Graph g;
@@ -33,10 +65,11 @@ Graph KeyframeGraph::build(const std::vector<slam::Landmark>& map) const {
   }
   for (std::size_t k = 0; k < records_.size(); ++k) {
     const KeyframeRecord& r = records_[k];
-    g.keyframes.push_back({k, r.utime, r.T_WtoR_filter});
+    g.keyframes.push_back({k, r.utime, estimate(k)});
     if (k == 0) continue;
     const Pose2 u = slam::odometryIncrement(records_[k - 1].odom_O, r.odom_O);
-    g.odometry.push_back({static_cast<int>(k - 1), static_cast<int>(k), u, slam::incrementCovariance(u, motion)});
+    g.odometry.push_back(
+        {static_cast<int>(k - 1), static_cast<int>(k), u, slam::incrementCovariance(covariancePoint(k, u), motion)});
   }
   g.pose_priors.push_back({0, options_.start, options_.start_cov});
   std::map<std::uint64_t, int> index_of_id;

@@ -19,6 +19,10 @@ enum class BackEndMode : std::uint8_t {
 /// Whether the graph estimates the odometry's systematic errors (`backend.odometry_calibration`).
 enum class OdometryCalibration : std::uint8_t { kNone = 0, kScaleAndDrift = 1 };
 
+/// Where each odometry factor's covariance is evaluated (`backend.odometry_covariance`): see
+/// keyframe_graph.h's OdometryCovarianceAt.
+enum class OdometryCovariance : std::uint8_t { kEstimate = 0, kMeasured = 1 };
+
 /// Which ceiling prior the graph carries (`backend.ceiling`): see smoother.h's CeilingPrior.
 enum class CeilingKind : std::uint8_t { kNone = 0, kKnownHeight = 1, kFlat = 2 };
 
@@ -42,6 +46,12 @@ struct BackEndOptions {
   /// calibrate_odometry; the priors are filter.motion's trans_sigma_per_m and rot_sigma_per_m). Off by
   /// default: on eight generated halls it made the back end worse (docs/results/world-families.md).
   OdometryCalibration odometry_calibration = OdometryCalibration::kNone;
+  /// Evaluate Sigma_u at the keyframes' estimates (kEstimate) or at the odometry's own increment
+  /// (kMeasured: biased, the map shrinks by about the per-step relative variance).
+  OdometryCovariance odometry_covariance = OdometryCovariance::kEstimate;
+  /// With kEstimate: the length of each increment is the mean over this many keyframes either side
+  /// (the robot's speed is smooth on that scale, the per-step odometry noise is not), >= 0.
+  int odometry_covariance_window = 10;
   CeilingKind ceiling = CeilingKind::kNone;
   double ceiling_height_m = 0.0;  ///< kKnownHeight: the measured height of the lamps above the floor [m]
   double ceiling_sigma_m = 0.05;  ///< how far a lamp may sit from that plane [m], > 0

@@ -15,6 +15,7 @@ const std::vector<options::Field<BackEndOptions>>& backEndFields();  ///< keys `
 const std::vector<options::Field<SolverOptions>>& solverFields();    ///< keys `backend.solver.*`
 const std::vector<std::string>& backEndModeNames();                  ///< "off", "keyframes"
 const std::vector<std::string>& ceilingNames();                      ///< "none", "known_height", "flat"
-const std::vector<std::string>& odometryCalibrationNames();          ///< "none", "scale_and_drift"
+const std::vector<std::string>& odometryCalibrationNames();
+const std::vector<std::string>& odometryCovarianceNames();  ///< "none", "scale_and_drift"
 
 }  // namespace omnislam::smoothing

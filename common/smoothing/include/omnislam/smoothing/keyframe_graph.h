@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "omnislam/core/pose2.h"
@@ -29,6 +30,23 @@ struct KeyframeRecord {
   Pose2 T_WtoR_filter;  ///< the filter's estimate at the frame (the pose it published)
   std::vector<slam::BearingMeasurement> z;
   std::vector<std::int64_t> landmark_of_measurement;  ///< per z: the landmark id, -1 for none
+  /// The last applied solution's pose of this keyframe (KeyframeGraph::adoptSolution): the next
+  /// solve starts here instead of at the filter's estimate of the time, which predates the correction.
+  std::optional<Pose2> T_WtoR_smoothed;
+};
+
+/// Where the odometry factor's covariance Sigma_u is evaluated (BackEndOptions::odometry_covariance).
+enum class OdometryCovarianceAt : std::uint8_t {
+  /// At the odometry's own increment (the filter's motion model does this when it samples).
+  kMeasured = 0,
+  /// At the increment between the two keyframes' estimates (the last solution's, else the filter's),
+  /// its length the mean over GraphOptions::covariance_window keyframes either side. In a least-squares
+  /// solve, weights that depend on the noisy measurement bias it: a random-walk variance grows with
+  /// the measured distance, so steps measured too long weigh less than steps measured too short, and
+  /// the map shrinks by about the per-step relative variance (sigma^2 / d: 1.4 % for 0.05 m/sqrt(m)
+  /// at 0.175 m per keyframe; docs/design/smoothing.md). The estimates carry the bearings'
+  /// information, and the window's mean length hardly any one step's odometry noise.
+  kEstimate = 1,
 };
 
 struct GraphOptions {
@@ -42,6 +60,8 @@ struct GraphOptions {
   /// scale error and heading drift of the odometry), which then leave the per-step covariance; the
   /// random-walk terms and the floors stay. Only for the chord noise model with both terms > 0.
   bool calibrate_odometry = false;
+  OdometryCovarianceAt odometry_covariance_at = OdometryCovarianceAt::kEstimate;
+  int covariance_window = 10;  ///< keyframes either side (kEstimate), >= 0
 };
 
 class KeyframeGraph {
@@ -49,6 +69,11 @@ class KeyframeGraph {
   explicit KeyframeGraph(const GraphOptions& options);
 
   void add(KeyframeRecord record);
+  /// After a solution was handed to the filter: its poses become the first poses.size() keyframes'
+  /// starting points for the next build (and where Sigma_u is evaluated), and the filter's estimates
+  /// of the keyframes added since the solve started, which predate the correction, are moved by it
+  /// (T_corr = slam::correctionTransform of the correction applied), as the filter's poses were.
+  void adoptSolution(const std::vector<Pose2>& poses, const Pose2& T_corr);
   std::size_t size() const { return records_.size(); }
   const std::vector<KeyframeRecord>& records() const { return records_; }
 
@@ -59,6 +84,11 @@ class KeyframeGraph {
   Graph build(const std::vector<slam::Landmark>& map) const;
 
  private:
+  /// The initial estimate of keyframe k: its last smoothed pose, else the filter's (always the
+  /// filter's for the newest keyframe: correctionFrom maps the filter's pose there).
+  Pose2 estimate(std::size_t k) const;
+  /// Where keyframe k's odometry factor (from k - 1) evaluates Sigma_u (OdometryCovarianceAt).
+  Pose2 covariancePoint(std::size_t k, const Pose2& u_measured) const;
   GraphOptions options_;
   std::vector<KeyframeRecord> records_;
 };

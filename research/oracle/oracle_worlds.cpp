@@ -10,6 +10,11 @@
 // --birth truth: (with --association truth) a candidate the filter initialises is born at its lamp.
 // --map truth: localisation only on the lamps of GROUND_TRUTH_MAP at their true positions.
 // --fit-json: the final map's rotation about the start (best fit to the lamps, as noise_free_hall).
+// --graph-json: the back end's keyframe graph of the whole run (every filter step a keyframe) with
+//   the TRUE association (each labelled feature to its lamp, clutter left out), poses and lamps
+//   starting at the truth, solved once at the end by the product's smoother (backend.solver and
+//   backend.odometry_calibration of the config): what the graph's formulation reaches when its
+//   association is right (issue 54). Keyframe position / heading RMSE and lamp errors against the truth.
 #include <CLI/CLI.hpp>
 
 #include <Eigen/Geometry>
@@ -23,6 +28,7 @@
 #include <stdexcept>
 
 #include "omnislam/associations_t.hpp"
+#include "omnislam/core/angles.h"
 #include "omnislam/runtime/slam_config.h"
 #include "omnislam/feature_labels_t.hpp"
 #include "omnislam/lcmio/channels.h"
@@ -34,6 +40,7 @@
 #include "omnislam/runtime/map_message.h"
 #include "omnislam/runtime/pairing.h"
 #include "omnislam/runtime/slam_driver.h"
+#include "omnislam/smoothing/keyframe_graph.h"
 #include "oracle_filter.h"
 
 using namespace omnislam;
@@ -42,9 +49,11 @@ using research::OracleFilter;
 namespace {
 
 struct Args {
-  std::string config, in, out, fit_json, association = "filter", map = "build", birth = "filter", method;
+  std::string config, in, out, fit_json, graph_json, graph_init = "truth", graph_cov = "estimate",
+                                                     association = "filter", map = "build", birth = "filter", method;
   std::vector<std::string> sets;
   std::uint64_t seed = 1;
+  int reweight = 0;
 };
 
 /// What the first pass takes from the log: the labels of each frame (by utime) and the lamps.
@@ -123,7 +132,9 @@ class Replay {
                 by_label_ ? research::Association{research::TruthAssociation{}} : research::FilterAssociation{},
                 birthOf(a, truth_)),
         pairer_(opt.pairing),
-        out_(a.out, lcmio::LogWriter::Mode::kAtomic) {}
+        out_(a.out, lcmio::LogWriter::Mode::kAtomic),
+        record_graph_(!a.graph_json.empty()),
+        graph_init_filter_(a.graph_init == "filter") {}
 
   void event(const lcmio::LogEvent& ev) {
     if (ev.channel.rfind("SLAM_", 0) == 0) return;
@@ -150,7 +161,35 @@ class Replay {
     return filter_.bestMap();
   }
 
+  /// --graph-json: one record per filter step, the true labels as the association, at the true pose.
+  const std::vector<smoothing::KeyframeRecord>& graphRecords() const { return graph_records_; }
+  const std::vector<Pose2>& graphTruth() const { return graph_truth_; }
+
  private:
+  /// The truth pose nearest to `utime` (GROUND_TRUTH_POSE runs at 50 Hz; frames fall on it).
+  Pose2 truthPoseAt(int64_t utime) const {
+    auto it = truth_.poses.lower_bound(utime);
+    if (it == truth_.poses.end()) --it;
+    if (it != truth_.poses.begin() && std::prev(it)->first - utime > utime - it->first) --it;
+    return it->second;
+  }
+
+  void recordGraph(const runtime::Frame& fr, const Pose2& odom_O) {
+    const auto labels = truth_.labels.find(fr.utime);
+    if (labels == truth_.labels.end()) throw std::runtime_error("--graph-json: frame without labels");
+    smoothing::KeyframeRecord r;
+    r.utime = fr.utime;
+    r.odom_O = odom_O;
+    r.T_WtoR_filter = graph_init_filter_ ? filter_.meanPose() : truthPoseAt(fr.utime);
+    graph_truth_.push_back(truthPoseAt(fr.utime));
+    r.z = fr.z;
+    for (std::size_t k = 0; k < fr.z.size(); ++k) {
+      const auto f = static_cast<std::size_t>(fr.feature_index[k]);
+      r.landmark_of_measurement.push_back(f < labels->second.size() ? labels->second[f] : -1);
+    }
+    graph_records_.push_back(std::move(r));
+  }
+
   void apply(std::vector<runtime::PairEvent>& events) {
     for (auto& e : events) {
       if (e.kind == runtime::PairEvent::Kind::kReset) throw std::runtime_error("input restarted: not supported");
@@ -188,6 +227,7 @@ class Replay {
     const std::vector<slam::BearingMeasurement> z = measurements(fr, index);
     const research::OracleStep st = filter_.step(odom_prev_, odom_O, z);
     odom_prev_ = odom_O;
+    if (record_graph_) recordGraph(fr, odom_O);
     out_.write(last_ts_, channels::kSlamPose, poseMessage(filter_, fr.utime, frames_, fr.seq, st.ess));
     if (frames_ % opt_.map_every_n_frames == 0)
       out_.write(last_ts_, channels::kSlamMap, mapMessage(filter_, fr.utime, map_seq_++, fr.seq));
@@ -213,6 +253,9 @@ class Replay {
   OracleFilter filter_;
   runtime::Pairer pairer_;
   lcmio::LogWriter out_;
+  bool record_graph_, graph_init_filter_;
+  std::vector<Pose2> graph_truth_;
+  std::vector<smoothing::KeyframeRecord> graph_records_;
   Pose2 odom_prev_;
   int64_t last_ts_ = 0, frames_ = 0, dropped_ = 0, map_seq_ = 0;
 };
@@ -320,6 +363,81 @@ std::string mapFitJson(const std::vector<slam::Landmark>& map, const std::vector
   return o.str();
 }
 
+/// --graph-json: the keyframe graph of the whole run with the true association, solved from the
+/// truth; its keyframes and located lamps against the truth. JSON on one line.
+std::string graphJson(const std::vector<smoothing::KeyframeRecord>& records, const std::vector<Pose2>& truth,
+                      const std::vector<slam::Landmark>& lamps, const runtime::SlamProcessOptions& opt,
+                      bool at_measured, int reweight_rounds) {
+  smoothing::GraphOptions g;
+  g.motion = opt.filter.motion;
+  g.start = truth.front();
+  g.covariance_window = opt.backend.odometry_covariance_window;
+  if (at_measured) g.odometry_covariance_at = smoothing::OdometryCovarianceAt::kMeasured;
+  g.ceiling = opt.backend.ceilingPrior();
+  g.calibrate_odometry = opt.backend.odometry_calibration == smoothing::OdometryCalibration::kScaleAndDrift;
+  smoothing::Graph graph;
+  smoothing::Solution s;
+  std::vector<smoothing::KeyframeRecord> rs = records;
+  std::vector<slam::Landmark> ls = lamps;
+  for (int round = 0; round <= reweight_rounds; ++round) {  // Sigma_u at the last solution's increments
+    smoothing::KeyframeGraph kg(g);
+    for (const auto& r : rs) kg.add(r);
+    graph = kg.build(ls);
+    s = smoothing::solve(graph, opt.backend.solver);
+    if (!s.ok) throw std::runtime_error("--graph-json: the solve failed: " + s.failure);
+    for (std::size_t k = 0; k < rs.size(); ++k) rs[k].T_WtoR_filter = s.keyframe_poses[k];
+    for (std::size_t j = 0; j < ls.size() && j < s.landmarks_m.size(); ++j) ls[j].p_LinW_m = s.landmarks_m[j];
+  }
+  graph = [&] {  // the truth lamps for the errors below
+    smoothing::KeyframeGraph kg(g);
+    for (const auto& r : records) kg.add(r);
+    return kg.build(lamps);
+  }();
+  double pos2 = 0.0, head2 = 0.0, lamp_sum = 0.0, lamp_max = 0.0, st = 0.0, tt = 0.0, odo_len = 0.0, true_len = 0.0;
+  const Eigen::Vector2d p0(g.start.x_m, g.start.y_m);
+  for (std::size_t k = 0; k < records.size(); ++k) {
+    const Pose2& t = truth[k];
+    const Eigen::Vector2d dt = Eigen::Vector2d(t.x_m, t.y_m) - p0;
+    st += (Eigen::Vector2d(s.keyframe_poses[k].x_m, s.keyframe_poses[k].y_m) - p0).dot(dt);
+    tt += dt.squaredNorm();
+    if (k > 0) {
+      const Pose2& a = records[k - 1].odom_O;
+      const Pose2& b = records[k].odom_O;
+      const Pose2& ta = truth[k - 1];
+      const Eigen::Vector2d u = Eigen::Rotation2Dd(-a.theta_rad) * Eigen::Vector2d(b.x_m - a.x_m, b.y_m - a.y_m);
+      const Eigen::Vector2d v = Eigen::Rotation2Dd(-ta.theta_rad) * Eigen::Vector2d(t.x_m - ta.x_m, t.y_m - ta.y_m);
+      odo_len += u.dot(v);
+      true_len += v.squaredNorm();
+    }
+    pos2 += std::pow(s.keyframe_poses[k].x_m - t.x_m, 2) + std::pow(s.keyframe_poses[k].y_m - t.y_m, 2);
+    head2 += std::pow(wrapAngle(s.keyframe_poses[k].theta_rad - t.theta_rad), 2);
+  }
+  for (std::size_t j = 0; j < graph.landmarks.size(); ++j) {
+    const double e = (s.landmarks_m[j] - graph.landmarks[j].p_LinW_m).norm();  // the lamps start at the truth
+    lamp_sum += e;
+    lamp_max = std::max(lamp_max, e);
+  }
+  std::size_t dof = 0;
+  for (const auto& b : graph.bearings) dof += b.z.kind == slam::LandmarkKind::kPoint3D ? 2 : 1;
+  dof += 3 * graph.odometry.size();
+  std::ostringstream o;
+  o.precision(6);
+  const double n = static_cast<double>(records.size());
+  o << "{\"graph_keyframes\": " << records.size() << ", \"graph_lamps\": " << graph.landmarks.size()
+    << ", \"graph_bearings\": " << graph.bearings.size() << ", \"graph_removed\": " << s.removed.size()
+    << ", \"graph_position_rmse_m\": " << std::sqrt(pos2 / n)
+    << ", \"graph_heading_rmse_deg\": " << std::sqrt(head2 / n) * 180.0 / M_PI
+    << ", \"graph_lamp_mean_m\": " << lamp_sum / std::max<double>(1.0, static_cast<double>(graph.landmarks.size()))
+    << ", \"graph_lamp_max_m\": " << lamp_max << ", \"graph_scale_about_start\": " << st / std::max(tt, 1e-12)
+    << ", \"odometry_path_ratio\": " << odo_len / true_len
+    << ", \"graph_2cost_over_dof\": " << 2.0 * s.final_cost / static_cast<double>(std::max<std::size_t>(1, dof));
+  if (s.odometry_calibration)
+    o << ", \"graph_odometry_scale\": " << (*s.odometry_calibration)(0)
+      << ", \"graph_drift_rad_per_m\": " << (*s.odometry_calibration)(1);
+  o << "}\n";
+  return o.str();
+}
+
 int run(const Args& a) {
   if (a.association != "filter" && a.association != "truth") throw std::invalid_argument("--association filter|truth");
   if (a.map != "build" && a.map != "truth") throw std::invalid_argument("--map build|truth");
@@ -336,6 +454,11 @@ int run(const Args& a) {
   Replay replay(opt, a, std::move(truth));
   lcmio::forEachEvent(a.in, [&](const lcmio::LogEvent& ev) { replay.event(ev); });
   const std::vector<slam::Landmark> map = replay.finish();
+  if (!a.graph_json.empty()) {
+    std::ofstream f(a.graph_json);
+    f << graphJson(replay.graphRecords(), replay.graphTruth(), lamps, opt, a.graph_cov == "measured", a.reweight);
+    if (!f) throw std::runtime_error("cannot write " + a.graph_json);
+  }
   if (!a.fit_json.empty()) {
     std::ofstream f(a.fit_json);
     f << mapFitJson(
@@ -361,6 +484,10 @@ int main(int argc, char** argv) {
   cli.add_option("--map", a.map, "build | truth");
   cli.add_option("--birth", a.birth, "filter | truth: landmarks born where the filter puts them, or at their lamps");
   cli.add_option("--fit-json", a.fit_json, "write the final map's rotation about the start here");
+  cli.add_option("--graph-json", a.graph_json, "solve the whole run's keyframe graph with the true association here");
+  cli.add_option("--graph-init", a.graph_init, "truth | filter: the keyframes' initial poses (and Sigma_u's estimate)");
+  cli.add_option("--graph-reweight", a.reweight, "solves again with Sigma_u at the last solution, this many times");
+  cli.add_option("--graph-cov", a.graph_cov, "estimate | measured: where the odometry covariance is evaluated");
   CLI11_PARSE(cli, argc, argv);
   try {
     return run(a);

@@ -27,7 +27,12 @@ namespace t = omnislam::testing;
 
 namespace {
 
-const std::vector<std::string> kSets{"speedup=25", "odometry_only_after_s=250", "seed=2", "slam_seed=2"};
+// Speedup 10, not 25: this test counts refusals exactly, so it needs a bus that loses nothing. Every
+// process's UDP socket receives the whole multicast group, images included (300 KB per simulated
+// second: 7.7 MB/s of wall time at 25x), and a process starved for half a second on a machine at load
+// 16 overflowed its 4 MB receive buffer: lost truth poses then read as a jump in time (refused, then
+// a restart) and 11 frames were never rendered. At 10x the same buffer lasts 2.5 times as long.
+const std::vector<std::string> kSets{"speedup=10", "odometry_only_after_s=250", "seed=2", "slam_seed=2"};
 
 /// The last PROCESS_STATUS of each process in a log.
 std::map<std::string, process_status_t> lastStatuses(const std::string& log) {

@@ -112,12 +112,15 @@ class DeepCopyFilter {
     const auto Z = stages::prepareMeasurements(z, o_.inflate_azimuth_near_zenith, o_.p_new_mahalanobis_sq, refused);
     if (!Z.empty()) p_CinR_m_ = Z.front().p_CinR_m;
     const StepInput in{odometryIncrement(odom_prev, odom_now), Z, p_CinR_m_, std::nullopt};
-    StepState state{rng_, next_id_, cost_buffer_};
     const AssociationHook associate = [this](const AssociationInput& a) {
       return associateAsFilter(variant_, o_.update_map, o_.perception, a);
     };
     std::vector<double> step_log_w;
-    for (auto& p : particles_) step_log_w.push_back(processParticle(p, o_, variant_, in, state, associate).log_w);
+    for (auto& p : particles_) {
+      ParticleRng particle_rng = ParticleRng::drawFrom(rng_);
+      StepState state{particle_rng, next_id_, cost_buffer_};
+      step_log_w.push_back(processParticle(p, o_, variant_, in, state, associate).log_w);
+    }
     const Weighing w = weighParticles(particles_, step_log_w, weights_);
     bool resampled = false;
     const int best = resampleParticles(particles_, weights_, w.best, w.ess, o_.resample_ess_fraction, rng_, resampled);

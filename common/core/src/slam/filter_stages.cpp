@@ -79,9 +79,50 @@ struct LandmarkPrediction {
   MeasMat HmSHm;
 };
 
+// smallSpdInverse of a 2x2 matrix in fixed-size types (the same operations).
+bool spdInverse2(const Eigen::Matrix2d& S, Eigen::Matrix2d& S_inv, double& log_det) {
+  const double a = S(0, 0), b = 0.5 * (S(0, 1) + S(1, 0)), d = S(1, 1);
+  const double det = a * d - b * b;
+  if (!(a > 0.0) || !(det > 0.0) || !std::isfinite(det)) return false;
+  S_inv << d / det, -b / det, -b / det, a / det;
+  log_det = std::log(det);
+  return true;
+}
+
+// A point's (azimuth, elevation) pair in fixed-size types: Q_jl = Q + H_m Sigma H_m^T (line 6), H_x
+// and nu = z - zbar.
+struct PointPair {
+  Eigen::Matrix2d Qjl;
+  Eigen::Matrix<double, 2, 3> Hx;
+  Eigen::Vector2d nu;
+  PointPair(const Measurement& m, const LandmarkPrediction& lp) : Qjl(m.Q + lp.HmSHm), Hx(lp.Hx) {
+    nu << wrapAngle(m.z(0) - lp.zbar(0)), wrapAngle(m.z(1) - lp.zbar(1));
+  }
+};
+
+// correctedPairCost for a point: the same operations in the same order (the same bits: the replay
+// digests), in fixed-size types; the dynamic-size loops were a fifth of Alg. 2's time.
+double correctedPointPairCost(const Landmark& L, const Measurement& m, const MotionPrediction& pred,
+                              const LandmarkPrediction& lp) {
+  const PointPair p(m, lp);
+  Eigen::Matrix2d Qjl_inv;
+  double log_det_Qjl = 0.0;
+  if (!spdInverse2(p.Qjl, Qjl_inv, log_det_Qjl)) return kInf;
+  const Eigen::Matrix<double, 2, 3> QinvHx = Qjl_inv * p.Hx;
+  const Eigen::Matrix3d Sx = (p.Hx.transpose() * QinvHx + pred.R_inv).inverse();  // line 7
+  const Eigen::Vector3d dmu = Sx * (QinvHx.transpose() * p.nu);                   // line 8
+  const Pose2& x_hat = pred.x_hat;
+  const Pose2 mu_x{x_hat.x_m + dmu(0), x_hat.y_m + dmu(1), wrapAngle(x_hat.theta_rad + dmu(2))};
+  const auto zhat = predictBearing(L.p_LinW_m, mu_x, m.p_CinR_m);  // line 10
+  if (!zhat) return kInf;
+  const Eigen::Vector2d r(wrapAngle(m.z(0) - (*zhat)(0)), wrapAngle(m.z(1) - (*zhat)(1)));  // line 11
+  return 0.5 * (2.0 * kLog2Pi + log_det_Qjl + r.dot(Qjl_inv * r));
+}
+
 // Alg. 2 lines 6-11 for one pair whose landmark was predicted at xhat (lines 2-4).
 double correctedPairCost(const Landmark& L, const Measurement& m, const MotionPrediction& pred,
                          const LandmarkPrediction& lp) {
+  if (m.kind == LandmarkKind::kPoint3D) return correctedPointPairCost(L, m, pred, lp);
   const MeasVec& zbar = lp.zbar;
   const MeasJac& Hx = lp.Hx;
   const MeasMat Qjl = m.Q + lp.HmSHm;  // line 6
@@ -104,6 +145,14 @@ double correctedPairCost(const Landmark& L, const Measurement& m, const MotionPr
 // it needs; Alg. 2 scores it after the correction.
 double predictivePairCost(const Landmark&, const Measurement& m, const MotionPrediction& pred,
                           const LandmarkPrediction& lp) {
+  if (m.kind == LandmarkKind::kPoint3D) {  // fixed-size types, the same operations (as above)
+    const PointPair p(m, lp);
+    const Eigen::Matrix2d S = p.Hx * pred.R * p.Hx.transpose() + p.Qjl;
+    Eigen::Matrix2d S_inv;
+    double log_det_S = 0.0;
+    if (!spdInverse2(S, S_inv, log_det_S)) return kInf;
+    return 0.5 * (2.0 * kLog2Pi + log_det_S + p.nu.dot(S_inv * p.nu));
+  }
   const MeasMat Qjl = m.Q + lp.HmSHm;  // line 6
   const MeasVec nu = innovation(m.z, lp.zbar);
   const MeasMat S = lp.Hx * pred.R * lp.Hx.transpose() + Qjl;

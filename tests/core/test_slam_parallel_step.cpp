@@ -81,7 +81,8 @@ TEST(slam_ParallelStep, AnyOrderAndWorkersGiveTheSameBits) {
       if (k % 40 == 0) ASSERT_EQ(stateOf(seq), stateOf(par)) << "variant " << variant << " step " << k;
     }
     EXPECT_EQ(stateOf(seq), stateOf(par)) << "variant " << variant;
-    EXPECT_EQ(scrambled.runs, 2 * static_cast<int>(frames.size() - 1));  // drafts, then commits
+    // Per step: the drafts, the commits, the release of the particles replaced.
+    EXPECT_EQ(scrambled.runs, 3 * static_cast<int>(frames.size() - 1));
     EXPECT_GT(born, 0) << "variant " << variant << ": landmarks were born (their ids were given)";
     // Every landmark id names one landmark in every particle; the newest id is below the counter.
     for (const Particle& p : par.particles()) {
@@ -123,11 +124,17 @@ TEST(slam_ParallelStep, AThrowInTheParallelPartLeavesTheFilterAsItWas) {
     EXPECT_THROW(f.step(frames[59].odom, frames[60].odom, frames[60].z, &failing), std::runtime_error);
     EXPECT_EQ(stateOf(f), before) << "throw at call " << at;
   }
-  // And it steps on as the filter that never failed.
+  // And it steps on as the filter that never failed; a throw while the replaced particles are
+  // released (call 2 M + 5, after the commit) does not undo or fail the step.
   FastSlam g(o, 6);
   g.initialise(frames[0].truth);
   for (std::size_t k = 1; k < 60; ++k) g.step(frames[k - 1].odom, frames[k].odom, frames[k].z);
-  f.step(frames[59].odom, frames[60].odom, frames[60].z);
+  ScrambledFor failing_release;
+  failing_release.throw_at_call = 2L * o.num_particles + 5;
+  EXPECT_NO_THROW(f.step(frames[59].odom, frames[60].odom, frames[60].z, &failing_release));
   g.step(frames[59].odom, frames[60].odom, frames[60].z);
+  EXPECT_EQ(stateOf(f), stateOf(g));
+  f.step(frames[60].odom, frames[61].odom, frames[61].z);
+  g.step(frames[60].odom, frames[61].odom, frames[61].z);
   EXPECT_EQ(stateOf(f), stateOf(g));
 }

@@ -20,6 +20,22 @@ namespace {
 
 Pose2 poseFromVec(const Eigen::Vector3d& v) { return Pose2::fromVec(v); }
 
+// The particles of t-1 and those resampling did not draw, released on the executor: freeing the
+// tree paths and candidates only they held is a tenth of a step of 1000 particles on 4096
+// landmarks (perf). Never throws (the step has committed): should the executor fail, they are
+// released here.
+void releaseParticles(std::vector<Particle>& a, std::vector<Particle>& b, ParallelFor& executor) noexcept {
+  try {
+    executor.run(a.size() + b.size(), [&](std::size_t k, std::size_t) {
+      Particle& p = k < a.size() ? a[k] : b[k - a.size()];
+      p = Particle{};
+    });
+  } catch (...) {
+  }
+  a.clear();
+  b.clear();
+}
+
 }  // namespace
 
 FastSlam::FastSlam(const FastSlamOptions& options, std::uint64_t seed)
@@ -117,7 +133,8 @@ StepResult FastSlam::step(const Pose2& odom_prev, const Pose2& odom_now, const s
   Rng rng = rng_;
   std::uint64_t next_id = next_landmark_id_;
   SequentialFor sequential;
-  std::vector<Particle> particles = stepParticles(in, executor ? *executor : sequential, rng, next_id);
+  ParallelFor& ex = executor ? *executor : sequential;
+  std::vector<Particle> particles = stepParticles(in, ex, rng, next_id);
 
   const std::size_t m = particles.size();
   std::vector<double> step_log_w(m);
@@ -132,8 +149,9 @@ StepResult FastSlam::step(const Pose2& odom_prev, const Pose2& odom_now, const s
   for (std::size_t k = 0; k < m; ++k) poses_before[k] = particles[k].pose;
   std::vector<double> weights_before = weights;
   describeStep(result, w.best, z, Z);
-  const int best_after =
-      resampleParticles(particles, weights, w.best, w.ess, options_.resample_ess_fraction, rng, result.resampled);
+  std::vector<Particle> undrawn;
+  const int best_after = resampleParticles(particles, weights, w.best, w.ess, options_.resample_ess_fraction, rng,
+                                           result.resampled, &undrawn);
 
   // Commit.
   result.weights_degenerate = w.degenerate;
@@ -151,6 +169,7 @@ StepResult FastSlam::step(const Pose2& odom_prev, const Pose2& odom_now, const s
   ess_ = w.ess;
   best_index_ = best_after;
   ++num_steps_;
+  releaseParticles(particles, undrawn, ex);  // (t-1's, swapped out)
   return result;
 }
 

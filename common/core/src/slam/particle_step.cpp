@@ -283,7 +283,7 @@ Weighing weighParticles(const std::vector<Particle>& particles, const std::vecto
 }
 
 int resampleParticles(std::vector<Particle>& particles, std::vector<double>& weights, int best, double ess,
-                      double resample_ess_fraction, Rng& rng, bool& resampled) {
+                      double resample_ess_fraction, Rng& rng, bool& resampled, std::vector<Particle>* replaced) {
   const int m = static_cast<int>(particles.size());
   resampled = resample_ess_fraction >= 1.0 || ess < resample_ess_fraction * static_cast<double>(m);
   if (!resampled) {
@@ -303,6 +303,7 @@ int resampleParticles(std::vector<Particle>& particles, std::vector<double>& wei
     if (idx[k] == best && best_after < 0) best_after = k;
   }
   if (best_after < 0) best_after = 0;  // cannot happen: the heaviest particle is always drawn
+  if (replaced) *replaced = std::move(particles);
   particles = std::move(next);
   weights.assign(m, 1.0 / static_cast<double>(m));
   return best_after;

@@ -150,8 +150,10 @@ Weighing weighParticles(const std::vector<Particle>& particles, const std::vecto
 /// Low-variance resampling (Alg. 1 line 9) when resample_ess_fraction >= 1 or ess < fraction * M:
 /// the drawn particles share their maps and candidates (copy-on-write), log weights 0, weights
 /// uniform; otherwise each particle keeps log w^k. Returns the index of particle `best` afterwards
-/// (its first copy); `resampled` says which.
+/// (its first copy); `resampled` says which. With `replaced`, the set resampled from goes there
+/// (the particles not drawn, the others moved from) instead of being released here.
 int resampleParticles(std::vector<Particle>& particles, std::vector<double>& weights, int best, double ess,
-                      double resample_ess_fraction, Rng& rng, bool& resampled);
+                      double resample_ess_fraction, Rng& rng, bool& resampled,
+                      std::vector<Particle>* replaced = nullptr);
 
 }  // namespace omnislam::slam

@@ -72,6 +72,23 @@ Components cheapPairComponents(const Eigen::Ref<const Eigen::MatrixXd>& cost, co
   return c;
 }
 
+// A component of one row: every column of it costs that row less than "new", so the optimum is its
+// cheapest column, the first of equals, which is what solveAssignment's solver returns for one row
+// (its first column of least reduced cost) when it does not scale the costs (magnitudes below
+// 1e300 / 12). Without the matrix and the solver's six vectors: most components are single rows
+// (a measurement near one landmark), solved once per particle and step. -1: not taken (solve it).
+int singleRowColumn(const Eigen::Ref<const Eigen::MatrixXd>& cost, int row, const std::vector<int>& cols,
+                    double cost_new) {
+  if (!(std::abs(cost_new) <= 1e300 / 12.0)) return -1;
+  int best = -1;
+  for (int b = 0; b < static_cast<int>(cols.size()); ++b) {
+    const double x = cost(row, cols[b]);
+    if (!(std::abs(x) <= 1e300 / 12.0)) return -1;
+    if (best < 0 || x < cost(row, cols[best])) best = b;
+  }
+  return best < 0 ? -1 : cols[best];
+}
+
 }  // namespace
 
 std::vector<int> associate(const Eigen::Ref<const Eigen::MatrixXd>& cost, const std::vector<double>& cost_new,
@@ -92,6 +109,13 @@ std::vector<int> associate(const Eigen::Ref<const Eigen::MatrixXd>& cost, const 
     const std::vector<int>& rows = comps.rows_of[k];
     const std::vector<int>& cols = comps.cols_of[k];
     const int nr = static_cast<int>(rows.size()), nc = static_cast<int>(cols.size());
+    if (nr == 1) {
+      const int col = singleRowColumn(cost, rows[0], cols, cost_new[rows[0]]);
+      if (col >= 0) {
+        out[rows[0]] = col;
+        continue;
+      }
+    }
     Eigen::MatrixXd full(nr, nc + nr);
     for (int a = 0; a < nr; ++a) {
       for (int b = 0; b < nc; ++b) full(a, b) = cost(rows[a], cols[b]);

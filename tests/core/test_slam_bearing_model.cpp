@@ -4,6 +4,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <array>
 #include <cstring>
 #include <random>
 
@@ -256,6 +257,55 @@ TEST(slam_BearingModel, OneDimensionalLogGaussianIsTheLltFormBitForBit) {
     EXPECT_TRUE(sameBits(lg, ref) || (std::isnan(lg) && std::isnan(ref)))
         << "r " << r0 << " S " << s00 << ": " << lg << " vs " << ref;
     EXPECT_TRUE(sameBits(m2, m2_ref) || (std::isnan(m2) && std::isnan(m2_ref))) << "r " << r0 << " S " << s00;
+  }
+}
+
+// The two-dimensional case written out (issue 55: the generic LLT's set-up was most of its cost)
+// against the same reference: ordinary, near-singular, not positive definite, asymmetric (the LLT
+// reads the lower triangle), zero and signed-zero residuals, NaN, infinity and denormal entries.
+TEST(slam_BearingModel, TwoDimensionalLogGaussianIsTheLltFormBitForBit) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double nan = std::nan(""), inf = std::numeric_limits<double>::infinity();
+  const double tiny = std::numeric_limits<double>::denorm_min();
+  // r0, r1, s00, s01, s10, s11
+  std::vector<std::array<double, 6>> cases = {{0.0, 0.0, 1e-4, 0.0, 0.0, 1e-4},
+                                              {-0.0, 0.1, 1e-4, 2e-5, 2e-5, 3e-4},
+                                              {0.1, -0.0, 1e-4, 2e-5, 2e-5, 3e-4},
+                                              {0.1, 0.2, 1.0, 1.0, 1.0, 1.0},
+                                              {0.1, 0.2, 1.0, 2.0, 2.0, 1.0},
+                                              {0.1, 0.2, 0.0, 0.0, 0.0, 1.0},
+                                              {0.1, 0.2, -1.0, 0.0, 0.0, 1.0},
+                                              {0.1, 0.2, 1.0, 0.0, 0.0, -1.0},
+                                              {0.1, 0.2, 1.0, 5.0, 0.3, 1.0},
+                                              {0.1, 0.2, nan, 0.0, 0.0, 1.0},
+                                              {0.1, 0.2, 1.0, nan, nan, 1.0},
+                                              {0.1, 0.2, 1.0, 0.0, 0.0, nan},
+                                              {nan, 0.2, 1.0, 0.0, 0.0, 1.0},
+                                              {0.1, 0.2, inf, 0.0, 0.0, 1.0},
+                                              {0.1, 0.2, 1.0, 0.0, 0.0, inf},
+                                              {0.1, 0.2, tiny, 0.0, 0.0, tiny},
+                                              {1e-300, 1e-300, 1e-300, 0.0, 0.0, 1e-300},
+                                              {2.0, -3.0, 1e300, 1e299, 1e299, 1e300}};
+  for (int i = 0; i < 20000; ++i) {
+    const double a = std::pow(10.0, 6.0 * u(rng)), d = std::pow(10.0, 6.0 * u(rng));
+    const double b = u(rng) * std::sqrt(a * d) * (i % 7 == 0 ? 1.2 : 1.0);  // some not positive definite
+    const double scale = std::pow(10.0, 3.0 * u(rng));
+    cases.push_back({u(rng) * scale, u(rng) * scale, a, b, b, d});
+  }
+  for (const auto& c : cases) {
+    MeasVec r(2);
+    r << c[0], c[1];
+    MeasMat S(2, 2);
+    S << c[2], c[3], c[4], c[5];
+    double m2 = -1.0, m2_ref = -1.0;
+    const double lg = logGaussian(r, S, &m2);
+    const double ref = logGaussianByLlt(r, S, &m2_ref);
+    EXPECT_TRUE(sameBits(lg, ref) || (std::isnan(lg) && std::isnan(ref)))
+        << "r " << c[0] << " " << c[1] << " S " << c[2] << " " << c[3] << " " << c[4] << " " << c[5] << ": " << lg
+        << " vs " << ref;
+    EXPECT_TRUE(sameBits(m2, m2_ref) || (std::isnan(m2) && std::isnan(m2_ref)))
+        << "r " << c[0] << " " << c[1] << " S " << c[2] << " " << c[3] << " " << c[4] << " " << c[5];
   }
 }
 

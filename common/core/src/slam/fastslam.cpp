@@ -28,7 +28,7 @@ void releaseParticles(std::vector<Particle>& a, std::vector<Particle>& b, Parall
   try {
     executor.run(a.size() + b.size(), [&](std::size_t k, std::size_t) {
       Particle& p = k < a.size() ? a[k] : b[k - a.size()];
-      p = Particle{};
+      const Particle released = std::move(p);  // its map and candidates go here
     });
   } catch (...) {
   }

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "omnislam/core/slam/bearing_model.h"
+#include "omnislam/core/slam/perception.h"
 
 namespace {
 
@@ -307,6 +308,33 @@ TEST(slam_BearingModel, TwoDimensionalLogGaussianIsTheLltFormBitForBit) {
     EXPECT_TRUE(sameBits(m2, m2_ref) || (std::isnan(m2) && std::isnan(m2_ref)))
         << "r " << c[0] << " " << c[1] << " S " << c[2] << " " << c[3] << " " << c[4] << " " << c[5];
   }
+}
+
+// The perceptual-range test with the optical centre given (computed once per pose by the stages)
+// answers as the one that computes it, on random poses, landmarks, windows and margins.
+TEST(slam_BearingModel, PerceptualRangeWithTheCentreGivenAnswersTheSame) {
+  std::mt19937_64 rng(14);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int inside = 0;
+  for (int i = 0; i < 20000; ++i) {
+    PerceptionOptions o;
+    o.max_range_m = 6.0 + 4.0 * u(rng);
+    o.min_range_m = i % 3 == 0 ? 1.0 : 0.0;
+    o.azimuth_half_width_rad = i % 2 == 0 ? kPi : 1.0 + 0.5 * u(rng);
+    o.azimuth_centre_rad = 0.3 * u(rng);
+    const Eigen::Vector3d p(10.0 * u(rng), 10.0 * u(rng), 6.0 * u(rng));
+    const Pose2 T{3.0 * u(rng), 3.0 * u(rng), 4.0 * u(rng)};
+    const Eigen::Vector3d cam(0.2 * u(rng), 0.2 * u(rng), 1.0 + u(rng));
+    const double margin_rad = i % 4 == 0 ? 0.05 : 0.0, margin_m = i % 4 == 0 ? 1.0 : 0.0;
+    for (const auto kind : {LandmarkKind::kPoint3D, LandmarkKind::kVerticalLine}) {
+      const bool a = insidePerceptualRange(p, kind, T, cam, o, margin_rad, margin_m);
+      const bool b = insidePerceptualRange(p, kind, cameraCentreInWorld(T, cam), T.theta_rad, o, margin_rad, margin_m);
+      ASSERT_EQ(a, b) << "case " << i;
+      inside += a;
+    }
+  }
+  EXPECT_GT(inside, 1000);  // both answers occur
+  EXPECT_LT(inside, 39000);
 }
 
 TEST(slam_BearingModel, PredictionWithCosAndSinGivenIsTheSameBitForBit) {

@@ -279,7 +279,7 @@ void predictVisibleLandmarks(const LandmarkMap& map, const Pose2& x_hat, const E
   const Eigen::Vector3d c = cameraCentreInWorld(x_hat, p_CinR_vis_m);
   map.collectNear(c.x(), c.y(), horizontalReach_m(per, per.association_margin_m), near);
   for (const auto& r : near) {
-    if (insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, x_hat, p_CinR_vis_m, per,
+    if (insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, c, x_hat.theta_rad, per,
                               per.association_margin_rad, per.association_margin_m)) {
       visible.push_back(r);
     }
@@ -554,7 +554,7 @@ void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector
   for (const auto& r : near) {
     const bool seen = std::binary_search(updated.begin(), updated.end(), r.landmark);
     if (seen) continue;
-    if (!insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, x_t, p_CinR_vis_m, per)) continue;
+    if (!insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, c, x_t.theta_rad, per)) continue;
     out.log_w += log_miss;  // w_hat = 1 - p_in
     LandmarkMap::Edit e;
     e.ref = r;

@@ -59,7 +59,6 @@ OracleStep OracleFilter::step(const Pose2& odom_prev, const Pose2& odom_now,
   if (!Z.empty()) last_p_CinR_m_ = Z.front().p_CinR_m;
   const slam::StepInput in{u, Z, last_p_CinR_m_,
                            scale_anchored_ ? std::optional<Eigen::Vector2d>(scale_anchor_xy_) : std::nullopt};
-  slam::StepState state{rng_, next_landmark_id_, candidate_cost_buffer_};
   slam::AssociationHook associate = [this](const slam::AssociationInput& a) {
     return slam::associateAsFilter(variant_, options_.update_map, options_.perception, a);
   };
@@ -76,6 +75,8 @@ OracleStep OracleFilter::step(const Pose2& odom_prev, const Pose2& odom_now,
   std::vector<slam::ParticleStepInfo> infos;
   std::vector<double> step_log_w;
   for (auto& p : particles_) {
+    slam::ParticleRng particle_rng = slam::ParticleRng::drawFrom(rng_);  // as FastSlam (random.h)
+    slam::StepState state{particle_rng, next_landmark_id_, candidate_cost_buffer_};
     infos.push_back(slam::processParticle(p, options_, variant_, in, state, associate, birth));
     step_log_w.push_back(infos.back().log_w);
   }

@@ -4,10 +4,12 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <array>
 #include <cstring>
 #include <random>
 
 #include "omnislam/core/slam/bearing_model.h"
+#include "omnislam/core/slam/perception.h"
 
 namespace {
 
@@ -257,6 +259,82 @@ TEST(slam_BearingModel, OneDimensionalLogGaussianIsTheLltFormBitForBit) {
         << "r " << r0 << " S " << s00 << ": " << lg << " vs " << ref;
     EXPECT_TRUE(sameBits(m2, m2_ref) || (std::isnan(m2) && std::isnan(m2_ref))) << "r " << r0 << " S " << s00;
   }
+}
+
+// The two-dimensional case written out (issue 55: the generic LLT's set-up was most of its cost)
+// against the same reference: ordinary, near-singular, not positive definite, asymmetric (the LLT
+// reads the lower triangle), zero and signed-zero residuals, NaN, infinity and denormal entries.
+TEST(slam_BearingModel, TwoDimensionalLogGaussianIsTheLltFormBitForBit) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double nan = std::nan(""), inf = std::numeric_limits<double>::infinity();
+  const double tiny = std::numeric_limits<double>::denorm_min();
+  // r0, r1, s00, s01, s10, s11
+  std::vector<std::array<double, 6>> cases = {{0.0, 0.0, 1e-4, 0.0, 0.0, 1e-4},
+                                              {-0.0, 0.1, 1e-4, 2e-5, 2e-5, 3e-4},
+                                              {0.1, -0.0, 1e-4, 2e-5, 2e-5, 3e-4},
+                                              {0.1, 0.2, 1.0, 1.0, 1.0, 1.0},
+                                              {0.1, 0.2, 1.0, 2.0, 2.0, 1.0},
+                                              {0.1, 0.2, 0.0, 0.0, 0.0, 1.0},
+                                              {0.1, 0.2, -1.0, 0.0, 0.0, 1.0},
+                                              {0.1, 0.2, 1.0, 0.0, 0.0, -1.0},
+                                              {0.1, 0.2, 1.0, 5.0, 0.3, 1.0},
+                                              {0.1, 0.2, nan, 0.0, 0.0, 1.0},
+                                              {0.1, 0.2, 1.0, nan, nan, 1.0},
+                                              {0.1, 0.2, 1.0, 0.0, 0.0, nan},
+                                              {nan, 0.2, 1.0, 0.0, 0.0, 1.0},
+                                              {0.1, 0.2, inf, 0.0, 0.0, 1.0},
+                                              {0.1, 0.2, 1.0, 0.0, 0.0, inf},
+                                              {0.1, 0.2, tiny, 0.0, 0.0, tiny},
+                                              {1e-300, 1e-300, 1e-300, 0.0, 0.0, 1e-300},
+                                              {2.0, -3.0, 1e300, 1e299, 1e299, 1e300}};
+  for (int i = 0; i < 20000; ++i) {
+    const double a = std::pow(10.0, 6.0 * u(rng)), d = std::pow(10.0, 6.0 * u(rng));
+    const double b = u(rng) * std::sqrt(a * d) * (i % 7 == 0 ? 1.2 : 1.0);  // some not positive definite
+    const double scale = std::pow(10.0, 3.0 * u(rng));
+    cases.push_back({u(rng) * scale, u(rng) * scale, a, b, b, d});
+  }
+  for (const auto& c : cases) {
+    MeasVec r(2);
+    r << c[0], c[1];
+    MeasMat S(2, 2);
+    S << c[2], c[3], c[4], c[5];
+    double m2 = -1.0, m2_ref = -1.0;
+    const double lg = logGaussian(r, S, &m2);
+    const double ref = logGaussianByLlt(r, S, &m2_ref);
+    EXPECT_TRUE(sameBits(lg, ref) || (std::isnan(lg) && std::isnan(ref)))
+        << "r " << c[0] << " " << c[1] << " S " << c[2] << " " << c[3] << " " << c[4] << " " << c[5] << ": " << lg
+        << " vs " << ref;
+    EXPECT_TRUE(sameBits(m2, m2_ref) || (std::isnan(m2) && std::isnan(m2_ref)))
+        << "r " << c[0] << " " << c[1] << " S " << c[2] << " " << c[3] << " " << c[4] << " " << c[5];
+  }
+}
+
+// The perceptual-range test with the optical centre given (computed once per pose by the stages)
+// answers as the one that computes it, on random poses, landmarks, windows and margins.
+TEST(slam_BearingModel, PerceptualRangeWithTheCentreGivenAnswersTheSame) {
+  std::mt19937_64 rng(14);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int inside = 0;
+  for (int i = 0; i < 20000; ++i) {
+    PerceptionOptions o;
+    o.max_range_m = 6.0 + 4.0 * u(rng);
+    o.min_range_m = i % 3 == 0 ? 1.0 : 0.0;
+    o.azimuth_half_width_rad = i % 2 == 0 ? kPi : 1.0 + 0.5 * u(rng);
+    o.azimuth_centre_rad = 0.3 * u(rng);
+    const Eigen::Vector3d p(10.0 * u(rng), 10.0 * u(rng), 6.0 * u(rng));
+    const Pose2 T{3.0 * u(rng), 3.0 * u(rng), 4.0 * u(rng)};
+    const Eigen::Vector3d cam(0.2 * u(rng), 0.2 * u(rng), 1.0 + u(rng));
+    const double margin_rad = i % 4 == 0 ? 0.05 : 0.0, margin_m = i % 4 == 0 ? 1.0 : 0.0;
+    for (const auto kind : {LandmarkKind::kPoint3D, LandmarkKind::kVerticalLine}) {
+      const bool a = insidePerceptualRange(p, kind, T, cam, o, margin_rad, margin_m);
+      const bool b = insidePerceptualRange(p, kind, cameraCentreInWorld(T, cam), T.theta_rad, o, margin_rad, margin_m);
+      ASSERT_EQ(a, b) << "case " << i;
+      inside += a;
+    }
+  }
+  EXPECT_GT(inside, 1000);  // both answers occur
+  EXPECT_LT(inside, 39000);
 }
 
 TEST(slam_BearingModel, PredictionWithCosAndSinGivenIsTheSameBitForBit) {

@@ -31,7 +31,8 @@ struct ByHand {
     const auto Z = stages::prepareMeasurements(z, o.inflate_azimuth_near_zenith, o.p_new_mahalanobis_sq, refused);
     if (!Z.empty()) p_CinR_m = Z.front().p_CinR_m;
     const StepInput in{odometryIncrement(prev, now), Z, p_CinR_m, std::nullopt};
-    StepState state{rng, next_id, buffer};
+    ParticleRng particle_rng = ParticleRng::drawFrom(rng);  // as FastSlam: the particle's slice
+    StepState state{particle_rng, next_id, buffer};
     const ParticleStepInfo info = processParticle(p, o, variant, in, state, associate, birth);
     rng.uniform01();  // FastSlam's resampling draw (one particle: always resampled)
     return info;

@@ -31,7 +31,7 @@ void changeField(const slam::options::Field<S>& f, S& s) {
 }
 
 /// For each field of the table: paper 000 with that field alone changed gives exactly one deviation,
-/// "PREFIXkey=<its value>".
+/// "PREFIXkey=<its value>"; but `threads`, which changes no result, gives none.
 template <class S, class PartOf>
 void eachFieldAloneIsOneDeviation(const std::string& prefix, const std::vector<slam::options::Field<S>>& table,
                                   PartOf part_of) {
@@ -40,6 +40,10 @@ void eachFieldAloneIsOneDeviation(const std::string& prefix, const std::vector<s
     S& s = part_of(o);
     changeField(f, s);
     const std::vector<std::string> d = presetDeviations(o);
+    if (prefix.empty() && std::string(f.key) == "threads") {
+      EXPECT_TRUE(d.empty()) << "threads=" << slam::options::valueText(f, s);
+      continue;
+    }
     ASSERT_EQ(d.size(), 1u) << prefix << f.key;
     EXPECT_EQ(d[0], prefix + f.key + "=" + slam::options::valueText(f, s));
   }

@@ -96,7 +96,8 @@ TEST(slam_Stages, HierarchicalAssociationLevel1IsTheBruteForceMinimumAndFeedsThe
 // Alg. 3 line 2: without associations the FastSLAM 2.0 proposal is the motion model (same draw).
 TEST(slam_Stages, ProposalWithoutAssociationsIsTheMotionModel) {
   const stages::MotionPrediction pred = stages::predictMotion({1.0, 0.0, 0.2}, {0.5, 0.0, 0.1}, MotionNoiseOptions{});
-  Rng a(7), b(7);
+  Rng ra(7), rb(7);
+  ParticleRng a = ParticleRng::drawFrom(ra), b = ParticleRng::drawFrom(rb);
   const Pose2 x = stages::sampleFastSlam2Pose(pred, {}, {}, {-1, -1}, a);
   const Pose2 y = stages::sampleMotionModel(pred, b);
   EXPECT_EQ(x.vec(), y.vec());

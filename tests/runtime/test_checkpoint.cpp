@@ -175,6 +175,31 @@ TEST(Checkpoint, OtherOptionsOrDamageAreRefusedWithTheReasonAndLeaveTheDriverAlo
   EXPECT_EQ(reason(file, opt), "");
 }
 
+// filter.threads changes no result (FastSlam::step on the pool, tests/runtime/test_thread_pool.cpp),
+// so it is not part of the options a checkpoint must match: a run checkpointed on one thread resumes
+// on two and publishes what the one-thread resume publishes.
+TEST(Checkpoint, ResumesWithAnotherThreadCount) {
+  const auto msgs = stream();
+  const SlamProcessOptions one = options();
+  SlamProcessOptions two = one;
+  two.filter.threads = 2;
+  SlamDriver d(one);
+  InputClock clock(one.pairing.restart_jump_us);
+  for (std::size_t i = 0; i < 800; ++i) feedDriver(d, msgs[i]);
+  const auto file = encodeCheckpoint(one, d, clock, ReplayPosition{});
+  std::vector<std::vector<uint8_t>> outputs[2];
+  for (int k = 0; k < 2; ++k) {
+    const SlamProcessOptions& o = k == 0 ? one : two;
+    SlamDriver resumed(o);
+    InputClock c(o.pairing.restart_jump_us);
+    ASSERT_NO_THROW(decodeCheckpoint(file, o, resumed, c)) << o.filter.threads << " threads";
+    for (std::size_t i = 800; i < msgs.size(); ++i) append(feedDriver(resumed, msgs[i]), outputs[k]);
+    append(resumed.finish(), outputs[k]);
+  }
+  ASSERT_FALSE(outputs[0].empty());
+  EXPECT_TRUE(outputs[0] == outputs[1]) << "the 2-thread resume published other messages";
+}
+
 TEST(Checkpoint, MessagesAtOrBeforeTheCheckpointAreAlreadyProcessed) {
   InputClock c(5'000'000);
   c.resumeAfter(kT0 + 10'000'000, kT0 + 9'700'000);

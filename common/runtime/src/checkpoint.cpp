@@ -102,12 +102,21 @@ auto driverCounters(S& s) {  // S = DriverStats or const DriverStats; the pairin
       &s.health_diverged,  &s.health_fallback,    &s.frames_between_keyframes};
 }
 
-/// describe() without the lines of the map files (paths may differ between two starts of one run).
+/// describe() without the lines of the map files (paths may differ between two starts of one run)
+/// and without filter.threads (it changes no result: a checkpoint resumes with any thread count, and
+/// those written before the key existed still load).
 std::string fingerprint(const SlamProcessOptions& o) {
   std::istringstream in(describe(o));
   std::string line, out;
-  while (std::getline(in, line))
-    if (line.rfind("map:", 0) != 0) out += line + "\n";
+  while (std::getline(in, line)) {
+    if (line.rfind("map:", 0) == 0) continue;
+    if (line.rfind("filter: ", 0) == 0) {
+      const std::string key = " threads=";
+      if (const std::size_t at = line.find(key); at != std::string::npos)
+        line.erase(at, line.find_first_not_of("0123456789", at + key.size()) - at);
+    }
+    out += line + "\n";
+  }
   return out;
 }
 

@@ -2,6 +2,7 @@
 #include "omnislam/runtime/slam_driver.h"
 
 #include "omnislam/runtime/map_message.h"
+#include "omnislam/runtime/thread_pool.h"
 
 #include <algorithm>
 #include <cmath>
@@ -317,7 +318,8 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   ensureFilter(odom_O, r);
   if (started && !slam::isKeyframe(opt_.filter.keyframes, odom_prev_O_, odom_O, frame.utime - last_step_utime_))
     return betweenKeyframes(frame, odom_O);
-  const slam::StepResult sr = filter_->step(odom_prev_O_, odom_O, frame.z);
+  // The particles on filter.threads threads (the process's pool; the same results for any count).
+  const slam::StepResult sr = filter_->step(odom_prev_O_, odom_O, frame.z, sharedThreadPool(opt_.filter.threads));
   std::optional<BackEndReport> backend;
   if (backend_)
     backend = backend_->afterStep(*filter_,

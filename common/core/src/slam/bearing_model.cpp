@@ -131,6 +131,32 @@ double logGaussian(const MeasVec& r, const MeasMat& S, double* mahalanobis_sq) {
     if (mahalanobis_sq) *mahalanobis_sq = m2;
     return -0.5 * (1.0 * std::log(2.0 * kPi) + log_det + m2);
   }
+  if (S.rows() == 2 && S.cols() == 2 && r.size() == 2) {
+    // The same for two dimensions: Eigen's unblocked LLT of the lower triangle (its test: a NaN
+    // passes), its forward substitution (skipping a zero right-hand side), in the same order; the
+    // generic path's set-up was most of its cost (twice per associated pair and particle).
+    const double a00 = S(0, 0);
+    const double l00 = std::sqrt(a00);
+    const double l10 = S(1, 0) / l00;
+    const double x11 = S(1, 1) - l10 * l10;
+    if (a00 <= 0.0 || x11 <= 0.0) {
+      if (mahalanobis_sq) *mahalanobis_sq = std::numeric_limits<double>::infinity();
+      return -std::numeric_limits<double>::infinity();
+    }
+    const double l11 = std::sqrt(x11);
+    double y0 = r(0), y1 = r(1);
+    if (y0 != 0.0) {
+      y0 /= l00;
+      y1 -= y0 * l10;
+    }
+    if (y1 != 0.0) y1 /= l11;
+    const double m2 = y0 * y0 + y1 * y1;
+    double log_det = 0.0;
+    log_det += 2.0 * std::log(l00);
+    log_det += 2.0 * std::log(l11);
+    if (mahalanobis_sq) *mahalanobis_sq = m2;
+    return -0.5 * (2.0 * std::log(2.0 * kPi) + log_det + m2);
+  }
   const Eigen::LLT<MeasMat> llt(S);
   if (llt.info() != Eigen::Success) {
     if (mahalanobis_sq) *mahalanobis_sq = std::numeric_limits<double>::infinity();

@@ -71,10 +71,61 @@ bool candidateInsideRange(const Candidate& c, const Pose2& x_t, const Perception
 
 bool pairCompatible(const Measurement& m, const Landmark& L) { return m.kind == L.kind; }
 
-// Alg. 2 lines 6-11 for one pair whose zbar, H_x, H_m were predicted at xhat (lines 2-4).
-double correctedPairCost(const Landmark& L, const Measurement& m, const MotionPrediction& pred, const MeasVec& zbar,
-                         const MeasJac& Hx, const MeasJac& Hm) {
-  const MeasMat Qjl = m.Q + Hm * L.cov_LinW_m2 * Hm.transpose();  // line 6
+// What Alg. 2 computes once per landmark (and camera) at xhat (lines 2-4): zbar, H_x, H_m and the
+// landmark's part of line 6, H_m Sigma_j H_m^T.
+struct LandmarkPrediction {
+  MeasVec zbar;
+  MeasJac Hx, Hm;
+  MeasMat HmSHm;
+};
+
+// smallSpdInverse of a 2x2 matrix in fixed-size types (the same operations).
+bool spdInverse2(const Eigen::Matrix2d& S, Eigen::Matrix2d& S_inv, double& log_det) {
+  const double a = S(0, 0), b = 0.5 * (S(0, 1) + S(1, 0)), d = S(1, 1);
+  const double det = a * d - b * b;
+  if (!(a > 0.0) || !(det > 0.0) || !std::isfinite(det)) return false;
+  S_inv << d / det, -b / det, -b / det, a / det;
+  log_det = std::log(det);
+  return true;
+}
+
+// A point's (azimuth, elevation) pair in fixed-size types: Q_jl = Q + H_m Sigma H_m^T (line 6), H_x
+// and nu = z - zbar.
+struct PointPair {
+  Eigen::Matrix2d Qjl;
+  Eigen::Matrix<double, 2, 3> Hx;
+  Eigen::Vector2d nu;
+  PointPair(const Measurement& m, const LandmarkPrediction& lp) : Qjl(m.Q + lp.HmSHm), Hx(lp.Hx) {
+    nu << wrapAngle(m.z(0) - lp.zbar(0)), wrapAngle(m.z(1) - lp.zbar(1));
+  }
+};
+
+// correctedPairCost for a point: the same operations in the same order (the same bits: the replay
+// digests), in fixed-size types; the dynamic-size loops were a fifth of Alg. 2's time.
+double correctedPointPairCost(const Landmark& L, const Measurement& m, const MotionPrediction& pred,
+                              const LandmarkPrediction& lp) {
+  const PointPair p(m, lp);
+  Eigen::Matrix2d Qjl_inv;
+  double log_det_Qjl = 0.0;
+  if (!spdInverse2(p.Qjl, Qjl_inv, log_det_Qjl)) return kInf;
+  const Eigen::Matrix<double, 2, 3> QinvHx = Qjl_inv * p.Hx;
+  const Eigen::Matrix3d Sx = (p.Hx.transpose() * QinvHx + pred.R_inv).inverse();  // line 7
+  const Eigen::Vector3d dmu = Sx * (QinvHx.transpose() * p.nu);                   // line 8
+  const Pose2& x_hat = pred.x_hat;
+  const Pose2 mu_x{x_hat.x_m + dmu(0), x_hat.y_m + dmu(1), wrapAngle(x_hat.theta_rad + dmu(2))};
+  const auto zhat = predictBearing(L.p_LinW_m, mu_x, m.p_CinR_m);  // line 10
+  if (!zhat) return kInf;
+  const Eigen::Vector2d r(wrapAngle(m.z(0) - (*zhat)(0)), wrapAngle(m.z(1) - (*zhat)(1)));  // line 11
+  return 0.5 * (2.0 * kLog2Pi + log_det_Qjl + r.dot(Qjl_inv * r));
+}
+
+// Alg. 2 lines 6-11 for one pair whose landmark was predicted at xhat (lines 2-4).
+double correctedPairCost(const Landmark& L, const Measurement& m, const MotionPrediction& pred,
+                         const LandmarkPrediction& lp) {
+  if (m.kind == LandmarkKind::kPoint3D) return correctedPointPairCost(L, m, pred, lp);
+  const MeasVec& zbar = lp.zbar;
+  const MeasJac& Hx = lp.Hx;
+  const MeasMat Qjl = m.Q + lp.HmSHm;  // line 6
   const MeasVec nu = innovation(m.z, zbar);
   MeasMat Qjl_inv;
   double log_det_Qjl = 0.0;
@@ -92,11 +143,19 @@ double correctedPairCost(const Landmark& L, const Measurement& m, const MotionPr
 
 // Deviation: -log N(z; zbar, H_x R H_x^T + Q_jl), which charges a pairing for the pose correction
 // it needs; Alg. 2 scores it after the correction.
-double predictivePairCost(const Landmark& L, const Measurement& m, const MotionPrediction& pred, const MeasVec& zbar,
-                          const MeasJac& Hx, const MeasJac& Hm) {
-  const MeasMat Qjl = m.Q + Hm * L.cov_LinW_m2 * Hm.transpose();  // line 6
-  const MeasVec nu = innovation(m.z, zbar);
-  const MeasMat S = Hx * pred.R * Hx.transpose() + Qjl;
+double predictivePairCost(const Landmark&, const Measurement& m, const MotionPrediction& pred,
+                          const LandmarkPrediction& lp) {
+  if (m.kind == LandmarkKind::kPoint3D) {  // fixed-size types, the same operations (as above)
+    const PointPair p(m, lp);
+    const Eigen::Matrix2d S = p.Hx * pred.R * p.Hx.transpose() + p.Qjl;
+    Eigen::Matrix2d S_inv;
+    double log_det_S = 0.0;
+    if (!spdInverse2(S, S_inv, log_det_S)) return kInf;
+    return 0.5 * (2.0 * kLog2Pi + log_det_S + p.nu.dot(S_inv * p.nu));
+  }
+  const MeasMat Qjl = m.Q + lp.HmSHm;  // line 6
+  const MeasVec nu = innovation(m.z, lp.zbar);
+  const MeasMat S = lp.Hx * pred.R * lp.Hx.transpose() + Qjl;
   MeasMat S_inv;
   double log_det_S = 0.0;
   if (!smallSpdInverse(S, S_inv, log_det_S)) return kInf;
@@ -110,20 +169,26 @@ Eigen::MatrixXd scorePairsAtPrediction(const std::vector<LandmarkMap::Ref>& visi
                                        const MotionPrediction& pred, PairCost pair_cost) {
   const int nz = static_cast<int>(Z.size()), nv = static_cast<int>(visible.size());
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nz, nv, kInf);
+  LandmarkPrediction lp;
   for (int j = 0; j < nv && nz > 0; ++j) {
     const Landmark& L = *visible[j].landmark;
-    MeasJac Hx, Hm;
-    std::optional<MeasVec> zbar;
+    bool predicted = false;
     const Eigen::Vector3d* cached_cam = nullptr;
     for (int l = 0; l < nz; ++l) {
       const Measurement& m = Z[l];
       if (!pairCompatible(m, L)) continue;
       if (cached_cam == nullptr || *cached_cam != m.p_CinR_m) {  // Alg. 2 lines 2-4
-        zbar = predictMeasurement(L.kind, L.p_LinW_m, pred.x_hat, m.p_CinR_m, &Hx, &Hm);
+        const std::optional<MeasVec> zbar =
+            predictMeasurement(L.kind, L.p_LinW_m, pred.x_hat, m.p_CinR_m, &lp.Hx, &lp.Hm);
+        predicted = zbar.has_value();
+        if (predicted) {
+          lp.zbar = *zbar;
+          lp.HmSHm = lp.Hm * L.cov_LinW_m2 * lp.Hm.transpose();
+        }
         cached_cam = &m.p_CinR_m;
       }
-      if (!zbar) continue;
-      cost(l, j) = pair_cost(L, m, pred, *zbar, Hx, Hm);
+      if (!predicted) continue;
+      cost(l, j) = pair_cost(L, m, pred, lp);
     }
   }
   return cost;
@@ -203,7 +268,7 @@ MotionPrediction predictMotion(const Pose2& x_prev, const Pose2& u, const Motion
   return p;
 }
 
-Pose2 sampleMotionModel(const MotionPrediction& pred, Rng& rng) {
+Pose2 sampleMotionModel(const MotionPrediction& pred, ParticleRng& rng) {
   return Pose2::fromVec(rng.gaussian3(pred.x_hat.vec(), pred.R));
 }
 
@@ -214,7 +279,7 @@ void predictVisibleLandmarks(const LandmarkMap& map, const Pose2& x_hat, const E
   const Eigen::Vector3d c = cameraCentreInWorld(x_hat, p_CinR_vis_m);
   map.collectNear(c.x(), c.y(), horizontalReach_m(per, per.association_margin_m), near);
   for (const auto& r : near) {
-    if (insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, x_hat, p_CinR_vis_m, per,
+    if (insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, c, x_hat.theta_rad, per,
                               per.association_margin_rad, per.association_margin_m)) {
       visible.push_back(r);
     }
@@ -342,7 +407,7 @@ std::vector<ProposalTerm> orderedProposalTerms(const std::vector<LandmarkMap::Re
 
 Pose2 sampleFastSlam2Pose(const MotionPrediction& pred, const std::vector<LandmarkMap::Ref>& visible,
                           const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
-                          Rng& rng) {
+                          ParticleRng& rng) {
   const bool any_assoc =
       std::any_of(landmark_of_measurement.begin(), landmark_of_measurement.end(), [](int j) { return j >= 0; });
   if (!any_assoc) return sampleMotionModel(pred, rng);  // line 2
@@ -489,7 +554,7 @@ void accountMisses(const LandmarkMap& map, const Pose2& x_t, const Eigen::Vector
   for (const auto& r : near) {
     const bool seen = std::binary_search(updated.begin(), updated.end(), r.landmark);
     if (seen) continue;
-    if (!insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, x_t, p_CinR_vis_m, per)) continue;
+    if (!insidePerceptualRange(r.landmark->p_LinW_m, r.landmark->kind, c, x_t.theta_rad, per)) continue;
     out.log_w += log_miss;  // w_hat = 1 - p_in
     LandmarkMap::Edit e;
     e.ref = r;
@@ -595,20 +660,26 @@ CandidateUpdate updateCandidates(const std::vector<std::shared_ptr<const Candida
   CandidateUpdate out;
   out.candidates.reserve(nc + nl);
   for (int c = 0; c < nc; ++c) {
-    auto nc_ptr = std::make_shared<Candidate>(*candidates[c]);
-    Candidate& cand = *nc_ptr;
     const int l = meas_of_cand[c];
     if (l < 0) {
       // Not observed: i_j -= I_not (I_not consecutive misses); deleted when not above 0. Only a
-      // candidate that could have been seen misses (a forward camera does not see behind it).
-      if (candidateInsideRange(cand, x_t, o.perception)) {
-        ++cand.consecutive_misses;
-        cand.counter -= cand.consecutive_misses;
-        if (cand.counter <= 0) continue;
+      // candidate that could have been seen misses (a forward camera does not see behind it). Copied
+      // only when it changes and stays (copy-on-write).
+      const Candidate& old = *candidates[c];
+      if (!candidateInsideRange(old, x_t, o.perception)) {
+        out.candidates.push_back(candidates[c]);
+        continue;
       }
-      out.candidates.push_back(std::move(nc_ptr));
+      const int misses = old.consecutive_misses + 1;
+      if (old.counter - misses <= 0) continue;
+      auto missed = std::make_shared<Candidate>(old);
+      missed->consecutive_misses = misses;
+      missed->counter -= misses;
+      out.candidates.push_back(std::move(missed));
       continue;
     }
+    auto nc_ptr = std::make_shared<Candidate>(*candidates[c]);
+    Candidate& cand = *nc_ptr;
     const Measurement& m = Z[l];
     ++out.num_to_candidates;
     blendDescriptor(cand.descriptor, m.descriptor, o.descriptor_update_rate);

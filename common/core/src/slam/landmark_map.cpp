@@ -160,12 +160,11 @@ void LandmarkMap::collectNear(double x_m, double y_m, double reach_m, std::vecto
   const std::int32_t cy0 = cellIndex(y_m - reach_m, cell_size_m_), cy1 = cellIndex(y_m + reach_m, cell_size_m_);
   const double box_cells = (static_cast<double>(cx1) - cx0 + 1.0) * (static_cast<double>(cy1) - cy0 + 1.0);
   if (box_cells <= static_cast<double>(num_cells_)) {
+    // A column's cells are consecutive keys (cx high, cy low): one range walk per column, in the
+    // order cell-by-cell look-ups gave (cy increasing), without a look-up from the root per cell.
     for (std::int64_t cx = cx0; cx <= cx1; ++cx) {
-      for (std::int64_t cy = cy0; cy <= cy1; ++cy) {
-        if (const Node* n = find(makeKey(static_cast<std::int32_t>(cx), static_cast<std::int32_t>(cy)))) {
-          appendCell(*n, out);
-        }
-      }
+      const auto x = static_cast<std::int32_t>(cx);
+      inorderRange(root_.get(), makeKey(x, cy0), makeKey(x, cy1), [&](const Node& n) { appendCell(n, out); });
     }
     return;
   }

@@ -118,6 +118,7 @@ const std::vector<Field<FastSlamOptions>>& fastSlamFields() {
               "deviation: each particle's map scale anchored to the odometry path length (slam-core.md, \"Map scale\")"),
       real<F>("scale_correction_max_step", &F::scale_correction_max_step, "scale_correction_max_step", "", 0.0, 1.0,
               kLo, "largest relative rescaling of one step (odometry_scale_correction)"),
+      integer<F>("threads", &F::threads, "threads", 1, 64, "threads the particles of a step run on (the SLAM process's pool); the same results for any count, 1 = the caller's thread only"),
   };
   // clang-format on
   return t;

@@ -28,19 +28,36 @@ std::vector<std::int64_t> landmarkIdsOf(const std::vector<int>& landmark_of_meas
   return ids;
 }
 
-// updateCandidateLandmarks() (Alg. 4 line 28): the particle's next candidates; the landmarks they
-// initialise are returned (none when the map is fixed).
-std::vector<Landmark> updateCandidatesOf(Particle& p, const Pose2& x_t, const std::vector<stages::Measurement>& Z,
-                                         const stages::HierarchicalAssociation& a, const FastSlamOptions& o,
-                                         std::uint64_t& next_landmark_id, ParticleStepInfo& info) {
-  if (!o.update_map) return {};
+// updateCandidateLandmarks() (Alg. 4 line 28): the particle's next candidates and the landmarks they
+// initialise into the draft (nothing when the map is fixed).
+void updateCandidatesOf(const Particle& p, const std::vector<stages::Measurement>& Z,
+                        const stages::HierarchicalAssociation& a, const FastSlamOptions& o,
+                        std::uint64_t& next_landmark_id, ParticleStepDraft& d) {
+  d.candidates_replaced = o.update_map;
+  if (!o.update_map) return;
   stages::CandidateUpdate cu =
-      stages::updateCandidates(p.candidates, x_t, Z, a, stages::candidateUpdateOptionsOf(o), next_landmark_id);
-  p.candidates = std::move(cu.candidates);
-  info.num_to_candidates = cu.num_to_candidates;
-  info.num_new_candidates = cu.num_new_candidates;
-  info.num_initialised = cu.num_initialised;
-  return std::move(cu.inserts);
+      stages::updateCandidates(p.candidates, d.x_t, Z, a, stages::candidateUpdateOptionsOf(o), next_landmark_id);
+  d.candidates = std::move(cu.candidates);
+  d.newborn = std::move(cu.inserts);
+  d.info.num_to_candidates = cu.num_to_candidates;
+  d.info.num_new_candidates = cu.num_new_candidates;
+  d.info.num_initialised = cu.num_initialised;
+}
+
+// A draft's per-step results emptied (its vectors keep their capacity).
+void resetDraft(ParticleStepDraft& d) {
+  d.update.edits.clear();
+  d.update.updated.clear();
+  d.update.log_w = 0.0;
+  d.update.num_associated = d.update.num_deleted = 0;
+  d.update.nis = 0.0;
+  d.update.nis_dof = 0;
+  d.newborn.clear();
+  d.candidates_replaced = false;
+  d.candidates.clear();
+  d.info = ParticleStepInfo{};
+  d.near.clear();
+  d.visible.clear();
 }
 
 // (x, y) and, for a point, z of m scaled by s about (c, cz).
@@ -102,13 +119,13 @@ stages::HierarchicalAssociation associateAsFilter(const stages::FilterVariant& v
   return stages::associateHierarchically(level1, in.propose, level2);
 }
 
-ParticleStepInfo processParticle(Particle& p, const FastSlamOptions& o, const stages::FilterVariant& variant,
-                                 const StepInput& in, StepState& state, const AssociationHook& associate,
-                                 const BirthHook& place_newborn) {
+void draftParticleStep(const Particle& p, const FastSlamOptions& o, const stages::FilterVariant& variant,
+                       const StepInput& in, StepState& state, const AssociationHook& associate, ParticleStepDraft& d) {
+  resetDraft(d);
   const std::vector<stages::Measurement>& Z = in.Z;
-  const stages::MotionPrediction pred = stages::predictMotion(p.pose, in.u, o.motion);  // Alg. 1 line 3
-  std::vector<LandmarkMap::Ref> near, vis;
-  stages::predictVisibleLandmarks(p.map, pred.x_hat, in.p_CinR_vis_m, o.perception, near, vis);
+  d.pred = stages::predictMotion(p.pose, in.u, o.motion);  // Alg. 1 line 3
+  const stages::MotionPrediction& pred = d.pred;
+  stages::predictVisibleLandmarks(p.map, pred.x_hat, in.p_CinR_vis_m, o.perception, d.near, d.visible);
 
   // FastSLAM 1.0 samples x_t from the motion model first (and scores the pairs there); FastSLAM 2.0
   // samples it from the proposal between the association's levels (Alg. 3).
@@ -117,42 +134,71 @@ ParticleStepInfo processParticle(Particle& p, const FastSlamOptions& o, const st
           [&](const stages::FastSlam1&) -> std::optional<Pose2> { return stages::sampleMotionModel(pred, state.rng); },
           [](const stages::FastSlam2&) -> std::optional<Pose2> { return std::nullopt; }},
       variant);
-  const std::function<Pose2(const stages::MapAssociation&)> propose = [&](const stages::MapAssociation& l1) {
-    return std::visit(Overloaded{[&](const stages::FastSlam1&) { return *x_sampled; },
+  // One pointer captured: std::function keeps it without allocating.
+  const struct Proposal {
+    const stages::FilterVariant& variant;
+    const std::optional<Pose2>& x_sampled;
+    const ParticleStepDraft& d;
+    const std::vector<stages::Measurement>& Z;
+    ParticleRng& rng;
+  } proposal{variant, x_sampled, d, Z, state.rng};
+  const Proposal* pr = &proposal;
+  const std::function<Pose2(const stages::MapAssociation&)> propose = [pr](const stages::MapAssociation& l1) {
+    return std::visit(Overloaded{[&](const stages::FastSlam1&) { return *pr->x_sampled; },
                                  [&](const stages::FastSlam2&) {
-                                   return stages::sampleFastSlam2Pose(pred, vis, Z, l1.landmark_of_measurement,
-                                                                      state.rng);
+                                   return stages::sampleFastSlam2Pose(pr->d.pred, pr->d.visible, pr->Z,
+                                                                      l1.landmark_of_measurement, pr->rng);
                                  }},
-                      variant);
+                      pr->variant);
   };
   const stages::HierarchicalAssociation a =
-      associate(AssociationInput{p, pred, Z, vis, x_sampled, propose, state.cost_buffer});
-  const Pose2& x_t = a.x_t;
+      associate(AssociationInput{p, pred, Z, d.visible, x_sampled, propose, state.cost_buffer});
+  d.x_t = a.x_t;
 
   // Alg. 4: landmark EKFs, the weight, types I/II, misses.
-  stages::ParticleUpdate up;
-  stages::updateObservedLandmarks(pred, x_t, vis, Z, a.level1.landmark_of_measurement,
+  stages::ParticleUpdate& up = d.update;
+  stages::updateObservedLandmarks(pred, d.x_t, d.visible, Z, a.level1.landmark_of_measurement,
                                   stages::landmarkUpdateOptionsOf(o), stages::weightingOf(variant), up);
-  stages::accountMisses(p.map, x_t, in.p_CinR_vis_m, o.perception, o.update_map, near, up);
+  stages::accountMisses(p.map, d.x_t, in.p_CinR_vis_m, o.perception, o.update_map, d.near, up);
   up.log_w += stages::unexplainedWeight(a, Z, o.weight_term, o.p_new_mahalanobis_sq);
 
-  ParticleStepInfo info;
-  info.landmark_of_measurement = landmarkIdsOf(a.level1.landmark_of_measurement, vis);
-  info.num_associated = up.num_associated;
-  info.num_deleted = up.num_deleted;
-  info.nis = up.nis;
-  info.nis_dof = up.nis_dof;
-  std::vector<Landmark> inserts = updateCandidatesOf(p, x_t, Z, a, o, state.next_landmark_id, info);
-  p.map.apply(up.edits, place_newborn ? std::vector<Landmark>{} : inserts);
-  p.pose = x_t;
-  if (in.scale_anchor_xy_m)
-    anchorScale(p, pred.x_prev, in.u, in.p_CinR_vis_m, *in.scale_anchor_xy_m, o.scale_correction_max_step);
-  if (place_newborn) {
-    place_newborn(inserts);
-    p.map.apply({}, inserts);
+  d.info.landmark_of_measurement = landmarkIdsOf(a.level1.landmark_of_measurement, d.visible);
+  d.info.num_associated = up.num_associated;
+  d.info.num_deleted = up.num_deleted;
+  d.info.nis = up.nis;
+  d.info.nis_dof = up.nis_dof;
+  updateCandidatesOf(p, Z, a, o, state.next_landmark_id, d);
+  d.info.log_w = up.log_w;
+}
+
+void commitParticleStep(const Particle& before, ParticleStepDraft& d, const FastSlamOptions& o, const StepInput& in,
+                        Particle& after, const BirthHook& place_newborn) {
+  if (&after != &before) {
+    after.log_weight = before.log_weight;
+    after.map = before.map;
+    after.scale_path_m = before.scale_path_m;
+    after.scale_odometry_m = before.scale_odometry_m;
+    if (!d.candidates_replaced) after.candidates = before.candidates;
   }
-  info.log_w = up.log_w;
-  return info;
+  if (d.candidates_replaced) after.candidates = std::move(d.candidates);
+  const std::vector<Landmark> none;  // (the hook places them later)
+  after.map.apply(d.update.edits, place_newborn ? none : d.newborn);
+  after.pose = d.x_t;
+  if (in.scale_anchor_xy_m)
+    anchorScale(after, d.pred.x_prev, in.u, in.p_CinR_vis_m, *in.scale_anchor_xy_m, o.scale_correction_max_step);
+  if (place_newborn) {
+    place_newborn(d.newborn);
+    after.map.apply({}, d.newborn);
+  }
+}
+
+ParticleStepInfo processParticle(Particle& p, const FastSlamOptions& o, const stages::FilterVariant& variant,
+                                 const StepInput& in, StepState& state, const AssociationHook& associate,
+                                 const BirthHook& place_newborn) {
+  ParticleStepDraft d;
+  draftParticleStep(p, o, variant, in, state, associate, d);
+  commitParticleStep(p, d, o, in, p, place_newborn);
+  return std::move(d.info);
 }
 
 // Bearings are invariant under a scaling of poses and landmarks about any point of the camera plane
@@ -237,7 +283,7 @@ Weighing weighParticles(const std::vector<Particle>& particles, const std::vecto
 }
 
 int resampleParticles(std::vector<Particle>& particles, std::vector<double>& weights, int best, double ess,
-                      double resample_ess_fraction, Rng& rng, bool& resampled) {
+                      double resample_ess_fraction, Rng& rng, bool& resampled, std::vector<Particle>* replaced) {
   const int m = static_cast<int>(particles.size());
   resampled = resample_ess_fraction >= 1.0 || ess < resample_ess_fraction * static_cast<double>(m);
   if (!resampled) {
@@ -245,15 +291,19 @@ int resampleParticles(std::vector<Particle>& particles, std::vector<double>& wei
     return best;
   }
   const std::vector<int> idx = lowVarianceResample(weights, rng.uniform01());
+  std::vector<int> last_draw(m, -1);  // a particle's last draw takes it (moved), the others copy it
+  for (int k = 0; k < m; ++k) last_draw[idx[k]] = k;
   std::vector<Particle> next;
   next.reserve(m);
   int best_after = -1;
   for (int k = 0; k < m; ++k) {
-    next.push_back(particles[idx[k]]);  // shares map and candidates (copy-on-write)
+    if (last_draw[idx[k]] == k) next.push_back(std::move(particles[idx[k]]));
+    else next.push_back(particles[idx[k]]);  // shares map and candidates (copy-on-write)
     next.back().log_weight = 0.0;
     if (idx[k] == best && best_after < 0) best_after = k;
   }
   if (best_after < 0) best_after = 0;  // cannot happen: the heaviest particle is always drawn
+  if (replaced) *replaced = std::move(particles);
   particles = std::move(next);
   weights.assign(m, 1.0 / static_cast<double>(m));
   return best_after;

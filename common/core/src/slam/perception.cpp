@@ -21,8 +21,13 @@ std::string PerceptionOptions::validate() const {
 bool insidePerceptualRange(const Eigen::Vector3d& p_LinW_m, LandmarkKind kind, const Pose2& T_WtoR,
                            const Eigen::Vector3d& p_CinR_m, const PerceptionOptions& o, double margin_rad,
                            double margin_m) {
-  const Eigen::Vector3d c = cameraCentreInWorld(T_WtoR, p_CinR_m);
-  const Eigen::Vector3d d = p_LinW_m - c;
+  return insidePerceptualRange(p_LinW_m, kind, cameraCentreInWorld(T_WtoR, p_CinR_m), T_WtoR.theta_rad, o, margin_rad,
+                               margin_m);
+}
+
+bool insidePerceptualRange(const Eigen::Vector3d& p_LinW_m, LandmarkKind kind, const Eigen::Vector3d& c_W_m,
+                           double theta_rad, const PerceptionOptions& o, double margin_rad, double margin_m) {
+  const Eigen::Vector3d d = p_LinW_m - c_W_m;
   const bool line = kind == LandmarkKind::kVerticalLine;
   const double rho = std::hypot(d.x(), d.y());
   const double range = line ? rho : d.norm();
@@ -34,7 +39,7 @@ bool insidePerceptualRange(const Eigen::Vector3d& p_LinW_m, LandmarkKind kind, c
   }
   if (o.azimuth_half_width_rad + margin_rad >= kPi) return true;
   if (rho < kMinHorizontalRange_m) return !line;
-  const double az = wrapAngle(std::atan2(d.y(), d.x()) - T_WtoR.theta_rad);
+  const double az = wrapAngle(std::atan2(d.y(), d.x()) - theta_rad);
   return std::abs(wrapAngle(az - o.azimuth_centre_rad)) <= o.azimuth_half_width_rad + margin_rad;
 }
 

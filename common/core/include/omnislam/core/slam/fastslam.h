@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "omnislam/core/byte_codec.h"
+#include "omnislam/core/parallel_for.h"
 #include "omnislam/core/pose2.h"
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/candidate.h"
@@ -68,7 +69,12 @@ class FastSlam {
   /// One step of Alg. 1 with the odometry poses of the previous and the current frame and the
   /// current frame's measurements. Throws std::logic_error before initialise(). Strong exception
   /// guarantee: if anything in the step throws (std::bad_alloc), the filter is as it was before it.
-  StepResult step(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z);
+  /// The particles run on `executor` (none: one after the other on this thread); the results are
+  /// the same bits whatever it is: each particle draws its own random numbers (ParticleRng, taken in
+  /// particle order before they run), the landmarks born get their ids in particle order after
+  /// they ran, and every sum over the particles is taken in particle order.
+  StepResult step(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z,
+                  ParallelFor* executor = nullptr);
 
   /// Odometry-only step (no image): every particle samples the motion model; weights, maps and
   /// candidates are unchanged. Strong exception guarantee, as step().
@@ -118,8 +124,12 @@ class FastSlam {
   static FastSlam loadState(const FastSlamOptions& options, ByteReader& r);
 
  private:
-  StepResult stepInPlace(const Pose2& odom_prev, const Pose2& odom_now, const std::vector<BearingMeasurement>& z);
-  void finishStep(StepResult& result, const std::vector<ParticleStepInfo>& infos);
+  /// The particles at t (drafts_ filled), built aside from particles_: drafts on the executor, ids
+  /// given in particle order, commits on the executor.
+  std::vector<Particle> stepParticles(const StepInput& in, ParallelFor& executor, Rng& rng, std::uint64_t& next_id);
+  /// The step's result (of the best particle before resampling, drafts_[best_before]) but its counts.
+  void describeStep(StepResult& result, int best_before, const std::vector<BearingMeasurement>& z,
+                    const std::vector<stages::Measurement>& Z) const;
 
   FastSlamOptions options_;
   stages::FilterVariant variant_;  ///< the proposal, association and weighting options_ name
@@ -128,7 +138,9 @@ class FastSlam {
   std::vector<double> weights_;
   std::vector<Pose2> poses_before_resampling_;
   std::vector<double> weights_before_resampling_;
-  std::vector<double> candidate_cost_buffer_;  ///< level-2 association's cost matrix (scratch, reused)
+  // Scratch of the step, reused: one draft per particle, the level-2 cost matrix per worker.
+  std::vector<ParticleStepDraft> drafts_;
+  std::vector<std::vector<double>> cost_buffers_;
   double ess_ = 0.0;
   int best_index_ = 0;
   std::uint64_t next_landmark_id_ = 0;

@@ -26,6 +26,10 @@ using stages::WeightTerm;
 
 struct FastSlamOptions {
   int num_particles = 10;  ///< M (paper: 10)
+  /// Threads the particles of a step run on. The core starts none: FastSlam::step runs them on the
+  /// executor its caller gives (the SLAM process: a pool of this size, common/runtime/thread_pool.h).
+  /// The results are the same bits for any count; 1 (the default) runs them one after the other.
+  int threads = 1;
   AssociationMethod association = AssociationMethod::kHungarian;
   /// How a particle's new pose is drawn, with FastSLAM 2.0's own choices (filter_variant.h):
   /// FastSLAM 2.0 (paper 000, Alg. 3, the default): from the motion model corrected by the associated

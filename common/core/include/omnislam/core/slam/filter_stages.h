@@ -74,7 +74,7 @@ struct MotionPrediction {
 Eigen::Matrix3d checkedMotionCovariance(const Pose2& x_prev, const Pose2& u, const MotionNoiseOptions& motion);
 MotionPrediction predictMotion(const Pose2& x_prev, const Pose2& u, const MotionNoiseOptions& motion);
 /// x_t ~ p(x_t | x_{t-1}, u_t) = N(xhat_t, R_t) (Alg. 3 line 2; FastSLAM 1.0's proposal).
-Pose2 sampleMotionModel(const MotionPrediction& pred, Rng& rng);
+Pose2 sampleMotionModel(const MotionPrediction& pred, ParticleRng& rng);
 
 // --- Visible landmarks ------------------------------------------------------------------------------
 /// The landmarks inside the perceptual range of xhat_t widened by the association margins (these
@@ -144,7 +144,8 @@ std::vector<int> associateWithCandidates(const CandidateLevelInput& in, const Po
 /// x_t ~ N(mu_x, Sigma_x) folded in from the associated type I landmarks, ordered by trace(Sigma_j),
 /// then measured azimuth, then id (lines 4-14); N(xhat_t, R_t) when nothing is associated (line 2).
 Pose2 sampleFastSlam2Pose(const MotionPrediction& pred, const std::vector<LandmarkMap::Ref>& visible,
-                          const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement, Rng& rng);
+                          const std::vector<Measurement>& Z, const std::vector<int>& landmark_of_measurement,
+                          ParticleRng& rng);
 
 // --- Alg. 4: landmark updates and the weight ---------------------------------------------------------
 /// What updateObservedLandmarks reads of FastSlamOptions (landmarkUpdateOptionsOf).

@@ -42,9 +42,9 @@ struct StepInput {
   std::optional<Eigen::Vector2d> scale_anchor_xy_m;
 };
 
-/// What one particle's step changes besides the particle (shared by the particles of a step).
+/// What one particle's step changes besides the particle.
 struct StepState {
-  Rng& rng;
+  ParticleRng& rng;                  ///< the particle's random numbers of this step (random.h)
   std::uint64_t& next_landmark_id;   ///< the id the next landmark born takes
   std::vector<double>& cost_buffer;  ///< level-2 association's cost matrix (scratch, reused)
 };
@@ -86,9 +86,34 @@ using BirthHook = std::function<void(std::vector<Landmark>& newborn)>;
 stages::HierarchicalAssociation associateAsFilter(const stages::FilterVariant& variant, bool update_map,
                                                   const PerceptionOptions& perception, const AssociationInput& in);
 
-/// Alg. 1 lines 3-7 for particle p: the stages of filter_stages.h in order (the table in
-/// docs/design/slam-core.md), with `associate` as the association (FastSlam: associateAsFilter) and
-/// `place_newborn` as the birth. p's pose, map, candidates and scale sums become those at t.
+/// One particle's step before anything of the particle changes (draftParticleStep), and what
+/// commitParticleStep then makes of it. Reused across steps (its vectors keep their capacity).
+struct ParticleStepDraft {
+  stages::MotionPrediction pred;
+  Pose2 x_t;                         ///< the pose sampled at t
+  stages::ParticleUpdate update;     ///< the map's edits (refs into the particle's map), the weight
+  std::vector<Landmark> newborn;     ///< candidates initialised, ids from StepState::next_landmark_id
+  bool candidates_replaced = false;  ///< update_map: `candidates` are the particle's next ones
+  std::vector<std::shared_ptr<const Candidate>> candidates;
+  ParticleStepInfo info;                        ///< info.log_w is set by the draft
+  std::vector<LandmarkMap::Ref> near, visible;  ///< scratch of the stages
+};
+
+/// Alg. 1 lines 3-7 for particle p up to its update: prediction, association, the proposal,
+/// the landmark EKFs and the weight, the candidates (filter_stages.h in order, the table in
+/// docs/design/slam-core.md), with `associate` as the association (FastSlam: associateAsFilter);
+/// p is only read. FastSlam runs the particles' drafts at once (on its executor), then gives the
+/// newborns their ids in particle order, then commits.
+void draftParticleStep(const Particle& p, const FastSlamOptions& o, const stages::FilterVariant& variant,
+                       const StepInput& in, StepState& state, const AssociationHook& associate, ParticleStepDraft& d);
+/// `after` becomes the particle at t of the draft of `before` (they may be the same): pose x_t, the
+/// map's edits and newborns (placed by `place_newborn` when given), the candidates, the scale
+/// anchoring. `before` is only read unless it is `after`.
+void commitParticleStep(const Particle& before, ParticleStepDraft& d, const FastSlamOptions& o, const StepInput& in,
+                        Particle& after, const BirthHook& place_newborn = {});
+
+/// Alg. 1 lines 3-7 for particle p: draftParticleStep then commitParticleStep, with `place_newborn`
+/// as the birth. p's pose, map, candidates and scale sums become those at t.
 ParticleStepInfo processParticle(Particle& p, const FastSlamOptions& o, const stages::FilterVariant& variant,
                                  const StepInput& in, StepState& state, const AssociationHook& associate,
                                  const BirthHook& place_newborn = {});
@@ -125,8 +150,10 @@ Weighing weighParticles(const std::vector<Particle>& particles, const std::vecto
 /// Low-variance resampling (Alg. 1 line 9) when resample_ess_fraction >= 1 or ess < fraction * M:
 /// the drawn particles share their maps and candidates (copy-on-write), log weights 0, weights
 /// uniform; otherwise each particle keeps log w^k. Returns the index of particle `best` afterwards
-/// (its first copy); `resampled` says which.
+/// (its first copy); `resampled` says which. With `replaced`, the set resampled from goes there
+/// (the particles not drawn, the others moved from) instead of being released here.
 int resampleParticles(std::vector<Particle>& particles, std::vector<double>& weights, int best, double ess,
-                      double resample_ess_fraction, Rng& rng, bool& resampled);
+                      double resample_ess_fraction, Rng& rng, bool& resampled,
+                      std::vector<Particle>* replaced = nullptr);
 
 }  // namespace omnislam::slam

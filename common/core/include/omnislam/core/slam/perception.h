@@ -43,6 +43,11 @@ struct PerceptionOptions {
 bool insidePerceptualRange(const Eigen::Vector3d& p_LinW_m, LandmarkKind kind, const Pose2& T_WtoR,
                            const Eigen::Vector3d& p_CinR_m, const PerceptionOptions& options, double margin_rad = 0.0,
                            double margin_m = 0.0);
+/// The same with the optical centre in W given, c_W_m = cameraCentreInWorld(T_WtoR, p_CinR_m): a
+/// caller testing many landmarks from one pose computes it once. Equal to the above, bit for bit.
+bool insidePerceptualRange(const Eigen::Vector3d& p_LinW_m, LandmarkKind kind, const Eigen::Vector3d& c_W_m,
+                           double theta_rad, const PerceptionOptions& options, double margin_rad = 0.0,
+                           double margin_m = 0.0);
 
 /// p_in of Alg. 4 line 21: detection_probability inside the (unwidened) range, 0 outside.
 double probabilityInside(const Eigen::Vector3d& p_LinW_m, LandmarkKind kind, const Pose2& T_WtoR,

@@ -175,7 +175,7 @@ TEST(slam_GlobalLocalisation, IrregularMapRandomStartsAreLocalisedCorrectly) {
   s.p_detect = 0.9, s.clutter_per_frame = 1.0;
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  for (int run = 0; run < 8; ++run) {
+  for (int run = 0; run < 20; ++run) {
     const Pose2 start{8.0 + 24.0 * u(rng), 8.0 + 24.0 * u(rng), wrapAngle(2.0 * kPi * u(rng))};
     GlobalLocaliser loc(optionsFor(s), MotionNoiseOptions{}, perceptionFor(s), asMap(lamps));
     int first_fix = -1;

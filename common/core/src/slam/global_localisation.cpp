@@ -65,6 +65,7 @@ GlobalLocaliser::GlobalLocaliser(const GlobalLocalisationOptions& options, const
   const double area =
       2.0 * perception_.azimuth_half_width_rad * (perception_.max_elevation_rad - perception_.min_elevation_rad);
   log_clutter_density_ = std::log(opt_.clutter_per_frame / std::max(area, 1e-6));
+  while (max_unexplained_ < 100000 && countsConsistent(0, 0, max_unexplained_)) ++max_unexplained_;
 }
 
 const LocalisationStatus& GlobalLocaliser::step(const Pose2& odom_prev, const Pose2& odom_now,
@@ -122,13 +123,15 @@ void GlobalLocaliser::addSeeds(const std::vector<BearingMeasurement>& z) {
       if (sameHypothesis(h, t)) return true;
     return false;
   };
-  for (const Seed& s : seedPoses(z)) {
+  std::vector<int> scratch;
+  const FramePoints pts = framePoints(z);
+  for (const Seed& s : seedPoses(z, pts)) {
     PoseHypothesis raw;
     raw.pose_W = s.pose_W, raw.cov = s.cov;
     if (known(raw)) continue;
     bool dup = false;
     for (const PoseHypothesis& b : born) dup = dup || sameHypothesis(raw, b);
-    if (dup) continue;
+    if (dup || !plausibleSeed(s, z, pts, scratch)) continue;
     const Fit f = fit(s.pose_W, s.cov, false, z);
     if (!f.ok || f.matched < opt_.min_matched || !(f.llr > 0.0) || !consistent(f)) continue;
     PoseHypothesis h;

@@ -81,10 +81,14 @@ std::vector<int> GlobalLocaliser::assign(const std::vector<Predicted>& lamps, co
     const Eigen::Matrix2d Q = bearingCovariance(z[i]);
     for (std::size_t j = 0; j < lamps.size(); ++j) {
       const Eigen::Matrix2d S = lamps[j].H * P * lamps[j].H.transpose() + lamps[j].R_lamp + Q;
-      double m2 = 0.0;
-      const double lg = logGaussian(bearingInnovation(z[i], lamps[j].z), S, &m2);
-      if (m2 <= gate_bearing_sq_ && std::isfinite(lg))
-        cost(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = -(log_pd + lg - log_clutter_density_);
+      // log N(r; 0, S) of the 2x2 in closed form (the gate first: most pairs are far outside it).
+      const Eigen::Vector2d r = bearingInnovation(z[i], lamps[j].z);
+      const double det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+      if (!(det > 0.0) || !(S(0, 0) > 0.0)) continue;
+      const double m2 = (S(1, 1) * r.x() * r.x() - (S(0, 1) + S(1, 0)) * r.x() * r.y() + S(0, 0) * r.y() * r.y()) / det;
+      if (!(m2 <= gate_bearing_sq_)) continue;
+      const double lg = -0.5 * (m2 + std::log(det)) - std::log(2.0 * kPi);
+      cost(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = -(log_pd + lg - log_clutter_density_);
     }
   }
   const AssignmentResult a = solveAssignment(cost);
@@ -214,12 +218,15 @@ double poissonUpperTail(int k, double lambda) {
 
 }  // namespace
 
-bool GlobalLocaliser::consistent(const Fit& f) const {
+bool GlobalLocaliser::countsConsistent(int matched, int expected, int unexplained) const {
   const double alpha = 1.0 - opt_.consistency_probability;
   const double p_d = perception_.detection_probability;
-  if (p_d >= 1.0 ? f.matched < f.expected : binomialCdf(std::min(f.matched, f.expected), f.expected, p_d) < alpha)
-    return false;
-  return poissonUpperTail(f.in_range - f.matched, opt_.clutter_per_frame) >= alpha;
+  if (p_d >= 1.0 ? matched < expected : binomialCdf(std::min(matched, expected), expected, p_d) < alpha) return false;
+  return poissonUpperTail(unexplained, opt_.clutter_per_frame) >= alpha;
+}
+
+bool GlobalLocaliser::consistent(const Fit& f) const {
+  return countsConsistent(f.matched, f.expected, f.in_range - f.matched);
 }
 
 }  // namespace omnislam::slam

@@ -80,11 +80,7 @@ LampMapIndex::LampMapIndex(const std::vector<Landmark>& map, double height_toler
   }
   sigma_xy_m_ = horizontalSigmaPercentile(cov_W_, 0.9);
   class_ = heightClasses(p_W_, height_tolerance_m, class_height_);
-  for (std::size_t i = 0; i < xy_.size(); ++i) {
-    const long ix = std::lround(std::floor(xy_[i].x() / cell_m_)), iy = std::lround(std::floor(xy_[i].y() / cell_m_));
-    cells_.emplace_back(cellKey(ix, iy), static_cast<int>(i));
-  }
-  std::sort(cells_.begin(), cells_.end());
+  buildGrid();
   std::vector<int> near;
   for (std::size_t i = 0; i < xy_.size(); ++i) {
     near.clear();
@@ -98,9 +94,27 @@ LampMapIndex::LampMapIndex(const std::vector<Landmark>& map, double height_toler
   });
 }
 
-std::int64_t LampMapIndex::cellKey(long ix, long iy) const {
-  // Cells within +-2^31 on each axis (a map of 1e6 m at 1 m cells fits).
-  return (static_cast<std::int64_t>(ix) << 32) ^ static_cast<std::int64_t>(static_cast<std::uint32_t>(iy));
+void LampMapIndex::buildGrid() {
+  if (xy_.empty()) return;
+  Eigen::Vector2d lo = xy_[0], hi = xy_[0];
+  for (const Eigen::Vector2d& p : xy_) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  // At most about 4 cells per lamp (a sparse map of a large site gets coarser cells).
+  const double area = std::max((hi - lo).x(), 1e-9) * std::max((hi - lo).y(), 1e-9);
+  cell_m_ = std::max(cell_m_, std::sqrt(area / (4.0 * static_cast<double>(xy_.size()) + 64.0)));
+  origin_ = lo;
+  nx_ = static_cast<long>(std::floor((hi - lo).x() / cell_m_)) + 1;
+  ny_ = static_cast<long>(std::floor((hi - lo).y() / cell_m_)) + 1;
+  std::vector<std::pair<long, int>> keyed;
+  for (std::size_t i = 0; i < xy_.size(); ++i) {
+    const long ix = std::min(nx_ - 1, static_cast<long>((xy_[i].x() - lo.x()) / cell_m_));
+    const long iy = std::min(ny_ - 1, static_cast<long>((xy_[i].y() - lo.y()) / cell_m_));
+    keyed.emplace_back(iy * nx_ + ix, static_cast<int>(i));
+  }
+  std::sort(keyed.begin(), keyed.end());
+  cell_start_.assign(static_cast<std::size_t>(nx_ * ny_ + 1), 0);
+  for (const auto& k : keyed) ++cell_start_[static_cast<std::size_t>(k.first + 1)];
+  for (std::size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
+  for (const auto& k : keyed) cell_lamps_.push_back(k.second);
 }
 
 std::pair<const LampMapIndex::Pair*, const LampMapIndex::Pair*> LampMapIndex::pairsBetween(double lo_m,
@@ -113,24 +127,25 @@ std::pair<const LampMapIndex::Pair*, const LampMapIndex::Pair*> LampMapIndex::pa
 }
 
 void LampMapIndex::lampsNear(const Eigen::Vector2d& centre_W, double radius_m, std::vector<int>& out) const {
-  if (cells_.empty() || !(radius_m >= 0.0) || !centre_W.allFinite()) return;
+  if (xy_.empty() || !(radius_m >= 0.0) || !centre_W.allFinite()) return;
   const std::size_t first = out.size();
-  const long x0 = std::lround(std::floor((centre_W.x() - radius_m) / cell_m_));
-  const long x1 = std::lround(std::floor((centre_W.x() + radius_m) / cell_m_));
-  const long y0 = std::lround(std::floor((centre_W.y() - radius_m) / cell_m_));
-  const long y1 = std::lround(std::floor((centre_W.y() + radius_m) / cell_m_));
   const double r2 = radius_m * radius_m;
-  if (static_cast<double>(x1 - x0 + 1) * static_cast<double>(y1 - y0 + 1) > static_cast<double>(cells_.size())) {
-    for (std::size_t i = 0; i < xy_.size(); ++i)  // a disc larger than the map: one pass over the lamps
-      if ((xy_[i] - centre_W).squaredNorm() <= r2) out.push_back(static_cast<int>(i));
+  const Eigen::Vector2d lo = centre_W.array() - radius_m, hi = centre_W.array() + radius_m;
+  if (hi.x() < origin_.x() || hi.y() < origin_.y() || lo.x() > origin_.x() + static_cast<double>(nx_) * cell_m_ ||
+      lo.y() > origin_.y() + static_cast<double>(ny_) * cell_m_)
     return;
-  }
-  for (long ix = x0; ix <= x1; ++ix)
-    for (long iy = y0; iy <= y1; ++iy) {
-      const std::pair<std::int64_t, int> key{cellKey(ix, iy), -1};
-      for (auto it = std::upper_bound(cells_.begin(), cells_.end(), key); it != cells_.end() && it->first == key.first;
-           ++it)
-        if ((xy_[static_cast<std::size_t>(it->second)] - centre_W).squaredNorm() <= r2) out.push_back(it->second);
+  auto cell = [&](double v, double o, long n) {  // clamped into the grid (v is finite here)
+    return std::clamp(static_cast<long>(std::floor((v - o) / cell_m_)), 0L, n - 1);
+  };
+  const long x0 = cell(lo.x(), origin_.x(), nx_), x1 = cell(hi.x(), origin_.x(), nx_);
+  const long y0 = cell(lo.y(), origin_.y(), ny_), y1 = cell(hi.y(), origin_.y(), ny_);
+  for (long iy = y0; iy <= y1; ++iy)
+    for (long ix = x0; ix <= x1; ++ix) {
+      const std::size_t c = static_cast<std::size_t>(iy * nx_ + ix);
+      for (int k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
+        const int i = cell_lamps_[static_cast<std::size_t>(k)];
+        if ((xy_[static_cast<std::size_t>(i)] - centre_W).squaredNorm() <= r2) out.push_back(i);
+      }
     }
   std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end());
 }

@@ -27,7 +27,21 @@ std::optional<std::pair<Eigen::Vector2d, double>> GlobalLocaliser::pointAtClass(
   return std::make_pair(*q, s);
 }
 
-std::vector<GlobalLocaliser::Seed> GlobalLocaliser::seedPoses(const std::vector<BearingMeasurement>& z) const {
+GlobalLocaliser::FramePoints GlobalLocaliser::framePoints(const std::vector<BearingMeasurement>& z) const {
+  const std::size_t num_classes = index_.classHeights().size();
+  FramePoints pts(z.size(), std::vector<PointAt>(num_classes));
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    const BearingMeasurement& m = z[i];
+    if (m.kind != LandmarkKind::kPoint3D || !std::isfinite(m.azimuth_rad) || !std::isfinite(m.elevation_rad) ||
+        !m.p_CinR_m.allFinite() || !m.cov_rad2.allFinite())
+      continue;
+    for (std::size_t c = 0; c < num_classes; ++c) pts[i][c] = pointAtClass(m, static_cast<int>(c));
+  }
+  return pts;
+}
+
+std::vector<GlobalLocaliser::Seed> GlobalLocaliser::seedPoses(const std::vector<BearingMeasurement>& z,
+                                                              const FramePoints& pts) const {
   std::vector<int> seeds;
   for (std::size_t i = 0; i < z.size(); ++i)
     if (z[i].kind == LandmarkKind::kPoint3D && std::isfinite(z[i].azimuth_rad) && std::isfinite(z[i].elevation_rad) &&
@@ -40,17 +54,17 @@ std::vector<GlobalLocaliser::Seed> GlobalLocaliser::seedPoses(const std::vector<
   std::vector<int> scratch;
   if (static_cast<int>(seeds.size()) < opt_.min_matched) return out;
   for (std::size_t a = 0; a < seeds.size(); ++a)
-    for (std::size_t b = a + 1; b < seeds.size(); ++b) seedPair(z, seeds, a, b, out, scratch);
+    for (std::size_t b = a + 1; b < seeds.size(); ++b) seedPair(pts, seeds, a, b, out, scratch);
   return out;
 }
 
-void GlobalLocaliser::seedPair(const std::vector<BearingMeasurement>& z, const std::vector<int>& seeds, std::size_t a,
-                               std::size_t b, std::vector<Seed>& out, std::vector<int>& scratch) const {
+void GlobalLocaliser::seedPair(const FramePoints& pts, const std::vector<int>& seeds, std::size_t a, std::size_t b,
+                               std::vector<Seed>& out, std::vector<int>& scratch) const {
   const int num_classes = static_cast<int>(index_.classHeights().size());
   for (int ca = 0; ca < num_classes; ++ca)
     for (int cb = 0; cb < num_classes; ++cb) {
-      const auto pa = pointAtClass(z[static_cast<std::size_t>(seeds[a])], ca);
-      const auto pb = pointAtClass(z[static_cast<std::size_t>(seeds[b])], cb);
+      const PointAt& pa = pts[static_cast<std::size_t>(seeds[a])][static_cast<std::size_t>(ca)];
+      const PointAt& pb = pts[static_cast<std::size_t>(seeds[b])][static_cast<std::size_t>(cb)];
       if (!pa || !pb) continue;
       const double d = (pb->first - pa->first).norm();
       const double s_d = std::hypot(pa->second, pb->second);
@@ -66,14 +80,13 @@ void GlobalLocaliser::seedPair(const std::vector<BearingMeasurement>& z, const s
           Seed s{*pose, Eigen::Matrix3d::Zero(), 0.5 * (pa->first + pb->first)};
           const double s_xy = std::max(pa->second, pb->second), s_theta = s_d / d;
           s.cov.diagonal() << s_xy * s_xy, s_xy * s_xy, s_theta * s_theta;
-          if (2 + countLanding(s, z, seeds, a, b, scratch) >= opt_.min_matched) out.push_back(s);
+          if (2 + countLanding(s, pts, seeds, a, b, scratch) >= opt_.min_matched) out.push_back(s);
         }
     }
 }
 
-int GlobalLocaliser::countLanding(const Seed& s, const std::vector<BearingMeasurement>& z,
-                                  const std::vector<int>& seeds, std::size_t a, std::size_t b,
-                                  std::vector<int>& scratch) const {
+int GlobalLocaliser::countLanding(const Seed& s, const FramePoints& pts, const std::vector<int>& seeds, std::size_t a,
+                                  std::size_t b, std::vector<int>& scratch) const {
   const int num_classes = static_cast<int>(index_.classHeights().size());
   const double k = std::sqrt(gate_bearing_sq_);
   const double s_xy = std::sqrt(s.cov(0, 0)), s_theta = std::sqrt(s.cov(2, 2));
@@ -82,7 +95,7 @@ int GlobalLocaliser::countLanding(const Seed& s, const std::vector<BearingMeasur
     if (c == a || c == b) continue;
     bool hit = false;
     for (int cl = 0; cl < num_classes && !hit; ++cl) {
-      const auto pc = pointAtClass(z[static_cast<std::size_t>(seeds[c])], cl);
+      const PointAt& pc = pts[static_cast<std::size_t>(seeds[c])][static_cast<std::size_t>(cl)];
       if (!pc) continue;
       const double lever = (pc->first - s.pivot_R).norm() * s_theta;
       const double radius = k * std::sqrt(pc->second * pc->second + s_xy * s_xy + lever * lever);
@@ -93,6 +106,33 @@ int GlobalLocaliser::countLanding(const Seed& s, const std::vector<BearingMeasur
     if (hit) ++landed;
   }
   return landed;
+}
+
+bool GlobalLocaliser::plausibleSeed(const Seed& s, const std::vector<BearingMeasurement>& z, const FramePoints& pts,
+                                    std::vector<int>& scratch) const {
+  const double k = std::sqrt(gate_bearing_sq_);
+  const double s_xy = std::sqrt(s.cov(0, 0)), s_theta = std::sqrt(s.cov(2, 2));
+  int landed = 0, in_range = 0;
+  for (const std::vector<PointAt>& at : pts) {
+    bool reaches = false, hit = false;
+    for (int cl = 0; cl < static_cast<int>(at.size()) && !hit; ++cl) {
+      const PointAt& pc = at[static_cast<std::size_t>(cl)];
+      if (!pc) continue;
+      reaches = true;
+      const double lever = (pc->first - s.pivot_R).norm() * s_theta;
+      scratch.clear();
+      index_.lampsNear(s.pose_W.transformFrom(pc->first),
+                       k * std::sqrt(pc->second * pc->second + s_xy * s_xy + lever * lever), scratch);
+      for (int j : scratch) hit = hit || index_.heightClass(j) == cl;
+    }
+    in_range += reaches ? 1 : 0;
+    landed += hit ? 1 : 0;
+    if (in_range - landed >= max_unexplained_) return false;  // already more than clutter explains
+  }
+  scratch.clear();
+  const Eigen::Vector3d c = z.empty() ? perception_.default_p_CinR_m : z.front().p_CinR_m;
+  index_.lampsNear(cameraCentreInWorld(s.pose_W, c).head<2>(), opt_.max_range_m, scratch);
+  return landed >= opt_.min_matched && countsConsistent(landed, static_cast<int>(scratch.size()), in_range - landed);
 }
 
 }  // namespace omnislam::slam

@@ -160,15 +160,19 @@ class LampMapIndex {
   void lampsNear(const Eigen::Vector2d& centre_W, double radius_m, std::vector<int>& out) const;
 
  private:
-  std::int64_t cellKey(long ix, long iy) const;
+  void buildGrid();
   std::vector<Eigen::Vector3d> p_W_;
   std::vector<Eigen::Matrix3d> cov_W_;
   double sigma_xy_m_ = 0.0;
   std::vector<Eigen::Vector2d> xy_;
   std::vector<int> class_;
   std::vector<double> class_height_;
-  std::vector<Pair> pairs_;                          ///< sorted by distance, then a, b
-  std::vector<std::pair<std::int64_t, int>> cells_;  ///< (cell key, lamp), sorted
+  std::vector<Pair> pairs_;  ///< sorted by distance, then a, b
+  // A dense grid over the lamps' bounding box: the lamps of cell (ix, iy) are
+  // cell_lamps_[cell_start_[iy * nx_ + ix] .. cell_start_[iy * nx_ + ix + 1]), by index.
+  std::vector<int> cell_start_, cell_lamps_;
+  Eigen::Vector2d origin_ = Eigen::Vector2d::Zero();
+  long nx_ = 0, ny_ = 0;
   double cell_m_;
 };
 
@@ -216,11 +220,16 @@ class GlobalLocaliser {
     Eigen::Matrix3d cov;                                ///< of the two-lamp pose, from the bearings' noise
     Eigen::Vector2d pivot_R = Eigen::Vector2d::Zero();  ///< the two points' midpoint in R (its heading's pivot)
   };
-  std::vector<Seed> seedPoses(const std::vector<BearingMeasurement>& z) const;
-  void seedPair(const std::vector<BearingMeasurement>& z, const std::vector<int>& seeds, std::size_t a, std::size_t b,
+  using PointAt = std::optional<std::pair<Eigen::Vector2d, double>>;
+  /// Every bearing of a frame at every height class (pointAtClass), [bearing][class]; nothing for
+  /// a bearing that is not a usable point.
+  using FramePoints = std::vector<std::vector<PointAt>>;
+  FramePoints framePoints(const std::vector<BearingMeasurement>& z) const;
+  std::vector<Seed> seedPoses(const std::vector<BearingMeasurement>& z, const FramePoints& pts) const;
+  void seedPair(const FramePoints& pts, const std::vector<int>& seeds, std::size_t a, std::size_t b,
                 std::vector<Seed>& out, std::vector<int>& scratch) const;
-  int countLanding(const Seed& s, const std::vector<BearingMeasurement>& z, const std::vector<int>& seeds,
-                   std::size_t a, std::size_t b, std::vector<int>& scratch) const;
+  int countLanding(const Seed& s, const FramePoints& pts, const std::vector<int>& seeds, std::size_t a, std::size_t b,
+                   std::vector<int>& scratch) const;
   /// Horizontal position in R of bearing m at height class c and its standard deviation [m].
   std::optional<std::pair<Eigen::Vector2d, double>> pointAtClass(const BearingMeasurement& m, int c) const;
   void addSeeds(const std::vector<BearingMeasurement>& z);
@@ -230,6 +239,12 @@ class GlobalLocaliser {
   bool sameHypothesis(const PoseHypothesis& a, const PoseHypothesis& b) const;
   /// The counts of a fit are what a true pose gives (consistency_probability).
   bool consistent(const Fit& f) const;
+  bool countsConsistent(int matched, int expected, int unexplained) const;
+  /// A cheap test of a seed before its fit: every bearing placed at the map's heights from the seed
+  /// pose, the ones landing on a lamp counted and tested with countsConsistent() (landings are not
+  /// one to one, so this never refuses what the fit would keep on the counts).
+  bool plausibleSeed(const Seed& s, const std::vector<BearingMeasurement>& z, const FramePoints& pts,
+                     std::vector<int>& scratch) const;
   void pruneAndSort();
   void decide(const std::vector<BearingMeasurement>& z);
 
@@ -239,6 +254,7 @@ class GlobalLocaliser {
   LampMapIndex index_;
   double gate_bearing_sq_, gate_distance_sigmas_, gate_pose_sq_;
   double log_clutter_density_;
+  int max_unexplained_ = 0;  ///< the fewest unexplained bearings countsConsistent() refuses
   std::vector<PoseHypothesis> tracks_;
   struct PastFrame {
     Pose2 odom;

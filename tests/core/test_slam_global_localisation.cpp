@@ -9,6 +9,7 @@
 
 #include "omnislam/core/slam/bearing_model.h"
 #include "omnislam/core/slam/global_localisation.h"
+#include "slam_scenarios.h"
 
 namespace omnislam::slam {
 namespace {
@@ -274,6 +275,24 @@ TEST(slam_GlobalLocalisation, GridWithAMissingLampIsLocalisedOnceTheHoleIsSeen) 
           hole_seen = hole_seen || (cameraCentreInWorld(truth, kCamInR).head<2>() - hole).norm() <= s.range_m;
         });
   EXPECT_GE(first_fix, 0) << "never localised";
+}
+
+// The sports hall of paper 000 (tests/core/slam_scenarios.h): 4 x 4 lights 9 m x 4.5 m apart, the same
+// after a half turn about the hall's centre. From every pose of its 86 m loop the half-turned pose sees
+// the same lights: it must stay ambiguous (two hypotheses) and never be localised.
+TEST(slam_GlobalLocalisation, SportsHallIsHalfTurnSymmetricAndNeverLocalised) {
+  std::vector<Landmark> map = asMap(scenarios::hallLights());
+  PerceptionOptions p;
+  p.default_p_CinR_m = scenarios::kCamInR;
+  GlobalLocaliser loc(GlobalLocalisationOptions{}, MotionNoiseOptions{}, p, map);
+  const std::vector<scenarios::Frame> frames = scenarios::simulateHall(1);
+  int ambiguous_two = 0;
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const LocalisationStatus& st = loc.step(frames[k > 0 ? k - 1 : 0].odom, frames[k].odom, frames[k].z);
+    ASSERT_NE(st.state, LocalisationState::kLocalised) << "frame " << k;
+    if (st.state == LocalisationState::kAmbiguous && st.num_hypotheses == 2) ++ambiguous_two;
+  }
+  EXPECT_GT(ambiguous_two, static_cast<int>(frames.size()) * 9 / 10) << "of " << frames.size() << " frames";
 }
 
 TEST(slam_GlobalLocalisation, MapOfAnotherBuildingIsNeverLocalised) {

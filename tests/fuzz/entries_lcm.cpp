@@ -45,6 +45,7 @@ void decodeAnyMessage(const uint8_t* data, size_t size) {
   decodeAndValidate<associations_t>(data, size);
   decodeAndValidate<feature_labels_t>(data, size);
   decodeAndValidate<process_status_t>(data, size);
+  decodeAndValidate<slam_localisation_t>(data, size);  // omnislam-logstat decodes it (since 0.5)
 }
 
 }  // namespace

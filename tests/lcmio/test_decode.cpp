@@ -79,6 +79,17 @@ pose_t samplePose() {
   m.x_m = 1.0;
   return m;
 }
+slam_localisation_t sampleLocalisation() {
+  slam_localisation_t m{};
+  m.state = slam_localisation_t::STATE_AMBIGUOUS;
+  m.num_hypotheses = m.num_tracked = m.num_reported = 2;
+  m.x_m = {1.0, 5.0}, m.y_m = {2.0, 6.0}, m.theta_rad = {0.1, -3.0};
+  m.covariance.assign(2, std::vector<double>(9, 0.0));
+  m.relative_log_likelihood = {0.0, -1.5};
+  m.frames_explained = {3, 3};
+  m.travel_m = {0.5, 0.5};
+  return m;
+}
 odometry_t sampleOdometry() {
   odometry_t m{};
   m.theta_rad = 0.5;
@@ -134,6 +145,14 @@ TEST(Decode, LyingArrayCountsAreRefusedBeforeAnyAllocation) {
   EXPECT_NE(refusal(sampleAssociations(), counted, 1 << 30).find("num_features 1073741824 outside 0..3"),
             std::string::npos);
   EXPECT_NE(refusal(sampleLabels(), counted, 3).find("num_features 3 outside 0..2"), std::string::npos);
+  const size_t reported = 8 + 3 * 8 + 1 + 3 * 4;  // slam_localisation_t: utime, seq, input_seq, state, 3 counts
+  EXPECT_NE(refusal(sampleLocalisation(), reported, 3).find("num_reported 3 outside 0..2"), std::string::npos);
+  EXPECT_NE(refusal(sampleLocalisation(), reported, -1).find("num_reported -1 outside 0..2"), std::string::npos);
+  slam_localisation_t l;
+  const auto lb = encode(sampleLocalisation());
+  ASSERT_FALSE(lcmio::decode(lb.data(), lb.size(), l));
+  EXPECT_EQ(l.theta_rad, (std::vector<double>{0.1, -3.0}));
+  EXPECT_EQ(l.covariance.size(), 2u);
 }
 
 TEST(Decode, LyingStringLengthsAreRefused) {
@@ -211,6 +230,7 @@ TEST(Decode, SeededCorruptionsOfEveryTypeNeverThrow) {
   fuzz(sampleStatus(), 7, kRounds);
   fuzz(samplePose(), 8, kRounds);
   fuzz(sampleOdometry(), 9, kRounds);
+  fuzz(sampleLocalisation(), 10, kRounds);
 }
 
 }  // namespace

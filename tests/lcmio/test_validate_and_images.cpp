@@ -239,6 +239,36 @@ TEST(Validate, AssociationsLabelsAndTheLimitsAtTheirBounds) {
   EXPECT_EQ(lcmio::validate(f).value_or(""), "feature 0: elevation outside [-pi/2, pi/2]");
 }
 
+// SLAM_LOCALISATION (since 0.5): what the .lcm file says receivers refuse.
+TEST(Validate, LocalisationStatesCountsAndHypotheses) {
+  slam_localisation_t m{};
+  m.state = slam_localisation_t::STATE_LOCALISED;
+  m.num_hypotheses = 1, m.num_tracked = 1, m.num_frames = 4, m.num_reported = 1;
+  m.x_m = {1.0}, m.y_m = {2.0}, m.theta_rad = {0.5};
+  m.covariance = {std::vector<double>(9, 0.01)};
+  m.relative_log_likelihood = {0.0};
+  m.frames_explained = {3};
+  m.travel_m = {0.6};
+  EXPECT_FALSE(lcmio::validate(m));
+  auto bad = [&](auto change, const std::string& expect) {
+    slam_localisation_t b = m;
+    change(b);
+    const auto e = lcmio::validate(b);
+    ASSERT_TRUE(e.has_value()) << expect;
+    EXPECT_NE(e->find(expect), std::string::npos) << *e;
+  };
+  bad([](slam_localisation_t& b) { b.state = 4; }, "state 4");
+  bad([](slam_localisation_t& b) { b.num_frames = -1; }, "negative count");
+  bad([](slam_localisation_t& b) { b.num_tracked = 0; }, "num_reported above num_tracked");
+  bad([](slam_localisation_t& b) { b.x_m.clear(); }, "num_reported");
+  bad([](slam_localisation_t& b) { b.theta_rad[0] = std::nan(""); }, "pose not finite");
+  bad([](slam_localisation_t& b) { b.covariance[0].pop_back(); }, "not 9");
+  bad([](slam_localisation_t& b) { b.covariance[0][4] = INFINITY; }, "covariance not finite");
+  bad([](slam_localisation_t& b) { b.relative_log_likelihood[0] = 0.5; }, "relative_log_likelihood");
+  bad([](slam_localisation_t& b) { b.travel_m[0] = -1.0; }, "travel_m");
+  bad([](slam_localisation_t& b) { b.utime = -1; }, "utime");
+}
+
 TEST(ImageMsg, RawAndLosslessRoundTripsAreExact) {
   cv::Mat grey(48, 64, CV_8UC1);
   cv::randu(grey, 0, 255);

@@ -148,4 +148,19 @@ TEST(MapFile, MalformedFilesNameFileAndKey) {
   EXPECT_NE(loadError(dir.path / "missing.yaml").find("missing.yaml"), std::string::npos);
 }
 
+// Issue 56, item 5: a file that is not a map at all (binary bytes, another YAML document) is refused
+// naming the file and why. (A map cut at a line boundary, or just before a line's closing brace,
+// still loads: version 1 has no landmark count or end marker; see docs/design/global-localisation.md.)
+TEST(MapFile, ForeignFilesAreRefused) {
+  TmpDir dir;
+  const fs::path bin = dir.path / "foreign.bin";
+  std::ofstream(bin, std::ios::binary) << std::string("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16);
+  EXPECT_NE(loadError(bin).find("foreign.bin"), std::string::npos);
+  const fs::path other = dir.path / "world.yaml";
+  writeText(other, "lights:\n  - [1, 2, 6.5]\ntrajectory: {}\n");
+  const std::string err = loadError(other);
+  EXPECT_NE(err.find("world.yaml"), std::string::npos) << err;
+  EXPECT_NE(err.find("format"), std::string::npos) << err;
+}
+
 }  // namespace

@@ -20,6 +20,7 @@
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
 #include "omnislam/slam_health_t.hpp"
+#include "omnislam/slam_localisation_t.hpp"
 #include "omnislam/slam_trajectory_t.hpp"
 
 namespace omnislam::tools {
@@ -193,6 +194,7 @@ const std::vector<Accumulator::Decoder>& Accumulator::decoders() {
       row<associations_t>(channels::kSlamAssociations),
       row<slam_health_t>(channels::kSlamHealth),
       row<slam_trajectory_t>(channels::kSlamTrajectory),
+      row<slam_localisation_t>(channels::kSlamLocalisation),
       row<feature_labels_t>(channels::kGroundTruthFeatureLabels),
   };
   return t;

@@ -126,4 +126,13 @@ std::optional<std::string> checkEncodedLengths(const slam_trajectory_t*, const u
   return w.error;
 }
 
+std::optional<std::string> checkEncodedLengths(const slam_localisation_t*, const uint8_t* body, size_t size) {
+  Walk w(body, size);
+  w.skip(3 * 8 + 1 + 3 * 4);
+  const int32_t n = w.i32();
+  // x_m, y_m, theta_rad, covariance[9], relative_log_likelihood, frames_explained (int32), travel_m
+  w.array("num_reported", n, 3 * 8 + 9 * 8 + 8 + 4 + 8);
+  return w.error;
+}
+
 }  // namespace omnislam::lcmio

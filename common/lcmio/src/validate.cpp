@@ -231,4 +231,28 @@ std::optional<std::string> validate(const slam_trajectory_t& m, const Limits&) {
   return std::nullopt;
 }
 
+std::optional<std::string> validate(const slam_localisation_t& m, const Limits&) {
+  if (auto e = checkTime(m.utime, m.seq)) return e;
+  if (m.state < slam_localisation_t::STATE_SEARCHING || m.state > slam_localisation_t::STATE_LOST)
+    return "state " + std::to_string(m.state) + " outside 0..3";
+  if (m.num_hypotheses < 0 || m.num_tracked < 0 || m.num_frames < 0 || m.num_reported < 0) return "a negative count";
+  if (m.num_reported > m.num_tracked) return "num_reported above num_tracked";
+  for (std::size_t n : {m.x_m.size(), m.y_m.size(), m.theta_rad.size(), m.covariance.size(),
+                        m.relative_log_likelihood.size(), m.frames_explained.size(), m.travel_m.size()})
+    if (auto e = countMismatch("num_reported", m.num_reported, n)) return e;
+  for (std::size_t k = 0; k < static_cast<std::size_t>(m.num_reported); ++k) {
+    const std::string h = "hypothesis " + std::to_string(k) + ": ";
+    if (!finite(m.x_m[k]) || !finite(m.y_m[k]) || !finite(m.theta_rad[k])) return h + "pose not finite";
+    if (m.covariance[k].size() != 9)
+      return h + "covariance of " + std::to_string(m.covariance[k].size()) + " values, not 9";
+    for (double c : m.covariance[k])
+      if (!finite(c)) return h + "covariance not finite";
+    if (!finite(m.relative_log_likelihood[k]) || m.relative_log_likelihood[k] > 0.0)
+      return h + "relative_log_likelihood above 0 or not finite";
+    if (m.frames_explained[k] < 0 || !finite(m.travel_m[k]) || m.travel_m[k] < 0.0)
+      return h + "negative frames_explained or travel_m";
+  }
+  return std::nullopt;
+}
+
 }  // namespace omnislam::lcmio

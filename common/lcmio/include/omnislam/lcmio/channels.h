@@ -12,6 +12,7 @@ inline constexpr const char* kSlamParticles = "SLAM_PARTICLES";
 inline constexpr const char* kSlamAssociations = "SLAM_ASSOCIATIONS";  ///< since 0.2
 inline constexpr const char* kSlamHealth = "SLAM_HEALTH";              ///< since 0.3
 inline constexpr const char* kSlamTrajectory = "SLAM_TRAJECTORY";      ///< since 0.4
+inline constexpr const char* kSlamLocalisation = "SLAM_LOCALISATION";  ///< since 0.5
 inline constexpr const char* kGroundTruthPose = "GROUND_TRUTH_POSE";
 inline constexpr const char* kGroundTruthMap = "GROUND_TRUTH_MAP";
 inline constexpr const char* kProcessStatus = "PROCESS_STATUS";

@@ -23,6 +23,7 @@
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
 #include "omnislam/slam_health_t.hpp"
+#include "omnislam/slam_localisation_t.hpp"
 #include "omnislam/slam_trajectory_t.hpp"
 
 namespace omnislam::lcmio {
@@ -39,6 +40,7 @@ std::optional<std::string> checkEncodedLengths(const feature_labels_t*, const ui
 std::optional<std::string> checkEncodedLengths(const process_status_t*, const uint8_t* body, size_t size);
 std::optional<std::string> checkEncodedLengths(const slam_health_t*, const uint8_t* body, size_t size);
 std::optional<std::string> checkEncodedLengths(const slam_trajectory_t*, const uint8_t* body, size_t size);
+std::optional<std::string> checkEncodedLengths(const slam_localisation_t*, const uint8_t* body, size_t size);
 inline std::optional<std::string> checkEncodedLengths(const pose_t*, const uint8_t*, size_t) { return std::nullopt; }
 inline std::optional<std::string> checkEncodedLengths(const odometry_t*, const uint8_t*, size_t) {
   return std::nullopt;

@@ -17,6 +17,7 @@
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
 #include "omnislam/slam_health_t.hpp"
+#include "omnislam/slam_localisation_t.hpp"
 #include "omnislam/slam_trajectory_t.hpp"
 
 namespace omnislam::lcmio {
@@ -44,7 +45,8 @@ std::optional<std::string> validate(const particles_t& m, const Limits& lim = {}
 std::optional<std::string> validate(const process_status_t& m, const Limits& lim = {});
 std::optional<std::string> validate(const associations_t& m, const Limits& lim = {});
 std::optional<std::string> validate(const feature_labels_t& m, const Limits& lim = {});
-std::optional<std::string> validate(const slam_health_t& m, const Limits& lim = {});      ///< since 0.3
-std::optional<std::string> validate(const slam_trajectory_t& m, const Limits& lim = {});  ///< since 0.4
+std::optional<std::string> validate(const slam_health_t& m, const Limits& lim = {});        ///< since 0.3
+std::optional<std::string> validate(const slam_trajectory_t& m, const Limits& lim = {});    ///< since 0.4
+std::optional<std::string> validate(const slam_localisation_t& m, const Limits& lim = {});  ///< since 0.5
 
 }  // namespace omnislam::lcmio

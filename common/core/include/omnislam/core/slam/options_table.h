@@ -10,6 +10,7 @@
 
 #include "omnislam/core/options_field.h"
 #include "omnislam/core/slam/fastslam_options.h"
+#include "omnislam/core/slam/global_localisation.h"
 #include "omnislam/core/slam/health_monitor.h"
 
 namespace omnislam::slam::options {
@@ -30,6 +31,8 @@ const std::vector<Field<PerceptionOptions>>& perceptionFields();  ///< keys `fil
 const std::vector<Field<CandidateOptions>>& candidateFields();    ///< keys `filter.candidates.*`
 const std::vector<Field<KeyframeOptions>>& keyframeFields();      ///< keys `filter.keyframes.*`
 const std::vector<Field<HealthOptions>>& healthFields();          ///< keys `health.*` (health_monitor.h)
+/// keys `localisation.*` (global_localisation.h; the table is in global_localisation_table.cpp)
+const std::vector<Field<GlobalLocalisationOptions>>& globalLocalisationFields();
 
 /// Names of the enum fields (index = the enum's value).
 const std::vector<std::string>& associationNames();   ///< "hungarian", "ml"

@@ -1,0 +1,348 @@
+// Global localisation in a saved map (global_localisation.h): the closed forms, an irregular map from
+// random start poses, regular grids (ambiguous with the symmetric count, then localised once a
+// missing lamp is seen), a map of another building, noise, misses and clutter, determinism.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "omnislam/core/slam/bearing_model.h"
+#include "omnislam/core/slam/global_localisation.h"
+#include "slam_scenarios.h"
+
+namespace omnislam::slam {
+namespace {
+
+const Eigen::Vector3d kCamInR(0.1, 0.0, 0.5);
+constexpr double kSigma_rad = 0.3 * kPi / 180.0;
+
+struct Sensor {
+  double range_m = 10.0;  // horizontal range within which lamps are detected
+  double p_detect = 1.0;  // detection probability
+  double clutter_per_frame = 0.0;
+  double sigma_rad = kSigma_rad;
+};
+
+std::vector<BearingMeasurement> observe(const std::vector<Eigen::Vector3d>& lamps, const Pose2& truth, const Sensor& s,
+                                        std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, s.sigma_rad);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<BearingMeasurement> z;
+  const Eigen::Vector2d c = cameraCentreInWorld(truth, kCamInR).head<2>();
+  for (const Eigen::Vector3d& p : lamps) {
+    if ((p.head<2>() - c).norm() > s.range_m) continue;
+    const double draw = u(rng), na = n(rng), ne = n(rng);
+    if (draw > s.p_detect) continue;
+    const auto b = predictBearing(p, truth, kCamInR);
+    if (!b) continue;
+    BearingMeasurement m;
+    m.azimuth_rad = wrapAngle(b->x() + na), m.elevation_rad = b->y() + ne;
+    m.cov_rad2 = Eigen::Matrix2d::Identity() * s.sigma_rad * s.sigma_rad;
+    m.p_CinR_m = kCamInR;
+    z.push_back(m);
+  }
+  std::poisson_distribution<int> clutter(s.clutter_per_frame > 0 ? s.clutter_per_frame : 1e-9);
+  for (int k = clutter(rng); k > 0; --k) {
+    BearingMeasurement m;
+    m.azimuth_rad = wrapAngle(2.0 * kPi * u(rng)), m.elevation_rad = 0.2 + 1.3 * u(rng);
+    m.cov_rad2 = Eigen::Matrix2d::Identity() * s.sigma_rad * s.sigma_rad;
+    m.p_CinR_m = kCamInR;
+    z.push_back(m);
+  }
+  return z;
+}
+
+std::vector<Landmark> asMap(const std::vector<Eigen::Vector3d>& lamps, double sigma_m = 0.02) {
+  std::vector<Landmark> map;
+  for (std::size_t i = 0; i < lamps.size(); ++i) {
+    Landmark l;
+    l.id = i, l.p_LinW_m = lamps[i], l.cov_LinW_m2 = Eigen::Matrix3d::Identity() * sigma_m * sigma_m;
+    map.push_back(l);
+  }
+  return map;
+}
+
+// Lamps at two heights (5.5 m, 6.5 m, +-2 cm) uniformly over [0, w] x [0, h].
+std::vector<Eigen::Vector3d> irregularLamps(int n, double w, double h, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Eigen::Vector3d> l;
+  for (int i = 0; i < n; ++i) {
+    const double x = w * u(rng), y = h * u(rng), z = (u(rng) < 0.5 ? 5.5 : 6.5) + 0.04 * (u(rng) - 0.5);
+    l.emplace_back(x, y, z);
+  }
+  return l;
+}
+
+// Lamps at (spacing i, spacing j), i, j in [0, n), at 6.5 m; `skip` (i, j) left out when given.
+std::vector<Eigen::Vector3d> gridLamps(int nx, int ny, double spacing, int skip_i = -1, int skip_j = -1) {
+  std::vector<Eigen::Vector3d> l;
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < ny; ++j)
+      if (i != skip_i || j != skip_j) l.emplace_back(spacing * i, spacing * j, 6.5);
+  return l;
+}
+
+GlobalLocalisationOptions optionsFor(const Sensor& s) {
+  GlobalLocalisationOptions o;
+  o.max_range_m = s.range_m;
+  o.clutter_per_frame = std::max(s.clutter_per_frame, 0.1);
+  return o;
+}
+
+PerceptionOptions perceptionFor(const Sensor& s) {
+  PerceptionOptions p;
+  p.detection_probability = std::min(std::max(s.p_detect, 0.5), 0.95);
+  p.default_p_CinR_m = kCamInR;
+  return p;
+}
+
+double headingError_deg(const Pose2& a, const Pose2& b) {
+  return std::abs(rad2deg(wrapAngle(a.theta_rad - b.theta_rad)));
+}
+double positionError_m(const Pose2& a, const Pose2& b) { return std::hypot(a.x_m - b.x_m, a.y_m - b.y_m); }
+
+// A drive: `frames` steps of `step_m` turning `turn_deg` per step from `start`; the odometry has a 2 %
+// scale error and 0.2 deg of heading noise per step. Calls check(frame, truth, status) after each.
+template <class Check>
+void drive(GlobalLocaliser& loc, const std::vector<Eigen::Vector3d>& lamps, const Sensor& s, Pose2 truth, int frames,
+           double step_m, double turn_deg, std::uint64_t seed, Check check) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  Pose2 odom{0.0, 0.0, 0.0}, odom_prev = odom;
+  for (int k = 0; k < frames; ++k) {
+    const LocalisationStatus& st = loc.step(odom_prev, odom, observe(lamps, truth, s, rng));
+    check(k, truth, st);
+    const Pose2 u{step_m, 0.0, deg2rad(turn_deg)};
+    truth = truth.compose(u);
+    odom_prev = odom;
+    odom = odom.compose(Pose2{1.02 * step_m, 0.0, u.theta_rad + deg2rad(0.2) * n(rng)});
+  }
+}
+
+TEST(slam_GlobalLocalisation, PoseFromTwoLampsInvertsARigidMotion) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-20.0, 20.0);
+  for (int t = 0; t < 100; ++t) {
+    const Pose2 T{u(rng), u(rng), wrapAngle(u(rng))};
+    const Eigen::Vector2d a_R(u(rng), u(rng)), b_R(u(rng), u(rng));
+    const auto p = poseFromTwoLamps(a_R, b_R, T.transformFrom(a_R), T.transformFrom(b_R));
+    ASSERT_TRUE(p.has_value());
+    EXPECT_NEAR(p->x_m, T.x_m, 1e-9);
+    EXPECT_NEAR(p->y_m, T.y_m, 1e-9);
+    EXPECT_NEAR(wrapAngle(p->theta_rad - T.theta_rad), 0.0, 1e-12);
+  }
+  // A quarter turn about the origin by hand: (1, 0) -> (0, 1), (2, 0) -> (0, 2).
+  const auto q = poseFromTwoLamps({1, 0}, {2, 0}, {0, 1}, {0, 2});
+  ASSERT_TRUE(q.has_value());
+  EXPECT_NEAR(q->x_m, 0.0, 1e-12);
+  EXPECT_NEAR(q->y_m, 0.0, 1e-12);
+  EXPECT_NEAR(q->theta_rad, kPi / 2, 1e-12);
+  EXPECT_FALSE(poseFromTwoLamps({1, 1}, {1, 1}, {0, 0}, {1, 0}).has_value());
+  EXPECT_FALSE(poseFromTwoLamps({1, 1}, {2, 1}, {3, 3}, {3, 3}).has_value());
+}
+
+TEST(slam_GlobalLocalisation, HorizontalPointInvertsTheBearingModel) {
+  const Eigen::Vector3d lamp(4.0, -3.0, 6.5);
+  const auto b = predictBearing(lamp, Pose2{}, kCamInR);
+  ASSERT_TRUE(b.has_value());
+  const auto q = horizontalPointInRobot(b->x(), b->y(), kCamInR, 6.5, 100.0);
+  ASSERT_TRUE(q.has_value());
+  EXPECT_NEAR(q->x(), 4.0, 1e-12);
+  EXPECT_NEAR(q->y(), -3.0, 1e-12);
+  EXPECT_FALSE(horizontalPointInRobot(b->x(), b->y(), kCamInR, 6.5, 4.0).has_value());     // beyond the range
+  EXPECT_FALSE(horizontalPointInRobot(b->x(), -b->y(), kCamInR, 6.5, 100.0).has_value());  // points down
+  EXPECT_FALSE(horizontalPointInRobot(b->x(), 0.0, kCamInR, 6.5, 100.0).has_value());      // horizontal
+}
+
+TEST(slam_GlobalLocalisation, OptionsValidateNamesTheKey) {
+  EXPECT_EQ(GlobalLocalisationOptions{}.validate(), "");
+  GlobalLocalisationOptions o;
+  o.gate_probability = 1.5;
+  EXPECT_NE(o.validate().find("gate_probability"), std::string::npos) << o.validate();
+  o = {};
+  o.min_matched = 10, o.max_seed_bearings = 5;
+  EXPECT_NE(o.validate().find("min_matched"), std::string::npos) << o.validate();
+  o = {};
+  o.drop_likelihood_ratio = 10.0;
+  EXPECT_NE(o.validate().find("drop_likelihood_ratio"), std::string::npos) << o.validate();
+  EXPECT_THROW(GlobalLocaliser(o, MotionNoiseOptions{}, PerceptionOptions{}, {}), std::invalid_argument);
+}
+
+TEST(slam_GlobalLocalisation, IrregularMapRandomStartsAreLocalisedCorrectly) {
+  const std::vector<Eigen::Vector3d> lamps = irregularLamps(90, 40.0, 40.0, 11);
+  Sensor s;
+  s.p_detect = 0.9, s.clutter_per_frame = 1.0;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int run = 0; run < 20; ++run) {
+    const Pose2 start{8.0 + 24.0 * u(rng), 8.0 + 24.0 * u(rng), wrapAngle(2.0 * kPi * u(rng))};
+    GlobalLocaliser loc(optionsFor(s), MotionNoiseOptions{}, perceptionFor(s), asMap(lamps));
+    int first_fix = -1;
+    // 20 frames of 0.25 m: at most 5 m of travel.
+    drive(loc, lamps, s, start, 20, 0.25, 4.0, 100 + run, [&](int k, const Pose2& truth, const LocalisationStatus& st) {
+      if (st.state != LocalisationState::kLocalised) return;
+      if (first_fix < 0) first_fix = k;
+      EXPECT_LT(positionError_m(st.best.at(0).pose_W, truth), 0.3) << "run " << run << " frame " << k;
+      EXPECT_LT(headingError_deg(st.best.at(0).pose_W, truth), 2.0) << "run " << run << " frame " << k;
+    });
+    EXPECT_GE(first_fix, 0) << "run " << run << ": never localised";
+  }
+}
+
+// Every proper rigid motion g of the square lattice (a quarter turn about a centre of symmetry, then a
+// lattice translation) under which the lamps within range of g(truth) are, seen from it, those seen
+// from the truth: the hypotheses a regular grid cannot tell apart.
+int symmetricPoses(const std::vector<Eigen::Vector3d>& lamps, const Pose2& truth, double range_m,
+                   const Eigen::Vector2d& centre, double spacing) {
+  auto seen = [&](const Pose2& p) {
+    std::vector<Eigen::Vector2d> v;
+    const Eigen::Vector2d c = cameraCentreInWorld(p, kCamInR).head<2>();
+    const Pose2 inv = p.inverse();
+    for (const auto& l : lamps)
+      if ((l.head<2>() - c).norm() <= range_m) v.push_back(inv.transformFrom(l.head<2>()));
+    return v;
+  };
+  const auto ref = seen(truth);
+  int count = 0;
+  for (int k = 0; k < 4; ++k)
+    for (int a = -10; a <= 10; ++a)
+      for (int b = -10; b <= 10; ++b) {
+        const Pose2 g = Pose2{centre.x() + spacing * a, centre.y() + spacing * b, 0.0}
+                            .compose(Pose2{0.0, 0.0, k * kPi / 2})
+                            .compose(Pose2{-centre.x(), -centre.y(), 0.0});
+        const auto v = seen(g.compose(truth));
+        bool same = v.size() == ref.size();
+        for (const auto& p : ref) {
+          bool found = false;
+          for (const auto& q : v) found = found || (p - q).norm() < 1e-6;
+          same = same && found;
+        }
+        count += same ? 1 : 0;
+      }
+  return count;
+}
+
+TEST(slam_GlobalLocalisation, RegularGridIsAmbiguousWithItsSymmetricCount) {
+  // 8 x 8 lamps 4 m apart; 7 m of range from the middle of a cell sees a 4 x 4 block without corners.
+  const std::vector<Eigen::Vector3d> lamps = gridLamps(8, 8, 4.0);
+  Sensor s;
+  s.range_m = 7.0;
+  const Pose2 truth = Pose2{14.0, 14.0, 0.3}.compose(Pose2{-kCamInR.x(), 0.0, 0.0});
+  const int expected = symmetricPoses(lamps, truth, s.range_m, {14.0, 14.0}, 4.0);
+  EXPECT_EQ(expected, 100);  // 5 x 5 places of the block, 4 headings
+  GlobalLocaliser loc(optionsFor(s), MotionNoiseOptions{}, perceptionFor(s), asMap(lamps));
+  drive(loc, lamps, s, truth, 6, 0.0, 0.0, 5, [&](int k, const Pose2&, const LocalisationStatus& st) {
+    EXPECT_NE(st.state, LocalisationState::kLocalised) << "frame " << k;
+    if (k > 0) {
+      EXPECT_EQ(st.state, LocalisationState::kAmbiguous) << "frame " << k;
+      EXPECT_EQ(st.num_hypotheses, expected) << "frame " << k;
+    }
+  });
+}
+
+TEST(slam_GlobalLocalisation, SmallSquareGridStaysAmbiguousWhileDriving) {
+  // 3 x 3 lamps 3 m apart, all always in view: the four quarter turns about the centre agree forever.
+  const std::vector<Eigen::Vector3d> lamps = gridLamps(3, 3, 3.0);
+  Sensor s;
+  s.range_m = 30.0;
+  s.p_detect = 0.9;
+  GlobalLocaliser loc(optionsFor(s), MotionNoiseOptions{}, perceptionFor(s), asMap(lamps));
+  drive(loc, lamps, s, Pose2{1.0, 2.0, 0.4}, 30, 0.2, 6.0, 9, [&](int k, const Pose2&, const LocalisationStatus& st) {
+    EXPECT_NE(st.state, LocalisationState::kLocalised) << "frame " << k;
+    if (k >= 2) EXPECT_EQ(st.num_hypotheses, 4) << "frame " << k;
+  });
+}
+
+TEST(slam_GlobalLocalisation, GridWithAMissingLampIsLocalisedOnceTheHoleIsSeen) {
+  const std::vector<Eigen::Vector3d> lamps = gridLamps(8, 8, 4.0, 6, 3);  // no lamp at (24, 12)
+  const Eigen::Vector2d hole(24.0, 12.0);
+  Sensor s;
+  s.range_m = 7.0;
+  s.p_detect = 0.95;
+  GlobalLocaliser loc(optionsFor(s), MotionNoiseOptions{}, perceptionFor(s), asMap(lamps));
+  bool hole_seen = false;
+  int first_fix = -1;
+  drive(loc, lamps, s, Pose2{8.0, 10.0, 0.0}, 60, 0.25, 0.0, 21,
+        [&](int k, const Pose2& truth, const LocalisationStatus& st) {
+          if (st.state == LocalisationState::kLocalised) {
+            if (first_fix < 0) first_fix = k;
+            EXPECT_TRUE(hole_seen) << "localised at frame " << k << " before the hole was in view";
+            EXPECT_LT(positionError_m(st.best.at(0).pose_W, truth), 0.3) << "frame " << k;
+            EXPECT_LT(headingError_deg(st.best.at(0).pose_W, truth), 2.0) << "frame " << k;
+          }
+          hole_seen = hole_seen || (cameraCentreInWorld(truth, kCamInR).head<2>() - hole).norm() <= s.range_m;
+        });
+  EXPECT_GE(first_fix, 0) << "never localised";
+}
+
+// The sports hall of paper 000 (tests/core/slam_scenarios.h): 4 x 4 lights 9 m x 4.5 m apart, the same
+// after a half turn about the hall's centre. From every pose of its 86 m loop the half-turned pose sees
+// the same lights: it must stay ambiguous (two hypotheses) and never be localised.
+TEST(slam_GlobalLocalisation, SportsHallIsHalfTurnSymmetricAndNeverLocalised) {
+  std::vector<Landmark> map = asMap(scenarios::hallLights());
+  PerceptionOptions p;
+  p.default_p_CinR_m = scenarios::kCamInR;
+  GlobalLocaliser loc(GlobalLocalisationOptions{}, MotionNoiseOptions{}, p, map);
+  const std::vector<scenarios::Frame> frames = scenarios::simulateHall(1);
+  int ambiguous_two = 0;
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const LocalisationStatus& st = loc.step(frames[k > 0 ? k - 1 : 0].odom, frames[k].odom, frames[k].z);
+    ASSERT_NE(st.state, LocalisationState::kLocalised) << "frame " << k;
+    if (st.state == LocalisationState::kAmbiguous && st.num_hypotheses == 2) ++ambiguous_two;
+  }
+  EXPECT_GT(ambiguous_two, static_cast<int>(frames.size()) * 9 / 10) << "of " << frames.size() << " frames";
+}
+
+TEST(slam_GlobalLocalisation, MapOfAnotherBuildingIsNeverLocalised) {
+  const std::vector<Eigen::Vector3d> here = irregularLamps(90, 40.0, 40.0, 11);
+  const std::vector<Eigen::Vector3d> elsewhere = irregularLamps(90, 40.0, 40.0, 12);
+  Sensor s;
+  s.p_detect = 0.9, s.clutter_per_frame = 1.0;
+  GlobalLocaliser loc(optionsFor(s), MotionNoiseOptions{}, perceptionFor(s), asMap(here));
+  LocalisationState last = LocalisationState::kSearching;
+  drive(loc, elsewhere, s, Pose2{20.0, 20.0, 1.0}, 30, 0.25, 3.0, 4,
+        [&](int k, const Pose2&, const LocalisationStatus& st) {
+          EXPECT_NE(st.state, LocalisationState::kLocalised) << "frame " << k;
+          last = st.state;
+        });
+  EXPECT_NE(last, LocalisationState::kLocalised);
+}
+
+TEST(slam_GlobalLocalisation, NoFrameOrTooFewBearingsKeepsSearching) {
+  const std::vector<Eigen::Vector3d> lamps = irregularLamps(40, 30.0, 30.0, 2);
+  Sensor s;
+  GlobalLocaliser loc(optionsFor(s), MotionNoiseOptions{}, perceptionFor(s), asMap(lamps));
+  EXPECT_EQ(loc.step(Pose2{}, Pose2{}, {}).state, LocalisationState::kSearching);
+  BearingMeasurement m;
+  m.elevation_rad = 1.0, m.p_CinR_m = kCamInR;
+  EXPECT_EQ(loc.step(Pose2{}, Pose2{}, {m, m}).state, LocalisationState::kSearching);
+  m.azimuth_rad = std::nan("");
+  EXPECT_EQ(loc.step(Pose2{}, Pose2{}, {m}).state, LocalisationState::kSearching);  // non-finite: ignored
+}
+
+TEST(slam_GlobalLocalisation, BitForBitDeterministic) {
+  const std::vector<Eigen::Vector3d> lamps = irregularLamps(90, 40.0, 40.0, 11);
+  Sensor s;
+  s.p_detect = 0.9, s.clutter_per_frame = 1.0;
+  auto run = [&] {
+    GlobalLocaliser loc(optionsFor(s), MotionNoiseOptions{}, perceptionFor(s), asMap(lamps));
+    std::vector<double> trace;
+    drive(
+        loc, lamps, s, Pose2{15.0, 22.0, -2.0}, 15, 0.25, 4.0, 77,
+        [&](int, const Pose2&, const LocalisationStatus& st) {
+          trace.push_back(static_cast<double>(st.state));
+          trace.push_back(st.num_tracked);
+          for (const auto& h : loc.hypotheses())
+            trace.insert(trace.end(), {h.pose_W.x_m, h.pose_W.y_m, h.pose_W.theta_rad, h.log_likelihood, h.cov(0, 0)});
+        });
+    return trace;
+  };
+  const std::vector<double> a = run(), b = run();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "entry " << i;  // exact
+}
+
+}  // namespace
+}  // namespace omnislam::slam

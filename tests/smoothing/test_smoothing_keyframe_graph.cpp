@@ -93,7 +93,8 @@ std::vector<KeyframeRecord> records(unsigned seed, std::vector<Landmark>& lights
 }
 
 /// The least-squares scale of the solved positions about the start against the truth.
-double solvedScale(const std::vector<KeyframeRecord>& recs, const std::vector<Landmark>& lights, OdometryCovarianceAt at) {
+double solvedScale(const std::vector<KeyframeRecord>& recs, const std::vector<Landmark>& lights,
+                   OdometryCovarianceAt at) {
   GraphOptions go;
   go.motion = motion();
   go.start = path().front();
@@ -156,7 +157,8 @@ TEST(smoothing_KeyframeGraph, AnAdoptedSolutionIsTheNextStartAndLaterKeyframesMo
     EXPECT_LT((g2.keyframes[k].T_WtoR.vec() - T_corr.compose(recs[k].T_WtoR_filter).vec()).norm(), 1e-12) << k;
   // The odometry itself is what was measured, wherever its covariance is evaluated.
   for (std::size_t i = 0; i < g2.odometry.size(); ++i)
-    EXPECT_EQ(g2.odometry[i].u_AtoB.vec(), g1.odometry.size() > i ? g1.odometry[i].u_AtoB.vec() : g2.odometry[i].u_AtoB.vec());
+    EXPECT_EQ(g2.odometry[i].u_AtoB.vec(),
+              g1.odometry.size() > i ? g1.odometry[i].u_AtoB.vec() : g2.odometry[i].u_AtoB.vec());
 }
 
 }  // namespace

@@ -84,7 +84,11 @@ TEST(FullDisk, TheRecorderSaysSoAtOnceTheRunStopsAndTheLossIsCountedExactly) {
   ASSERT_GE(images.size(), 4u) << stat.output;
   const long recorded = std::stol(images[2]), gaps = std::stol(images[3]);
   EXPECT_EQ(gaps, 0) << stat.output;  // nothing lost before the disk was full
-  EXPECT_GT(rounds, recorded) << "published after the disk was full, unrecorded: " << r.output;
+  // Published = recorded + unrecorded, the unrecorded ones those published after the disk was full.
+  // How many there are depends on how soon the launcher stops the publisher after the recorder's
+  // failure: none when that is within one period (20 ms) and the torn event was not an image (seen
+  // once in a suite run: 392 of 392). Fewer published than recorded would be a miscount.
+  EXPECT_GE(rounds, recorded) << "published after the disk was full, unrecorded: " << r.output;
   std::cout << "disk full after " << recorded << " of " << rounds << " rounds; " << rounds - recorded
             << " rounds published unrecorded before the run stopped; " << in_file << " events in the file\n";
 }

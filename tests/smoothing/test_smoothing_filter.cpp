@@ -45,8 +45,12 @@ HallRun runHall(std::uint64_t seed, int solve_every) {
   HallRun run;
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const StepResult sr = f.step(frames[k == 0 ? 0 : k - 1].odom, frames[k].odom, frames[k].z);
-    kg.add({static_cast<std::int64_t>(k) * 1000000, frames[k].odom, f.meanPose(), frames[k].z,
-            sr.landmark_of_measurement});
+    kg.add({static_cast<std::int64_t>(k) * 1000000,
+            frames[k].odom,
+            f.meanPose(),
+            frames[k].z,
+            sr.landmark_of_measurement,
+            {}});
     if (solve_every <= 0 || (k + 1) % static_cast<std::size_t>(solve_every) != 0) continue;
     const auto map = f.bestMap();
     const Graph g = kg.build(map);
@@ -68,7 +72,7 @@ TEST(smoothing_FilterAndBackEnd, TheGraphHoldsTheFiltersAssociationAndOdometry) 
   int associated = 0;
   for (std::size_t k = 0; k < 60; ++k) {
     const StepResult sr = f.step(frames[k == 0 ? 0 : k - 1].odom, frames[k].odom, frames[k].z);
-    kg.add({static_cast<std::int64_t>(k), frames[k].odom, f.meanPose(), frames[k].z, sr.landmark_of_measurement});
+    kg.add({static_cast<std::int64_t>(k), frames[k].odom, f.meanPose(), frames[k].z, sr.landmark_of_measurement, {}});
     associated += sr.num_associated;
   }
   const auto map = f.bestMap();

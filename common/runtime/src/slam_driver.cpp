@@ -278,9 +278,7 @@ void SlamDriver::startBackEnd(const Pose2& start_W, const Eigen::Matrix3d& start
   g.start_cov = start_cov + Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal().toDenseMatrix();
   g.ceiling = opt_.backend.ceilingPrior();
   g.calibrate_odometry = opt_.backend.odometry_calibration == smoothing::OdometryCalibration::kScaleAndDrift;
-  g.odometry_covariance_at = opt_.backend.odometry_covariance == smoothing::OdometryCovariance::kMeasured
-                                 ? smoothing::OdometryCovarianceAt::kMeasured
-                                 : smoothing::OdometryCovarianceAt::kEstimate;
+  g.odometry_covariance_at = opt_.backend.odometry_covariance;
   g.covariance_window = opt_.backend.odometry_covariance_window;
   backend_ = std::make_unique<BackEndRunner>(opt_.backend, g, backend_waits_);
 }

@@ -48,7 +48,7 @@ const std::vector<Field<BackEndOptions>>& backEndFields() {
                      [](B& o, int i) { o.odometry_calibration = static_cast<OdometryCalibration>(i); },
                      "scale_and_drift: the run's odometry scale and heading drift are unknowns of the graph, their priors filter.motion's trans_sigma_per_m and rot_sigma_per_m (the per-run errors, then left out of the per-step noise); none: the odometry as the filter models it"),
       enumeration<B>("odometry_covariance", "odometry_covariance", odometryCovarianceNames(), [](const B& o) { return static_cast<int>(o.odometry_covariance); },
-                     [](B& o, int i) { o.odometry_covariance = static_cast<OdometryCovariance>(i); },
+                     [](B& o, int i) { o.odometry_covariance = static_cast<OdometryCovarianceAt>(i); },
                      "estimate: each odometry factor's Sigma_u at the keyframes' estimates, its length the mean over odometry_covariance_window keyframes either side; measured: at the odometry's own increment (biased: steps measured long weigh less, and the map shrinks by about the per-step relative variance)"),
       integer<B>("odometry_covariance_window", &B::odometry_covariance_window, "odometry_covariance_window", 0, 10000, "with odometry_covariance estimate: keyframes either side over which an increment's length is averaged"),
       enumeration<B>("ceiling", "ceiling", ceilingNames(), [](const B& o) { return static_cast<int>(o.ceiling); },

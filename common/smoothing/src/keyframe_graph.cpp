@@ -34,18 +34,15 @@ Pose2 KeyframeGraph::estimate(std::size_t k) const {
   return r.T_WtoR_smoothed && k + 1 < records_.size() ? *r.T_WtoR_smoothed : r.T_WtoR_filter;
 }
 
-Pose2 KeyframeGraph::covariancePoint(std::size_t k, const Pose2& u_measured) const {
+Pose2 KeyframeGraph::covariancePoint(std::size_t k, const Pose2& u_measured, const std::vector<Pose2>& estimates,
+                                     const std::vector<double>& lengths) const {
   if (options_.odometry_covariance_at == OdometryCovarianceAt::kMeasured) return u_measured;
-  const auto length = [&](std::size_t i) {
-    const Pose2 d = slam::odometryIncrement(estimate(i - 1), estimate(i));
-    return std::hypot(d.x_m, d.y_m);
-  };
   const auto w = static_cast<std::size_t>(std::max(0, options_.covariance_window));
   const std::size_t lo = k > w ? k - w : 1, hi = std::min(records_.size() - 1, k + w);
   double sum = 0.0;
-  for (std::size_t i = lo; i <= hi; ++i) sum += length(i);
-  Pose2 at = slam::odometryIncrement(estimate(k - 1), estimate(k));
-  const double d = std::hypot(at.x_m, at.y_m), mean = sum / static_cast<double>(hi - lo + 1);
+  for (std::size_t i = lo; i <= hi; ++i) sum += lengths[i];
+  Pose2 at = slam::odometryIncrement(estimates[k - 1], estimates[k]);
+  const double d = lengths[k], mean = sum / static_cast<double>(hi - lo + 1);
   if (d > 1e-9) {  // the estimate's direction and rotation, the window's length
     at.x_m *= mean / d;
     at.y_m *= mean / d;
@@ -63,13 +60,21 @@ Graph KeyframeGraph::build(const std::vector<slam::Landmark>& map) const {
     motion.trans_sigma_per_m = 0.0;
     motion.rot_sigma_per_m = 0.0;
   }
+  std::vector<Pose2> estimates;  // each keyframe's initial estimate, and the lengths between them
+  std::vector<double> lengths(records_.size(), 0.0);
+  for (std::size_t k = 0; k < records_.size(); ++k) {
+    estimates.push_back(estimate(k));
+    if (k == 0) continue;
+    const Pose2 d = slam::odometryIncrement(estimates[k - 1], estimates[k]);
+    lengths[k] = std::hypot(d.x_m, d.y_m);
+  }
   for (std::size_t k = 0; k < records_.size(); ++k) {
     const KeyframeRecord& r = records_[k];
-    g.keyframes.push_back({k, r.utime, estimate(k)});
+    g.keyframes.push_back({k, r.utime, estimates[k]});
     if (k == 0) continue;
     const Pose2 u = slam::odometryIncrement(records_[k - 1].odom_O, r.odom_O);
-    g.odometry.push_back(
-        {static_cast<int>(k - 1), static_cast<int>(k), u, slam::incrementCovariance(covariancePoint(k, u), motion)});
+    const Pose2 at = covariancePoint(k, u, estimates, lengths);
+    g.odometry.push_back({static_cast<int>(k - 1), static_cast<int>(k), u, slam::incrementCovariance(at, motion)});
   }
   g.pose_priors.push_back({0, options_.start, options_.start_cov});
   std::map<std::uint64_t, int> index_of_id;

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 
+#include "omnislam/smoothing/keyframe_graph.h"
 #include "omnislam/smoothing/smoother.h"
 
 namespace omnislam::smoothing {
@@ -18,10 +19,6 @@ enum class BackEndMode : std::uint8_t {
 
 /// Whether the graph estimates the odometry's systematic errors (`backend.odometry_calibration`).
 enum class OdometryCalibration : std::uint8_t { kNone = 0, kScaleAndDrift = 1 };
-
-/// Where each odometry factor's covariance is evaluated (`backend.odometry_covariance`): see
-/// keyframe_graph.h's OdometryCovarianceAt.
-enum class OdometryCovariance : std::uint8_t { kEstimate = 0, kMeasured = 1 };
 
 /// Which ceiling prior the graph carries (`backend.ceiling`): see smoother.h's CeilingPrior.
 enum class CeilingKind : std::uint8_t { kNone = 0, kKnownHeight = 1, kFlat = 2 };
@@ -48,7 +45,7 @@ struct BackEndOptions {
   OdometryCalibration odometry_calibration = OdometryCalibration::kNone;
   /// Evaluate Sigma_u at the keyframes' estimates (kEstimate) or at the odometry's own increment
   /// (kMeasured: biased, the map shrinks by about the per-step relative variance).
-  OdometryCovariance odometry_covariance = OdometryCovariance::kEstimate;
+  OdometryCovarianceAt odometry_covariance = OdometryCovarianceAt::kEstimate;
   /// With kEstimate: the length of each increment is the mean over this many keyframes either side
   /// (the robot's speed is smooth on that scale, the per-step odometry noise is not), >= 0.
   int odometry_covariance_window = 10;

@@ -37,8 +37,6 @@ struct KeyframeRecord {
 
 /// Where the odometry factor's covariance Sigma_u is evaluated (BackEndOptions::odometry_covariance).
 enum class OdometryCovarianceAt : std::uint8_t {
-  /// At the odometry's own increment (the filter's motion model does this when it samples).
-  kMeasured = 0,
   /// At the increment between the two keyframes' estimates (the last solution's, else the filter's),
   /// its length the mean over GraphOptions::covariance_window keyframes either side. In a least-squares
   /// solve, weights that depend on the noisy measurement bias it: a random-walk variance grows with
@@ -46,7 +44,9 @@ enum class OdometryCovarianceAt : std::uint8_t {
   /// the map shrinks by about the per-step relative variance (sigma^2 / d: 1.4 % for 0.05 m/sqrt(m)
   /// at 0.175 m per keyframe; docs/design/smoothing.md). The estimates carry the bearings'
   /// information, and the window's mean length hardly any one step's odometry noise.
-  kEstimate = 1,
+  kEstimate = 0,
+  /// At the odometry's own increment (the filter's motion model does this when it samples).
+  kMeasured = 1,
 };
 
 struct GraphOptions {
@@ -87,8 +87,10 @@ class KeyframeGraph {
   /// The initial estimate of keyframe k: its last smoothed pose, else the filter's (always the
   /// filter's for the newest keyframe: correctionFrom maps the filter's pose there).
   Pose2 estimate(std::size_t k) const;
-  /// Where keyframe k's odometry factor (from k - 1) evaluates Sigma_u (OdometryCovarianceAt).
-  Pose2 covariancePoint(std::size_t k, const Pose2& u_measured) const;
+  /// Where keyframe k's odometry factor (from k - 1) evaluates Sigma_u (OdometryCovarianceAt), given
+  /// every keyframe's estimate and the length of each increment between them (lengths[i]: i - 1 to i).
+  Pose2 covariancePoint(std::size_t k, const Pose2& u_measured, const std::vector<Pose2>& estimates,
+                        const std::vector<double>& lengths) const;
   GraphOptions options_;
   std::vector<KeyframeRecord> records_;
 };

@@ -8,7 +8,11 @@
 #
 #   scripts/evaluate-worlds.sh --family halls|irregular|corridors [--worlds 20] [--first-seed 1]
 #                              [--rate-hz 1] [--association hungarian|ml|both] [--jobs 2]
-#                              [--out DIR] [--keep-logs] [--set KEY=VALUE ...]
+#                              [--out DIR] [--keep-logs] [--known-ceiling] [--set KEY=VALUE ...]
+# --known-ceiling gives each run the world's ceiling height as a user would measure it
+# (backend.ceiling=known_height, backend.ceiling_height_m from the world's info: one flat ceiling;
+# a world whose lamps are at several heights fails with a message). It acts only with the back end
+# on (--set backend.mode=keyframes).
 # --set is passed to omnislam-slam after the per-world settings (for experiments; the baseline
 # uses none; the table's header names them). Worlds already scored in --out are not run again,
 # whatever settings scored them: use a fresh --out for each setting. Needs omnislam-gen-world,
@@ -23,6 +27,7 @@ ASSOC=both
 JOBS=2
 OUT=""
 KEEP=0
+KNOWN=0
 SETS=()
 source "$ROOT/scripts/lib/options.sh"
 while [ $# -gt 0 ]; do
@@ -35,6 +40,7 @@ while [ $# -gt 0 ]; do
     --jobs) opt_need evaluate-worlds "$@"; JOBS="$2"; shift 2 ;;
     --out) opt_need evaluate-worlds "$@"; OUT="$2"; shift 2 ;;
     --keep-logs) KEEP=1; shift ;;
+    --known-ceiling) KNOWN=1; shift ;;
     --set) opt_need evaluate-worlds "$@"; SETS+=(--set "$2"); shift 2 ;;
     -h|--help) opt_usage "$0"; exit 0 ;;
     *) echo "evaluate-worlds: unknown argument '$1' (see --help)" >&2; exit 2 ;;
@@ -54,7 +60,7 @@ for t in omnislam-gen-world omnislam-slam omnislam-eval; do
 done
 [ -n "$OUT" ] || OUT="$(mktemp -d "/tmp/omnislam-worlds-$FAMILY.XXXXXX")"
 mkdir -p "$OUT"
-export BIN OUT FAMILY RATE METHODS KEEP ROOT
+export BIN OUT FAMILY RATE METHODS KEEP KNOWN ROOT
 export SETS_STR="${SETS[*]+${SETS[*]}}"
 
 # One world: generate, replay with each method, score. Failures are recorded in OUT/fail-*.txt
@@ -71,6 +77,15 @@ one_world() {
   sets=$(python3 -c 'import json,sys; d=json.load(open(sys.argv[1]))
 print("start_pose.x_m=%r start_pose.y_m=%r start_pose.theta_deg=%r filter.perception.max_range_m=%r filter.perception.min_elevation_deg=%r" % (
   d["start_x_m"], d["start_y_m"], d["start_theta_deg"], d["perception_max_range_m"], d["min_elevation_deg"]))' "$w.info.json")
+  if [ "$KNOWN" = 1 ]; then
+    # The ceiling's height as a tape measure gives it: only where every lamp hangs at one height.
+    sets+=" $(python3 -c 'import json,sys; d=json.load(open(sys.argv[1]))
+lo, hi = d["ceiling_min_m"], d["ceiling_max_m"]
+if hi - lo > 0.01: sys.exit("evaluate-worlds: --known-ceiling: the lamps of %s hang between %.2f and %.2f m, not at one height" % (d["world"], lo, hi))
+print("backend.ceiling=known_height backend.ceiling_height_m=%r" % lo)' "$w.info.json" 2> "$OUT/fail-ceiling-$s.txt")" \
+      || { cat "$OUT/fail-ceiling-$s.txt" >&2; [ "$KEEP" = 1 ] || rm -f "$w.lcm"; return 0; }
+    rm -f "$OUT/fail-ceiling-$s.txt"
+  fi
   local args=() kv
   for kv in $sets; do args+=(--set "$kv"); done
   for kv in $SETS_STR; do [ "$kv" = --set ] || args+=(--set "$kv"); done
@@ -101,5 +116,5 @@ seq "$FIRST" "$LAST" | xargs -P "$JOBS" -I{} bash -c 'one_world "$@"' _ {}
 T1=$(date +%s)
 python3 "$ROOT/scripts/worlds_table.py" "$OUT" --family "$FAMILY" --seeds "$FIRST" "$LAST" --rate-hz "$RATE" \
   --methods $METHODS --wall-s $((T1 - T0)) --worlds-run "$FRESH" --jobs "$JOBS" \
-  --extra-sets "$SETS_STR"
+  --extra-sets "$SETS_STR$([ "$KNOWN" = 1 ] && echo " --known-ceiling (backend.ceiling=known_height per world)")"
 echo "evaluate-worlds: files in $OUT (summary.json, table.md)" >&2

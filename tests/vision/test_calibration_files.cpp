@@ -316,6 +316,17 @@ TEST(CalibrationFiles, MalformedOpenCvFilesNameTheKey) {
       {opencvYaml("camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 2147483647\n   dt: d\n   data: [ 1. ]\n" +
                   kDYaml + "xi: 1.0\n"),
        "key 'camera_matrix' must be a 3x3 matrix, found 3x2147483647 (declared)"},
+      // Found by tests/fuzz (regressions/calibration): the declared rows x cols of the distortion
+      // overflowed int (UBSan) before its shape was checked.
+      {opencvYaml(
+           kKYaml +
+           "distortion_coefficients: !!opencv-matrix\n   rows: 2147483647\n   cols: 4\n   dt: d\n   data: [ 0. ]\n" +
+           "xi: 1.0\n"),
+       "key 'distortion_coefficients' must be a 1x4 matrix (or its transpose), found 2147483647x4"},
+      {opencvYaml(
+           kKYaml +
+           "distortion_coefficients: !!opencv-matrix\n   rows: 2147483647\n   cols: 4\n   dt: d\n   data: [ 0. ]\n"),
+       "has 8589934588 values and there is no 'xi'"},
       // Found by tests/fuzz (regressions/calibration): a list at the top level made OpenCV's
       // FileNode::operator[] throw cv::Exception out of the reader.
       {opencvYaml("- 1\n- 2\n"), "not a readable OpenCV FileStorage file"},

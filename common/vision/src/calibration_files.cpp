@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <sstream>
 
@@ -153,7 +154,10 @@ CameraCalibration readOpencv(const cv::FileStorage& fs, const std::string& sourc
   readOpencvSize(fs, source, &c);
   const std::optional<double> xi = readXi(fs, source);
   const cv::FileNode dn = fs["distortion_coefficients"];
-  const int n_dist = dn.isMap() ? static_cast<int>(dn["rows"]) * static_cast<int>(dn["cols"]) : -1;
+  // In 64 bits: the declared shape is not checked yet (readMatrix does that below), and a declared
+  // rows x cols of 2^31 - 1 x 4 overflowed int (found by tests/fuzz, regressions/calibration).
+  const int64_t n_dist =
+      dn.isMap() ? static_cast<int64_t>(static_cast<int>(dn["rows"])) * static_cast<int>(dn["cols"]) : -1;
   if (want == CalibrationFormat::kOpencvFisheye && xi)
     fail(source, "key 'xi' found: an OpenCV omnidir (Mei) calibration, not a fisheye one");
   if (!xi && n_dist >= 5)

@@ -30,6 +30,7 @@
 //
 // Usage: bench_latency [--particles 10,100] [--speedup 4] [--duration 120] [--reps 1]
 //                      [--image-rate-hz 0] [--world config/worlds/sports_hall.yaml] [--warmup 5]
+//                      [--slam-config FILE]
 //                      [--launch config/launch/sports_hall_slam.yaml] [--bin-dir build/bin]
 //                      [--out-dir DIR] [--json FILE]
 #include <CLI/CLI.hpp>
@@ -202,7 +203,8 @@ void pairArrivals(Listener& l, RunResult& out) {
 /// The run settings shared by every run.
 struct Plan {
   std::string launcher, launch_file, out_dir;
-  std::string world;  ///< a world file given to the launch file as `world`; empty: its default
+  std::string world;        ///< a world file given to the launch file as `world`; empty: its default
+  std::string slam_config;  ///< a SLAM config given to the launch file as `slam`; empty: its default
   std::vector<int> particles;
   double speedup = 4.0, duration = 120.0, warmup_s = 5.0;
   double image_rate_hz = 0.0;  ///< 0: the world's own
@@ -218,6 +220,7 @@ std::vector<std::string> launchArgs(const Plan& plan, const std::string& url, in
                                 // the launch file's rule: 3 x speedup (3 s of wall time)
                                 "--set", "odometry_only_after_s=" + fmt(3.0 * plan.speedup, 3)};
   if (!plan.world.empty()) a.insert(a.end(), {"--set", "world=" + plan.world});
+  if (!plan.slam_config.empty()) a.insert(a.end(), {"--set", "slam=" + plan.slam_config});
   return a;
 }
 
@@ -502,6 +505,9 @@ int main(int argc, char** argv) {
                  "as it is)")
       ->check(CLI::Range(0.0, 100.0));
   cli.add_option("--world", world_in, "the world --image-rate-hz starts from (the launch file's default)");
+  cli.add_option(
+      "--slam-config", plan.slam_config,
+      "SLAM config given to the launch file as `slam` (default: the launch file's, config/slam/sports_hall.yaml)");
   cli.add_option("--warmup", plan.warmup_s, "seconds after the first image before the CPU window starts")
       ->check(CLI::Range(0.0, 3600.0));
   cli.add_option("--port", plan.port,
@@ -518,10 +524,10 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
   if (!checkPaths(plan, bin_dir) || !prepareWorld(plan, world_in)) return 1;
-  std::cout << "launch " << plan.launch_file << " at " << fmt(plan.speedup, 1) << "x, " << fmt(plan.duration, 0)
-            << " simulated s per run, " << plan.reps << " run(s) per particle count; launcher output in "
-            << plan.out_dir << "\nload average at start: " << loadAverage() << " (" << sysconf(_SC_NPROCESSORS_ONLN)
-            << " cores)\n";
+  std::cout << "launch " << plan.launch_file << (plan.slam_config.empty() ? "" : " with slam=" + plan.slam_config)
+            << " at " << fmt(plan.speedup, 1) << "x, " << fmt(plan.duration, 0) << " simulated s per run, " << plan.reps
+            << " run(s) per particle count; launcher output in " << plan.out_dir
+            << "\nload average at start: " << loadAverage() << " (" << sysconf(_SC_NPROCESSORS_ONLN) << " cores)\n";
   auto runs = runAll(plan);
   if (!runs) return 1;
   std::map<int, Pooled> pooled = pool(plan.particles, *runs);

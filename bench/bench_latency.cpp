@@ -1,5 +1,6 @@
 // bench_latency: end-to-end latency of the live pipeline, from an image's publication to the
-// SLAM_POSE that answers it, for several particle counts (issue 5).
+// SLAM_POSE that answers it, for several particle counts (issues 5 and 55), and the CPU each process
+// of the pipeline used meanwhile.
 //
 // For each particle count it runs `omnislam-launch config/launch/sports_hall_slam.yaml` (simulator,
 // capture, odometry, features, SLAM; no logger) on a private UDP multicast URL at a speed-up where
@@ -13,19 +14,29 @@
 // (the simulator publishes GROUND_TRUTH_POSE at the wall time of its utime, the capture process renders
 // and publishes the image on receiving it). Median, p99 and max per particle count, and the ratios
 // against the first count (the baseline of the same run). Runs alternate between the counts when
-// --reps > 1. A report: exits 0 when the runs happened, whatever the figures; 1 when a run could not
-// be started or produced no frames.
+// --reps > 1.
+//
+// CPU per process: every second the user + system CPU time of each process the launcher started
+// (/proc/PID/stat, live_run.h); a program's share of one core is its CPU time over the wall time
+// from --warmup seconds after the first image to the simulator's last sample. With --image-rate-hz
+// the world file (--world, the launch file's default: the sports hall) is written again with that
+// image rate into OUT_DIR and given to the launch file as `world` (world_variant.h). The frames'
+// size and rate are read from the bus (the first OMNI_IMAGE's header; the median utime step), so the
+// output shows what ran. PASS / FAIL lines against issue 55's targets (image -> SLAM_POSE p99 <= 33
+// ms; features + odometry + SLAM <= 50 % of one core), printed for every count and saying whether the
+// run had the issue's conditions (640 x 480 at 30 Hz, real time, 100 particles). A report: exits 0
+// when the runs happened, whatever the figures; 1 when a run could not be started or produced no
+// frames.
 //
 // Usage: bench_latency [--particles 10,100] [--speedup 4] [--duration 120] [--reps 1]
+//                      [--image-rate-hz 0] [--world config/worlds/sports_hall.yaml] [--warmup 5]
+//                      [--slam-config FILE]
 //                      [--launch config/launch/sports_hall_slam.yaml] [--bin-dir build/bin]
 //                      [--out-dir DIR] [--json FILE]
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 
-#include <fcntl.h>
 #include <signal.h>
-#include <sys/prctl.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -41,10 +52,15 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "bench_util.h"
+#include "live_run.h"
+#include "omnislam/config/world_config.h"
+#include "omnislam/sim/world_generator.h"
+#include "world_variant.h"
 #include "omnislam/lcmio/channels.h"
 
 #ifndef OMNISLAM_SOURCE_DIR
@@ -67,28 +83,46 @@ void onSignal(int) { g_stop = 1; }
 /// First receive time [us, wall clock] of each utime on one channel.
 using Arrivals = std::map<int64_t, int64_t>;
 
+using Steady = std::chrono::steady_clock;
+
+double secondsSince(Steady::time_point t0) { return std::chrono::duration<double>(Steady::now() - t0).count(); }
+
 struct Listener {
   std::map<std::string, Arrivals> by_channel;
   int64_t short_messages = 0;
+  Steady::time_point t0;
+  double first_image_s = -1.0;    ///< when the first OMNI_IMAGE came [s since t0]
+  int32_t width = 0, height = 0;  ///< the first OMNI_IMAGE's header
 };
 
-/// The utime of an LCM message whose first field is `int64_t utime` (after the 8-byte fingerprint).
-bool peekUtime(const lcm::ReceiveBuffer* rbuf, int64_t& utime) {
-  if (rbuf->data_size < 16) return false;
-  const auto* b = static_cast<const uint8_t*>(rbuf->data) + 8;
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v = (v << 8) | b[i];
-  utime = static_cast<int64_t>(v);
+/// width and height of an image_t: after the fingerprint, utime, seq and camera_name (int32 length
+/// with its NUL, then the bytes), big-endian. False when the buffer is too short.
+bool peekImageSize(const lcm::ReceiveBuffer* rbuf, int32_t& width, int32_t& height) {
+  const auto* b = static_cast<const uint8_t*>(rbuf->data);
+  const auto be32 = [&](size_t at) {
+    return static_cast<int32_t>(uint32_t(b[at]) << 24 | uint32_t(b[at + 1]) << 16 | uint32_t(b[at + 2]) << 8 |
+                                uint32_t(b[at + 3]));
+  };
+  const size_t n = rbuf->data_size;
+  if (n < 28) return false;
+  const int32_t name_len = be32(24);
+  if (name_len < 0 || 28 + size_t(name_len) + 8 > n) return false;
+  width = be32(28 + size_t(name_len));
+  height = be32(32 + size_t(name_len));
   return true;
 }
 
 void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Listener* l) {
   int64_t u = 0;
-  if (!peekUtime(rbuf, u)) {
+  if (!bench::peekUtime(rbuf, u)) {
     ++l->short_messages;
     return;
   }
   l->by_channel[channel].emplace(u, rbuf->recv_utime);  // keeps the first arrival of a utime
+  if (l->first_image_s < 0.0 && channel == channels::kOmniImage) {
+    l->first_image_s = secondsSince(l->t0);
+    peekImageSize(rbuf, l->width, l->height);
+  }
 }
 
 struct Stats {
@@ -122,51 +156,22 @@ struct RunResult {
   size_t images = 0, features = 0, poses = 0;
   Stats total, features_stage, slam_stage, render_stage;
   std::vector<double> total_ms, features_ms, slam_ms, render_ms;
+  int32_t width = 0, height = 0;             ///< of the first image
+  double image_hz = 0.0;                     ///< 1 / the median step between consecutive image utimes
+  std::map<std::string, bench::CpuUse> cpu;  ///< per program, over the CPU window
 };
 
-/// Starts the launcher with `args`, its output into log_path; its pid, or -1 (said) when it cannot fork.
-pid_t startLauncher(std::vector<std::string> args, const std::string& log_path) {
-  const pid_t pid = fork();
-  if (pid < 0) {
-    std::perror("bench_latency: fork");
-    return -1;
+/// 1e6 / the median step between consecutive utimes [Hz]; 0 with fewer than two.
+double medianRateHz(const Arrivals& a) {
+  std::vector<double> steps;
+  int64_t prev = -1;
+  for (const auto& [u, t] : a) {
+    if (prev >= 0) steps.push_back(double(u - prev));
+    prev = u;
   }
-  if (pid > 0) return pid;
-  prctl(PR_SET_PDEATHSIG, SIGTERM);  // the run dies with the bench
-  const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0) {
-    std::perror(("bench_latency: " + log_path).c_str());
-    _exit(127);
-  }
-  dup2(fd, STDOUT_FILENO);
-  dup2(fd, STDERR_FILENO);
-  close(fd);
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  execv(argv[0], argv.data());
-  std::perror("bench_latency: exec omnislam-launch");
-  _exit(127);
-}
-
-/// Handles the bus until the launcher exits (a stop of the bench forwarded to it as SIGINT: it stops
-/// its processes in order), then what is still queued; its exit code (128 + signal when killed).
-int listenUntilExit(lcm::LCM& lcm, pid_t pid) {
-  int status = 0;
-  bool exited = false, forwarded = false;
-  while (!exited) {
-    lcm.handleTimeout(50);
-    if (g_stop && !forwarded) {
-      kill(pid, SIGINT);
-      forwarded = true;
-    }
-    const pid_t w = waitpid(pid, &status, WNOHANG);
-    if (w == pid) exited = true;
-  }
-  // Messages still queued in LCM.
-  const auto drain_end = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);
-  while (std::chrono::steady_clock::now() < drain_end) lcm.handleTimeout(20);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  if (steps.empty()) return 0.0;
+  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  return 1e6 / steps[steps.size() / 2];
 }
 
 /// Pairs the arrivals of each image's utime on the four channels into the stage latencies.
@@ -188,15 +193,49 @@ void pairArrivals(Listener& l, RunResult& out) {
     out.total_ms.push_back(1e-3 * double(p->second - t_img));
     if (f != feat.end()) out.slam_ms.push_back(1e-3 * double(p->second - f->second));
   }
+  out.image_hz = medianRateHz(img);
   out.total = stats(out.total_ms);
   out.features_stage = stats(out.features_ms);
   out.slam_stage = stats(out.slam_ms);
   out.render_stage = stats(out.render_ms);
 }
 
+/// The run settings shared by every run.
+struct Plan {
+  std::string launcher, launch_file, out_dir;
+  std::string world;        ///< a world file given to the launch file as `world`; empty: its default
+  std::string slam_config;  ///< a SLAM config given to the launch file as `slam`; empty: its default
+  std::vector<int> particles;
+  double speedup = 4.0, duration = 120.0, warmup_s = 5.0;
+  double image_rate_hz = 0.0;  ///< 0: the world's own
+  int reps = 1, port = 0;
+};
+
+/// The launcher's command line for one run.
+std::vector<std::string> launchArgs(const Plan& plan, const std::string& url, int particles) {
+  std::vector<std::string> a = {plan.launcher, plan.launch_file, "--url", url, "--no-log",
+                                "--log-dir",  // the SLAM process's checkpoint goes there
+                                plan.out_dir, "--set", "speedup=" + fmt(plan.speedup, 3), "--set",
+                                "duration=" + fmt(plan.duration, 3), "--set", "particles=" + std::to_string(particles),
+                                // the launch file's rule: 3 x speedup (3 s of wall time)
+                                "--set", "odometry_only_after_s=" + fmt(3.0 * plan.speedup, 3)};
+  if (!plan.world.empty()) a.insert(a.end(), {"--set", "world=" + plan.world});
+  if (!plan.slam_config.empty()) a.insert(a.end(), {"--set", "slam=" + plan.slam_config});
+  return a;
+}
+
+/// Each program's CPU from `warmup_s` after the first image to the simulator's last sample.
+void cpuWindow(const Plan& plan, const Listener& l, const bench::ProcessSampler& sampler, RunResult& out) {
+  const auto sim_end = bench::lastSampleOf(sampler.series(), "omnislam-sim");
+  if (l.first_image_s < 0.0 || !sim_end || *sim_end <= l.first_image_s + plan.warmup_s) {
+    std::cerr << "bench_latency: no CPU window (the run was shorter than the warm-up)" << std::endl;
+    return;
+  }
+  out.cpu = bench::cpuByProgram(sampler.series(), l.first_image_s + plan.warmup_s, *sim_end);
+}
+
 /// Runs the launch file once with `particles` and listens; returns false if it could not start.
-bool runOnce(const std::string& launcher, const std::string& launch_file, const std::string& url, int particles,
-             double speedup, double duration, const std::string& log_path, RunResult& out) {
+bool runOnce(const Plan& plan, const std::string& url, int particles, const std::string& log_path, RunResult& out) {
   Listener l;
   lcm::LCM lcm(url);
   if (!lcm.good()) {
@@ -206,18 +245,20 @@ bool runOnce(const std::string& launcher, const std::string& launch_file, const 
   for (const char* ch :
        {channels::kOmniImage, channels::kOmniFeatures, channels::kSlamPose, channels::kGroundTruthPose})
     lcm.subscribeFunction(ch, &onMessage, &l)->setQueueCapacity(100000);
-  const auto t0 = std::chrono::steady_clock::now();
-  const pid_t pid =
-      startLauncher({launcher, launch_file, "--url", url, "--no-log", "--set", "speedup=" + fmt(speedup, 3), "--set",
-                     "duration=" + fmt(duration, 3), "--set", "particles=" + std::to_string(particles)},
-                    log_path);
+  l.t0 = Steady::now();
+  const pid_t pid = bench::startChild(launchArgs(plan, url, particles), log_path);
   if (pid < 0) return false;
-  out.exit_code = listenUntilExit(lcm, pid);
-  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  bench::ProcessSampler sampler(pid);
+  out.exit_code = bench::listenUntilExit(
+      lcm, pid, &g_stop, [&] { sampler.sample(secondsSince(l.t0)); }, 1.0);
+  out.wall_s = secondsSince(l.t0);
   out.particles = particles;
   out.url = url;
   out.log_path = log_path;
+  out.width = l.width;
+  out.height = l.height;
   pairArrivals(l, out);
+  cpuWindow(plan, l, sampler, out);
   return true;
 }
 
@@ -238,6 +279,9 @@ std::optional<std::string> checkParticles(const std::vector<int>& particles) {
 struct Pooled {
   Stats total, feat, slam, render;
   size_t images = 0, poses = 0;
+  int32_t width = 0, height = 0;             ///< of the first run's first image
+  double image_hz = 0.0;                     ///< of the first run
+  std::map<std::string, bench::CpuUse> cpu;  ///< per program, the runs' CPU and wall seconds summed
 };
 
 /// The runs of each count pooled.
@@ -253,6 +297,15 @@ std::map<int, Pooled> pool(const std::vector<int>& particles, std::map<int, std:
       r.insert(r.end(), run.render_ms.begin(), run.render_ms.end());
       p.images += run.images;
       p.poses += run.poses;
+      for (const auto& [name, u] : run.cpu) {
+        p.cpu[name].cpu_s += u.cpu_s;
+        p.cpu[name].wall_s += u.wall_s;
+      }
+    }
+    if (!runs[m].empty()) {
+      p.width = runs[m].front().width;
+      p.height = runs[m].front().height;
+      p.image_hz = runs[m].front().image_hz;
     }
     p.total = stats(t);
     p.feat = stats(f);
@@ -290,6 +343,51 @@ void printTable(const std::vector<int>& particles, std::map<int, Pooled>& pooled
   }
 }
 
+// Issue 55's targets and the conditions they are set for.
+constexpr double kTargetP99Ms = 33.0;
+constexpr double kTargetCpuShare = 0.5;  ///< features + odometry + SLAM, of one core
+const std::vector<std::string> kTargetPrograms = {"omnislam-features", "omnislam-odometry", "omnislam-slam"};
+
+double targetShare(const Pooled& p) {
+  double share = 0.0;
+  for (const std::string& name : kTargetPrograms)
+    if (p.cpu.count(name)) share += p.cpu.at(name).fractionOfOneCore();
+  return share;
+}
+
+void printCpu(const std::vector<int>& particles, std::map<int, Pooled>& pooled) {
+  std::cout << "\nCPU per process [% of one core] (user + system over the window, /proc/PID/stat)\n";
+  for (int m : particles) {
+    const Pooled& p = pooled[m];
+    std::cout << "M=" << m << ":";
+    for (const auto& [name, u] : p.cpu)
+      std::cout << "  " << name << " " << fmt(100.0 * u.fractionOfOneCore(), 1) << " (" << fmt(u.cpu_s, 1) << " s / "
+                << fmt(u.wall_s, 0) << " s)";
+    std::cout << "\n";
+  }
+}
+
+void printTargets(const Plan& plan, const std::vector<int>& particles, std::map<int, Pooled>& pooled) {
+  std::cout << "\n";
+  for (int m : particles) {
+    const Pooled& p = pooled[m];
+    const bool issue_conditions =
+        p.width == 640 && p.height == 480 && std::abs(p.image_hz - 30.0) < 0.5 && plan.speedup == 1.0 && m == 100;
+    const std::string cond = " [M=" + std::to_string(m) + ", " + std::to_string(p.width) + " x " +
+                             std::to_string(p.height) + " at " + fmt(p.image_hz, 2) + " Hz, speedup " +
+                             fmt(plan.speedup, 2) +
+                             (issue_conditions ? ": the issue's conditions]"
+                                               : ": NOT the issue's "
+                                                 "conditions]");
+    std::cout << "TARGET (issue 55) image -> SLAM_POSE p99 " << fmt(p.total.p99_ms, 1) << " ms <= " << kTargetP99Ms
+              << " ms: " << (p.total.n > 0 && p.total.p99_ms <= kTargetP99Ms ? "PASS" : "FAIL") << cond << "\n";
+    const double share = targetShare(p);
+    std::cout << "TARGET (issue 55) features + odometry + SLAM " << fmt(100.0 * share, 1)
+              << " % of one core <= " << fmt(100.0 * kTargetCpuShare, 0)
+              << " %: " << (!p.cpu.empty() && share <= kTargetCpuShare ? "PASS" : "FAIL") << cond << "\n";
+  }
+}
+
 void writeJson(const std::string& json_path, const std::string& launch_file, double speedup, double duration, int reps,
                const std::vector<int>& particles, std::map<int, Pooled>& pooled) {
   std::ofstream js(json_path);
@@ -304,20 +402,20 @@ void writeJson(const std::string& json_path, const std::string& launch_file, dou
     const Pooled& p = pooled[particles[i]];
     js << "    {\"M\": " << particles[i] << ", \"images\": " << p.images << ", \"poses\": " << p.poses
        << ", \"image_to_pose\": " << st(p.total) << ", \"image_to_features\": " << st(p.feat)
-       << ", \"features_to_pose\": " << st(p.slam) << ", \"truth_to_image\": " << st(p.render) << "}"
-       << (i + 1 < particles.size() ? "," : "") << "\n";
+       << ", \"features_to_pose\": " << st(p.slam) << ", \"truth_to_image\": " << st(p.render)
+       << ", \"width\": " << p.width << ", \"height\": " << p.height << ", \"image_hz\": " << fmt(p.image_hz, 3)
+       << ", \"cpu\": {";
+    bool first = true;
+    for (const auto& [name, u] : p.cpu) {
+      js << (first ? "" : ", ") << "\"" << name << "\": {\"cpu_s\": " << fmt(u.cpu_s, 2)
+         << ", \"wall_s\": " << fmt(u.wall_s, 2) << ", \"share\": " << fmt(u.fractionOfOneCore(), 4) << "}";
+      first = false;
+    }
+    js << "}}" << (i + 1 < particles.size() ? "," : "") << "\n";
   }
   js << "  ]\n}\n";
   std::cout << "JSON: " << json_path << "\n";
 }
-
-/// The run settings shared by every run.
-struct Plan {
-  std::string launcher, launch_file, out_dir;
-  std::vector<int> particles;
-  double speedup = 4.0, duration = 120.0;
-  int reps = 1, port = 0;
-};
 
 /// Every run, alternating between the counts; nothing when one could not start or answered no image.
 std::optional<std::map<int, std::vector<RunResult>>> runAll(const Plan& plan) {
@@ -326,14 +424,12 @@ std::optional<std::map<int, std::vector<RunResult>>> runAll(const Plan& plan) {
   for (int rep = 0; rep < plan.reps && !g_stop; ++rep) {
     for (int m : plan.particles) {
       if (g_stop) break;
-      const int p =
-          plan.port > 0 ? plan.port + run_index : 20000 + static_cast<int>((getpid() * 13 + run_index * 101) % 30000);
-      const std::string url = "udpm://239.255.76.67:" + std::to_string(p) + "?ttl=0&recv_buf_size=4194304";
+      const std::string url = bench::privateUrl(plan.port, run_index);
       const std::string log =
           plan.out_dir + "/bench_latency-M" + std::to_string(m) + "-" + std::to_string(rep + 1) + ".log";
       RunResult r;
       std::cout << "run M=" << m << " rep " << rep + 1 << " on " << url << " ... " << std::flush;
-      if (!runOnce(plan.launcher, plan.launch_file, url, m, plan.speedup, plan.duration, log, r)) return std::nullopt;
+      if (!runOnce(plan, url, m, log, r)) return std::nullopt;
       std::cout << "exit " << r.exit_code << ", " << fmt(r.wall_s, 1) << " s, " << r.images << " images, " << r.features
                 << " features, " << r.poses << " poses answering an image\n";
       if (r.poses == 0) {
@@ -347,22 +443,73 @@ std::optional<std::map<int, std::vector<RunResult>>> runAll(const Plan& plan) {
   return runs;
 }
 
+/// With --image-rate-hz: the world written again at that rate into the output folder, its path in
+/// plan.world. False (said) when the world cannot be read or written.
+bool prepareWorld(Plan& plan, const std::string& world_in) {
+  if (plan.image_rate_hz <= 0.0) return true;
+  try {
+    const sim::World w = bench::worldVariant(config::loadWorld(world_in), plan.image_rate_hz, 0.0);
+    const std::string stem = std::filesystem::path(world_in).stem().string();
+    plan.world = plan.out_dir + "/" + stem + "-" + fmt(plan.image_rate_hz, 0) + "hz.yaml";
+    std::ofstream f(plan.world);
+    f << sim::worldToYaml(w, {"bench_latency: " + world_in + " with images at " + fmt(w.image_rate_hz, 3) +
+                              " Hz, truth and odometry at " + fmt(w.truth_rate_hz, 3) + " Hz"});
+    if (!f) throw std::runtime_error("cannot write " + plan.world);
+    std::cout << "world " << plan.world << ": " << world_in << " with images at " << fmt(w.image_rate_hz, 2)
+              << " Hz (truth " << fmt(w.truth_rate_hz, 2) << " Hz), " << w.camera.intrinsics.width_px << " x "
+              << w.camera.intrinsics.height_px << "\n";
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << "bench_latency: --world " << world_in << ": " << e.what() << std::endl;
+    return false;
+  }
+}
+
+/// The output folder and the launcher exist; false (said) otherwise.
+bool checkPaths(Plan& plan, const std::string& bin_dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(plan.out_dir, ec);
+  if (ec) {
+    std::cerr << "bench_latency: cannot create " << plan.out_dir << ": " << ec.message() << std::endl;
+    return false;
+  }
+  plan.launcher = bin_dir + "/omnislam-launch";
+  if (access(plan.launcher.c_str(), X_OK) != 0) {
+    std::cerr << "bench_latency: " << plan.launcher << " not found: build omnislam-launch and the processes"
+              << std::endl;
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App cli{"bench_latency: image -> SLAM_POSE latency of the live sports-hall pipeline"};
+  CLI::App cli{"bench_latency: image -> SLAM_POSE latency and CPU per process of the live sports-hall pipeline"};
   Plan plan;
   plan.launch_file = std::string(OMNISLAM_SOURCE_DIR) + "/config/launch/sports_hall_slam.yaml";
   plan.out_dir = "/tmp";
   plan.particles = {10, 100};
   std::string bin_dir = OMNISLAM_BIN_DIR, json_path;
-  cli.add_option("--launch", plan.launch_file, "launch file (needs the variables speedup, duration, particles)");
+  std::string world_in = std::string(OMNISLAM_SOURCE_DIR) + "/config/worlds/sports_hall.yaml";
+  cli.add_option("--launch", plan.launch_file,
+                 "launch file (needs the variables speedup, duration, particles, odometry_only_after_s, world)");
   cli.add_option("--bin-dir", bin_dir, "folder of omnislam-launch and the processes");
   cli.add_option("--particles", plan.particles, "particle counts; the first is the baseline of the ratios")
       ->delimiter(',');
   cli.add_option("--speedup", plan.speedup, "simulated seconds per real second")->check(CLI::Range(0.1, 100.0));
   cli.add_option("--duration", plan.duration, "simulated seconds per run")->check(CLI::Range(5.0, 100000.0));
   cli.add_option("--reps", plan.reps, "runs per particle count, alternating")->check(CLI::Range(1, 100));
+  cli.add_option("--image-rate-hz", plan.image_rate_hz,
+                 "run the world (--world) with images at this rate, written into OUT_DIR (0: the launch file's world "
+                 "as it is)")
+      ->check(CLI::Range(0.0, 100.0));
+  cli.add_option("--world", world_in, "the world --image-rate-hz starts from (the launch file's default)");
+  cli.add_option(
+      "--slam-config", plan.slam_config,
+      "SLAM config given to the launch file as `slam` (default: the launch file's, config/slam/sports_hall.yaml)");
+  cli.add_option("--warmup", plan.warmup_s, "seconds after the first image before the CPU window starts")
+      ->check(CLI::Range(0.0, 3600.0));
   cli.add_option("--port", plan.port,
                  "UDP port of the first run's private bus, each next run the next port (default: from the pid)")
       ->check(CLI::Range(1024, 60000));
@@ -376,28 +523,18 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
-
-  std::error_code ec;
-  std::filesystem::create_directories(plan.out_dir, ec);
-  if (ec) {
-    std::cerr << "bench_latency: cannot create " << plan.out_dir << ": " << ec.message() << std::endl;
-    return 1;
-  }
-  plan.launcher = bin_dir + "/omnislam-launch";
-  if (access(plan.launcher.c_str(), X_OK) != 0) {
-    std::cerr << "bench_latency: " << plan.launcher << " not found: build omnislam-launch and the processes"
-              << std::endl;
-    return 1;
-  }
-  std::cout << "launch " << plan.launch_file << " at " << fmt(plan.speedup, 1) << "x, " << fmt(plan.duration, 0)
-            << " simulated s per run, " << plan.reps << " run(s) per particle count; launcher output in "
-            << plan.out_dir << "\nload average at start: " << loadAverage() << " (" << sysconf(_SC_NPROCESSORS_ONLN)
-            << " cores)\n";
+  if (!checkPaths(plan, bin_dir) || !prepareWorld(plan, world_in)) return 1;
+  std::cout << "launch " << plan.launch_file << (plan.slam_config.empty() ? "" : " with slam=" + plan.slam_config)
+            << " at " << fmt(plan.speedup, 1) << "x, " << fmt(plan.duration, 0) << " simulated s per run, " << plan.reps
+            << " run(s) per particle count; launcher output in " << plan.out_dir
+            << "\nload average at start: " << loadAverage() << " (" << sysconf(_SC_NPROCESSORS_ONLN) << " cores)\n";
   auto runs = runAll(plan);
   if (!runs) return 1;
   std::map<int, Pooled> pooled = pool(plan.particles, *runs);
   std::cout << "load average at end: " << loadAverage() << "\n";
   printTable(plan.particles, pooled);
+  printCpu(plan.particles, pooled);
+  printTargets(plan, plan.particles, pooled);
   if (!json_path.empty())
     writeJson(json_path, plan.launch_file, plan.speedup, plan.duration, plan.reps, plan.particles, pooled);
   return 0;

@@ -71,7 +71,8 @@ std::vector<GlobalLocaliser::Predicted> GlobalLocaliser::predictVisible(const Po
 }
 
 std::vector<int> GlobalLocaliser::assign(const std::vector<Predicted>& lamps, const Eigen::Matrix3d& P,
-                                         const std::vector<BearingMeasurement>& z, double* llr, int* matched) const {
+                                         const std::vector<BearingMeasurement>& z, double* llr, double* count_llr,
+                                         int* matched) const {
   const double log_pd = std::log(perception_.detection_probability);
   const double log_miss = std::log(std::max(1.0 - perception_.detection_probability, 1e-12));
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(static_cast<Eigen::Index>(z.size()),
@@ -94,17 +95,21 @@ std::vector<int> GlobalLocaliser::assign(const std::vector<Predicted>& lamps, co
   const AssignmentResult a = solveAssignment(cost);
   std::vector<int> lamp_of(z.size(), -1);
   std::vector<char> taken(lamps.size(), 0);
-  double l = 0.0;
+  double l = 0.0, c = 0.0;
   int n = 0;
   for (std::size_t i = 0; i < z.size(); ++i) {
     const int j = i < a.col_of_row.size() ? a.col_of_row[i] : -1;
     if (j < 0) continue;
     lamp_of[i] = j, taken[static_cast<std::size_t>(j)] = 1, ++n;
     l -= cost(static_cast<Eigen::Index>(i), j);
+    // The match's worth by its count: E[r^T S^-1 r] = 2, and the bearing's own noise for |S|.
+    const Eigen::Matrix2d Q = bearingCovariance(z[i]);
+    c += log_pd - 0.5 * (2.0 + std::log(Q.determinant())) - std::log(2.0 * kPi) - log_clutter_density_;
   }
   for (std::size_t j = 0; j < lamps.size(); ++j)
-    if (lamps[j].expected && !taken[j]) l += log_miss;
+    if (lamps[j].expected && !taken[j]) l += log_miss, c += log_miss;
   *llr = l;
+  *count_llr = c;
   *matched = n;
   return lamp_of;
 }
@@ -168,7 +173,7 @@ GlobalLocaliser::Fit GlobalLocaliser::fit(const Pose2& pose_W, const Eigen::Matr
   const Eigen::Matrix3d prior_info = cov.inverse();
   for (int round = 0; round < (prior ? 1 : 2); ++round) {
     const std::vector<Predicted> lamps = predictVisible(f.pose_W, c);
-    const std::vector<int> lamp_of = assign(lamps, gate_cov, z, &f.llr, &f.matched);
+    const std::vector<int> lamp_of = assign(lamps, gate_cov, z, &f.llr, &f.count_llr, &f.matched);
     f.expected =
         static_cast<int>(std::count_if(lamps.begin(), lamps.end(), [](const Predicted& p) { return p.expected; }));
     std::vector<Match> zs;

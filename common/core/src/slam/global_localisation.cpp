@@ -60,6 +60,7 @@ GlobalLocaliser::GlobalLocaliser(const GlobalLocalisationOptions& options, const
       perception_(perception),
       index_(map, options.height_tolerance_m, 2.0 * options.max_range_m, std::max(options.max_range_m / 4.0, 0.5)) {
   gate_bearing_sq_ = chiSquareQuantile(opt_.gate_probability, 2.0);
+  count_gate_sq_ = chiSquareQuantile(1.0 - (1.0 - opt_.gate_probability) * (1.0 - opt_.gate_probability), 2.0);
   gate_distance_sigmas_ = std::sqrt(chiSquareQuantile(opt_.gate_probability, 1.0));
   gate_pose_sq_ = chiSquareQuantile(opt_.gate_probability, 3.0);
   // The window's extent in (azimuth, elevation) [rad^2]: clutter is uniform over it.
@@ -243,9 +244,11 @@ void GlobalLocaliser::decide(const std::vector<BearingMeasurement>& z) {
     return;  // searching stays searching, lost stays lost
   }
   had_hypotheses_ = true;
-  // Within the ratio of the best in L, or in C (the counts: shared map error, the file header).
+  // Within the ambiguity ratio of the best in L, or within the drop ratio of the best C (the counts:
+  // shared map error, the file header; the wider ratio because a lamp at the edge of the range or a
+  // gate, matched for one pose and not for its twin, is worth a match, ~10 nats, for the whole window).
   const double floor = tracks_.front().log_likelihood - std::log(opt_.ambiguity_likelihood_ratio);
-  const double count_floor = bestCount() - std::log(opt_.ambiguity_likelihood_ratio);
+  const double count_floor = bestCount() - std::log(opt_.drop_likelihood_ratio);
   status_.num_hypotheses = static_cast<int>(std::count_if(tracks_.begin(), tracks_.end(), [&](const PoseHypothesis& h) {
     return h.log_likelihood >= floor || h.count_log_likelihood >= count_floor;
   }));

@@ -48,8 +48,11 @@ bool usable(const BearingMeasurement& m) {
 std::vector<GlobalLocaliser::Predicted> GlobalLocaliser::predictVisible(const Pose2& pose_W,
                                                                         const Eigen::Vector3d& p_CinR_m) const {
   const Eigen::Vector2d centre = cameraCentreInWorld(pose_W, p_CinR_m).head<2>();
+  // Lamps up to the association margin beyond max_range_m may match a bearing (a lamp just beyond it
+  // for one pose, just inside for its twin: the map's errors must not decide between them); only
+  // those within max_range_m are expected, a miss counted.
   std::vector<int> near;
-  index_.lampsNear(centre, opt_.max_range_m, near);
+  index_.lampsNear(centre, opt_.max_range_m + perception_.association_margin_m, near);
   std::vector<Predicted> out;
   out.reserve(near.size());
   for (int i : near) {
@@ -64,7 +67,8 @@ std::vector<GlobalLocaliser::Predicted> GlobalLocaliser::predictVisible(const Po
     if (!z) continue;
     pr.R_lamp = J_l * index_.lampCov(i) * J_l.transpose();
     pr.z = *z;
-    pr.expected = probabilityInside(p, LandmarkKind::kPoint3D, pose_W, p_CinR_m, perception_) > 0.0;
+    pr.expected = probabilityInside(p, LandmarkKind::kPoint3D, pose_W, p_CinR_m, perception_) > 0.0 &&
+                  (p.head<2>() - centre).norm() <= opt_.max_range_m;
     out.push_back(pr);
   }
   return out;
@@ -77,6 +81,8 @@ std::vector<int> GlobalLocaliser::assign(const std::vector<Predicted>& lamps, co
   const double log_miss = std::log(std::max(1.0 - perception_.detection_probability, 1e-12));
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(static_cast<Eigen::Index>(z.size()),
                                                    static_cast<Eigen::Index>(lamps.size()), kForbiddenCost);
+  // Within the counts' wider gate, for c (countMatches).
+  Eigen::MatrixXd near = Eigen::MatrixXd::Constant(cost.rows(), cost.cols(), kForbiddenCost);
   for (std::size_t i = 0; i < z.size(); ++i) {
     if (!usable(z[i])) continue;
     const Eigen::Matrix2d Q = bearingCovariance(z[i]);
@@ -87,6 +93,7 @@ std::vector<int> GlobalLocaliser::assign(const std::vector<Predicted>& lamps, co
       const double det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
       if (!(det > 0.0) || !(S(0, 0) > 0.0)) continue;
       const double m2 = (S(1, 1) * r.x() * r.x() - (S(0, 1) + S(1, 0)) * r.x() * r.y() + S(0, 0) * r.y() * r.y()) / det;
+      if (m2 <= count_gate_sq_) near(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = m2;
       if (!(m2 <= gate_bearing_sq_)) continue;
       const double lg = -0.5 * (m2 + std::log(det)) - std::log(2.0 * kPi);
       cost(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = -(log_pd + lg - log_clutter_density_);
@@ -95,23 +102,51 @@ std::vector<int> GlobalLocaliser::assign(const std::vector<Predicted>& lamps, co
   const AssignmentResult a = solveAssignment(cost);
   std::vector<int> lamp_of(z.size(), -1);
   std::vector<char> taken(lamps.size(), 0);
-  double l = 0.0, c = 0.0;
+  double l = 0.0;
   int n = 0;
   for (std::size_t i = 0; i < z.size(); ++i) {
     const int j = i < a.col_of_row.size() ? a.col_of_row[i] : -1;
     if (j < 0) continue;
     lamp_of[i] = j, taken[static_cast<std::size_t>(j)] = 1, ++n;
     l -= cost(static_cast<Eigen::Index>(i), j);
+  }
+  for (std::size_t j = 0; j < lamps.size(); ++j)
+    if (lamps[j].expected && !taken[j]) l += log_miss;
+  *llr = l;
+  *count_llr = countMatches(lamps, z, lamp_of, near);
+  *matched = n;
+  return lamp_of;
+}
+
+double GlobalLocaliser::countMatches(const std::vector<Predicted>& lamps, const std::vector<BearingMeasurement>& z,
+                                     const std::vector<int>& lamp_of, const Eigen::MatrixXd& near) const {
+  const double log_pd = std::log(perception_.detection_probability);
+  const double log_miss = std::log(std::max(1.0 - perception_.detection_probability, 1e-12));
+  std::vector<char> taken(lamps.size(), 0);
+  std::vector<int> of = lamp_of;
+  for (int j : of)
+    if (j >= 0) taken[static_cast<std::size_t>(j)] = 1;
+  // A bearing the gate left out but within the wider gate of a free lamp is that lamp's (greedy, in
+  // bearing order): a pose and its twin must not be told apart by a residual at the gate's edge.
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    if (of[i] >= 0) continue;
+    Eigen::Index best = -1;
+    for (Eigen::Index j = 0; j < near.cols(); ++j)
+      if (!taken[static_cast<std::size_t>(j)] && near(static_cast<Eigen::Index>(i), j) < kForbiddenCost &&
+          (best < 0 || near(static_cast<Eigen::Index>(i), j) < near(static_cast<Eigen::Index>(i), best)))
+        best = j;
+    if (best >= 0) of[i] = static_cast<int>(best), taken[static_cast<std::size_t>(best)] = 1;
+  }
+  double c = 0.0;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    if (of[i] < 0) continue;
     // The match's worth by its count: E[r^T S^-1 r] = 2, and the bearing's own noise for |S|.
     const Eigen::Matrix2d Q = bearingCovariance(z[i]);
     c += log_pd - 0.5 * (2.0 + std::log(Q.determinant())) - std::log(2.0 * kPi) - log_clutter_density_;
   }
   for (std::size_t j = 0; j < lamps.size(); ++j)
-    if (lamps[j].expected && !taken[j]) l += log_miss, c += log_miss;
-  *llr = l;
-  *count_llr = c;
-  *matched = n;
-  return lamp_of;
+    if (lamps[j].expected && !taken[j]) c += log_miss;
+  return c;
 }
 
 namespace {

@@ -228,6 +228,10 @@ class GlobalLocaliser {
   std::vector<Predicted> predictVisible(const Pose2& pose_W, const Eigen::Vector3d& p_CinR_m) const;
   std::vector<int> assign(const std::vector<Predicted>& lamps, const Eigen::Matrix3d& P,
                           const std::vector<BearingMeasurement>& z, double* llr, double* count_llr, int* matched) const;
+  /// c of an assignment (Fit::count_llr): its matches, and bearings it left out that are within the
+  /// wider gate count_gate_sq_ (`near`: the Mahalanobis^2, kForbiddenCost outside) of a free lamp.
+  double countMatches(const std::vector<Predicted>& lamps, const std::vector<BearingMeasurement>& z,
+                      const std::vector<int>& lamp_of, const Eigen::MatrixXd& near) const;
   void predictTracks(const Pose2& odom_prev, const Pose2& odom_now);
   void updateTracks(const std::vector<BearingMeasurement>& z);
   struct Seed {
@@ -270,6 +274,8 @@ class GlobalLocaliser {
   PerceptionOptions perception_;
   LampMapIndex index_;
   double gate_bearing_sq_, gate_distance_sigmas_, gate_pose_sq_;
+  /// The counts' gate (c): chi-square(2) at 1 - (1 - gate_probability)^2 (0.9999 for 0.99).
+  double count_gate_sq_;
   double log_clutter_density_;
   int max_unexplained_ = 0;  ///< the fewest unexplained bearings countsConsistent() refuses
   std::vector<PoseHypothesis> tracks_;

@@ -19,6 +19,9 @@ struct GlobalLocaliser::Predicted {
   Eigen::Matrix<double, 2, 3> H = Eigen::Matrix<double, 2, 3>::Zero();
   Eigen::Matrix2d R_lamp = Eigen::Matrix2d::Zero();  ///< the lamp's map covariance in bearing space
   bool expected = false;                             ///< inside the unwidened range: a miss counts log(1 - P_D)
+  /// Expected and the association margin inside both ranges: its miss counts in c (a map error
+  /// smaller than the margin cannot take the lamp out of range for one pose and not its twin).
+  bool inner = false;
 };
 
 namespace {
@@ -69,6 +72,9 @@ std::vector<GlobalLocaliser::Predicted> GlobalLocaliser::predictVisible(const Po
     pr.z = *z;
     pr.expected = probabilityInside(p, LandmarkKind::kPoint3D, pose_W, p_CinR_m, perception_) > 0.0 &&
                   (p.head<2>() - centre).norm() <= opt_.max_range_m;
+    const double margin_m = perception_.association_margin_m;
+    pr.inner = pr.expected && (p.head<2>() - centre).norm() <= opt_.max_range_m - margin_m &&
+               (p - cameraCentreInWorld(pose_W, p_CinR_m)).norm() <= perception_.max_range_m - margin_m;
     out.push_back(pr);
   }
   return out;
@@ -139,14 +145,26 @@ double GlobalLocaliser::countMatches(const std::vector<Predicted>& lamps, const 
   }
   double c = 0.0;
   for (std::size_t i = 0; i < z.size(); ++i) {
-    if (of[i] < 0) continue;
+    // Only bearings inside both ranges by their own geometry count: the same for a pose and its
+    // twin (their lamps, map errors within the margin, are predicted for both).
+    if (of[i] < 0 || !reachesInside(z[i])) continue;
     // The match's worth by its count: E[r^T S^-1 r] = 2, and the bearing's own noise for |S|.
     const Eigen::Matrix2d Q = bearingCovariance(z[i]);
     c += log_pd - 0.5 * (2.0 + std::log(Q.determinant())) - std::log(2.0 * kPi) - log_clutter_density_;
   }
   for (std::size_t j = 0; j < lamps.size(); ++j)
-    if (lamps[j].expected && !taken[j]) c += log_miss;
+    if (lamps[j].inner && !taken[j]) c += log_miss;
   return c;
+}
+
+bool GlobalLocaliser::reachesInside(const BearingMeasurement& m) const {
+  for (double h : index_.classHeights()) {
+    const auto q = horizontalPointInRobot(m.azimuth_rad, m.elevation_rad, m.p_CinR_m, h, opt_.max_range_m);
+    if (!q) continue;
+    const double horizontal_m = (*q - m.p_CinR_m.head<2>()).norm(), vertical_m = h - m.p_CinR_m.z();
+    if (std::hypot(horizontal_m, vertical_m) <= perception_.max_range_m) return true;
+  }
+  return false;
 }
 
 namespace {

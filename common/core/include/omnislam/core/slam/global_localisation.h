@@ -232,6 +232,9 @@ class GlobalLocaliser {
   /// wider gate count_gate_sq_ (`near`: the Mahalanobis^2, kForbiddenCost outside) of a free lamp.
   double countMatches(const std::vector<Predicted>& lamps, const std::vector<BearingMeasurement>& z,
                       const std::vector<int>& lamp_of, const Eigen::MatrixXd& near) const;
+  /// The bearing reaches a height class within max_range_m horizontally and the perception's
+  /// max_range_m in 3D: by its own geometry, the same for every pose.
+  bool reachesInside(const BearingMeasurement& m) const;
   void predictTracks(const Pose2& odom_prev, const Pose2& odom_now);
   void updateTracks(const std::vector<BearingMeasurement>& z);
   struct Seed {

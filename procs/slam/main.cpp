@@ -1,7 +1,7 @@
 // omnislam-slam: bearing-only FastSLAM (paper 000) on the bus. Subscribes OMNI_FEATURES and
 // ODOMETRY, pairs each frame with the odometry interpolated at its utime, runs one filter step and
 // publishes SLAM_POSE, SLAM_HEALTH, SLAM_MAP, SLAM_PARTICLES and SLAM_ASSOCIATIONS stamped with the
-// frame's utime.
+// frame's utime; with start_pose.source unknown, SLAM_LOCALISATION per frame until localised.
 //   live    on an LCM URL, with PROCESS_STATUS;
 //   replay  --replay IN.lcm --out OUT.lcm: the same runtime fed with the log's events in order.
 // This file is the adapter: flags and config, the bus; the runtime is common/runtime (slam_runtime.h,
@@ -36,6 +36,7 @@ void publishAll(lcmio::Node& node, const DriverResult& r) {
   for (const auto& x : r.refused) node.reject(x.channel, x.reason);
   for (const auto& d : r.dropped) node.reject(channels::kOmniFeatures, d);
   for (const auto& n : r.notes) std::cerr << node.tag() << n << std::endl;
+  for (const auto& l : r.localisation) node.publish(channels::kSlamLocalisation, l);
   for (const auto& out : r.outputs) {
     node.publish(channels::kSlamPose, out.pose);
     if (out.health) node.publish(channels::kSlamHealth, *out.health);

@@ -295,6 +295,33 @@ TEST(slam_GlobalLocalisation, SportsHallIsHalfTurnSymmetricAndNeverLocalised) {
   EXPECT_GT(ambiguous_two, static_cast<int>(frames.size()) * 9 / 10) << "of " << frames.size() << " frames";
 }
 
+// The same with a map whose lamps are off by N(0, 3 cm) each (a real map is never exact): the map's
+// errors are the same in every frame, so the two half-turned poses' likelihoods drift apart by how the
+// errors fit each. Before the counts' evidence C (global_localisation.h, "Shared map error") the live
+// hall was localised at the half-turned pose at frame 7; with C counting a match for a lamp at the
+// range's edge for one pose and not its twin, 2 of these 5 draws were localised (frames 77 and 132).
+// Now none of these 5 draws of the map's errors is ever localised (of 30 draws, one was: draw 13 at
+// frame 96, 26 m; the known weakness in docs/design/global-localisation.md). 5 draws: ~35 s here.
+TEST(slam_GlobalLocalisation, SportsHallWithANoisyMapIsStillNeverLocalised) {
+  PerceptionOptions p;
+  p.default_p_CinR_m = scenarios::kCamInR;
+  const std::vector<scenarios::Frame> frames = scenarios::simulateHall(1);
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> n(0.0, 0.03);
+    std::vector<Eigen::Vector3d> lamps = scenarios::hallLights();
+    for (Eigen::Vector3d& l : lamps) l += Eigen::Vector3d(n(rng), n(rng), n(rng));
+    GlobalLocaliser loc(GlobalLocalisationOptions{}, MotionNoiseOptions{}, p, asMap(lamps, 0.03));
+    int ambiguous = 0;
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      const LocalisationStatus& st = loc.step(frames[k > 0 ? k - 1 : 0].odom, frames[k].odom, frames[k].z);
+      ASSERT_NE(st.state, LocalisationState::kLocalised) << "map draw " << seed << ", frame " << k;
+      ambiguous += st.state == LocalisationState::kAmbiguous;
+    }
+    EXPECT_GT(ambiguous, static_cast<int>(frames.size()) * 9 / 10) << "map draw " << seed;
+  }
+}
+
 TEST(slam_GlobalLocalisation, MapOfAnotherBuildingIsNeverLocalised) {
   const std::vector<Eigen::Vector3d> here = irregularLamps(90, 40.0, 40.0, 11);
   const std::vector<Eigen::Vector3d> elsewhere = irregularLamps(90, 40.0, 40.0, 12);

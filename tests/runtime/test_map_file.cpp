@@ -120,7 +120,8 @@ TEST(MapFile, MalformedFilesNameFileAndKey) {
     std::string text, expect;
   } cases[] = {
       {"format: other\nversion: 1\nlandmarks: []\n", "format"},
-      {"format: omnislam-map\nversion: 2\nlandmarks: []\n", "version"},
+      {"format: omnislam-map\nversion: 3\nlandmarks: []\n", "version"},
+      {"format: omnislam-map\nversion: 1\nnum_landmarks: 0\nlandmarks: []\n", "num_landmarks"},
       {"format: omnislam-map\nversion: 1\n", "landmarks"},
       {head + "  - {id: 1, kind: blob, type: 1, counter: 1, position_m: [0, 0, 0], " + good_cov + "}\n", "kind"},
       {head + "  - {id: 1, kind: point3d, type: 3, counter: 1, position_m: [0, 0, 0], " + good_cov + "}\n", "type"},
@@ -149,8 +150,7 @@ TEST(MapFile, MalformedFilesNameFileAndKey) {
 }
 
 // Issue 56, item 5: a file that is not a map at all (binary bytes, another YAML document) is refused
-// naming the file and why. (A map cut at a line boundary, or just before a line's closing brace,
-// still loads: version 1 has no landmark count or end marker; see docs/design/global-localisation.md.)
+// naming the file and why. (Truncated files: the version 2 tests below.)
 TEST(MapFile, ForeignFilesAreRefused) {
   TmpDir dir;
   const fs::path bin = dir.path / "foreign.bin";
@@ -161,6 +161,55 @@ TEST(MapFile, ForeignFilesAreRefused) {
   const std::string err = loadError(other);
   EXPECT_NE(err.find("world.yaml"), std::string::npos) << err;
   EXPECT_NE(err.find("format"), std::string::npos) << err;
+  // Neither is called a truncated map, nor is a missing file.
+  EXPECT_EQ(err.find("truncated"), std::string::npos) << err;
+  EXPECT_EQ(loadError(bin).find("truncated"), std::string::npos) << loadError(bin);
+  EXPECT_EQ(loadError(dir.path / "missing.yaml").find("truncated"), std::string::npos);
+}
+
+// Version 2 (issue 56, item 5): the file cut at every byte offset is refused, naming the file; the
+// whole file loads. Each refusal says why: truncated (no end line, or a count that disagrees), or
+// the key the cut broke, with the missing end line named.
+TEST(MapFile, EveryTruncationOfAVersion2MapIsRefused) {
+  TmpDir dir;
+  const fs::path p = dir.path / "cut.yaml";
+  const std::string full = mapToYaml(sampleMap());
+  ASSERT_NE(full.find("version: 2\n"), std::string::npos);
+  ASSERT_NE(full.find("num_landmarks: 3\n"), std::string::npos);
+  int named_truncated = 0;
+  for (std::size_t cut = 0; cut < full.size(); ++cut) {
+    writeText(p, full.substr(0, cut));
+    const std::string err = loadError(p);
+    ASSERT_FALSE(err.empty()) << "cut at byte " << cut << " of " << full.size() << " loaded";
+    EXPECT_NE(err.find("cut.yaml"), std::string::npos) << cut << ": " << err;
+    named_truncated += err.find("truncated") != std::string::npos;
+  }
+  EXPECT_EQ(named_truncated, static_cast<int>(full.size())) << "every refusal says the file may be truncated";
+  writeText(p, full);
+  EXPECT_EQ(loadMap(p.string()).landmarks.size(), 3u);
+}
+
+// A version 2 file whose count disagrees with its list (a landmark's line deleted) is refused;
+// a version 1 file (no count, no end line) still loads.
+TEST(MapFile, Version2CountIsCheckedAndVersion1StillLoads) {
+  TmpDir dir;
+  const fs::path p = dir.path / "map.yaml";
+  const std::string full = mapToYaml(sampleMap());
+  const std::size_t first = full.find("  - {id:");
+  const std::size_t second = full.find("  - {id:", first + 1);
+  writeText(p, full.substr(0, first) + full.substr(second));
+  const std::string err = loadError(p);
+  EXPECT_NE(err.find("num_landmarks"), std::string::npos) << err;
+  EXPECT_NE(err.find("truncated"), std::string::npos) << err;
+
+  std::string v1 = full;
+  v1.replace(v1.find("version: 2"), 10, "version: 1");
+  v1.erase(v1.find("num_landmarks: 3\n"), 17);
+  v1.erase(v1.find("end: omnislam-map\n"));
+  writeText(p, v1);
+  const SavedMap m = loadMap(p.string());
+  ASSERT_EQ(m.landmarks.size(), 3u);
+  EXPECT_EQ(m.landmarks[2].id, sampleMap().landmarks[2].id);
 }
 
 }  // namespace

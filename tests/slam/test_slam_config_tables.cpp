@@ -178,6 +178,30 @@ TEST(SlamConfigTables, StartPoseNeedsItsSourceAndAFixedPoseAllThreeKeys) {
   EXPECT_EQ(odo.start_pose_W.theta_rad, 0.0);
 }
 
+// Issue 56: `start_pose.source: unknown` reads no pose keys; `localisation.*` through its table (the
+// core's), its checks across keys named; unknown without a map to load is refused naming the key.
+TEST(SlamConfigTables, UnknownStartAndLocalisationKeys) {
+  const SlamProcessOptions o =
+      parseSlamOptions(config::Node::loadString("start_pose: {source: unknown, x_m: 1}\nlocalisation: {min_frames: 5, "
+                                                "max_range_m: 25}\nmap: {load_path: m.yaml}\n",
+                                                "x"));
+  EXPECT_EQ(o.start_source, SlamProcessOptions::StartSource::kUnknown);
+  EXPECT_EQ(o.start_pose_W.x_m, 0.0) << "not read with unknown";
+  EXPECT_EQ(o.localisation.min_frames, 5);
+  EXPECT_EQ(o.localisation.max_range_m, 25.0);
+  EXPECT_EQ(o.validate(), "");
+  EXPECT_NE(describe(o).find("localisation: "), std::string::npos) << "echoed";
+  const std::string range = errorOf("localisation: {min_frames: 0}\n");
+  EXPECT_NE(range.find("key 'localisation.min_frames'"), std::string::npos) << range;
+  const std::string across = errorOf("localisation: {min_matched: 9, max_seed_bearings: 8}\n");
+  EXPECT_NE(across.find("key 'localisation.min_matched'"), std::string::npos) << across;
+  EXPECT_NE(errorOf("localisation: {min_frame: 3}\n").find("localisation.min_frame"), std::string::npos);
+  // Unknown with no map: the file alone parses (--load-map may give one), validate() names the key.
+  const SlamProcessOptions no_map = parseSlamOptions(config::Node::loadString("start_pose: {source: unknown}\n", "x"));
+  EXPECT_NE(no_map.validate().find("start_pose.source unknown needs map.load_path"), std::string::npos)
+      << no_map.validate();
+}
+
 // Durations: seconds in the file, whole microseconds in the struct, exact in the echo.
 TEST(SlamConfigTables, DurationsAreMicrosecondsOfTheSecondsWritten) {
   const SlamProcessOptions o = parseSlamOptions(config::Node::loadString(
@@ -203,8 +227,8 @@ TEST(SlamConfigTables, UnknownKeysListTheTablesKeys) {
       << errorOf("restart: {heading_sigma_rad: 0.5}\n");
   EXPECT_NE(errorOf("checkpoint: {interval: 5}\n").find("(known here: path, interval_s)"), std::string::npos);
   const std::string root = errorOf("sed: 1\n");
-  for (const char* k : {"seed", "start_pose", "features", "output", "map", "checkpoint", "pairing", "restart",
-                        "plausibility", "filter"})
+  for (const char* k : {"seed", "start_pose", "localisation", "features", "output", "map", "checkpoint", "pairing",
+                        "restart", "plausibility", "filter"})
     EXPECT_NE(root.find(k), std::string::npos) << k << " in " << root;
 }
 
@@ -284,6 +308,8 @@ void expectFileReadThroughTheTables(const std::string& file) {
     expectFileKeys(childOf(y, name), std::string(name) + ".", dir, o, d, table());
   expectFileKeys(childOf(y, "pairing"), "pairing.", dir, o.pairing, d.pairing, pairingFields());
   expectFileKeys(childOf(y, "restart"), "restart.", dir, o.restart, d.restart, restartFields());
+  expectFileKeys(childOf(y, "localisation"), "localisation.", dir, o.localisation, d.localisation,
+                 slam::options::globalLocalisationFields());
   expectFileKeys(childOf(y, "plausibility"), "plausibility.", dir, o.plausibility, d.plausibility,
                  plausibilityFields());
   // The filter's keys given beside its preset override it; the others hold the preset's values.
@@ -354,6 +380,7 @@ TEST(SlamConfigTables, TheEchoPrintsEveryKeyOfEverySection) {
     expectEchoed(echo, "pairing", o.pairing, pairingFields());
     expectEchoed(echo, "restart", o.restart, restartFields());
     expectEchoed(echo, "plausibility", o.plausibility, plausibilityFields());
+    expectEchoed(echo, "localisation", o.localisation, slam::options::globalLocalisationFields());
     namespace opt = slam::options;
     expectEchoed(echo, "filter", o.filter, opt::fastSlamFields());
     expectEchoed(echo, "filter.motion", o.filter.motion, opt::motionFields());

@@ -96,10 +96,11 @@ auto pairingCounters(S& s) {  // S = PairingStats or const PairingStats
 template <class S>
 auto driverCounters(S& s) {  // S = DriverStats or const DriverStats; the pairing's are the pairer's
   return std::vector<decltype(&s.frames_processed)>{
-      &s.frames_processed, &s.features_in,        &s.features_skipped_kind,   &s.measurements_rejected,
-      &s.filter_resets,    &s.degenerate_weights, &s.odometry_only_steps,     &s.dropped_behind_prediction,
-      &s.frames_too_large, &s.implausible,        &s.reinit_last_estimate,    &s.health_uncertain,
-      &s.health_diverged,  &s.health_fallback,    &s.frames_between_keyframes};
+      &s.frames_processed,  &s.features_in,        &s.features_skipped_kind,    &s.measurements_rejected,
+      &s.filter_resets,     &s.degenerate_weights, &s.odometry_only_steps,      &s.dropped_behind_prediction,
+      &s.frames_too_large,  &s.implausible,        &s.reinit_last_estimate,     &s.health_uncertain,
+      &s.health_diverged,   &s.health_fallback,    &s.frames_between_keyframes, &s.frames_localising,
+      &s.localisation_fixes};
 }
 
 /// describe() without the lines of the map files (paths may differ between two starts of one run)
@@ -224,7 +225,7 @@ void SlamDriver::saveState(ByteWriter& w) const {
   w.i64(ended_step_utime_);
   putPose(w, odom_prev_O_);
   for (int64_t v : {last_step_utime_, last_frame_utime_, odom_utime_at_last_frame_, epoch_, pose_seq_, map_seq_,
-                    particles_seq_, associations_seq_})
+                    particles_seq_, associations_seq_, localisation_seq_})
     w.i64(v);
   putCounts(w, driverCounters(stats_));
   health_.saveState(w);
@@ -241,7 +242,7 @@ void SlamDriver::loadState(ByteReader& r) {
     if (r.boolean("filter present")) f = std::make_unique<slam::FastSlam>(slam::FastSlam::loadState(opt_.filter, r));
   const int64_t ended_step_utime = r.i64("ended_step_utime");
   const Pose2 odom_prev = getPose(r, "odom_prev_O");
-  int64_t v[8];
+  int64_t v[9];
   for (int64_t& x : v) x = r.i64("driver counters");
   DriverStats stats = stats_;
   getCounts(r, driverCounters(stats), "driver counters");
@@ -264,6 +265,13 @@ void SlamDriver::loadState(ByteReader& r) {
   map_seq_ = v[5];
   particles_seq_ = v[6];
   associations_seq_ = v[7];
+  localisation_seq_ = v[8];
+  // Start unknown: a restored filter tracks; without one the localising starts again (a checkpoint
+  // is written only once a filter has stepped, and the localiser's hypotheses are not in it).
+  if (start_) {
+    if (filter_) start_->resumeTracking();
+    else start_->restart();
+  }
   stats_ = stats;
   health_ = std::move(health);
   health_seq_ = health_seq;

@@ -116,7 +116,7 @@ lcmio::LogWriter::Mode outputMode(const std::string& out_path) {
 bool isSlamOutput(const std::string& channel) {
   return channel == channels::kSlamPose || channel == channels::kSlamMap || channel == channels::kSlamParticles ||
          channel == channels::kSlamAssociations || channel == channels::kSlamHealth ||
-         channel == channels::kSlamTrajectory;
+         channel == channels::kSlamTrajectory || channel == channels::kSlamLocalisation;
 }
 
 /// Whether the replay's event number pos.events was read before the checkpoint it resumed from (its
@@ -139,6 +139,7 @@ int64_t writeReplayResult(const DriverResult& r, int64_t ts, lcmio::LogWriter& o
   for (const auto& x : r.refused) rep.reject(x.channel, x.reason);
   for (const auto& d : r.dropped) rep.reject(channels::kOmniFeatures, d);
   for (const auto& n : r.notes) rep.line(n);
+  for (const auto& l : r.localisation) out.write(ts, channels::kSlamLocalisation, l);
   for (const auto& o : r.outputs) {
     out.write(ts, channels::kSlamPose, o.pose);
     if (o.health) out.write(ts, channels::kSlamHealth, *o.health);

@@ -95,6 +95,12 @@ void parseStartPose(const Node& n, SlamProcessOptions& o) {
   }
 }
 
+void parseLocalisation(const Node& n, slam::GlobalLocalisationOptions& g) {
+  parseSection(n, g, slam::options::globalLocalisationFields());
+  const std::string err = g.validate();  // the checks across keys
+  if (!err.empty()) throw validationError(n, err);
+}
+
 void parseFeatures(const Node& n, SlamProcessOptions& o) {
   parseSection(n, o, featureFields());
   if (!o.use_ceiling_lights && !o.use_vertical_lines)
@@ -122,6 +128,9 @@ std::string SlamProcessOptions::validate() const {
   if (!use_ceiling_lights && !use_vertical_lines) return "at least one feature kind must be used";
   if (localisation_only && load_map_path.empty())
     return "map.localisation_only needs map.load_path (a map to localise in)";
+  if (const std::string g = localisation.validate(); !g.empty()) return "localisation: " + g;
+  if (start_source == StartSource::kUnknown && load_map_path.empty())
+    return "start_pose.source unknown needs map.load_path or --load-map (a saved map to localise in)";
   return "";
 }
 
@@ -134,6 +143,7 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
   SlamProcessOptions o;
   parseFields(root, o, topLevelFields());
   if (auto s = root.optChild("start_pose")) parseStartPose(*s, o);
+  if (auto l = root.optChild("localisation")) parseLocalisation(*l, o.localisation);
   if (auto f = root.optChild("features")) parseFeatures(*f, o);
   if (auto out = root.optChild("output")) parseSection(*out, o, outputFields());
   if (auto m = root.optChild("map")) parseMap(*m, o);

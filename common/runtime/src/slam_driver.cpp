@@ -96,6 +96,11 @@ SlamDriver::SlamDriver(const SlamProcessOptions& options, std::vector<slam::Land
   if (!err.empty()) throw std::invalid_argument("SLAM options: " + err);
   if (opt_.localisation_only && prior_map_.empty())
     throw std::invalid_argument("SLAM options: localisation only needs a non-empty prior map");
+  if (opt_.start_source == SlamProcessOptions::StartSource::kUnknown) {
+    if (prior_map_.empty())
+      throw std::invalid_argument("SLAM options: start_pose.source unknown needs a non-empty loaded map");
+    start_ = std::make_unique<GlobalStart>(opt_.localisation, opt_.filter, prior_map_);
+  }
 }
 
 const DriverStats& SlamDriver::stats() const {
@@ -221,6 +226,10 @@ void SlamDriver::apply(std::vector<PairEvent>& events, DriverResult& r) {
         }
         ++epoch_;
         last_step_utime_ = last_frame_utime_ = odom_utime_at_last_frame_ = 0;
+        // A new odometry frame: global localisation starts again unless the filter goes on from its
+        // last estimate (restart.reinit_from).
+        if (start_ && !(restart_from_ && opt_.restart.reinit_from == RestartOptions::ReinitFrom::kLastEstimate))
+          start_->restart();
         break;
       case PairEvent::Kind::kDropped: r.dropped.push_back(ev.reason); break;
       case PairEvent::Kind::kPaired:
@@ -239,12 +248,34 @@ const slam::FastSlam* SlamDriver::filterToSave(int64_t* utime) const {
   return ended_filter_.get();
 }
 
-void SlamDriver::ensureFilter(const Pose2& odom_O, DriverResult& r) {
+bool SlamDriver::localising() const {
+  return start_ && start_->phase() == GlobalStart::Phase::kLocalising &&
+         !(restart_from_ && opt_.restart.reinit_from == RestartOptions::ReinitFrom::kLastEstimate);
+}
+
+void SlamDriver::localise(const Frame& frame, const Pose2& odom_O, DriverResult& r) {
+  ++stats_.frames_localising;
+  const std::optional<GlobalStart::Fix> fix = start_->onFrame(odom_O, frame.z);
+  r.localisation.push_back(toLocalisationMessage(start_->status(), frame.utime, localisation_seq_++, frame.seq));
+  if (!fix) return;
+  ++stats_.localisation_fixes;
+  ensureFilter(odom_O, r, &*fix);
+  // The fix is this frame's pose (its bearings are in it): the filter steps from the next frame on.
+  last_step_utime_ = last_frame_utime_ = frame.utime;
+}
+
+void SlamDriver::ensureFilter(const Pose2& odom_O, DriverResult& r, const GlobalStart::Fix* fix) {
   if (filter_) return;
   // Built aside and kept only once initialised: a filter that failed to start must not stay.
   auto filter = std::make_unique<slam::FastSlam>(opt_.filter, opt_.seed + static_cast<std::uint64_t>(epoch_));
   const RestartOptions& ro = opt_.restart;
-  if (restart_from_ && ro.reinit_from == RestartOptions::ReinitFrom::kLastEstimate) {
+  if (fix) {  // start_pose.source unknown: the particles drawn around the localiser's pose
+    filter->initialise(fix->pose_W, prior_map_, fix->cov);
+    r.notes.push_back("localised after " + std::to_string(start_->status().frames) + " frames at (" +
+                      num(fix->pose_W.x_m) + " m, " + num(fix->pose_W.y_m) + " m, " + num(fix->pose_W.theta_rad) +
+                      " rad), sd " + num(std::sqrt(fix->cov(0, 0))) + " m, " + num(std::sqrt(fix->cov(1, 1))) + " m, " +
+                      num(std::sqrt(fix->cov(2, 2))) + " rad: the filter starts there");
+  } else if (restart_from_ && ro.reinit_from == RestartOptions::ReinitFrom::kLastEstimate) {
     // After a restart of the inputs: the robot is where the filter last had it, less sure by the
     // motion the restart may have hidden; its map goes on (shared by all particles, ids kept).
     Eigen::Matrix3d cov = restart_from_->cov;
@@ -310,6 +341,10 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
     r.dropped.push_back("frame seq " + std::to_string(frame.seq) + " utime " + std::to_string(frame.utime) +
                         " is not after the last odometry-only step (utime " + std::to_string(last_step_utime_) +
                         "): dropped");
+    return std::nullopt;
+  }
+  if (!filter_ && localising()) {  // start_pose.source unknown: no filter (and no pose) before the fix
+    localise(frame, odom_O, r);
     return std::nullopt;
   }
   const bool started = filter_ != nullptr;
@@ -471,6 +506,10 @@ std::string SlamDriver::summary() const {
     << " dropped_behind_prediction " << s.dropped_behind_prediction << " degenerate_weights " << s.degenerate_weights
     << "; between_keyframes " << s.frames_between_keyframes << "; health: uncertain " << s.health_uncertain
     << " diverged " << s.health_diverged << " fallback " << s.health_fallback;
+  if (start_)
+    o << "; localisation: frames " << s.frames_localising << " fixes " << s.localisation_fixes << " "
+      << (start_->phase() == GlobalStart::Phase::kTracking ? "tracking"
+                                                           : slam::localisationStateName(start_->status().state));
   if (filter_)
     o << "; landmarks " << filter_->bestParticle().map.size() << " candidates " << filter_->bestCandidateCount();
   if (backend_) {

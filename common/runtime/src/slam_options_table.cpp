@@ -28,7 +28,7 @@ constexpr double kInt64Max = 9223372036854775807.0;  // the seed's range: that o
 }  // namespace
 
 const std::vector<std::string>& startSourceNames() {
-  static const std::vector<std::string> n{"odometry", "fixed"};
+  static const std::vector<std::string> n{"odometry", "fixed", "unknown"};
   return n;
 }
 const std::vector<std::string>& reinitFromNames() {
@@ -49,13 +49,13 @@ const std::vector<ProcessField>& startPoseFields() {
   static const std::vector<ProcessField> t{
       enumeration<O>("source", "start_source", startSourceNames(), [](const O& o) { return static_cast<int>(o.start_source); },
                      [](O& o, int i) { o.start_source = static_cast<O::StartSource>(i); },
-                     "odometry: the map frame is the odometry frame; fixed: x_m, y_m, theta_deg is the robot's pose at the first frame (required in the section)"),
+                     "odometry: the map frame is the odometry frame; fixed: x_m, y_m, theta_deg is the robot's pose at the first frame (required in the section); unknown: found by global localisation in the loaded map (needs map.load_path; no SLAM_POSE until localised, localisation.*)"),
       realVia<O>("x_m", [](const O& o) { return o.start_pose_W.x_m; }, [](O& o, double v) { o.start_pose_W.x_m = v; },
-                 "start_pose_W.x_m", "m", -1e6, 1e6, kC, "with source fixed (required there; not read with odometry): x of the start pose in W"),
+                 "start_pose_W.x_m", "m", -1e6, 1e6, kC, "with source fixed (required there; not read with odometry or unknown): x of the start pose in W"),
       realVia<O>("y_m", [](const O& o) { return o.start_pose_W.y_m; }, [](O& o, double v) { o.start_pose_W.y_m = v; },
-                 "start_pose_W.y_m", "m", -1e6, 1e6, kC, "with source fixed (required there; not read with odometry): y of the start pose in W"),
+                 "start_pose_W.y_m", "m", -1e6, 1e6, kC, "with source fixed (required there; not read with odometry or unknown): y of the start pose in W"),
       realVia<O>("theta_deg", [](const O& o) { return o.start_pose_W.theta_rad; }, [](O& o, double v) { o.start_pose_W.theta_rad = wrapAngle(v); },
-                 "start_pose_W.theta_rad", "deg", -360, 360, kC, "with source fixed (required there; not read with odometry): heading of the start pose in W (wrapped)", true),
+                 "start_pose_W.theta_rad", "deg", -360, 360, kC, "with source fixed (required there; not read with odometry or unknown): heading of the start pose in W (wrapped)", true),
   };
   return t;
 }
@@ -176,6 +176,9 @@ const std::vector<ConfigSection>& processSections() {
   static const std::vector<ConfigSection> s{
       section<O>("", topLevelFields, whole),
       section<O>("start_pose", startPoseFields, whole),
+      section<slam::GlobalLocalisationOptions>(
+          "localisation", slam::options::globalLocalisationFields,
+          [](const O& o) -> const auto& { return o.localisation; }),
       section<O>("features", featureFields, whole),
       section<O>("output", outputFields, whole),
       section<O>("map", mapFields, whole, true),

@@ -51,7 +51,9 @@ void CheckpointKeeper::afterInput(const SlamDriver& driver, const InputClock& cl
 bool CheckpointKeeper::writeNow(const SlamDriver& driver, const InputClock& clock, const ReplayPosition& pos) {
   if (!enabled()) return true;
   if (driver.filterToSave(nullptr) == nullptr) {
-    std::cerr << tag_ << "checkpoint not written: no frame was processed" << std::endl;
+    std::cerr << tag_
+              << "checkpoint not written: no frame was processed (or, start_pose.source unknown, not localised yet)"
+              << std::endl;
     return true;
   }
   const bool ok = write(driver, clock, pos);
@@ -91,6 +93,9 @@ std::vector<slam::Landmark> loadPriorMap(const SlamProcessOptions& options, cons
   std::vector<slam::Landmark> prior = loadMap(options.load_map_path).landmarks;
   if (options.localisation_only && prior.empty())
     throw std::invalid_argument("--localise: the map " + options.load_map_path + " has no landmarks");
+  if (options.start_source == SlamProcessOptions::StartSource::kUnknown && prior.empty())
+    throw std::invalid_argument("start_pose.source unknown: the map " + options.load_map_path +
+                                " has no landmarks to localise against");
   std::cerr << tag << "loaded " << prior.size() << " landmarks from " << options.load_map_path << std::endl;
   return prior;
 }
@@ -133,7 +138,8 @@ void SlamRuntime::saveMap() const {
   SavedMap m;
   const slam::FastSlam* f = driver_.filterToSave(&m.utime);
   if (f == nullptr) {
-    std::cerr << tag_ << "map not saved: no frame was processed" << std::endl;
+    std::cerr << tag_ << "map not saved: no frame was processed (or, start_pose.source unknown, not localised yet)"
+              << std::endl;
     return;
   }
   m.landmarks = f->bestMap();

@@ -5,6 +5,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "omnislam/core/slam/chi_square.h"
@@ -59,6 +60,7 @@ GlobalLocaliser::GlobalLocaliser(const GlobalLocalisationOptions& options, const
       perception_(perception),
       index_(map, options.height_tolerance_m, 2.0 * options.max_range_m, std::max(options.max_range_m / 4.0, 0.5)) {
   gate_bearing_sq_ = chiSquareQuantile(opt_.gate_probability, 2.0);
+  count_gate_sq_ = chiSquareQuantile(1.0 - (1.0 - opt_.gate_probability) * (1.0 - opt_.gate_probability), 2.0);
   gate_distance_sigmas_ = std::sqrt(chiSquareQuantile(opt_.gate_probability, 1.0));
   gate_pose_sq_ = chiSquareQuantile(opt_.gate_probability, 3.0);
   // The window's extent in (azimuth, elevation) [rad^2]: clutter is uniform over it.
@@ -97,9 +99,14 @@ void GlobalLocaliser::updateTracks(const std::vector<BearingMeasurement>& z) {
     const Fit f = fit(h.pose_W, h.cov, true, z);
     if (f.ok) h.pose_W = f.pose_W, h.cov = f.cov;
     h.frame_llr.push_back(f.llr);
-    if (h.frame_llr.size() > static_cast<std::size_t>(opt_.window_frames)) h.frame_llr.erase(h.frame_llr.begin());
-    h.log_likelihood = 0.0;
+    h.frame_count_llr.push_back(f.count_llr);
+    if (h.frame_llr.size() > static_cast<std::size_t>(opt_.window_frames)) {
+      h.frame_llr.erase(h.frame_llr.begin());
+      h.frame_count_llr.erase(h.frame_count_llr.begin());
+    }
+    h.log_likelihood = h.count_log_likelihood = 0.0;
     for (double l : h.frame_llr) h.log_likelihood += l;
+    for (double c : h.frame_count_llr) h.count_log_likelihood += c;
     h.evidence = opt_.evidence_memory * h.evidence + f.llr;
     h.matched_last = f.matched;
     if (f.matched > 0) ++h.frames_explained;
@@ -136,6 +143,7 @@ void GlobalLocaliser::addSeeds(const std::vector<BearingMeasurement>& z) {
     if (!f.ok || f.matched < opt_.min_matched || !(f.llr > 0.0) || !consistent(f)) continue;
     PoseHypothesis h;
     h.pose_W = f.pose_W, h.cov = f.cov, h.evidence = f.llr, h.log_likelihood = f.llr, h.frame_llr = {f.llr};
+    h.count_log_likelihood = f.count_llr, h.frame_count_llr = {f.count_llr};
     h.frames_explained = 1, h.matched_last = f.matched;
     if (known(h) || !runBackwards(h)) continue;
     auto same = std::find_if(born.begin(), born.end(), [&](const PoseHypothesis& b) { return sameHypothesis(h, b); });
@@ -155,6 +163,10 @@ bool GlobalLocaliser::runBackwards(PoseHypothesis& h) const {
   Pose2 first_back_pose;  // the pose and covariance at the frame before this one
   Eigen::Matrix3d first_back_cov = Eigen::Matrix3d::Zero();
   double best_sum = best && !best->frame_llr.empty() ? best->frame_llr.back() : 0.0, sum = h.frame_llr.back();
+  double best_csum = best && !best->frame_count_llr.empty() ? best->frame_count_llr.back() : 0.0;
+  double csum = h.frame_count_llr.back();
+  // Dropped only when it is worse by the margin in L and in C (shared map error: the file header).
+  const auto worse = [&] { return best && sum < best_sum - margin && csum < best_csum - margin; };
   for (std::size_t back = 1; back < window_.size(); ++back) {
     const PastFrame& later = window_[window_.size() - back];
     const PastFrame& frame = window_[window_.size() - back - 1];
@@ -165,11 +177,15 @@ bool GlobalLocaliser::runBackwards(PoseHypothesis& h) const {
     if (f.ok) x = f.pose_W, P = f.cov;
     if (back == 1) first_back_pose = x, first_back_cov = P;
     h.frame_llr.insert(h.frame_llr.begin(), f.llr);
-    sum += f.llr;
+    h.frame_count_llr.insert(h.frame_count_llr.begin(), f.count_llr);
+    sum += f.llr, csum += f.count_llr;
     h.travel_m += std::hypot(u.x_m, u.y_m);
     if (f.matched > 0) ++h.frames_explained;
-    if (best && best->frame_llr.size() > back) best_sum += best->frame_llr[best->frame_llr.size() - 1 - back];
-    if (best && sum < best_sum - margin) return false;
+    if (best && best->frame_llr.size() > back) {
+      best_sum += best->frame_llr[best->frame_llr.size() - 1 - back];
+      best_csum += best->frame_count_llr[best->frame_count_llr.size() - 1 - back];
+    }
+    if (worse()) return false;
   }
   // The birth frame scored as the tracked ones are: predicted from the frame before (not fitted to
   // itself, which would favour a seed by the prediction's own uncertainty).
@@ -178,13 +194,19 @@ bool GlobalLocaliser::runBackwards(PoseHypothesis& h) const {
     Pose2 x1 = first_back_pose;
     const Eigen::Matrix3d P1 = propagatePoseCovariance(x1, first_back_cov, u, motionCovariance(x1, u, motion_));
     x1 = predictPose(x1, u);
-    const double l_now = fit(x1, P1, true, window_.back().z).llr;
-    sum += l_now - h.frame_llr.back();
-    h.frame_llr.back() = l_now;
-    if (best && sum < best_sum - margin) return false;
+    const Fit now = fit(x1, P1, true, window_.back().z);
+    sum += now.llr - h.frame_llr.back(), csum += now.count_llr - h.frame_count_llr.back();
+    h.frame_llr.back() = now.llr, h.frame_count_llr.back() = now.count_llr;
+    if (worse()) return false;
   }
-  h.log_likelihood = sum;
+  h.log_likelihood = sum, h.count_log_likelihood = csum;
   return true;
+}
+
+double GlobalLocaliser::bestCount() const {
+  double c = -std::numeric_limits<double>::infinity();
+  for (const PoseHypothesis& h : tracks_) c = std::max(c, h.count_log_likelihood);
+  return c;
 }
 
 void GlobalLocaliser::pruneAndSort() {
@@ -194,10 +216,14 @@ void GlobalLocaliser::pruneAndSort() {
       tracks_.end());
   std::sort(tracks_.begin(), tracks_.end(), poseLess);
   if (tracks_.empty()) return;
+  // Dropped for its L only when its C is also below the best C by the ratio (shared map error).
   const double floor = tracks_.front().log_likelihood - std::log(opt_.drop_likelihood_ratio);
-  tracks_.erase(
-      std::remove_if(tracks_.begin(), tracks_.end(), [&](const PoseHypothesis& h) { return h.log_likelihood < floor; }),
-      tracks_.end());
+  const double count_floor = bestCount() - std::log(opt_.drop_likelihood_ratio);
+  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
+                               [&](const PoseHypothesis& h) {
+                                 return h.log_likelihood < floor && h.count_log_likelihood < count_floor;
+                               }),
+                tracks_.end());
   if (tracks_.size() > static_cast<std::size_t>(opt_.max_hypotheses)) {
     tracks_.resize(static_cast<std::size_t>(opt_.max_hypotheses));
     status_.capped = true;
@@ -218,9 +244,14 @@ void GlobalLocaliser::decide(const std::vector<BearingMeasurement>& z) {
     return;  // searching stays searching, lost stays lost
   }
   had_hypotheses_ = true;
+  // Within the ambiguity ratio of the best in L, or within the drop ratio of the best C (the counts:
+  // shared map error, the file header; the wider ratio because a lamp at the edge of the range or a
+  // gate, matched for one pose and not for its twin, is worth a match, ~10 nats, for the whole window).
   const double floor = tracks_.front().log_likelihood - std::log(opt_.ambiguity_likelihood_ratio);
-  status_.num_hypotheses = static_cast<int>(std::count_if(
-      tracks_.begin(), tracks_.end(), [&](const PoseHypothesis& h) { return h.log_likelihood >= floor; }));
+  const double count_floor = bestCount() - std::log(opt_.drop_likelihood_ratio);
+  status_.num_hypotheses = static_cast<int>(std::count_if(tracks_.begin(), tracks_.end(), [&](const PoseHypothesis& h) {
+    return h.log_likelihood >= floor || h.count_log_likelihood >= count_floor;
+  }));
   const PoseHypothesis& best = tracks_.front();
   const bool confirmed = best.frames_explained >= opt_.min_frames && best.travel_m >= opt_.min_travel_m;
   if (status_.num_hypotheses > 1) status_.state = LocalisationState::kAmbiguous;

@@ -19,6 +19,9 @@ struct GlobalLocaliser::Predicted {
   Eigen::Matrix<double, 2, 3> H = Eigen::Matrix<double, 2, 3>::Zero();
   Eigen::Matrix2d R_lamp = Eigen::Matrix2d::Zero();  ///< the lamp's map covariance in bearing space
   bool expected = false;                             ///< inside the unwidened range: a miss counts log(1 - P_D)
+  /// Expected and the association margin inside both ranges: its miss counts in c (a map error
+  /// smaller than the margin cannot take the lamp out of range for one pose and not its twin).
+  bool inner = false;
 };
 
 namespace {
@@ -48,8 +51,11 @@ bool usable(const BearingMeasurement& m) {
 std::vector<GlobalLocaliser::Predicted> GlobalLocaliser::predictVisible(const Pose2& pose_W,
                                                                         const Eigen::Vector3d& p_CinR_m) const {
   const Eigen::Vector2d centre = cameraCentreInWorld(pose_W, p_CinR_m).head<2>();
+  // Lamps up to the association margin beyond max_range_m may match a bearing (a lamp just beyond it
+  // for one pose, just inside for its twin: the map's errors must not decide between them); only
+  // those within max_range_m are expected, a miss counted.
   std::vector<int> near;
-  index_.lampsNear(centre, opt_.max_range_m, near);
+  index_.lampsNear(centre, opt_.max_range_m + perception_.association_margin_m, near);
   std::vector<Predicted> out;
   out.reserve(near.size());
   for (int i : near) {
@@ -64,18 +70,25 @@ std::vector<GlobalLocaliser::Predicted> GlobalLocaliser::predictVisible(const Po
     if (!z) continue;
     pr.R_lamp = J_l * index_.lampCov(i) * J_l.transpose();
     pr.z = *z;
-    pr.expected = probabilityInside(p, LandmarkKind::kPoint3D, pose_W, p_CinR_m, perception_) > 0.0;
+    pr.expected = probabilityInside(p, LandmarkKind::kPoint3D, pose_W, p_CinR_m, perception_) > 0.0 &&
+                  (p.head<2>() - centre).norm() <= opt_.max_range_m;
+    const double margin_m = perception_.association_margin_m;
+    pr.inner = pr.expected && (p.head<2>() - centre).norm() <= opt_.max_range_m - margin_m &&
+               (p - cameraCentreInWorld(pose_W, p_CinR_m)).norm() <= perception_.max_range_m - margin_m;
     out.push_back(pr);
   }
   return out;
 }
 
 std::vector<int> GlobalLocaliser::assign(const std::vector<Predicted>& lamps, const Eigen::Matrix3d& P,
-                                         const std::vector<BearingMeasurement>& z, double* llr, int* matched) const {
+                                         const std::vector<BearingMeasurement>& z, double* llr, double* count_llr,
+                                         int* matched) const {
   const double log_pd = std::log(perception_.detection_probability);
   const double log_miss = std::log(std::max(1.0 - perception_.detection_probability, 1e-12));
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(static_cast<Eigen::Index>(z.size()),
                                                    static_cast<Eigen::Index>(lamps.size()), kForbiddenCost);
+  // Within the counts' wider gate, for c (countMatches).
+  Eigen::MatrixXd near = Eigen::MatrixXd::Constant(cost.rows(), cost.cols(), kForbiddenCost);
   for (std::size_t i = 0; i < z.size(); ++i) {
     if (!usable(z[i])) continue;
     const Eigen::Matrix2d Q = bearingCovariance(z[i]);
@@ -86,6 +99,7 @@ std::vector<int> GlobalLocaliser::assign(const std::vector<Predicted>& lamps, co
       const double det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
       if (!(det > 0.0) || !(S(0, 0) > 0.0)) continue;
       const double m2 = (S(1, 1) * r.x() * r.x() - (S(0, 1) + S(1, 0)) * r.x() * r.y() + S(0, 0) * r.y() * r.y()) / det;
+      if (m2 <= count_gate_sq_) near(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = m2;
       if (!(m2 <= gate_bearing_sq_)) continue;
       const double lg = -0.5 * (m2 + std::log(det)) - std::log(2.0 * kPi);
       cost(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = -(log_pd + lg - log_clutter_density_);
@@ -105,8 +119,52 @@ std::vector<int> GlobalLocaliser::assign(const std::vector<Predicted>& lamps, co
   for (std::size_t j = 0; j < lamps.size(); ++j)
     if (lamps[j].expected && !taken[j]) l += log_miss;
   *llr = l;
+  *count_llr = countMatches(lamps, z, lamp_of, near);
   *matched = n;
   return lamp_of;
+}
+
+double GlobalLocaliser::countMatches(const std::vector<Predicted>& lamps, const std::vector<BearingMeasurement>& z,
+                                     const std::vector<int>& lamp_of, const Eigen::MatrixXd& near) const {
+  const double log_pd = std::log(perception_.detection_probability);
+  const double log_miss = std::log(std::max(1.0 - perception_.detection_probability, 1e-12));
+  std::vector<char> taken(lamps.size(), 0);
+  std::vector<int> of = lamp_of;
+  for (int j : of)
+    if (j >= 0) taken[static_cast<std::size_t>(j)] = 1;
+  // A bearing the gate left out but within the wider gate of a free lamp is that lamp's (greedy, in
+  // bearing order): a pose and its twin must not be told apart by a residual at the gate's edge.
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    if (of[i] >= 0) continue;
+    Eigen::Index best = -1;
+    for (Eigen::Index j = 0; j < near.cols(); ++j)
+      if (!taken[static_cast<std::size_t>(j)] && near(static_cast<Eigen::Index>(i), j) < kForbiddenCost &&
+          (best < 0 || near(static_cast<Eigen::Index>(i), j) < near(static_cast<Eigen::Index>(i), best)))
+        best = j;
+    if (best >= 0) of[i] = static_cast<int>(best), taken[static_cast<std::size_t>(best)] = 1;
+  }
+  double c = 0.0;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    // Only bearings inside both ranges by their own geometry count: the same for a pose and its
+    // twin (their lamps, map errors within the margin, are predicted for both).
+    if (of[i] < 0 || !reachesInside(z[i])) continue;
+    // The match's worth by its count: E[r^T S^-1 r] = 2, and the bearing's own noise for |S|.
+    const Eigen::Matrix2d Q = bearingCovariance(z[i]);
+    c += log_pd - 0.5 * (2.0 + std::log(Q.determinant())) - std::log(2.0 * kPi) - log_clutter_density_;
+  }
+  for (std::size_t j = 0; j < lamps.size(); ++j)
+    if (lamps[j].inner && !taken[j]) c += log_miss;
+  return c;
+}
+
+bool GlobalLocaliser::reachesInside(const BearingMeasurement& m) const {
+  for (double h : index_.classHeights()) {
+    const auto q = horizontalPointInRobot(m.azimuth_rad, m.elevation_rad, m.p_CinR_m, h, opt_.max_range_m);
+    if (!q) continue;
+    const double horizontal_m = (*q - m.p_CinR_m.head<2>()).norm(), vertical_m = h - m.p_CinR_m.z();
+    if (std::hypot(horizontal_m, vertical_m) <= perception_.max_range_m) return true;
+  }
+  return false;
 }
 
 namespace {
@@ -168,7 +226,7 @@ GlobalLocaliser::Fit GlobalLocaliser::fit(const Pose2& pose_W, const Eigen::Matr
   const Eigen::Matrix3d prior_info = cov.inverse();
   for (int round = 0; round < (prior ? 1 : 2); ++round) {
     const std::vector<Predicted> lamps = predictVisible(f.pose_W, c);
-    const std::vector<int> lamp_of = assign(lamps, gate_cov, z, &f.llr, &f.matched);
+    const std::vector<int> lamp_of = assign(lamps, gate_cov, z, &f.llr, &f.count_llr, &f.matched);
     f.expected =
         static_cast<int>(std::count_if(lamps.begin(), lamps.end(), [](const Predicted& p) { return p.expected; }));
     std::vector<Match> zs;

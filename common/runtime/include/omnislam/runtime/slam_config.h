@@ -10,6 +10,7 @@
 #include "omnislam/config/yaml_node.h"
 #include "omnislam/core/pose2.h"
 #include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/global_localisation.h"
 #include "omnislam/core/slam/health_monitor.h"
 #include "omnislam/runtime/pairing.h"
 #include "omnislam/smoothing/back_end_options.h"
@@ -60,10 +61,15 @@ struct SlamProcessOptions {
   /// The smoothing back end behind the filter (keys `backend.*`; docs/design/smoothing.md).
   smoothing::BackEndOptions backend;
   /// Where the map frame W is: kOdometry = the odometry frame O (the robot's pose at the first
-  /// frame is its odometry pose); kFixed = `start_pose_W` is the robot's pose at the first frame.
-  enum class StartSource { kOdometry, kFixed };
+  /// frame is its odometry pose); kFixed = `start_pose_W` is the robot's pose at the first frame;
+  /// kUnknown = the loaded map's frame, the pose found by global localisation in it (global_start.h;
+  /// needs load_map_path).
+  enum class StartSource { kOdometry, kFixed, kUnknown };
   StartSource start_source = StartSource::kOdometry;
   Pose2 start_pose_W;
+  /// The global localiser of start_source kUnknown (keys `localisation.*`; its table is the core's,
+  /// options_table.h globalLocalisationFields()).
+  slam::GlobalLocalisationOptions localisation;
   bool use_ceiling_lights = true;
   bool use_vertical_lines = true;
   /// Floor on the standard deviation of each measured angle [rad]: the variances of a feature's
@@ -92,8 +98,8 @@ struct SlamProcessOptions {
   int64_t checkpoint_interval_us = 10'000'000;
 
   /// Empty when valid, otherwise a message naming the first bad field: the filter's and the
-  /// pairing's validate(), every table's ranges, at least one feature kind, localisation_only
-  /// with a map to load.
+  /// pairing's validate(), every table's ranges, at least one feature kind, localisation_only and
+  /// start_pose.source unknown with a map to load.
   std::string validate() const;
 };
 

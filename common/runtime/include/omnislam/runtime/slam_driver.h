@@ -24,7 +24,9 @@
 #include "omnislam/slam_trajectory_t.hpp"
 #include "omnislam/runtime/slam_config.h"
 #include "omnislam/runtime/back_end_runner.h"
+#include "omnislam/runtime/global_start.h"
 #include "omnislam/runtime/pairing.h"
+#include "omnislam/slam_localisation_t.hpp"
 
 namespace omnislam::runtime {
 
@@ -55,6 +57,10 @@ struct DriverResult {
   /// earlier for a restart that did not come.
   std::vector<Refusal> refused;
   std::vector<FrameOutput> outputs;
+  /// SLAM_LOCALISATION of every frame given to the global localiser (start_pose.source unknown),
+  /// in frame order: before the fix no frame has a FrameOutput (no SLAM_POSE); the frame of the fix
+  /// has its localised state here, and the outputs start with the next frame.
+  std::vector<slam_localisation_t> localisation;
   std::vector<std::string> dropped;  ///< OMNI_FEATURES frames dropped by rule, one line each
   std::vector<std::string> notes;    ///< restarts and held messages (accepted, but worth a line)
 };
@@ -77,6 +83,8 @@ struct DriverStats {
   int64_t health_uncertain = 0;           ///< steps whose SLAM_HEALTH said uncertain
   int64_t health_diverged = 0;            ///< steps whose SLAM_HEALTH said diverged
   int64_t health_fallback = 0;            ///< steps whose SLAM_POSE was the odometry fallback
+  int64_t frames_localising = 0;          ///< frames given to the global localiser (start_pose.source unknown)
+  int64_t localisation_fixes = 0;         ///< filters started at a fix of the global localiser
 };
 
 /// Converts one feature to a filter measurement; nothing for a kind that is off in `options` or a
@@ -132,7 +140,12 @@ class SlamDriver {
   static void note(const InputResult& in, const char* channel, DriverResult& r);
   std::optional<FrameOutput> process(const Frame& frame, const Pose2& odom_O, DriverResult& r);
   void maybePredict(DriverResult& r);
-  void ensureFilter(const Pose2& odom_O, DriverResult& r);
+  /// `fix`: the global localiser's (start_pose.source unknown), else the configured start.
+  void ensureFilter(const Pose2& odom_O, DriverResult& r, const GlobalStart::Fix* fix = nullptr);
+  /// The frame goes to the global localiser instead of the filter (no filter yet, start unknown).
+  bool localising() const;
+  /// One frame given to the global localiser; at its fix the filter starts there.
+  void localise(const Frame& frame, const Pose2& odom_O, DriverResult& r);
   /// The odometry plausibility check (options.plausibility); nothing when plausible.
   std::optional<std::string> checkOdometry(const odometry_t& msg);
   /// The outputs of the filter's estimate; moved by the odometry increment *u when given.
@@ -172,6 +185,9 @@ class SlamDriver {
   /// The smoothing back end of the current filter (backend.mode keyframes), started with it.
   std::unique_ptr<BackEndRunner> backend_;
   bool backend_waits_ = true;
+  /// The localising phase of start_pose.source unknown (none for fixed and odometry).
+  std::unique_ptr<GlobalStart> start_;
+  int64_t localisation_seq_ = 0;
   void startBackEnd(const Pose2& start_W, const Eigen::Matrix3d& start_cov);
   mutable DriverStats stats_;
 };

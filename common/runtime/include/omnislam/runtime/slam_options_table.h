@@ -27,7 +27,7 @@ const std::vector<options::Field<PlausibilityOptions>>& plausibilityFields();  /
 const std::vector<options::Field<RestartOptions>>& restartFields();            ///< `restart.*`
 
 /// Names of the enum fields (index = the enum's value).
-const std::vector<std::string>& startSourceNames();  ///< "odometry", "fixed"
+const std::vector<std::string>& startSourceNames();  ///< "odometry", "fixed", "unknown"
 const std::vector<std::string>& reinitFromNames();   ///< "last_estimate", "start_pose"
 
 /// One section of a SLAM config ("" = the top level, "pairing", "filter.motion"), its table applied
@@ -45,7 +45,7 @@ struct ConfigSection {
 /// The sections of the filter: filter, filter.motion, filter.perception, filter.candidates.
 const std::vector<ConfigSection>& filterSections();
 /// Every other section, in the order of the echo and the docs: the top level, start_pose,
-/// features, output, map, checkpoint, pairing, restart, plausibility.
+/// localisation, features, output, map, checkpoint, pairing, restart, plausibility.
 const std::vector<ConfigSection>& processSections();
 
 }  // namespace omnislam::runtime

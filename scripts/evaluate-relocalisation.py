@@ -1,0 +1,273 @@
+#!/usr/bin/env python3
+"""Global localisation on generated worlds (issue 56; docs/design/global-localisation.md, "Evaluation").
+
+For each world (omnislam-gen-world, families halls and irregular): one run maps it (omnislam-slam
+--replay of its feature log from the known start pose, --save-map); a second run of the same world
+with new odometry and detector noise (--odometry-seed, --detector-seed) is cut to start at a random
+time of the drive, i.e. a random place and heading on its path, and replayed with
+`start_pose.source: unknown`, the saved map and --localise, and again with a map of the world's
+true lamps with 3 cm of noise (--maps: the localiser without the first run's map errors). Scored from the SLAM_LOCALISATION and
+GROUND_TRUTH_POSE of its output: localised within 0.3 m / 2 deg after <= 5 m of travel (the issue's
+bar), wrong poses reported as localised (> 1 m or > 5 deg off), travel to the first fix, and the
+SLAM_POSE error after it. Prints a table (Markdown) and writes OUT/relocalisation.json.
+
+  python3 scripts/evaluate-relocalisation.py [--families halls,irregular] [--worlds 10] [--first-seed 1]
+                                             [--window-s 150] [--maps slam,truth] [--jobs 2] [--out DIR]
+
+Needs omnislam-gen-world, omnislam-slam and omnislam-eval (scripts/build.sh, or OMNISLAM_BUILD_DIR). Deterministic:
+the same arguments give the same figures (the cut time comes from a generator seeded by the world's
+seed; every program is seeded).
+"""
+import argparse
+import json
+import math
+import os
+import random
+import struct
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from lcm_log_filter import HEADER, SYNC, events  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BIN = os.path.join(os.environ.get("OMNISLAM_BUILD_DIR", os.path.join(ROOT, "build")), "bin")
+CONFIG = os.path.join(ROOT, "config", "slam", "sports_hall.yaml")
+FINGERPRINT = 8  # every LCM message starts with its type's 8-byte hash
+
+
+def pose_of(data):
+    """utime, x, y, theta of a pose_t (lcmtypes/pose_t.lcm: utime, seq, x_m, y_m, theta_rad, ...)."""
+    utime, _seq, x, y, th = struct.unpack_from(">qqddd", data, FINGERPRINT)
+    return utime, x, y, th
+
+
+def localisation_of(data):
+    """utime, state, num_hypotheses, num_reported and hypothesis 0 (x, y, theta) of a slam_localisation_t."""
+    p = FINGERPRINT
+    utime, _seq, _iseq = struct.unpack_from(">qqq", data, p)
+    p += 24
+    (state,) = struct.unpack_from(">b", data, p)
+    p += 1
+    nh, _nt, _nf, nr = struct.unpack_from(">iiii", data, p)
+    p += 16
+    best = None
+    if nr > 0:
+        x = struct.unpack_from(">d", data, p)[0]
+        y = struct.unpack_from(">d", data, p + 8 * nr)[0]
+        th = struct.unpack_from(">d", data, p + 16 * nr)[0]
+        best = (x, y, th)
+    return utime, state, nh, best
+
+
+def run(argv, log):
+    with open(log, "w") as f:
+        r = subprocess.run(argv, stdout=f, stderr=subprocess.STDOUT)
+    if r.returncode != 0:
+        with open(log) as f:
+            tail = f.read()[-600:]
+        raise RuntimeError(f"{os.path.basename(argv[0])} exited {r.returncode}: {tail}")
+
+
+def cut_log(src, dst, start_us, end_us):
+    """The events of src with log time in [start_us, end_us), renumbered."""
+    n = 0
+    with open(dst, "wb") as out:
+        for utime, channel, data in events(src):
+            if start_us <= utime < end_us:
+                out.write(HEADER.pack(SYNC, n, utime, len(channel), len(data)) + channel + data)
+                n += 1
+    return n
+
+
+def wrap(a):
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+def score(out_log):
+    """The run's figures from its output log."""
+    truth, loc, slam = [], [], []
+    for _t, channel, data in events(out_log):
+        if channel == b"GROUND_TRUTH_POSE":
+            truth.append(pose_of(data))
+        elif channel == b"SLAM_LOCALISATION":
+            loc.append(localisation_of(data))
+        elif channel == b"SLAM_POSE":
+            slam.append(pose_of(data))
+    truth.sort()
+    travel, cum = [0.0], 0.0
+    for a, b in zip(truth, truth[1:]):
+        cum += math.hypot(b[1] - a[1], b[2] - a[2])
+        travel.append(cum)
+    times = [t[0] for t in truth]
+
+    def at(utime):  # nearest true pose and the travel up to it
+        import bisect
+        i = min(max(bisect.bisect_left(times, utime), 0), len(times) - 1)
+        if i > 0 and abs(times[i - 1] - utime) < abs(times[i] - utime):
+            i -= 1
+        return truth[i], travel[i]
+
+    def err(pose, utime):
+        t, _ = at(utime)
+        return math.hypot(pose[0] - t[1], pose[1] - t[2]), abs(wrap(pose[2] - t[3])) * 180 / math.pi
+
+    r = {"frames_localising": len(loc), "fix": False, "wrong": 0, "travel_to_fix_m": None,
+         "fix_error_m": None, "fix_error_deg": None, "last_state": loc[-1][1] if loc else None,
+         "max_hypotheses": max((l[2] for l in loc), default=0), "window_travel_m": travel[-1] if travel else 0.0}
+    for utime, state, _nh, best in loc:
+        if state != 2 or best is None:
+            continue
+        e_m, e_deg = err(best, utime)
+        if e_m > 1.0 or e_deg > 5.0:
+            r["wrong"] += 1
+        if not r["fix"]:
+            r.update(fix=True, travel_to_fix_m=at(utime)[1], fix_error_m=e_m, fix_error_deg=e_deg)
+    errs = [err(p[1:], p[0])[0] for p in slam]
+    r["slam_pose_max_error_m"] = max(errs) if errs else None
+    r["slam_poses"] = len(errs)
+    return r
+
+
+def truth_map(world_yaml, path, seed):
+    """A saved map (version 2) of the world's lamps with N(0, 3 cm) on each coordinate."""
+    import yaml
+    with open(world_yaml) as f:
+        lights = yaml.safe_load(f)["lights"]["list"]
+    rng = random.Random(seed)
+    lines = ["format: omnislam-map", "version: 2", "utime: 0", f"num_landmarks: {len(lights)}", "landmarks:"]
+    for L in lights:
+        x, y, z = (L[k] + rng.gauss(0.0, 0.03) for k in ("x_m", "y_m", "z_m"))
+        lines.append(f"  - {{id: {L['id']}, kind: point3d, type: 1, counter: 10, position_m: [{x!r}, {y!r}, {z!r}], "
+                     "covariance_m2: [0.0009, 0, 0, 0, 0.0009, 0, 0, 0, 0.0009]}")
+    lines.append("end: omnislam-map")
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def map_run(base, seed, info, perception):
+    """The first run: the world mapped from its known start pose; the map saved; its scores."""
+    gen, slam = os.path.join(BIN, "omnislam-gen-world"), os.path.join(BIN, "omnislam-slam")
+    run([slam, "--replay", base + ".map-run.lcm", "--config", CONFIG, "--seed", str(seed), "--no-progress",
+         "--set", f"start_pose.x_m={info['start_x_m']!r}", "--set", f"start_pose.y_m={info['start_y_m']!r}",
+         "--set", f"start_pose.theta_deg={info['start_theta_deg']!r}", *perception,
+         "--out", base + ".map-out.lcm", "--save-map", base + ".slam-map.yaml"], base + ".map-slam.txt")
+    r = subprocess.run([os.path.join(BIN, "omnislam-eval"), "--json", "--no-tum", base + ".map-out.lcm"],
+                       capture_output=True, text=True)
+    ev = json.loads(r.stdout) if r.returncode == 0 else {}
+    # The second run: the same world and drive, new sensor noise.
+    run([gen, "--world", base + ".world.yaml", "--seed", str(seed + 100000), "--out-log", base + ".run2.lcm"],
+        base + ".gen2.txt")
+    return {"map_landmark_mean_err_m": ev.get("landmark_mean_err_m"), "map_ate_rmse_m": ev.get("ate_rmse_m")}
+
+
+def one_world(family, seed, a, out):
+    base = os.path.join(out, f"{family}-{seed}")
+    result_path = base + ".json"
+    if os.path.exists(result_path):
+        with open(result_path) as f:
+            return json.load(f)
+    run([os.path.join(BIN, "omnislam-gen-world"), "--family", family, "--seed", str(seed), "--out-world",
+         base + ".world.yaml", "--out-log", base + ".map-run.lcm", "--out-info", base + ".info.json"], base + ".gen.txt")
+    with open(base + ".info.json") as f:
+        info = json.load(f)
+    perception = ["--set", f"filter.perception.max_range_m={info['perception_max_range_m']!r}",
+                  "--set", f"filter.perception.min_elevation_deg={info['min_elevation_deg']!r}"]
+    mapped = map_run(base, seed, info, perception)
+    truth_map(base + ".world.yaml", base + ".truth-map.yaml", seed)
+    # The second run cut to start at a random time: a random place and heading on the drive.
+    stamps = [t for t, ch, _ in events(base + ".run2.lcm") if ch == b"OMNI_FEATURES"]
+    rng = random.Random(seed * 7919 + len(family))
+    latest = max(stamps[0], stamps[-1] - int(a.window_s * 1e6))
+    start = stamps[0] + int(rng.random() * (latest - stamps[0]))
+    cut_log(base + ".run2.lcm", base + ".cut.lcm", start, start + int(a.window_s * 1e6))
+    results = []
+    for kind in a.maps.split(","):
+        run([os.path.join(BIN, "omnislam-slam"), "--replay", base + ".cut.lcm", "--config", CONFIG, "--seed",
+             str(seed), "--no-progress", "--set", "start_pose.source=unknown", *perception, "--load-map",
+             base + f".{kind}-map.yaml", "--localise", "--out", base + f".loc-{kind}.lcm"], base + f".loc-{kind}.txt")
+        r = score(base + f".loc-{kind}.lcm")
+        r.update(family=family, seed=seed, map=kind, lamps=info["lamps"], start_offset_s=(start - stamps[0]) * 1e-6,
+                 lamps_missing=info.get("lamps_missing"), lamps_extra=info.get("lamps_extra"), **mapped)
+        r["ok"] = bool(r["fix"] and r["travel_to_fix_m"] <= 5.0 and r["fix_error_m"] <= 0.3
+                       and r["fix_error_deg"] <= 2.0)
+        results.append(r)
+        print(f"evaluate-relocalisation: {family} {seed} {kind} map: {'ok' if r['ok'] else 'not ok'} "
+              f"(fix {r['fix']}, travel {r['travel_to_fix_m']}, error {r['fix_error_m']} m "
+              f"{r['fix_error_deg']} deg, wrong {r['wrong']})", file=sys.stderr)
+    for suffix in (".map-run.lcm", ".map-out.lcm", ".run2.lcm", ".cut.lcm", ".loc-slam.lcm", ".loc-truth.lcm"):
+        if not a.keep_logs and os.path.exists(base + suffix):
+            os.remove(base + suffix)
+    with open(result_path, "w") as f:
+        json.dump(results, f, indent=1)
+    return results
+
+
+def quantile(v, q):
+    v = sorted(v)
+    return v[min(len(v) - 1, int(q * (len(v) - 1) + 0.5))] if v else float("nan")
+
+
+def table(results):
+    lines = ["| map | family | worlds | localised <= 5 m, 0.3 m / 2 deg | wrong poses reported localised | "
+             "never localised | travel to first fix: median / p90 / max [m] | fix error: median / max [m] | "
+             "SLAM_POSE error after fix, max [m] |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for kind, fam in [(k, f) for k in sorted({r["map"] for r in results})
+                      for f in sorted({r["family"] for r in results}) + ["all"]]:
+        rs = [r for r in results if r["map"] == kind and fam in ("all", r["family"])]
+        fix_err = [r["fix_error_m"] for r in rs if r["fix"]]
+        travel = [r["travel_to_fix_m"] for r in rs if r["fix"]]
+        post = [r["slam_pose_max_error_m"] for r in rs if r["slam_pose_max_error_m"] is not None]
+        lines.append(f"| {kind} | {fam} | {len(rs)} | {sum(r['ok'] for r in rs)} / {len(rs)} | "
+                     f"{sum(r['wrong'] for r in rs)} (in {sum(r['wrong'] > 0 for r in rs)} worlds) | "
+                     f"{sum(not r['fix'] for r in rs)} | {quantile(travel, 0.5):.2f} / {quantile(travel, 0.9):.2f} / "
+                     f"{max(travel, default=float('nan')):.2f} | {quantile(fix_err, 0.5):.3f} / "
+                     f"{max(fix_err, default=float('nan')):.3f} | {max(post, default=float('nan')):.3f} |")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--families", default="halls,irregular")
+    ap.add_argument("--worlds", type=int, default=10, help="worlds per family")
+    ap.add_argument("--first-seed", type=int, default=1)
+    ap.add_argument("--window-s", type=float, default=150.0, help="length of the second run [s]")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--out", default="")
+    ap.add_argument("--maps", default="slam,truth",
+                    help="the maps localised in: slam (the first run's saved map), truth (the world's lamps with "
+                         "3 cm of noise: the localiser alone, without the map's errors)")
+    ap.add_argument("--keep-logs", action="store_true")
+    a = ap.parse_args()
+    if a.worlds < 1 or a.jobs < 1 or a.first_seed < 1 or a.window_s <= 0:
+        ap.error("--worlds, --jobs, --first-seed and --window-s must be positive")
+    if not set(a.maps.split(",")) <= {"slam", "truth"}:
+        ap.error("--maps takes slam, truth or slam,truth")
+    for t in ("omnislam-gen-world", "omnislam-slam", "omnislam-eval"):
+        if not os.access(os.path.join(BIN, t), os.X_OK):
+            ap.error(f"{BIN}/{t} missing: run scripts/build.sh first")
+    out = a.out or tempfile.mkdtemp(prefix="omnislam-reloc.")
+    os.makedirs(out, exist_ok=True)
+    jobs = [(f, s) for f in a.families.split(",") for s in range(a.first_seed, a.first_seed + a.worlds)]
+    results, failed = [], []
+    with ThreadPoolExecutor(max_workers=a.jobs) as pool:
+        futures = {pool.submit(one_world, f, s, a, out): (f, s) for f, s in jobs}
+        for fut, (f, s) in futures.items():
+            try:
+                results.extend(fut.result())
+            except RuntimeError as e:
+                failed.append(f"{f} {s}: {e}")
+    for line in failed:
+        print("evaluate-relocalisation: failed: " + line, file=sys.stderr)
+    with open(os.path.join(out, "relocalisation.json"), "w") as f:
+        json.dump({"results": results, "failed": failed}, f, indent=1)
+    print(table(results))
+    print(f"\nfiles in {out}; {len(failed)} runs failed", file=sys.stderr)
+    return 0 if not failed else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -251,7 +251,9 @@ TEST(slam_GlobalLocalisation, SmallSquareGridStaysAmbiguousWhileDriving) {
   GlobalLocaliser loc(optionsFor(s), MotionNoiseOptions{}, perceptionFor(s), asMap(lamps));
   drive(loc, lamps, s, Pose2{1.0, 2.0, 0.4}, 30, 0.2, 6.0, 9, [&](int k, const Pose2&, const LocalisationStatus& st) {
     EXPECT_NE(st.state, LocalisationState::kLocalised) << "frame " << k;
-    if (k >= 2) EXPECT_EQ(st.num_hypotheses, 4) << "frame " << k;
+    if (k >= 2) {
+      EXPECT_EQ(st.num_hypotheses, 4) << "frame " << k;
+    }
   });
 }
 

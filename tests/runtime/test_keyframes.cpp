@@ -86,7 +86,9 @@ TEST(Keyframes, TenHertzStepsOncePerTravelAndAnswersEveryFrame) {
     ASSERT_TRUE(f.associations.has_value());
     int used = 0;
     for (int64_t id : f.associations->landmark_id) used += id != associations_t::NOT_USED;
-    if (!keyframe) EXPECT_EQ(used, 0) << "frame " << i << " between keyframes uses no measurement";
+    if (!keyframe) {
+      EXPECT_EQ(used, 0) << "frame " << i << " between keyframes uses no measurement";
+    }
     // Between keyframes: the last step's mean pose moved by the odometry since that step.
     const FrameOutput& k = outs[i - i % 8];
     const Pose2 expected =

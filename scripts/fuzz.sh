@@ -2,7 +2,7 @@
 # Runs every libFuzzer target of tests/fuzz for a fixed time and prints, per target, the executions,
 # the coverage (edges), the findings, and the peak memory (docs/design/fuzzing.md).
 #
-#   scripts/fuzz.sh [--seconds-per-target N] [--targets a,b,...] [--build-only] [--make-seeds]
+#   scripts/fuzz.sh [--seconds-per-target N] [--targets a,b,...] [--seed S] [--build-only] [--make-seeds]
 #
 # Builds the fuzz executables in build-fuzz/ (clang-14, -fsanitize=fuzzer,address,undefined:
 # OMNISLAM_FUZZ=ON, only the fuzz_* targets). Each target runs N seconds (default 60) on a working
@@ -14,6 +14,9 @@
 # file, libFuzzer's slowest input under the limit, stays in build-fuzz/fuzz-work/), where the
 # normal suite's fuzz_test_regressions replays it: commit it with the fix. Exit 1 when any target
 # had a finding. --make-seeds rewrites the seed corpora from the project's files (then exits).
+# --seed S (a whole number >= 1) fixes libFuzzer's random seed, so that a run is repeatable up to
+# its time limit (the CI's smoke run uses 1); without it libFuzzer draws one (the long runs' way of
+# exploring), and prints it first in build-fuzz/fuzz-work/TARGET/last-run.log.
 # OMNISLAM_FUZZ_BUILD_DIR (default build-fuzz), OMNISLAM_FUZZ_CXX / _CC (default clang++-14 / clang-14).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -21,12 +24,14 @@ cd "$root"
 build="${OMNISLAM_FUZZ_BUILD_DIR:-$root/build-fuzz}"
 seconds=60
 only=""
+seed=""
 build_only=0
 make_seeds=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds-per-target) seconds="${2:?--seconds-per-target needs a number}"; shift 2 ;;
     --targets) only="${2:?--targets needs a list}"; shift 2 ;;
+    --seed) seed="${2:?--seed needs a number}"; shift 2 ;;
     --build-only) build_only=1; shift ;;
     --make-seeds) make_seeds=1; shift ;;
     -h | --help) awk 'NR == 1 { next } !/^#/ { exit } { sub(/^# ?/, ""); print }' "$0"; exit 0 ;;
@@ -34,6 +39,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 [[ "$seconds" =~ ^[1-9][0-9]*$ ]] || { echo "fuzz.sh: --seconds-per-target must be a whole number >= 1, got '$seconds'" >&2; exit 2; }
+[ -z "$seed" ] || [[ "$seed" =~ ^[1-9][0-9]{0,8}$ ]] || { echo "fuzz.sh: --seed must be a whole number in [1, 999999999], got '$seed'" >&2; exit 2; }
 
 # Every target with its -max_len (bytes): binary formats get room for their seeds, text files 16 KiB.
 declare -A MAX_LEN=(
@@ -62,6 +68,14 @@ make_seed_corpora() {
   "$build/bin/fuzz_make_seeds" "$c"
   mkdir -p "$c"/{calibration,ocamcalib,slam_config,world_config,features_config,launch_file,mrclam,wheel_csv}
   cp config/cameras/*.yaml "$c/calibration/"
+  # The XML form, as cv::FileStorage writes it (the project has no XML calibration of its own).
+  printf '%s\n' '<?xml version="1.0"?>' '<opencv_storage>' '<image_width>1280</image_width>' \
+    '<image_height>960</image_height>' '<camera_matrix type_id="opencv-matrix">' '  <rows>3</rows>' \
+    '  <cols>3</cols>' '  <dt>d</dt>' '  <data>' '    4.005e+02 2.5e-01 6.401e+02' \
+    '    0. 4.015e+02 4.802e+02 0. 0. 1.</data></camera_matrix>' \
+    '<distortion_coefficients type_id="opencv-matrix">' '  <rows>1</rows>' '  <cols>4</cols>' '  <dt>d</dt>' \
+    '  <data>' '    -3.0e-01 1.0e-01 1.0e-03 -2.0e-03</data></distortion_coefficients>' '<xi>9.6e-01</xi>' \
+    '</opencv_storage>' > "$c/calibration/opencv-omnidir.xml"
   cp config/slam/*.yaml "$c/slam_config/"
   cp config/worlds/*.yaml "$c/world_config/"
   cp config/features/*.yaml "$c/features_config/"
@@ -84,14 +98,15 @@ make_seed_corpora() {
 
 # One target for $seconds: prints its row of the table; returns 1 on a finding.
 run_target() {
-  local t="$1" exe="$build/bin/fuzz_$1" work="$build/fuzz-work/$1" dict=() log
+  local t="$1" exe="$build/bin/fuzz_$1" work="$build/fuzz-work/$1" extra=() log
   [ -x "$exe" ] || { echo "fuzz.sh: no executable $exe" >&2; return 2; }
   mkdir -p "$work/corpus" "$work/artifacts" "$work/tmp"
   rm -f "$work/artifacts"/*
-  [ -f "$root/tests/fuzz/dict/$t.dict" ] && dict=(-dict="$root/tests/fuzz/dict/$t.dict")
+  [ -f "$root/tests/fuzz/dict/$t.dict" ] && extra=(-dict="$root/tests/fuzz/dict/$t.dict")
+  [ -z "$seed" ] || extra+=(-seed="$seed")
   log="$work/last-run.log"
   local start=$SECONDS rc=0
-  TMPDIR="$work/tmp" "$exe" "$work/corpus" "$root/tests/fuzz/corpus/$t" "${dict[@]}" \
+  TMPDIR="$work/tmp" "$exe" "$work/corpus" "$root/tests/fuzz/corpus/$t" "${extra[@]}" \
     -max_total_time="$seconds" -rss_limit_mb=2048 -malloc_limit_mb=2048 -timeout=10 -max_len="${MAX_LEN[$t]}" \
     -print_final_stats=1 -artifact_prefix="$work/artifacts/" > "$log" 2>&1 || rc=$?
   local execs edges rss findings=0 f

@@ -14,6 +14,7 @@ PKGS=(
   libopencv-contrib-dev                               # cv::omnidir (ccalib): calibration tool, model checks
   libjpeg-dev                                         # libjpeg (OpenCV's): JPEG decoding that reports damaged data
   libyaml-cpp-dev                                     # world / config files
+  libpugixml-dev                                      # OpenCV XML calibration files (OpenCV 4.6's parser crashes)
   libcli11-dev                                        # command-line flags
   libgtest-dev libgmock-dev googletest                # unit and integration tests
   libbenchmark-dev                                    # bench/

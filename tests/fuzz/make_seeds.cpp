@@ -82,14 +82,16 @@ void imageMessages() {
   const std::vector<std::pair<const char*, int8_t>> formats{
       {"gray", image_t::FORMAT_GRAY8}, {"jpeg", image_t::FORMAT_JPEG}, {"png", image_t::FORMAT_PNG}};
   for (const auto& [name, f] : formats) {
-    image_t m;
+    image_t m;  // lcm-gen's types leave fields uninitialised: every field is set
     m.utime = kT0;
+    m.seq = 0;
     m.camera_name = "fuzz";
     lcmio::encodeImage(frame(false), f, m);
     message(std::string("image_") + name, m);
   }
   image_t c;
   c.utime = kT0;
+  c.seq = 0;
   c.camera_name = "fuzz";
   lcmio::encodeImage(frame(true), image_t::FORMAT_BGR8, c);
   message("image_bgr", c);

@@ -330,6 +330,34 @@ TEST(CalibrationFiles, MalformedOpenCvFilesNameTheKey) {
       // Found by tests/fuzz (regressions/calibration): a list at the top level made OpenCV's
       // FileNode::operator[] throw cv::Exception out of the reader.
       {opencvYaml("- 1\n- 2\n"), "not a readable OpenCV FileStorage file"},
+      // Found by tests/fuzz (regressions/calibration, timeout-*): OpenCV 4.6's YAML parser never
+      // returned on these; the YAML dialect is read by yaml-cpp now (src/opencv_storage.h).
+      {"%YAML:1.\n -+\n,  -\nm", "not a readable OpenCV FileStorage file"},
+      {"%YAML:1.\n a:]\ni:\n-", "not a readable OpenCV FileStorage file"},
+      {opencvYaml(kKYaml + kDYaml + kDYaml + "xi: 1.0\n"), "not a readable OpenCV FileStorage file"},
+      {opencvYaml(kKYaml + "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 4\n   dt: d\n   data: [ "
+                           "0., 0., 0. ]\nxi: 1.0\n"),
+       "key 'distortion_coefficients' is not an OpenCV matrix: its data must be a list of rows x cols x channels = 4"},
+      {opencvYaml(kKYaml + "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 4\n   dt: d\n   data: [ "
+                           "0., 0., a, 0. ]\nxi: 1.0\n"),
+       "key 'distortion_coefficients' is not an OpenCV matrix: its data holds something that is not a number"},
+      {opencvYaml(kKYaml + "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 4\n   dt: 2d\n   data: [ "
+                           "0., 0., 0., 0., 0., 0., 0., 0. ]\nxi: 1.0\n"),
+       "key 'distortion_coefficients' must be a 1x4 matrix (or its transpose), found 1x4 with 2 channels"},
+      {opencvYaml(kKYaml + "distortion_coefficients: 0.5\nxi: 1.0\n"),
+       "key 'distortion_coefficients' is a number, not an OpenCV matrix"},
+      {opencvYaml(kKYaml + kDYaml + "xi: 1.0\nimage_width: 640.5\nimage_height: 480\n"),
+       "key 'image_width' must be an integer"},
+      // Found by tests/fuzz (regressions/calibration, crash-ceecaada...): OpenCV 4.6's XML parser
+      // dereferenced a null pointer on these 8 bytes; the XML form is read by pugixml now.
+      {"<?xml n=", "unknown calibration format"},
+      {"<?xml version=\"1.0\"?>\n<opencv_storage>\n<xi>1.</x", "not a readable OpenCV FileStorage file: not valid XML"},
+      {"<?xml version=\"1.0\"?>\n<opencv_storage>\n<xi>1.</xi><xi>2.</xi></opencv_storage>\n",
+       "not a readable OpenCV FileStorage file: key 'xi' is given twice"},
+      // The XML form: the declared shape is refused before anything is allocated for it.
+      {"<?xml version=\"1.0\"?>\n<opencv_storage>\n<camera_matrix type_id=\"opencv-matrix\"><rows>3</rows>"
+       "<cols>2147483647</cols><dt>d</dt><data>1.</data></camera_matrix>\n<xi>1.</xi>\n</opencv_storage>\n",
+       "key 'camera_matrix' must be a 3x3 matrix, found 3x2147483647 (declared)"},
   };
   for (const Case& c : cases) {
     writeText(path, c.text);

@@ -1,7 +1,6 @@
 // Readers of OpenCV / Kalibr / OCamCalib calibration files: see calibration_files.h.
 #include "omnislam/vision/calibration_files.h"
 
-#include <opencv2/core.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -15,6 +14,7 @@
 #include "omnislam/core/camera/kannala_brandt.h"
 #include "omnislam/core/camera/mei.h"
 #include "omnislam/core/camera/reflected_camera.h"
+#include "opencv_storage.h"
 
 namespace omnislam::vision {
 namespace {
@@ -28,13 +28,6 @@ const char* const kAccepted =
 
 [[noreturn]] void fail(const std::string& source, const std::string& what) {
   throw ConfigError("'" + source + "': " + what);
-}
-
-std::string oneLine(std::string s) {
-  for (char& ch : s)
-    if (ch == '\n' || ch == '\r') ch = ' ';
-  while (!s.empty() && s.back() == ' ') s.pop_back();
-  return s;
 }
 
 std::string fmt(double v) {
@@ -57,107 +50,102 @@ bool isOpencvStorage(const std::string& text) {
          (t.substr(0, 5) == "<?xml" && t.find("<opencv_storage>") != std::string_view::npos);
 }
 
-/// cv::FileStorage over the text; its parse errors become one-line ConfigErrors. OpenCV 4.6's parser
-/// also lets standard exceptions out on some malformed files (std::length_error from a string it
-/// sizes from the input: found by tests/fuzz, regressions/calibration): they are parse errors too.
-cv::FileStorage openStorage(const std::string& text, const std::string& source) {
-  std::string why;
-  try {
-    cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
-    if (fs.isOpened()) return fs;
-  } catch (const cv::Exception& e) {
-    why = ": " + oneLine(e.err);
-  } catch (const std::exception& e) {
-    why = ": " + oneLine(e.what());
-  }
-  fail(source, "not a readable OpenCV FileStorage file" + why);
+using detail::OpencvMatrix;
+using detail::OpencvNumber;
+using detail::OpencvOther;
+using detail::OpencvValue;
+using detail::OpencvValues;
+
+/// The value at `key` ("missing" when absent).
+const OpencvValue& valueAt(const OpencvValues& v, const std::string& key) {
+  static const OpencvValue missing = detail::OpencvMissing{};
+  const auto it = v.find(key);
+  return it == v.end() ? missing : it->second;
 }
 
-/// A numeric matrix node as CV_64F; fails naming the key unless it is rows x cols (or cols x rows
-/// when `either_orientation`) of finite numbers.
-cv::Mat readMatrix(const cv::FileStorage& fs, const std::string& key, int rows, int cols, bool either_orientation,
-                   const std::string& source) {
-  const cv::FileNode n = fs[key];
-  if (n.empty() || n.isNone()) fail(source, "key '" + key + "' is missing");
-  const auto shapeOk = [&](int r, int c) {
-    return (r == rows && c == cols) || (either_orientation && r == cols && c == rows);
-  };
-  const auto wrongShape = [&](int r, int c, const std::string& more) {
+bool present(const OpencvValues& v, const std::string& key) {
+  return !std::holds_alternative<detail::OpencvMissing>(valueAt(v, key));
+}
+
+/// A numeric matrix's values (row-major); fails naming the key unless it is rows x cols (or cols x
+/// rows when `either_orientation`) of finite numbers. The declared shape is checked before the values
+/// (which are not read for large shapes: opencv_storage.h).
+std::vector<double> readMatrix(const OpencvValues& v, const std::string& key, int rows, int cols,
+                               bool either_orientation, const std::string& source) {
+  const OpencvValue& n = valueAt(v, key);
+  if (!present(v, key)) fail(source, "key '" + key + "' is missing");
+  if (const auto* o = std::get_if<OpencvOther>(&n)) fail(source, "key '" + key + "' is " + o->what);
+  const auto* m = std::get_if<OpencvMatrix>(&n);
+  if (!m) fail(source, "key '" + key + "' is a number, not an OpenCV matrix (!!opencv-matrix)");
+  const bool shape_ok =
+      (m->rows == rows && m->cols == cols) || (either_orientation && m->rows == cols && m->cols == rows);
+  if (!shape_ok || m->channels != 1 || m->values.empty())
     fail(source, "key '" + key + "' must be a " + std::to_string(rows) + "x" + std::to_string(cols) + " matrix" +
-                     (either_orientation ? " (or its transpose)" : "") + ", found " + std::to_string(r) + "x" +
-                     std::to_string(c) + more);
-  };
-  // OpenCV allocates the declared rows x cols before it reads the data: 3 KB declaring 2^31 columns
-  // asked for 48 GB (found by tests/fuzz, regressions/calibration). The declared shape comes first.
-  if (n.isMap() && !shapeOk(static_cast<int>(n["rows"]), static_cast<int>(n["cols"])))
-    wrongShape(static_cast<int>(n["rows"]), static_cast<int>(n["cols"]), " (declared)");
-  cv::Mat m;
-  try {
-    n >> m;
-  } catch (const cv::Exception& e) {
-    fail(source, "key '" + key + "' is not an OpenCV matrix: " + oneLine(e.err));
-  }
-  if (m.empty() || m.channels() != 1 || !shapeOk(m.rows, m.cols))
-    wrongShape(m.rows, m.cols, m.channels() > 1 ? " with " + std::to_string(m.channels()) + " channels" : "");
-  m.convertTo(m, CV_64F);
-  for (int i = 0; i < m.rows; ++i)
-    for (int j = 0; j < m.cols; ++j)
-      if (!std::isfinite(m.at<double>(i, j))) fail(source, "key '" + key + "' holds a value that is not finite");
-  return m;
+                     (either_orientation ? " (or its transpose)" : "") + ", found " + std::to_string(m->rows) + "x" +
+                     std::to_string(m->cols) +
+                     (m->channels > 1 ? " with " + std::to_string(m->channels) + " channels" : "") +
+                     (m->values.empty() ? " (declared)" : ""));
+  for (const double x : m->values)
+    if (!std::isfinite(x)) fail(source, "key '" + key + "' holds a value that is not finite");
+  return m->values;
 }
 
 /// Focal lengths, centre and skew of an OpenCV camera_matrix [fx s cx; 0 fy cy; 0 0 1].
-void readCameraMatrix(const cv::FileStorage& fs, const std::string& source, double* fx, double* fy, double* cx,
-                      double* cy, double* skew) {
-  const cv::Mat K = readMatrix(fs, "camera_matrix", 3, 3, false, source);
-  if (K.at<double>(1, 0) != 0.0 || K.at<double>(2, 0) != 0.0 || K.at<double>(2, 1) != 0.0 || K.at<double>(2, 2) != 1.0)
+void readCameraMatrix(const OpencvValues& v, const std::string& source, double* fx, double* fy, double* cx, double* cy,
+                      double* skew) {
+  const std::vector<double> K = readMatrix(v, "camera_matrix", 3, 3, false, source);
+  if (K[3] != 0.0 || K[6] != 0.0 || K[7] != 0.0 || K[8] != 1.0)
     fail(source, "key 'camera_matrix' must be [fx s cx; 0 fy cy; 0 0 1]");
-  *fx = K.at<double>(0, 0);
-  *fy = K.at<double>(1, 1);
+  *fx = K[0];
+  *fy = K[4];
   if (!(*fx > 0.0 && *fy > 0.0))
     fail(source, "key 'camera_matrix': fx and fy must be > 0, found " + fmt(*fx) + ", " + fmt(*fy));
-  *skew = K.at<double>(0, 1);
-  *cx = K.at<double>(0, 2);
-  *cy = K.at<double>(1, 2);
+  *skew = K[1];
+  *cx = K[2];
+  *cy = K[5];
 }
 
 /// image_width / image_height when the file has them (both or neither), else 0, 0.
-void readOpencvSize(const cv::FileStorage& fs, const std::string& source, CameraCalibration* c) {
-  const cv::FileNode w = fs["image_width"], h = fs["image_height"];
-  if (w.isNone() && h.isNone()) return;
-  for (const auto& [key, n] : {std::pair<const char*, cv::FileNode>{"image_width", w}, {"image_height", h}}) {
-    if (!n.isInt() || static_cast<int>(n) < 1 || static_cast<int>(n) > 16384)
+void readOpencvSize(const OpencvValues& v, const std::string& source, CameraCalibration* c) {
+  if (!present(v, "image_width") && !present(v, "image_height")) return;
+  int size[2] = {0, 0};
+  for (const int i : {0, 1}) {
+    const char* key = i == 0 ? "image_width" : "image_height";
+    const auto* n = std::get_if<OpencvNumber>(&valueAt(v, key));
+    if (!n || !n->whole || n->value < 1 || n->value > 16384)
       fail(source, std::string("key '") + key +
                        "' must be an integer in [1, 16384] (with both image_width and "
                        "image_height given, or neither)");
+    size[i] = static_cast<int>(n->value);
   }
-  c->width_px = static_cast<int>(w);
-  c->height_px = static_cast<int>(h);
+  c->width_px = size[0];
+  c->height_px = size[1];
 }
 
 /// xi as a number or a 1x1 matrix; nullopt when the file has no xi.
-std::optional<double> readXi(const cv::FileStorage& fs, const std::string& source) {
-  const cv::FileNode n = fs["xi"];
-  if (n.isNone()) return std::nullopt;
-  const double xi =
-      n.isReal() || n.isInt() ? static_cast<double>(n) : readMatrix(fs, "xi", 1, 1, false, source).at<double>(0, 0);
+std::optional<double> readXi(const OpencvValues& v, const std::string& source) {
+  if (!present(v, "xi")) return std::nullopt;
+  const auto* n = std::get_if<OpencvNumber>(&valueAt(v, "xi"));
+  const double xi = n ? n->value : readMatrix(v, "xi", 1, 1, false, source)[0];
   if (!std::isfinite(xi) || xi < 0.0) fail(source, "key 'xi' must be a number >= 0, found " + fmt(xi));
   return xi;
 }
 
-/// parseOpencv's reading of an opened storage (OpenCV's own checks throw cv::Exception).
-CameraCalibration readOpencv(const cv::FileStorage& fs, const std::string& source,
-                             std::optional<CalibrationFormat> want) {
+/// The number of distortion values declared (rows x cols, in 64 bits: a declared 2^31 - 1 x 4
+/// overflowed int, found by tests/fuzz), or -1 when it is not a matrix.
+int64_t declaredDistortionCount(const OpencvValues& v) {
+  const auto* m = std::get_if<OpencvMatrix>(&valueAt(v, "distortion_coefficients"));
+  return m ? m->rows * m->cols : -1;
+}
+
+/// An OpenCV file's values as `want`, or (nullopt) as what it holds: omnidir with xi, fisheye without.
+CameraCalibration readOpencv(const OpencvValues& v, const std::string& source, std::optional<CalibrationFormat> want) {
   CameraCalibration c;
   double fx = 0, fy = 0, cx = 0, cy = 0, skew = 0;
-  readCameraMatrix(fs, source, &fx, &fy, &cx, &cy, &skew);
-  readOpencvSize(fs, source, &c);
-  const std::optional<double> xi = readXi(fs, source);
-  const cv::FileNode dn = fs["distortion_coefficients"];
-  // In 64 bits: the declared shape is not checked yet (readMatrix does that below), and a declared
-  // rows x cols of 2^31 - 1 x 4 overflowed int (found by tests/fuzz, regressions/calibration).
-  const int64_t n_dist =
-      dn.isMap() ? static_cast<int64_t>(static_cast<int>(dn["rows"])) * static_cast<int>(dn["cols"]) : -1;
+  readCameraMatrix(v, source, &fx, &fy, &cx, &cy, &skew);
+  readOpencvSize(v, source, &c);
+  const std::optional<double> xi = readXi(v, source);
+  const int64_t n_dist = declaredDistortionCount(v);
   if (want == CalibrationFormat::kOpencvFisheye && xi)
     fail(source, "key 'xi' found: an OpenCV omnidir (Mei) calibration, not a fisheye one");
   if (!xi && n_dist >= 5)
@@ -166,8 +154,7 @@ CameraCalibration readOpencv(const cv::FileStorage& fs, const std::string& sourc
                      "omnidir (4 values and xi) or fisheye (4 values) one");
   if (want == CalibrationFormat::kOpencvOmnidir && !xi)
     fail(source, "key 'xi' is missing (an omnidir calibration has camera_matrix, distortion_coefficients, xi)");
-  const cv::Mat D = readMatrix(fs, "distortion_coefficients", 1, 4, true, source);
-  const double* d = D.ptr<double>();
+  const std::vector<double> d = readMatrix(v, "distortion_coefficients", 1, 4, true, source);
   if (xi) {
     c.format = CalibrationFormat::kOpencvOmnidir;
     c.intrinsics = MeiIntrinsics{fx, fy, cx, cy, skew, *xi, d[0], d[1], d[2], d[3]};
@@ -180,17 +167,9 @@ CameraCalibration readOpencv(const cv::FileStorage& fs, const std::string& sourc
   return c;
 }
 
-/// An OpenCV file as `want`, or (nullopt) as what it holds: omnidir with xi, fisheye without. OpenCV's
-/// assertions become ConfigErrors too: a top level that is a list, not a map, made fs["camera_matrix"]
-/// throw cv::Exception "isMap()" out of the reader (found by tests/fuzz, regressions/calibration).
 CameraCalibration parseOpencv(const std::string& text, const std::string& source,
                               std::optional<CalibrationFormat> want) {
-  const cv::FileStorage fs = openStorage(text, source);
-  try {
-    return readOpencv(fs, source, want);
-  } catch (const cv::Exception& e) {
-    fail(source, "not a readable OpenCV FileStorage file: " + oneLine(e.err));
-  }
+  return readOpencv(detail::readOpencvValues(text, source, detail::opencvCalibrationKeys()), source, want);
 }
 
 /// The Kalibr camera map: the one named, else the first key of the file whose value is a map.
@@ -431,10 +410,10 @@ std::string formatDescription(CalibrationFormat f) {
 std::optional<CalibrationFormat> detectCalibrationFormat(const std::string& text) {
   if (isOpencvStorage(text)) {
     try {
-      const cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
-      if (!fs.isOpened() || fs["camera_matrix"].isNone()) return std::nullopt;
-      return fs["xi"].isNone() ? CalibrationFormat::kOpencvFisheye : CalibrationFormat::kOpencvOmnidir;
-    } catch (const std::exception&) {  // cv::Exception, and what OpenCV's parser lets out (openStorage)
+      const OpencvValues v = detail::readOpencvValues(text, "", {"camera_matrix", "xi"});
+      if (!present(v, "camera_matrix")) return std::nullopt;
+      return present(v, "xi") ? CalibrationFormat::kOpencvOmnidir : CalibrationFormat::kOpencvFisheye;
+    } catch (const ConfigError&) {
       return std::nullopt;
     }
   }

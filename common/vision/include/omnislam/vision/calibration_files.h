@@ -3,11 +3,11 @@
 // camchain.yaml, OCamCalib calib_results.txt; format detection by content; the camera model built
 // from what was read.
 //
-// Why here (omnislam_vision) and not in the pure core or omnislam_config: OpenCV's YAML 1.0 dialect
-// ("%YAML:1.0", !!opencv-matrix) and its XML are read faithfully only by cv::FileStorage, so the
-// reader needs OpenCV, which the core must not use and the config library (used by OpenCV-free
-// processes such as omnislam-slam) does not link. Kalibr's plain YAML goes through config::Node
-// (yaml-cpp), whose messages name the key and the line.
+// Why here (omnislam_vision) and not in the pure core or omnislam_config: OpenCV's XML is read by
+// cv::FileStorage, so the reader needs OpenCV, which the core must not use and the config library
+// (used by OpenCV-free processes such as omnislam-slam) does not link. OpenCV's YAML dialect
+// ("%YAML:1.0", !!opencv-matrix) and Kalibr's plain YAML go through yaml-cpp and config::Node
+// (src/opencv_storage.h says why not cv::FileStorage: OpenCV 4.6's YAML parser hangs on some files).
 //
 // What is read is kept in neutral structs (the file's own parameters, in its own units: pixels for
 // focal lengths, centres and skew; dimensionless distortion, xi, alpha, beta); makeCalibratedCamera()

@@ -53,13 +53,18 @@ void setCounters(benchmark::State& state, const Graph& g, int iterations) {
       scheduledInterval(g), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
-void BM_Solve(benchmark::State& state) {
+/// The 12 x 8 m loop under 6 x 4 lights (BM_Solve, BM_SolveRevisit), driven `laps` times.
+sim::SimOptions loopOptions(int64_t laps) {
   sim::SimOptions o;
-  o.laps = static_cast<int>(state.range(0));
+  o.laps = static_cast<int>(laps);
   o.lights_x = 6;
   o.lights_y = 4;
   o.max_range_m = 12.0;
-  const auto g = sim::simulateGraph(o);
+  return o;
+}
+
+void BM_Solve(benchmark::State& state) {
+  const auto g = sim::simulateGraph(loopOptions(state.range(0)));
   SolverOptions so;
   so.linear_solver = static_cast<LinearSolver>(state.range(1));
   int iterations = 0;
@@ -204,12 +209,7 @@ void timeSolve(benchmark::State& state, const Graph& g) {
 
 /// Args: laps of the loop (40 keyframes each, and the last); 0 cold, 1 warm.
 void BM_SolveRevisit(benchmark::State& state) {
-  sim::SimOptions o;
-  o.laps = static_cast<int>(state.range(0));
-  o.lights_x = 6;
-  o.lights_y = 4;
-  o.max_range_m = 12.0;
-  const Graph g = sim::simulateGraph(o).graph;
+  const Graph g = sim::simulateGraph(loopOptions(state.range(0))).graph;
   timeSolve(state, state.range(1) ? warmStarted(g, static_cast<int>(scheduledInterval(g))) : g);
 }
 // 3, 12, 25, 49, 122 laps: 121, 481, 1001, 1961, 4881 keyframes (40 per lap and the last)

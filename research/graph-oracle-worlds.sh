@@ -38,11 +38,9 @@ for s in $(seq "$FIRST" $((FIRST + WORLDS - 1))); do
   "$BIN/omnislam-gen-world" --family "$FAMILY" --seed "$s" --rate-hz 1 --out-world "$w.yaml" --out-log "$w.lcm" \
     --out-info "$w.info.json" 2> "$w.gen.txt"
   args=(--config "$ROOT/config/slam/sports_hall.yaml" --seed "$s")
-  for kv in $(python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); k=sys.argv[2] == "1"
-s = "start_pose.x_m=%r start_pose.y_m=%r start_pose.theta_deg=%r filter.perception.max_range_m=%r filter.perception.min_elevation_deg=%r" % (
-  d["start_x_m"], d["start_y_m"], d["start_theta_deg"], d["perception_max_range_m"], d["min_elevation_deg"])
-if k and d["ceiling_max_m"] - d["ceiling_min_m"] > 0.01: sys.exit("graph-oracle-worlds: --known-ceiling: lamps at several heights")
-print(s + (" backend.ceiling=known_height backend.ceiling_height_m=%r" % d["ceiling_min_m"] if k else ""))' "$w.info.json" "$KNOWN"); do
+  known=()
+  [ "$KNOWN" = 1 ] && known=(--known-ceiling)
+  for kv in $(python3 "$ROOT/scripts/world_settings.py" "$w.info.json" ${known[@]+"${known[@]}"}); do
     args+=(--set "$kv")
   done
   if "$BIN/research_oracle_worlds" --in "$w.lcm" --out "$OUT/out-$s.lcm" "${args[@]}" ${SETS[@]+"${SETS[@]}"} \

@@ -78,9 +78,7 @@ run_variant() {
   cp "$info" "$d/world-$s.info.json"
   args=(--config "$ROOT/config/slam/sports_hall.yaml" --seed "$s")
   local kv
-  for kv in $(python3 -c 'import json,sys; d=json.load(open(sys.argv[1]))
-print("start_pose.x_m=%r start_pose.y_m=%r start_pose.theta_deg=%r filter.perception.max_range_m=%r filter.perception.min_elevation_deg=%r" % (
-  d["start_x_m"], d["start_y_m"], d["start_theta_deg"], d["perception_max_range_m"], d["min_elevation_deg"]))' "$info"); do
+  for kv in $(python3 "$ROOT/scripts/world_settings.py" "$info"); do
     args+=(--set "$kv")
   done
   for kv in $SETS_STR; do [ "$kv" = --set ] || args+=(--set "$kv"); done

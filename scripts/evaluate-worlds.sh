@@ -73,19 +73,11 @@ one_world() {
     "$BIN/omnislam-gen-world" --family "$FAMILY" --seed "$s" --rate-hz "$RATE" --out-world "$w.yaml" \
       --out-log "$w.lcm" --out-info "$w.info.json" 2> "$w.gen.txt" || { cp "$w.gen.txt" "$OUT/fail-gen-$s.txt"; return 0; }
   fi
-  local sets
-  sets=$(python3 -c 'import json,sys; d=json.load(open(sys.argv[1]))
-print("start_pose.x_m=%r start_pose.y_m=%r start_pose.theta_deg=%r filter.perception.max_range_m=%r filter.perception.min_elevation_deg=%r" % (
-  d["start_x_m"], d["start_y_m"], d["start_theta_deg"], d["perception_max_range_m"], d["min_elevation_deg"]))' "$w.info.json")
-  if [ "$KNOWN" = 1 ]; then
-    # The ceiling's height as a tape measure gives it: only where every lamp hangs at one height.
-    sets+=" $(python3 -c 'import json,sys; d=json.load(open(sys.argv[1]))
-lo, hi = d["ceiling_min_m"], d["ceiling_max_m"]
-if hi - lo > 0.01: sys.exit("evaluate-worlds: --known-ceiling: the lamps of %s hang between %.2f and %.2f m, not at one height" % (d["world"], lo, hi))
-print("backend.ceiling=known_height backend.ceiling_height_m=%r" % lo)' "$w.info.json" 2> "$OUT/fail-ceiling-$s.txt")" \
-      || { cat "$OUT/fail-ceiling-$s.txt" >&2; [ "$KEEP" = 1 ] || rm -f "$w.lcm"; return 0; }
-    rm -f "$OUT/fail-ceiling-$s.txt"
-  fi
+  local sets known=()
+  [ "$KNOWN" = 1 ] && known=(--known-ceiling)
+  sets=$(python3 "$ROOT/scripts/world_settings.py" "$w.info.json" ${known[@]+"${known[@]}"} 2> "$OUT/fail-settings-$s.txt") \
+    || { cat "$OUT/fail-settings-$s.txt" >&2; [ "$KEEP" = 1 ] || rm -f "$w.lcm"; return 0; }
+  rm -f "$OUT/fail-settings-$s.txt"
   local args=() kv
   for kv in $sets; do args+=(--set "$kv"); done
   for kv in $SETS_STR; do [ "$kv" = --set ] || args+=(--set "$kv"); done

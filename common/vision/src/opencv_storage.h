@@ -63,7 +63,6 @@ const std::vector<std::string>& opencvCalibrationKeys();
 /// Reads `keys` from an OpenCV FileStorage file's text (YAML or XML, told by its first line).
 /// Throws config::ConfigError "'source': not a readable OpenCV FileStorage file: why" when the file
 /// does not parse or its top level is not a map.
-OpencvValues readOpencvValues(const std::string& text, const std::string& source,
-                              const std::vector<std::string>& keys);
+OpencvValues readOpencvValues(const std::string& text, const std::string& source, const std::vector<std::string>& keys);
 
 }  // namespace omnislam::vision::detail

@@ -141,6 +141,36 @@ double correctedPairCost(const Landmark& L, const Measurement& m, const MotionPr
   return 0.5 * (static_cast<double>(r.size()) * kLog2Pi + log_det_Qjl + r.dot(Qjl_inv * r));
 }
 
+// Alg. 2 lines 6-11 with line 10 to first order (LinearisedPairPrediction): zhat = zbar + H_x dmu,
+// so r = nu - H_x Sigma_x H_x^T Q_jl^-1 nu = Q_jl S^-1 nu with S = H_x R H_x^T + Q_jl (Woodbury on
+// line 7), and r^T Q_jl^-1 r = y^T Q_jl y with y = S^-1 nu. No 3x3 inverse, no h again: one log.
+double linearisedPointPairCost(const Measurement& m, const MotionPrediction& pred, const LandmarkPrediction& lp) {
+  const PointPair p(m, lp);
+  const double qa = p.Qjl(0, 0), qb = 0.5 * (p.Qjl(0, 1) + p.Qjl(1, 0)), qd = p.Qjl(1, 1);
+  const double det_Qjl = qa * qd - qb * qb;
+  if (!(qa > 0.0) || !(det_Qjl > 0.0) || !std::isfinite(det_Qjl)) return kInf;
+  const Eigen::Matrix2d S = p.Hx * pred.R * p.Hx.transpose() + p.Qjl;
+  const double sa = S(0, 0), sb = 0.5 * (S(0, 1) + S(1, 0)), sd = S(1, 1);
+  const double det_S = sa * sd - sb * sb;
+  if (!(det_S > 0.0) || !std::isfinite(det_S)) return kInf;
+  const Eigen::Vector2d y((sd * p.nu(0) - sb * p.nu(1)) / det_S, (sa * p.nu(1) - sb * p.nu(0)) / det_S);  // S^-1 nu
+  const double m2 = qa * y(0) * y(0) + 2.0 * qb * y(0) * y(1) + qd * y(1) * y(1);                         // y^T Q_jl y
+  return 0.5 * (2.0 * kLog2Pi + std::log(det_Qjl) + m2);
+}
+
+// The same for an azimuth-only measurement (a vertical line): scalars.
+double linearisedPairCost(const Landmark&, const Measurement& m, const MotionPrediction& pred,
+                          const LandmarkPrediction& lp) {
+  if (m.kind == LandmarkKind::kPoint3D) return linearisedPointPairCost(m, pred, lp);
+  const double q = m.Q(0, 0) + lp.HmSHm(0, 0);
+  if (!(q > 0.0) || !std::isfinite(q)) return kInf;
+  const Eigen::RowVector3d Hx = lp.Hx.row(0);
+  const double s = Hx * pred.R * Hx.transpose() + q;
+  if (!(s > 0.0) || !std::isfinite(s)) return kInf;
+  const double y = wrapAngle(m.z(0) - lp.zbar(0)) / s;
+  return 0.5 * (kLog2Pi + std::log(q) + y * q * y);
+}
+
 // Deviation: -log N(z; zbar, H_x R H_x^T + Q_jl), which charges a pairing for the pose correction
 // it needs; Alg. 2 scores it after the correction.
 double predictivePairCost(const Landmark&, const Measurement& m, const MotionPrediction& pred,
@@ -292,6 +322,11 @@ Eigen::MatrixXd scorePairsCorrected(const std::vector<LandmarkMap::Ref>& visible
   return scorePairsAtPrediction(visible, Z, pred, correctedPairCost);
 }
 
+Eigen::MatrixXd scorePairsLinearised(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
+                                     const MotionPrediction& pred) {
+  return scorePairsAtPrediction(visible, Z, pred, linearisedPairCost);
+}
+
 Eigen::MatrixXd scorePairsPredictive(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
                                      const MotionPrediction& pred) {
   return scorePairsAtPrediction(visible, Z, pred, predictivePairCost);
@@ -301,6 +336,10 @@ Eigen::MatrixXd scorePairs(const FastSlam2& variant, const std::vector<LandmarkM
                            const std::vector<Measurement>& Z, const MotionPrediction& pred) {
   if (std::holds_alternative<PredictivePairScore>(variant.pair_score)) {
     return scorePairsPredictive(visible, Z, pred);
+  }
+  const auto& corrected = std::get<CorrectedPairScore>(variant.pair_score);
+  if (std::holds_alternative<LinearisedPairPrediction>(corrected.prediction)) {
+    return scorePairsLinearised(visible, Z, pred);
   }
   return scorePairsCorrected(visible, Z, pred);
 }

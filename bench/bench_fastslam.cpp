@@ -9,8 +9,10 @@
 // (100 particles x 256 landmarks <= 1 ms per step; 1000 x 4096 >= 30 steps/s on 2 cores): the 1- and
 // 2-thread filters interleaved on the same frames, medians of wall time per step, their ratio, the
 // process CPU time per step and the load average, a PASS / FAIL line each, and whether the two filters
-// ended with the same saved state. OMNISLAM_BENCH_ROUNDS (default 20) rounds; OMNISLAM_BENCH_NO_TARGETS=1
-// skips them.
+// ended with the same saved state; each for three pair scores of the association (the paper's with
+// the exact prediction, the default; with the linearised one, filter.association_linearised; the
+// predictive score, filter.association_predictive), the six filters interleaved. OMNISLAM_BENCH_ROUNDS (default
+// 20) rounds; OMNISLAM_BENCH_NO_TARGETS=1 skips them.
 #include <benchmark/benchmark.h>
 #include <time.h>
 
@@ -25,6 +27,7 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "omnislam/core/slam/candidate.h"
@@ -185,6 +188,13 @@ void BM_FilterStep(benchmark::State& state, bool deep_copy) {
   else runSteps<FastSlam>(state, FastSlamOptions{});
 }
 
+// The step with the corrected pair score's linearised prediction (filter.association_linearised).
+void BM_FilterStepLinearised(benchmark::State& state) {
+  FastSlamOptions o;
+  std::get<FastSlam2Proposal>(o.proposal).pair_score = stages::CorrectedPairScore{stages::LinearisedPairPrediction{}};
+  runSteps<FastSlam>(state, o);
+}
+
 // FastSLAM 1.0 with each map-level association method.
 void BM_FilterStepFastSlam1(benchmark::State& state, AssociationMethod method) {
   FastSlamOptions o;
@@ -246,6 +256,7 @@ BENCHMARK(BM_FilterStepThreads)
 
 BENCHMARK_CAPTURE(BM_FilterStep, cow, false)->Apply(stepArgs);
 BENCHMARK_CAPTURE(BM_FilterStep, deep_copy, true)->Apply(stepArgs);
+BENCHMARK(BM_FilterStepLinearised)->Apply(stepArgs);
 BENCHMARK(BM_FlatVectorResampleCopy)->Apply(stepArgs);
 
 void fastSlam1Args(benchmark::internal::Benchmark* b) {
@@ -404,13 +415,15 @@ std::string loadAverage() {
 // One filter of M particles on the map of N landmarks stepping the lap's frames on `pool` (none:
 // its caller's thread); wall and process CPU ms per step of each batch.
 struct TargetRun {
-  TargetRun(int m, int n, ParallelFor* pool) : w(world(n)), f(options(m), 1), pool(pool) {
+  TargetRun(int m, int n, const stages::PairScore& score, ParallelFor* pool)
+      : w(world(n)), f(options(m, score), 1), pool(pool) {
     f.initialise(w.start, w.prior);
   }
-  static FastSlamOptions options(int m) {
+  static FastSlamOptions options(int m, const stages::PairScore& score) {
     FastSlamOptions o;
     o.num_particles = m;
     o.perception.max_range_m = kRange_m;
+    std::get<FastSlam2Proposal>(o.proposal).pair_score = score;
     return o;
   }
   void batch(int steps) {
@@ -432,26 +445,44 @@ struct TargetRun {
   std::vector<double> wall_ms, cpu_ms;
 };
 
-// The 1-thread and the 2-thread filter interleaved (the order alternating from round to round), so
-// that load from other work on the shared machine hits both alike; the 2-thread one is judged.
-void printTarget(int m, int n, double target_ms, int rounds, int steps) {
-  runtime::ThreadPool two(2);
-  TargetRun one_thread(m, n, nullptr), two_threads(m, n, &two);
-  one_thread.batch(1);  // untimed warm-up of each
-  two_threads.batch(1);
-  one_thread.wall_ms.clear(), one_thread.cpu_ms.clear(), two_threads.wall_ms.clear(), two_threads.cpu_ms.clear();
-  for (int r = 0; r < rounds; ++r) {
-    TargetRun& a = r % 2 == 0 ? one_thread : two_threads;
-    TargetRun& b = r % 2 == 0 ? two_threads : one_thread;
-    a.batch(steps);
-    b.batch(steps);
-  }
+// One pair score's line: the 1- and the 2-thread filter's medians; the 2-thread one is judged.
+void printTargetLine(const char* pair_cost, const TargetRun& one_thread, const TargetRun& two_threads, double target_ms,
+                     double exact_ms) {
   const double t1 = median(one_thread.wall_ms), t2 = median(two_threads.wall_ms);
   std::printf(
-      "  M = %4d, N = %4d: 1 thread %7.3f ms/step (CPU %7.3f), 2 threads %7.3f ms/step (CPU %7.3f) = %4.2fx "
-      "the 1-thread step, %6.1f steps/s (target <= %.3g ms/step): %s; same state after both: %s\n",
-      m, n, t1, median(one_thread.cpu_ms), t2, median(two_threads.cpu_ms), t2 / t1, 1e3 / t2, target_ms,
-      t2 <= target_ms ? "PASS" : "FAIL", one_thread.state() == two_threads.state() ? "yes" : "NO");
+      "  M = %4d, N = %4d, %-10s: 1 thread %7.3f ms/step (CPU %7.3f), 2 threads %7.3f ms/step (CPU %7.3f) = %4.2fx "
+      "the 1-thread step, %6.1f steps/s (target <= %.3g ms/step): %s; same state after both: %s; 1 thread = %4.2fx "
+      "exact's\n",
+      one_thread.f.options().num_particles, static_cast<int>(one_thread.w.prior.size()), pair_cost, t1,
+      median(one_thread.cpu_ms), t2, median(two_threads.cpu_ms), t2 / t1, 1e3 / t2, target_ms,
+      t2 <= target_ms ? "PASS" : "FAIL", one_thread.state() == two_threads.state() ? "yes" : "NO", t1 / exact_ms);
+}
+
+// The 1-thread and the 2-thread filter of each pair score interleaved (the order rotating from round
+// to round), so that load from other work on the shared machine hits all alike: the paper's score
+// with the exact prediction (the default) and the linearised one (filter.association_linearised),
+// and the predictive score (filter.association_predictive, config/slam/sports_hall.yaml's).
+void printTarget(int m, int n, double target_ms, int rounds, int steps) {
+  runtime::ThreadPool two(2);
+  const std::vector<std::pair<const char*, stages::PairScore>> scores{
+      {"exact", stages::CorrectedPairScore{stages::ExactPairPrediction{}}},
+      {"linearised", stages::CorrectedPairScore{stages::LinearisedPairPrediction{}}},
+      {"predictive", stages::PredictivePairScore{}}};
+  std::vector<std::unique_ptr<TargetRun>> runs;  // per score: 1 thread, 2 threads
+  for (const auto& s : scores) {
+    runs.push_back(std::make_unique<TargetRun>(m, n, s.second, nullptr));
+    runs.push_back(std::make_unique<TargetRun>(m, n, s.second, &two));
+  }
+  for (auto& r : runs) {
+    r->batch(1);  // untimed warm-up of each
+    r->wall_ms.clear(), r->cpu_ms.clear();
+  }
+  for (int r = 0; r < rounds; ++r) {
+    for (std::size_t i = 0; i < runs.size(); ++i) runs[(i + static_cast<std::size_t>(r)) % runs.size()]->batch(steps);
+  }
+  const double exact_ms = median(runs[0]->wall_ms);
+  for (std::size_t i = 0; i < scores.size(); ++i)
+    printTargetLine(scores[i].first, *runs[2 * i], *runs[2 * i + 1], target_ms, exact_ms);
 }
 
 void printTargets() {

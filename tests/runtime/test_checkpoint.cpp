@@ -4,9 +4,11 @@
 // the file are checked; the already-processed rule and the schedule.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <random>
+#include <string>
 #include <variant>
 
 #include "omnislam/runtime/checkpoint.h"
@@ -198,6 +200,40 @@ TEST(Checkpoint, ResumesWithAnotherThreadCount) {
   }
   ASSERT_FALSE(outputs[0].empty());
   EXPECT_TRUE(outputs[0] == outputs[1]) << "the 2-thread resume published other messages";
+}
+
+// filter.association_linearised changes results, so a checkpoint must match it; at its default
+// (false, the behaviour before the key existed) the fingerprint leaves it out, so checkpoints
+// written before it existed still load.
+TEST(Checkpoint, LinearisedPairCostIsInTheFingerprintOnlyWhenOn) {
+  const auto msgs = stream();
+  const SlamProcessOptions exact = options();
+  SlamProcessOptions linearised = exact;
+  std::get<slam::FastSlam2Proposal>(linearised.filter.proposal).pair_score =
+      slam::stages::CorrectedPairScore{slam::stages::LinearisedPairPrediction{}};
+  const auto fileOf = [&](const SlamProcessOptions& o) {
+    SlamDriver d(o);
+    InputClock clock(o.pairing.restart_jump_us);
+    for (std::size_t i = 0; i < 200; ++i) feedDriver(d, msgs[i]);
+    return encodeCheckpoint(o, d, clock, ReplayPosition{});
+  };
+  const auto holds = [](const std::vector<uint8_t>& bytes, const std::string& text) {
+    return std::search(bytes.begin(), bytes.end(), text.begin(), text.end()) != bytes.end();
+  };
+  const auto exact_file = fileOf(exact), linearised_file = fileOf(linearised);
+  EXPECT_FALSE(holds(exact_file, "association_linearised"));
+  EXPECT_TRUE(holds(linearised_file, " association_linearised=true"));
+  SlamDriver resumed(exact);
+  InputClock c(exact.pairing.restart_jump_us);
+  try {
+    decodeCheckpoint(linearised_file, exact, resumed, c);
+    ADD_FAILURE() << "a linearised run's checkpoint resumed with the exact pair cost";
+  } catch (const StateFormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("association_linearised=true"), std::string::npos) << e.what();
+  }
+  SlamDriver again(linearised);
+  InputClock c2(linearised.pairing.restart_jump_us);
+  EXPECT_NO_THROW(decodeCheckpoint(linearised_file, linearised, again, c2));
 }
 
 TEST(Checkpoint, MessagesAtOrBeforeTheCheckpointAreAlreadyProcessed) {

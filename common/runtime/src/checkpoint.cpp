@@ -103,9 +103,11 @@ auto driverCounters(S& s) {  // S = DriverStats or const DriverStats; the pairin
       &s.localisation_fixes};
 }
 
-/// describe() without the lines of the map files (paths may differ between two starts of one run)
-/// and without filter.threads (it changes no result: a checkpoint resumes with any thread count, and
-/// those written before the key existed still load).
+/// describe() without the lines of the map files (paths may differ between two starts of one run),
+/// without filter.threads (it changes no result: a checkpoint resumes with any thread count, and
+/// those written before the key existed still load) and without filter.association_linearised at
+/// its default, false (the behaviour before the key existed: those checkpoints still load; true
+/// stays in, as it changes the results).
 std::string fingerprint(const SlamProcessOptions& o) {
   std::istringstream in(describe(o));
   std::string line, out;
@@ -115,6 +117,8 @@ std::string fingerprint(const SlamProcessOptions& o) {
       const std::string key = " threads=";
       if (const std::size_t at = line.find(key); at != std::string::npos)
         line.erase(at, line.find_first_not_of("0123456789", at + key.size()) - at);
+      const std::string exact = " association_linearised=false";
+      if (const std::size_t at = line.find(exact); at != std::string::npos) line.erase(at, exact.size());
     }
     out += line + "\n";
   }

@@ -77,6 +77,7 @@ struct LandmarkPrediction {
   MeasVec zbar;
   MeasJac Hx, Hm;
   MeasMat HmSHm;
+  Eigen::Matrix2d HxRHx;  ///< H_x R_t H_x^T (top-left 1x1 for a line): only for the linearised cost
 };
 
 // smallSpdInverse of a 2x2 matrix in fixed-size types (the same operations).
@@ -141,6 +142,43 @@ double correctedPairCost(const Landmark& L, const Measurement& m, const MotionPr
   return 0.5 * (static_cast<double>(r.size()) * kLog2Pi + log_det_Qjl + r.dot(Qjl_inv * r));
 }
 
+// Alg. 2 lines 6-11 with line 10 to first order (LinearisedPairPrediction): zhat = zbar + H_x dmu,
+// so r = nu - H_x Sigma_x H_x^T Q_jl^-1 nu = Q_jl S^-1 nu with S = H_x R H_x^T + Q_jl (Woodbury on
+// line 7), and r^T Q_jl^-1 r = y^T Q_jl y with y = S^-1 nu. No 3x3 inverse, no h again: one log.
+// H_x R H_x^T is the landmark's (lp.HxRHx, once per landmark).
+double linearisedPointPairCost(const Measurement& m, const LandmarkPrediction& lp) {
+  const Eigen::Matrix2d Qjl = m.Q + lp.HmSHm;
+  const double qa = Qjl(0, 0), qb = 0.5 * (Qjl(0, 1) + Qjl(1, 0)), qd = Qjl(1, 1);
+  const double det_Qjl = qa * qd - qb * qb;
+  if (!(qa > 0.0) || !(det_Qjl > 0.0) || !std::isfinite(det_Qjl)) return kInf;
+  const double sa = lp.HxRHx(0, 0) + qa, sb = 0.5 * (lp.HxRHx(0, 1) + lp.HxRHx(1, 0)) + qb, sd = lp.HxRHx(1, 1) + qd;
+  const double det_S = sa * sd - sb * sb;
+  if (!(det_S > 0.0) || !std::isfinite(det_S)) return kInf;
+  const double nu0 = wrapAngle(m.z(0) - lp.zbar(0)), nu1 = wrapAngle(m.z(1) - lp.zbar(1));
+  const double y0 = (sd * nu0 - sb * nu1) / det_S, y1 = (sa * nu1 - sb * nu0) / det_S;  // S^-1 nu
+  const double m2 = qa * y0 * y0 + 2.0 * qb * y0 * y1 + qd * y1 * y1;                   // y^T Q_jl y
+  return 0.5 * (2.0 * kLog2Pi + std::log(det_Qjl) + m2);
+}
+
+// The same for an azimuth-only measurement (a vertical line): scalars.
+double linearisedPairCost(const Landmark&, const Measurement& m, const MotionPrediction&,
+                          const LandmarkPrediction& lp) {
+  if (m.kind == LandmarkKind::kPoint3D) return linearisedPointPairCost(m, lp);
+  const double q = m.Q(0, 0) + lp.HmSHm(0, 0);
+  if (!(q > 0.0) || !std::isfinite(q)) return kInf;
+  const double s = lp.HxRHx(0, 0) + q;
+  if (!(s > 0.0) || !std::isfinite(s)) return kInf;
+  const double y = wrapAngle(m.z(0) - lp.zbar(0)) / s;
+  return 0.5 * (kLog2Pi + std::log(q) + y * q * y);
+}
+
+// H_x R_t H_x^T of a landmark predicted at xhat, in fixed-size types (a line's 1x3 H_x padded).
+Eigen::Matrix2d motionTermOf(const MeasJac& Hx, const Eigen::Matrix3d& R) {
+  Eigen::Matrix<double, 2, 3> H = Eigen::Matrix<double, 2, 3>::Zero();
+  H.topRows(Hx.rows()) = Hx;
+  return H * R * H.transpose();
+}
+
 // Deviation: -log N(z; zbar, H_x R H_x^T + Q_jl), which charges a pairing for the pose correction
 // it needs; Alg. 2 scores it after the correction.
 double predictivePairCost(const Landmark&, const Measurement& m, const MotionPrediction& pred,
@@ -162,9 +200,10 @@ double predictivePairCost(const Landmark&, const Measurement& m, const MotionPre
   return 0.5 * (static_cast<double>(nu.size()) * kLog2Pi + log_det_S + nu.dot(S_inv * nu));
 }
 
-// Alg. 2 loop of FastSLAM 2.0: zbar, H_x, H_m once per landmark and camera (lines 2-4), then the
-// pair cost (a function of the above) per compatible measurement.
-template <class PairCost>
+// Alg. 2 loop of FastSLAM 2.0: zbar, H_x, H_m once per landmark and camera (lines 2-4), with
+// kMotionTerm also H_x R_t H_x^T, then the pair cost (a function of the above) per compatible
+// measurement.
+template <bool kMotionTerm = false, class PairCost>
 Eigen::MatrixXd scorePairsAtPrediction(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
                                        const MotionPrediction& pred, PairCost pair_cost) {
   const int nz = static_cast<int>(Z.size()), nv = static_cast<int>(visible.size());
@@ -184,6 +223,7 @@ Eigen::MatrixXd scorePairsAtPrediction(const std::vector<LandmarkMap::Ref>& visi
         if (predicted) {
           lp.zbar = *zbar;
           lp.HmSHm = lp.Hm * L.cov_LinW_m2 * lp.Hm.transpose();
+          if constexpr (kMotionTerm) lp.HxRHx = motionTermOf(lp.Hx, pred.R);
         }
         cached_cam = &m.p_CinR_m;
       }
@@ -292,6 +332,11 @@ Eigen::MatrixXd scorePairsCorrected(const std::vector<LandmarkMap::Ref>& visible
   return scorePairsAtPrediction(visible, Z, pred, correctedPairCost);
 }
 
+Eigen::MatrixXd scorePairsLinearised(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
+                                     const MotionPrediction& pred) {
+  return scorePairsAtPrediction<true>(visible, Z, pred, linearisedPairCost);
+}
+
 Eigen::MatrixXd scorePairsPredictive(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
                                      const MotionPrediction& pred) {
   return scorePairsAtPrediction(visible, Z, pred, predictivePairCost);
@@ -301,6 +346,10 @@ Eigen::MatrixXd scorePairs(const FastSlam2& variant, const std::vector<LandmarkM
                            const std::vector<Measurement>& Z, const MotionPrediction& pred) {
   if (std::holds_alternative<PredictivePairScore>(variant.pair_score)) {
     return scorePairsPredictive(visible, Z, pred);
+  }
+  const auto& corrected = std::get<CorrectedPairScore>(variant.pair_score);
+  if (std::holds_alternative<LinearisedPairPrediction>(corrected.prediction)) {
+    return scorePairsLinearised(visible, Z, pred);
   }
   return scorePairsCorrected(visible, Z, pred);
 }

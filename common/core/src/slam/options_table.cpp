@@ -38,9 +38,28 @@ bool predictivePairScore(const F& o) {
   return fastSlam2Choice<stages::PredictivePairScore>(o, &FastSlam2Proposal::pair_score);
 }
 const char* setPredictivePairScore(F& o, bool on) {
+  auto* p = std::get_if<FastSlam2Proposal>(&o.proposal);
+  if (p && !on && std::holds_alternative<stages::CorrectedPairScore>(p->pair_score))
+    return nullptr;  // keeps its prediction
   return setFastSlam2Choice<stages::PredictivePairScore, stages::CorrectedPairScore>(
       o, &FastSlam2Proposal::pair_score, on,
       "needs proposal kFastSlam2 (FastSLAM 1.0 already scores each pairing at its sampled pose)");
+}
+// [association_linearised]: the corrected pair score's prediction (filter_variant.h); true only with
+// the corrected score of FastSLAM 2.0, the only one that predicts at a corrected pose.
+bool linearisedPairPrediction(const F& o) {
+  const auto* p = std::get_if<FastSlam2Proposal>(&o.proposal);
+  const auto* c = p ? std::get_if<stages::CorrectedPairScore>(&p->pair_score) : nullptr;
+  return c && std::holds_alternative<stages::LinearisedPairPrediction>(c->prediction);
+}
+const char* setLinearisedPairPrediction(F& o, bool on) {
+  auto* p = std::get_if<FastSlam2Proposal>(&o.proposal);
+  if (!p) return on ? "needs proposal kFastSlam2 (FastSLAM 1.0 predicts each pairing at its sampled pose)" : nullptr;
+  auto* c = std::get_if<stages::CorrectedPairScore>(&p->pair_score);
+  if (!c) return on ? "needs association_predictive false (the predictive score corrects no pose)" : nullptr;
+  c->prediction = on ? stages::PairPrediction{stages::LinearisedPairPrediction{}}
+                     : stages::PairPrediction{stages::ExactPairPrediction{}};
+  return nullptr;
 }
 bool weightAtPredictedPose(const F& o) {
   return fastSlam2Choice<stages::WeightAtPredictedPose>(o, &FastSlam2Proposal::weight);
@@ -104,6 +123,8 @@ const std::vector<Field<FastSlamOptions>>& fastSlamFields() {
               "deviation: azimuth variance at least var(el) / cos^2(el) (slam-core.md, \"Azimuth near the zenith\")"),
       flagVia<F>("association_predictive", predictivePairScore, setPredictivePairScore, "proposal.pair_score",
               "deviation, FastSLAM 2.0 only: a pairing scored with the pose correction it needs (slam-core.md)"),
+      flagVia<F>("association_linearised", linearisedPairPrediction, setLinearisedPairPrediction, "proposal.pair_score",
+              "deviation (cost), FastSLAM 2.0's corrected score only: the pair's prediction at its corrected pose to first order (slam-core.md, \"Pair cost\")"),
       flagVia<F>("weight_at_predicted_pose", weightAtPredictedPose, setWeightAtPredictedPose, "proposal.weight",
               "deviation, FastSLAM 2.0 only: weigh at the predicted pose (Probabilistic Robotics Table 13.3)"),
       enumeration<F>(

@@ -91,13 +91,17 @@ void predictVisibleLandmarks(const LandmarkMap& map, const Pose2& x_hat, const E
 /// mu_x,jl = xhat + Sigma_x,jl H_x^T Q_jl^-1 (z_l - zbar_j), phi = N(z_l; h(mu_j, mu_x,jl), Q_jl).
 Eigen::MatrixXd scorePairsCorrected(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
                                     const MotionPrediction& pred);
+/// FastSLAM 2.0, deviation (association_linearised): the above with h(mu_j, mu_x,jl) to first order
+/// about xhat, zbar + H_x (mu_x,jl - xhat); the same to first order in the correction, no h again.
+Eigen::MatrixXd scorePairsLinearised(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
+                                     const MotionPrediction& pred);
 /// FastSLAM 2.0, deviation (association_predictive): N(z_l; zbar_j, H_x R_t H_x^T + Q_jl) at xhat_t.
 Eigen::MatrixXd scorePairsPredictive(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
                                      const MotionPrediction& pred);
 /// FastSLAM 1.0: N(z_l; h(mu_j, x_t), Q_l + H_m Sigma_j H_m^T) at the sampled pose x_t.
 Eigen::MatrixXd scorePairsAtPose(const std::vector<LandmarkMap::Ref>& visible, const std::vector<Measurement>& Z,
                                  const Pose2& x_t);
-/// FastSLAM 2.0 with its pair score (one of the two above).
+/// FastSLAM 2.0 with its pair score (corrected, exact or linearised, or predictive: above).
 Eigen::MatrixXd scorePairs(const FastSlam2& variant, const std::vector<LandmarkMap::Ref>& visible,
                            const std::vector<Measurement>& Z, const MotionPrediction& pred);
 

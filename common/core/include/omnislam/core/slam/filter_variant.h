@@ -24,8 +24,19 @@ struct MaximumLikelihoodAssociation {};  ///< greedy in measurement order (the p
 /// What both levels use (the map, then the candidates).
 using DeterministicAssociation = std::variant<HungarianAssociation, MaximumLikelihoodAssociation>;
 
+/// How the corrected pair score predicts the measurement at the pair's corrected pose mu_x,jl.
+struct ExactPairPrediction {};  ///< the paper: zhat = h(mu_j, mu_x,jl), the model evaluated again
+/// Deviation (cost): zhat = zbar + H_x (mu_x,jl - xhat), the model to first order about xhat. Then
+/// z - zhat = Q_jl S^-1 nu with S = H_x R H_x^T + Q_jl (Woodbury), so the score needs neither the
+/// 3x3 inverse of line 7 nor h again: one 2x2 inverse and one log per pair (docs/design/slam-core.md,
+/// "Pair cost").
+struct LinearisedPairPrediction {};
+using PairPrediction = std::variant<ExactPairPrediction, LinearisedPairPrediction>;
+
 /// Alg. 2 pair scores of FastSLAM 2.0.
-struct CorrectedPairScore {};   ///< the paper: N(z; h(mu_j, mu_x,jl), Q_jl) after the pair's own correction
+struct CorrectedPairScore {  ///< the paper: N(z; h(mu_j, mu_x,jl), Q_jl) after the pair's own correction
+  PairPrediction prediction;
+};
 struct PredictivePairScore {};  ///< deviation: N(z; h(mu_j, xhat), H_x R H_x^T + Q_jl)
 using PairScore = std::variant<CorrectedPairScore, PredictivePairScore>;
 
@@ -51,8 +62,9 @@ struct FastSlam2 {
 using FilterVariant = std::variant<FastSlam1, FastSlam2>;
 
 // --- The choices as the options write them (config keys in brackets) ----------------------------
-/// FastSLAM 2.0's own choices: the pair score [association_predictive] and the pose the weight is
-/// evaluated at [weight_at_predicted_pose]; the paper's by default.
+/// FastSLAM 2.0's own choices: the pair score [association_predictive], the corrected score's
+/// prediction [association_linearised] and the pose the weight is evaluated at
+/// [weight_at_predicted_pose]; the paper's by default.
 struct FastSlam2Proposal {
   PairScore pair_score;
   FastSlam2Weighting weight;

@@ -15,6 +15,9 @@ if [ -n "${OMNISLAM_SANITIZE:-}" ]; then
   export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
   # Leaks inside third-party libraries, each named with its reason in the file.
   export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$root/tests/support/lsan.supp:print_suppressions=0}"
+  # ThreadSanitizer (OMNISLAM_SANITIZE=thread): a report fails its test; races inside uninstrumented
+  # GLib (under LCM) are suppressed, each with its reason in the file.
+  export TSAN_OPTIONS="${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1:suppressions=$root/tests/support/tsan.supp}"
 fi
 bash scripts/prepare.sh
 build="${OMNISLAM_BUILD_DIR:-$root/build}"

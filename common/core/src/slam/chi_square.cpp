@@ -9,6 +9,15 @@ namespace omnislam::slam {
 
 namespace {
 
+/// log Gamma(a) without std::lgamma's write of the global `signgam` (C99 / POSIX): the filter's health
+/// monitor and the back end's outlier removal run on two threads, and ThreadSanitizer reported the
+/// two writes as a data race (tests/runtime/test_slam_driver_back_end.cpp). lgamma_r is the same
+/// computation in glibc (lgamma calls it with &signgam), so the results keep their bits.
+double logGamma(double a) {
+  int sign = 0;
+  return ::lgamma_r(a, &sign);
+}
+
 // P(a, x) by its series, for x < a + 1 (Numerical Recipes 6.2.5).
 double lowerGammaSeries(double a, double x) {
   double term = 1.0 / a, sum = term;
@@ -17,7 +26,7 @@ double lowerGammaSeries(double a, double x) {
     sum += term;
     if (std::abs(term) < std::abs(sum) * 1e-16) break;
   }
-  return sum * std::exp(-x + a * std::log(x) - std::lgamma(a));
+  return sum * std::exp(-x + a * std::log(x) - logGamma(a));
 }
 
 // Q(a, x) = 1 - P(a, x) by its continued fraction (modified Lentz), for x >= a + 1 (NR 6.2.7).
@@ -36,7 +45,7 @@ double upperGammaFraction(double a, double x) {
     h *= del;
     if (std::abs(del - 1.0) < 1e-16) break;
   }
-  return std::exp(-x + a * std::log(x) - std::lgamma(a)) * h;
+  return std::exp(-x + a * std::log(x) - logGamma(a)) * h;
 }
 
 }  // namespace
@@ -62,7 +71,7 @@ double chiSquareQuantile(double p, double k) {
     lo = hi;
     hi *= 2.0;
   }
-  const double log_norm = 0.5 * k * std::log(2.0) + std::lgamma(0.5 * k);
+  const double log_norm = 0.5 * k * std::log(2.0) + logGamma(0.5 * k);
   double x = 0.5 * (lo + hi);
   for (int i = 0; i < 200 && hi - lo > 1e-13 * hi; ++i) {
     const double F = chiSquareCdf(x, k);

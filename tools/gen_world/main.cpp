@@ -190,6 +190,8 @@ std::string infoJson(const sim::World& w, const std::optional<sim::GeneratedPara
       << ",\n  \"odometry_scale_error\": " << num(run->odometry_scale_error)
       << ",\n  \"odometry_heading_drift_rad_per_m\": " << num(run->odometry_heading_drift_rad_per_m);
   }
+  if (fo.kidnap)
+    j << ",\n  \"kidnap_at_s\": " << num(fo.kidnap->at_s) << ",\n  \"kidnap_to_s\": " << num(fo.kidnap->to_s);
   j << "\n}\n";
   return j.str();
 }
@@ -232,6 +234,15 @@ int main(int argc, char** argv) {
   cli.add_option("--out-info", out_info, "write the start pose, perception range, lamps seen (JSON) here");
   cli.add_option("--pixel-sigma-px", fo.pixel_sigma_px, "centroid noise, px")->check(app::FiniteRange(1e-6, 100.0));
   cli.add_option("--min-area-px", fo.min_area_px, "smallest detected blob, px")->check(app::FiniteRange(0.0, 1e6));
+  double kidnap_at_s = -1.0, kidnap_to_s = -1.0;
+  auto* kidnap_at = cli.add_option("--kidnap-at-s", kidnap_at_s,
+                                   "a kidnap: at this time of the drive [s] the robot is carried (the odometry does "
+                                   "not see it) ...")
+                        ->check(app::FiniteRange(0.0, 1e6));
+  cli.add_option("--kidnap-to-s", kidnap_to_s, "... to where the drive is at this time [s], and drives on from there")
+      ->check(app::FiniteRange(0.0, 1e6))
+      ->needs(kidnap_at);
+  kidnap_at->needs("--kidnap-to-s");
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
 
   return app::runMain("omnislam-gen-world", [&]() -> int {
@@ -257,6 +268,7 @@ int main(int argc, char** argv) {
     } else {
       world = config::loadWorld(world_in);
     }
+    if (kidnap_at_s >= 0.0) fo.kidnap = sim::FeatureSimOptions::Kidnap{kidnap_at_s, kidnap_to_s};
     std::unique_ptr<sim::SimRun> run;
     if (!out_log.empty() || !out_info.empty())
       run = std::make_unique<sim::SimRun>(sim::simulateFeatures(

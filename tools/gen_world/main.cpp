@@ -211,6 +211,23 @@ sim::GeneratedParams drawWorld(sim::WorldFamily fam, const std::string& family, 
   return g.params;
 }
 
+/// --kidnap-at-s and --kidnap-to-s (both or neither) into fo.kidnap.
+void addKidnapOptions(CLI::App& cli, sim::FeatureSimOptions& fo) {
+  const auto kidnap = [&fo]() -> sim::FeatureSimOptions::Kidnap& {
+    return fo.kidnap ? *fo.kidnap : fo.kidnap.emplace();
+  };
+  auto* at = cli.add_option_function<double>(
+                    "--kidnap-at-s", [kidnap](double s) { kidnap().at_s = s; },
+                    "a kidnap: at this time of the drive [s] the robot is carried (the odometry does not see it) ...")
+                 ->check(app::FiniteRange(0.0, 1e6));
+  cli.add_option_function<double>(
+         "--kidnap-to-s", [kidnap](double s) { kidnap().to_s = s; },
+         "... to where the drive is at this time [s], and drives on from there")
+      ->check(app::FiniteRange(0.0, 1e6))
+      ->needs(at);
+  at->needs("--kidnap-to-s");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -234,17 +251,8 @@ int main(int argc, char** argv) {
   cli.add_option("--out-info", out_info, "write the start pose, perception range, lamps seen (JSON) here");
   cli.add_option("--pixel-sigma-px", fo.pixel_sigma_px, "centroid noise, px")->check(app::FiniteRange(1e-6, 100.0));
   cli.add_option("--min-area-px", fo.min_area_px, "smallest detected blob, px")->check(app::FiniteRange(0.0, 1e6));
-  double kidnap_at_s = -1.0, kidnap_to_s = -1.0;
-  auto* kidnap_at = cli.add_option("--kidnap-at-s", kidnap_at_s,
-                                   "a kidnap: at this time of the drive [s] the robot is carried (the odometry does "
-                                   "not see it) ...")
-                        ->check(app::FiniteRange(0.0, 1e6));
-  cli.add_option("--kidnap-to-s", kidnap_to_s, "... to where the drive is at this time [s], and drives on from there")
-      ->check(app::FiniteRange(0.0, 1e6))
-      ->needs(kidnap_at);
-  kidnap_at->needs("--kidnap-to-s");
+  addKidnapOptions(cli, fo);
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
-
   return app::runMain("omnislam-gen-world", [&]() -> int {
     if (family.empty() == world_in.empty() || (out_world.empty() && out_log.empty() && out_info.empty())) {
       std::cerr << "omnislam-gen-world: give exactly one of --family and --world, and at least one of --out-world, "
@@ -268,7 +276,6 @@ int main(int argc, char** argv) {
     } else {
       world = config::loadWorld(world_in);
     }
-    if (kidnap_at_s >= 0.0) fo.kidnap = sim::FeatureSimOptions::Kidnap{kidnap_at_s, kidnap_to_s};
     std::unique_ptr<sim::SimRun> run;
     if (!out_log.empty() || !out_info.empty())
       run = std::make_unique<sim::SimRun>(sim::simulateFeatures(

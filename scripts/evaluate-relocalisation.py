@@ -11,8 +11,18 @@ GROUND_TRUTH_POSE of its output: localised within 0.3 m / 2 deg after <= 5 m of 
 bar), wrong poses reported as localised (> 1 m or > 5 deg off), travel to the first fix, and the
 SLAM_POSE error after it. Prints a table (Markdown) and writes OUT/relocalisation.json.
 
+With --kidnap (lost and found, issue 56 item 3): instead of the cut run, the second run starts at
+the world's known start pose and is kidnapped once (omnislam-gen-world --kidnap-at-s T --kidnap-to-s
+T2: at a random time T it is carried to where the drive is at a random other time T2, at least 30 s
+of drive away; the odometry does not see it), replayed in localisation mode with lost.policy
+relocalise. Scored: LOST reported after the kidnap (and never before), localised again within 5 m of
+travel after the kidnap at 0.3 m / 2 deg, wrong poses reported as localised, SLAM_MAP unchanged (every
+message the same landmark bytes), the largest SLAM_POSE error after the new fix. Writes
+OUT/kidnap.json.
+
   python3 scripts/evaluate-relocalisation.py [--families halls,irregular] [--worlds 10] [--first-seed 1]
                                              [--window-s 150] [--maps slam,truth] [--jobs 2] [--out DIR]
+                                             [--kidnap]
 
 Needs omnislam-gen-world, omnislam-slam and omnislam-eval (scripts/build.sh, or OMNISLAM_BUILD_DIR). Deterministic:
 the same arguments give the same figures (the cut time comes from a generator seeded by the world's
@@ -131,6 +141,57 @@ def score(out_log):
     return r
 
 
+def score_kidnap(out_log, kidnap_s):
+    """The kidnapped run's figures from its output log (kidnap_s: the kidnap's time of the drive)."""
+    truth, loc, slam, maps = [], [], [], []
+    for _t, channel, data in events(out_log):
+        if channel == b"GROUND_TRUTH_POSE":
+            truth.append(pose_of(data))
+        elif channel == b"SLAM_LOCALISATION":
+            loc.append(localisation_of(data))
+        elif channel == b"SLAM_POSE":
+            slam.append(pose_of(data))
+        elif channel == b"SLAM_MAP":
+            maps.append(data[FINGERPRINT + 24:])  # the landmarks, without utime, seq, input_seq
+    truth.sort()
+    kidnap = truth[0][0] + int(kidnap_s * 1e6)
+    jump = max((math.hypot(b[1] - a[1], b[2] - a[2]), b[0]) for a, b in zip(truth, truth[1:]))
+    cum, travel = 0.0, {}
+    for a, b in zip(truth, truth[1:]):  # the path length from the kidnap on, the jump left out
+        if b[0] > kidnap:
+            cum += math.hypot(b[1] - a[1], b[2] - a[2]) if b[0] != jump[1] else 0.0
+        travel[b[0]] = cum
+    times = [t[0] for t in truth]
+
+    def at(utime):
+        import bisect
+        i = min(max(bisect.bisect_left(times, utime), 0), len(times) - 1)
+        return truth[i], travel.get(truth[i][0], 0.0)
+
+    def err(pose, utime):
+        t, _ = at(utime)
+        return math.hypot(pose[0] - t[1], pose[1] - t[2]), abs(wrap(pose[2] - t[3])) * 180 / math.pi
+
+    r = {"carried_m": jump[0], "lost_before_kidnap": sum(1 for l in loc if l[1] == 3 and l[0] < kidnap),
+         "lost": False, "travel_to_lost_m": None, "fix": False, "travel_to_fix_m": None, "fix_error_m": None,
+         "fix_error_deg": None, "wrong": 0, "losses": sum(1 for l in loc if l[1] == 3),
+         "map_unchanged": bool(maps) and all(m == maps[0] for m in maps)}
+    for utime, state, _nh, best in loc:
+        if state == 3 and utime >= kidnap and not r["lost"]:
+            r.update(lost=True, travel_to_lost_m=at(utime)[1], lost_utime=utime)
+        if state != 2 or best is None:
+            continue
+        e_m, e_deg = err(best, utime)
+        r["wrong"] += e_m > 1.0 or e_deg > 5.0
+        if r["lost"] and not r["fix"]:
+            r.update(fix=True, travel_to_fix_m=at(utime)[1], fix_error_m=e_m, fix_error_deg=e_deg, fix_utime=utime)
+    after = [err(p[1:], p[0])[0] for p in slam if r["fix"] and p[0] > r["fix_utime"]]
+    r["slam_pose_max_error_m"] = max(after) if after else None
+    r["ok"] = bool(r["lost"] and r["fix"] and r["travel_to_fix_m"] <= 5.0 and r["fix_error_m"] <= 0.3
+                   and r["fix_error_deg"] <= 2.0 and r["lost_before_kidnap"] == 0)
+    return r
+
+
 def truth_map(world_yaml, path, seed):
     """A saved map (version 2) of the world's lamps with N(0, 3 cm) on each coordinate."""
     import yaml
@@ -163,9 +224,38 @@ def map_run(base, seed, info, perception):
     return {"map_landmark_mean_err_m": ev.get("landmark_mean_err_m"), "map_ate_rmse_m": ev.get("ate_rmse_m")}
 
 
+def kidnap_world(family, seed, a, out, base, info, perception, mapped):
+    """The kidnapped second run in localisation mode with lost.policy relocalise, in each map."""
+    duration = info["duration_s"]
+    rng = random.Random(seed * 7919 + len(family) + 56)
+    at_s = 30.0 + rng.random() * max(duration - 120.0, 1.0)  # tracked first, and 60 s left after it
+    to_s = at_s
+    while abs(to_s - at_s) < 30.0:
+        to_s = rng.random() * max(duration - 60.0, 1.0)
+    run([os.path.join(BIN, "omnislam-gen-world"), "--world", base + ".world.yaml", "--seed", str(seed + 100000),
+         "--kidnap-at-s", repr(at_s), "--kidnap-to-s", repr(to_s), "--out-log", base + ".kidnap.lcm"],
+        base + ".gen-kidnap.txt")
+    results = []
+    for kind in a.maps.split(","):
+        run([os.path.join(BIN, "omnislam-slam"), "--replay", base + ".kidnap.lcm", "--config", CONFIG, "--seed",
+             str(seed), "--no-progress", "--set", f"start_pose.x_m={info['start_x_m']!r}",
+             "--set", f"start_pose.y_m={info['start_y_m']!r}", "--set", f"start_pose.theta_deg={info['start_theta_deg']!r}",
+             *perception, "--set", "lost.policy=relocalise", "--load-map", base + f".{kind}-map.yaml", "--localise",
+             "--out", base + f".kid-{kind}.lcm"], base + f".kid-{kind}.txt")
+        r = score_kidnap(base + f".kid-{kind}.lcm", at_s)
+        r.update(family=family, seed=seed, map=kind, lamps=info["lamps"], kidnap_at_s=at_s, kidnap_to_s=to_s,
+                 lamps_missing=info.get("lamps_missing"), lamps_extra=info.get("lamps_extra"), **mapped)
+        results.append(r)
+        print(f"evaluate-relocalisation: kidnap {family} {seed} {kind} map: {'ok' if r['ok'] else 'not ok'} "
+              f"(carried {r['carried_m']:.1f} m; lost {r['lost']} after {r['travel_to_lost_m']} m; fix {r['fix']} "
+              f"after {r['travel_to_fix_m']} m, error {r['fix_error_m']} m {r['fix_error_deg']} deg; "
+              f"wrong {r['wrong']}; map unchanged {r['map_unchanged']})", file=sys.stderr)
+    return results
+
+
 def one_world(family, seed, a, out):
     base = os.path.join(out, f"{family}-{seed}")
-    result_path = base + ".json"
+    result_path = base + (".kidnap.json" if a.kidnap else ".json")
     if os.path.exists(result_path):
         with open(result_path) as f:
             return json.load(f)
@@ -177,6 +267,14 @@ def one_world(family, seed, a, out):
                   "--set", f"filter.perception.min_elevation_deg={info['min_elevation_deg']!r}"]
     mapped = map_run(base, seed, info, perception)
     truth_map(base + ".world.yaml", base + ".truth-map.yaml", seed)
+    if a.kidnap:
+        results = kidnap_world(family, seed, a, out, base, info, perception, mapped)
+        for suffix in (".map-run.lcm", ".map-out.lcm", ".run2.lcm", ".kidnap.lcm", ".kid-slam.lcm", ".kid-truth.lcm"):
+            if not a.keep_logs and os.path.exists(base + suffix):
+                os.remove(base + suffix)
+        with open(result_path, "w") as f:
+            json.dump(results, f, indent=1)
+        return results
     # The second run cut to start at a random time: a random place and heading on the drive.
     stamps = [t for t, ch, _ in events(base + ".run2.lcm") if ch == b"OMNI_FEATURES"]
     rng = random.Random(seed * 7919 + len(family))
@@ -229,6 +327,27 @@ def table(results):
     return "\n".join(lines)
 
 
+def kidnap_table(results):
+    lines = ["| map | family | worlds | lost, then localised <= 5 m, 0.3 m / 2 deg | lost reported after the kidnap | "
+             "lost before it | wrong poses reported localised | map unchanged | travel to lost: median / max [m] | "
+             "travel to the new fix: median / p90 / max [m] | SLAM_POSE error after it, max [m] |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for kind, fam in [(k, f) for k in sorted({r["map"] for r in results})
+                      for f in sorted({r["family"] for r in results}) + ["all"]]:
+        rs = [r for r in results if r["map"] == kind and fam in ("all", r["family"])]
+        to_lost = [r["travel_to_lost_m"] for r in rs if r["lost"]]
+        to_fix = [r["travel_to_fix_m"] for r in rs if r["fix"]]
+        post = [r["slam_pose_max_error_m"] for r in rs if r["slam_pose_max_error_m"] is not None]
+        lines.append(f"| {kind} | {fam} | {len(rs)} | {sum(r['ok'] for r in rs)} / {len(rs)} | "
+                     f"{sum(r['lost'] for r in rs)} | {sum(r['lost_before_kidnap'] > 0 for r in rs)} | "
+                     f"{sum(r['wrong'] for r in rs)} (in {sum(r['wrong'] > 0 for r in rs)} worlds) | "
+                     f"{sum(r['map_unchanged'] for r in rs)} / {len(rs)} | "
+                     f"{quantile(to_lost, 0.5):.2f} / {max(to_lost, default=float('nan')):.2f} | "
+                     f"{quantile(to_fix, 0.5):.2f} / {quantile(to_fix, 0.9):.2f} / "
+                     f"{max(to_fix, default=float('nan')):.2f} | {max(post, default=float('nan')):.3f} |")
+    return "\n".join(lines)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--families", default="halls,irregular")
@@ -241,6 +360,8 @@ def main():
                     help="the maps localised in: slam (the first run's saved map), truth (the world's lamps with "
                          "3 cm of noise: the localiser alone, without the map's errors)")
     ap.add_argument("--keep-logs", action="store_true")
+    ap.add_argument("--kidnap", action="store_true",
+                    help="lost and found: the second run starts at the known start and is kidnapped once")
     a = ap.parse_args()
     if a.worlds < 1 or a.jobs < 1 or a.first_seed < 1 or a.window_s <= 0:
         ap.error("--worlds, --jobs, --first-seed and --window-s must be positive")
@@ -262,9 +383,9 @@ def main():
                 failed.append(f"{f} {s}: {e}")
     for line in failed:
         print("evaluate-relocalisation: failed: " + line, file=sys.stderr)
-    with open(os.path.join(out, "relocalisation.json"), "w") as f:
+    with open(os.path.join(out, "kidnap.json" if a.kidnap else "relocalisation.json"), "w") as f:
         json.dump({"results": results, "failed": failed}, f, indent=1)
-    print(table(results))
+    print(kidnap_table(results) if a.kidnap else table(results))
     print(f"\nfiles in {out}; {len(failed)} runs failed", file=sys.stderr)
     return 0 if not failed else 1
 

@@ -162,7 +162,7 @@ TEST(SlamCheckpoint, UnusableCheckpointsStopTheProgramAtStartWithTheReason) {
       {write("truncated", std::vector<uint8_t>(bytes.begin(), bytes.end() - 1000)), "truncated", {}, hallFixture()},
       {write("text", {'h', 'e', 'l', 'l', 'o', '\n'}), "truncated", {}, hallFixture()},
       {write("magic", std::vector<uint8_t>(bytes.size(), 'x')), "wrong magic", {}, hallFixture()},
-      {write("version", version), "format version 7, this program reads version 2", {}, hallFixture()},
+      {write("version", version), "format version 7, this program reads version 3", {}, hallFixture()},
       {write("particles", bytes),
        "written with other options: 'filter: particles=10 ",
        {"--particles", "20"},

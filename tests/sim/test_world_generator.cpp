@@ -240,3 +240,41 @@ TEST(FeatureSim, WindowMissesClutterAndTheSmallestBlob) {
 }
 
 }  // namespace
+
+// A kidnap (FeatureSimOptions::kidnap): the truth jumps at at_s to the drive's pose at to_s and
+// follows the drive from there; the odometry never jumps (it is the drive's motion felt from where the
+// robot was: with the same seed it is the run without a kidnap up to at_s, and after it every step
+// moves it as much as the truth moves); a kidnap outside the drive is refused.
+TEST(FeatureSim, KidnapMovesTheTruthAndNotTheOdometry) {
+  const World w = reread(generateWorld(WorldFamily::kHalls, 3).world);
+  FeatureSimOptions o;
+  o.kidnap = FeatureSimOptions::Kidnap{40.0, 100.0};
+  const SimRun plain = simulateFeatures(w, 5, 6), kidnapped = simulateFeatures(w, 5, 6, o);
+  const Trajectory traj(w.trajectory_options, w.segments);
+  ASSERT_EQ(plain.steps.size(), kidnapped.steps.size());
+  const Pose2 carried = traj.at(40.0).pose.between(traj.at(100.0).pose);
+  ASSERT_GT(std::hypot(carried.x_m, carried.y_m), 1.0) << "the kidnap moves the robot";
+  bool jumped = false;
+  for (std::size_t k = 1; k < kidnapped.steps.size(); ++k) {
+    const SimTruthStep &s = kidnapped.steps[k], &prev = kidnapped.steps[k - 1];
+    if (s.t_s < 40.0) {
+      ASSERT_EQ(s.truth.x_m, plain.steps[k].truth.x_m);
+      ASSERT_EQ(s.odometry.x_m, plain.steps[k].odometry.x_m);
+      continue;
+    }
+    const double t_drive = std::min(s.t_s - 40.0 + 100.0, traj.duration_s());
+    EXPECT_NEAR(s.truth.x_m, traj.at(t_drive).pose.x_m, 1e-9);
+    EXPECT_NEAR(s.truth.y_m, traj.at(t_drive).pose.y_m, 1e-9);
+    const Pose2 truth_step = prev.truth.between(s.truth), odo_step = prev.odometry.between(s.odometry);
+    const double truth_m = std::hypot(truth_step.x_m, truth_step.y_m), odo_m = std::hypot(odo_step.x_m, odo_step.y_m);
+    if (prev.t_s < 40.0) {
+      jumped = truth_m > 1.0;
+    } else {
+      EXPECT_NEAR(truth_m, odo_m, 0.02) << "the odometry moves as the truth, up to its noise";
+    }
+    EXPECT_LT(odo_m, 0.05) << "no jump in the odometry at " << s.t_s << " s";
+  }
+  EXPECT_TRUE(jumped) << "the truth jumps at the kidnap";
+  o.kidnap = FeatureSimOptions::Kidnap{40.0, traj.duration_s() + 1.0};
+  EXPECT_THROW(simulateFeatures(w, 5, 6, o), std::invalid_argument);
+}

@@ -310,6 +310,7 @@ void expectFileReadThroughTheTables(const std::string& file) {
   expectFileKeys(childOf(y, "restart"), "restart.", dir, o.restart, d.restart, restartFields());
   expectFileKeys(childOf(y, "localisation"), "localisation.", dir, o.localisation, d.localisation,
                  slam::options::globalLocalisationFields());
+  expectFileKeys(childOf(y, "lost"), "lost.", dir, o.lost, d.lost, slam::options::lostFields());
   expectFileKeys(childOf(y, "plausibility"), "plausibility.", dir, o.plausibility, d.plausibility,
                  plausibilityFields());
   // The filter's keys given beside its preset override it; the others hold the preset's values.
@@ -381,6 +382,7 @@ TEST(SlamConfigTables, TheEchoPrintsEveryKeyOfEverySection) {
     expectEchoed(echo, "restart", o.restart, restartFields());
     expectEchoed(echo, "plausibility", o.plausibility, plausibilityFields());
     expectEchoed(echo, "localisation", o.localisation, slam::options::globalLocalisationFields());
+    expectEchoed(echo, "lost", o.lost, slam::options::lostFields());
     namespace opt = slam::options;
     expectEchoed(echo, "filter", o.filter, opt::fastSlamFields());
     expectEchoed(echo, "filter.motion", o.filter.motion, opt::motionFields());

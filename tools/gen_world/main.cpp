@@ -190,6 +190,8 @@ std::string infoJson(const sim::World& w, const std::optional<sim::GeneratedPara
       << ",\n  \"odometry_scale_error\": " << num(run->odometry_scale_error)
       << ",\n  \"odometry_heading_drift_rad_per_m\": " << num(run->odometry_heading_drift_rad_per_m);
   }
+  if (fo.kidnap)
+    j << ",\n  \"kidnap_at_s\": " << num(fo.kidnap->at_s) << ",\n  \"kidnap_to_s\": " << num(fo.kidnap->to_s);
   j << "\n}\n";
   return j.str();
 }
@@ -207,6 +209,23 @@ sim::GeneratedParams drawWorld(sim::WorldFamily fam, const std::string& family, 
   if (!out_world.empty()) runtime::writeFileAtomically(out_world, yaml.data(), yaml.size());
   world = config::parseWorld(config::Node::loadString(yaml, "generated world"));
   return g.params;
+}
+
+/// --kidnap-at-s and --kidnap-to-s (both or neither) into fo.kidnap.
+void addKidnapOptions(CLI::App& cli, sim::FeatureSimOptions& fo) {
+  const auto kidnap = [&fo]() -> sim::FeatureSimOptions::Kidnap& {
+    return fo.kidnap ? *fo.kidnap : fo.kidnap.emplace();
+  };
+  auto* at = cli.add_option_function<double>(
+                    "--kidnap-at-s", [kidnap](double s) { kidnap().at_s = s; },
+                    "a kidnap: at this time of the drive [s] the robot is carried (the odometry does not see it) ...")
+                 ->check(app::FiniteRange(0.0, 1e6));
+  cli.add_option_function<double>(
+         "--kidnap-to-s", [kidnap](double s) { kidnap().to_s = s; },
+         "... to where the drive is at this time [s], and drives on from there")
+      ->check(app::FiniteRange(0.0, 1e6))
+      ->needs(at);
+  at->needs("--kidnap-to-s");
 }
 
 }  // namespace
@@ -232,8 +251,8 @@ int main(int argc, char** argv) {
   cli.add_option("--out-info", out_info, "write the start pose, perception range, lamps seen (JSON) here");
   cli.add_option("--pixel-sigma-px", fo.pixel_sigma_px, "centroid noise, px")->check(app::FiniteRange(1e-6, 100.0));
   cli.add_option("--min-area-px", fo.min_area_px, "smallest detected blob, px")->check(app::FiniteRange(0.0, 1e6));
+  addKidnapOptions(cli, fo);
   OMNISLAM_PARSE_FLAGS(cli, argc, argv);
-
   return app::runMain("omnislam-gen-world", [&]() -> int {
     if (family.empty() == world_in.empty() || (out_world.empty() && out_log.empty() && out_info.empty())) {
       std::cerr << "omnislam-gen-world: give exactly one of --family and --world, and at least one of --out-world, "

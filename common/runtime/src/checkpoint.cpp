@@ -95,12 +95,24 @@ auto pairingCounters(S& s) {  // S = PairingStats or const PairingStats
 
 template <class S>
 auto driverCounters(S& s) {  // S = DriverStats or const DriverStats; the pairing's are the pairer's
-  return std::vector<decltype(&s.frames_processed)>{
-      &s.frames_processed,  &s.features_in,        &s.features_skipped_kind,    &s.measurements_rejected,
-      &s.filter_resets,     &s.degenerate_weights, &s.odometry_only_steps,      &s.dropped_behind_prediction,
-      &s.frames_too_large,  &s.implausible,        &s.reinit_last_estimate,     &s.health_uncertain,
-      &s.health_diverged,   &s.health_fallback,    &s.frames_between_keyframes, &s.frames_localising,
-      &s.localisation_fixes};
+  return std::vector<decltype(&s.frames_processed)>{&s.frames_processed,
+                                                    &s.features_in,
+                                                    &s.features_skipped_kind,
+                                                    &s.measurements_rejected,
+                                                    &s.filter_resets,
+                                                    &s.degenerate_weights,
+                                                    &s.odometry_only_steps,
+                                                    &s.dropped_behind_prediction,
+                                                    &s.frames_too_large,
+                                                    &s.implausible,
+                                                    &s.reinit_last_estimate,
+                                                    &s.health_uncertain,
+                                                    &s.health_diverged,
+                                                    &s.health_fallback,
+                                                    &s.frames_between_keyframes,
+                                                    &s.frames_localising,
+                                                    &s.localisation_fixes,
+                                                    &s.lost};
 }
 
 /// describe() without the lines of the map files (paths may differ between two starts of one run),
@@ -234,6 +246,8 @@ void SlamDriver::saveState(ByteWriter& w) const {
   putCounts(w, driverCounters(stats_));
   health_.saveState(w);
   w.i64(health_seq_);
+  w.boolean(lost_.has_value());
+  if (lost_) lost_->saveState(w);
 }
 
 void SlamDriver::loadState(ByteReader& r) {
@@ -253,6 +267,10 @@ void SlamDriver::loadState(ByteReader& r) {
   slam::HealthMonitor health = health_;
   health.loadState(r);
   const int64_t health_seq = r.i64("health seq");
+  std::optional<slam::LostMonitor> lost = lost_;
+  if (r.boolean("lost monitor present") != lost.has_value())
+    throw StateFormatError("lost monitor present or not unlike this run's options and map");
+  if (lost) lost->loadState(r);
   r.expectEnd("checkpoint");  // the driver's state ends a checkpoint
   pairer_ = std::move(pairer);
   filter_ = std::move(filters[0]);
@@ -270,12 +288,8 @@ void SlamDriver::loadState(ByteReader& r) {
   particles_seq_ = v[6];
   associations_seq_ = v[7];
   localisation_seq_ = v[8];
-  // Start unknown: a restored filter tracks; without one the localising starts again (a checkpoint
-  // is written only once a filter has stepped, and the localiser's hypotheses are not in it).
-  if (start_) {
-    if (filter_) start_->resumeTracking();
-    else start_->restart();
-  }
+  lost_ = std::move(lost);
+  restoreStart();
   stats_ = stats;
   health_ = std::move(health);
   health_seq_ = health_seq;
@@ -284,9 +298,20 @@ void SlamDriver::loadState(ByteReader& r) {
   // plausibility check takes its reference from the pairing at every message (checkOdometry), only
   // a jump waiting for confirmation at the checkpoint starts its count again.
   restart_from_.reset();
-  if (!filter_ && ended_filter_)
+  if (!filter_ && ended_filter_ && !(lost_ && lost_->lost()))
     restart_from_ = Estimate{ended_filter_->meanPose(), ended_filter_->poseCovariance(), ended_filter_->bestMap()};
   odometry_check_.reset();
+}
+
+void SlamDriver::restoreStart() {
+  // Start unknown: a restored filter tracks; without one the localising starts again (a checkpoint
+  // is written only once a filter has stepped, and the localiser's hypotheses are not in it). Lost
+  // (lost.policy relocalise): localising again in the kept map. Else the configured start.
+  if (!start_) return;
+  if (filter_) start_->resumeTracking();
+  else if (lost_ && lost_->lost()) start_->restart(startMap());
+  else if (opt_.start_source == SlamProcessOptions::StartSource::kUnknown) start_->restart();
+  else start_->resumeTracking();
 }
 
 // ---- the file -------------------------------------------------------------------------------

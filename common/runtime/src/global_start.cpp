@@ -15,7 +15,8 @@ std::vector<slam::Landmark> withPoints(std::vector<slam::Landmark> map) {
                                [](const slam::Landmark& l) { return l.kind == slam::LandmarkKind::kPoint3D; });
   if (!any)
     throw std::invalid_argument(
-        "start_pose.source unknown: the loaded map has no point landmarks (ceiling lights) to localise against");
+        "global localisation (start_pose.source unknown, lost.policy relocalise): the loaded map has no point "
+        "landmarks (ceiling lights) to localise against");
   return map;
 }
 
@@ -32,6 +33,11 @@ void GlobalStart::restart() {
   has_prev_ = false;
   status_ = slam::LocalisationStatus{};
   phase_ = Phase::kLocalising;
+}
+
+void GlobalStart::restart(std::vector<slam::Landmark> map) {
+  map_ = withPoints(std::move(map));
+  restart();
 }
 
 std::optional<GlobalStart::Fix> GlobalStart::onFrame(const Pose2& odom_O,

@@ -144,6 +144,7 @@ SlamProcessOptions parseSlamOptions(const Node& root) {
   parseFields(root, o, topLevelFields());
   if (auto s = root.optChild("start_pose")) parseStartPose(*s, o);
   if (auto l = root.optChild("localisation")) parseLocalisation(*l, o.localisation);
+  if (auto l = root.optChild("lost")) parseSection(*l, o.lost, slam::options::lostFields());
   if (auto f = root.optChild("features")) parseFeatures(*f, o);
   if (auto out = root.optChild("output")) parseSection(*out, o, outputFields());
   if (auto m = root.optChild("map")) parseMap(*m, o);

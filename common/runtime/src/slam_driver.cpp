@@ -101,6 +101,14 @@ SlamDriver::SlamDriver(const SlamProcessOptions& options, std::vector<slam::Land
       throw std::invalid_argument("SLAM options: start_pose.source unknown needs a non-empty loaded map");
     start_ = std::make_unique<GlobalStart>(opt_.localisation, opt_.filter, prior_map_);
   }
+  if (opt_.lost.policy == slam::LostPolicy::kRelocalise && !prior_map_.empty()) {
+    lost_.emplace(opt_.lost, opt_.localisation, opt_.filter.perception.detection_probability);
+    if (opt_.filter.update_map) lost_->keepMap(prior_map_);
+    if (!start_) {  // the configured start first; the localiser only once lost
+      start_ = std::make_unique<GlobalStart>(opt_.localisation, opt_.filter, prior_map_);
+      start_->resumeTracking();
+    }
+  }
 }
 
 const DriverStats& SlamDriver::stats() const {
@@ -228,8 +236,10 @@ void SlamDriver::apply(std::vector<PairEvent>& events, DriverResult& r) {
         last_step_utime_ = last_frame_utime_ = odom_utime_at_last_frame_ = 0;
         // A new odometry frame: global localisation starts again unless the filter goes on from its
         // last estimate (restart.reinit_from).
-        if (start_ && !(restart_from_ && opt_.restart.reinit_from == RestartOptions::ReinitFrom::kLastEstimate))
-          start_->restart();
+        if (start_ && !(restart_from_ && opt_.restart.reinit_from == RestartOptions::ReinitFrom::kLastEstimate)) {
+          if (opt_.start_source == SlamProcessOptions::StartSource::kUnknown) start_->restart();
+          else start_->resumeTracking();  // the configured start again (lost.policy relocalise)
+        }
         break;
       case PairEvent::Kind::kDropped: r.dropped.push_back(ev.reason); break;
       case PairEvent::Kind::kPaired:
@@ -269,8 +279,8 @@ void SlamDriver::ensureFilter(const Pose2& odom_O, DriverResult& r, const Global
   // Built aside and kept only once initialised: a filter that failed to start must not stay.
   auto filter = std::make_unique<slam::FastSlam>(opt_.filter, opt_.seed + static_cast<std::uint64_t>(epoch_));
   const RestartOptions& ro = opt_.restart;
-  if (fix) {  // start_pose.source unknown: the particles drawn around the localiser's pose
-    filter->initialise(fix->pose_W, prior_map_, fix->cov);
+  if (fix) {  // start_pose.source unknown, or lost: the particles drawn around the localiser's pose
+    filter->initialise(fix->pose_W, startMap(), fix->cov);
     r.notes.push_back("localised after " + std::to_string(start_->status().frames) + " frames at (" +
                       num(fix->pose_W.x_m) + " m, " + num(fix->pose_W.y_m) + " m, " + num(fix->pose_W.theta_rad) +
                       " rad), sd " + num(std::sqrt(fix->cov(0, 0))) + " m, " + num(std::sqrt(fix->cov(1, 1))) + " m, " +
@@ -296,6 +306,7 @@ void SlamDriver::ensureFilter(const Pose2& odom_O, DriverResult& r, const Global
   filter_ = std::move(filter);
   odom_prev_O_ = odom_O;
   health_.reset();  // the new filter's start is the health's start
+  if (lost_) lost_->found();
   startBackEnd(filter_->meanPose(), filter_->poseCovariance());
 }
 
@@ -366,6 +377,7 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   FrameOutput out = makeOutput(frame.utime, frame.seq, sr.ess);
   if (backend) out.trajectory = trajectoryMessage(*backend, frame, trajectory_seq_++);
   applyHealth(out, odom_O, &sr);
+  if (lost_ && lostAt(frame, sr, out, r)) return std::nullopt;
   if ((stats_.frames_processed - 1) % opt_.map_every_n_frames == 0) {  // the first frame has a map
     out.map = toMapMessage(filter_->bestMap(), filter_->bestCandidateCount(), frame.utime, map_seq_++, frame.seq);
   }
@@ -380,6 +392,53 @@ std::optional<FrameOutput> SlamDriver::process(const Frame& frame, const Pose2& 
   }
   out.associations = std::move(a);
   return out;
+}
+
+const std::vector<slam::Landmark>& SlamDriver::startMap() const {
+  return lost_ && opt_.filter.update_map ? lost_->keptMap() : prior_map_;
+}
+
+bool SlamDriver::lostAt(const Frame& frame, const slam::StepResult& sr, const FrameOutput& out, DriverResult& r) {
+  slam::LostInput in;
+  // The map in view: the loaded one when it is fixed, else the best particle's (this run's lamps too).
+  std::vector<slam::Landmark> map = opt_.filter.update_map ? filter_->bestMap() : std::vector<slam::Landmark>{};
+  const std::vector<slam::Landmark>& in_view = opt_.filter.update_map ? map : prior_map_;
+  const Eigen::Vector3d cam_m = frame.z.empty() ? opt_.filter.perception.default_p_CinR_m : frame.z.front().p_CinR_m;
+  in.expected =
+      slam::expectedLamps(in_view, filter_->meanPose(), cam_m, opt_.filter.perception, opt_.localisation.max_range_m);
+  for (const slam::BearingMeasurement& z : frame.z) in.bearings += z.kind == slam::LandmarkKind::kPoint3D;
+  in.matched = std::min(sr.num_associated, in.bearings);
+  in.map_fixed = !opt_.filter.update_map;
+  in.diverged = out.health && out.health->state == static_cast<int8_t>(slam::HealthState::kDiverged);
+  const slam::LostVerdict v = lost_->update(in);
+  if (!v.lost) {
+    if (!v.unexplained && opt_.filter.update_map) lost_->keepMap(std::move(map));
+    return false;
+  }
+  // The frame is answered by STATE_LOST alone: its outputs' sequence numbers are given back.
+  --pose_seq_, --particles_seq_, --health_seq_;
+  if (out.trajectory) --trajectory_seq_;
+  lose(frame, v.reason, r);
+  return true;
+}
+
+void SlamDriver::lose(const Frame& frame, const std::string& reason, DriverResult& r) {
+  ++stats_.lost;
+  r.notes.push_back("lost at frame seq " + std::to_string(frame.seq) + ": " + reason +
+                    "; global localisation again, in the map as it was at the last explained frame (" +
+                    std::to_string(startMap().size()) + " landmarks)");
+  slam::LocalisationStatus lost;
+  lost.state = slam::LocalisationState::kLost;
+  r.localisation.push_back(toLocalisationMessage(lost, frame.utime, localisation_seq_++, frame.seq));
+  // The map saved at exit while lost: the kept one, in a filter at the last estimate.
+  auto kept = std::make_unique<slam::FastSlam>(opt_.filter, opt_.seed + static_cast<std::uint64_t>(epoch_));
+  kept->initialise(filter_->meanPose(), startMap());
+  ended_filter_ = std::move(kept);
+  ended_step_utime_ = last_step_utime_;
+  filter_.reset();
+  backend_.reset();
+  restart_from_.reset();
+  start_->restart(startMap());
 }
 
 // A frame between keyframes (filter.keyframes): the filter is not stepped; the outputs are its
@@ -510,6 +569,7 @@ std::string SlamDriver::summary() const {
     o << "; localisation: frames " << s.frames_localising << " fixes " << s.localisation_fixes << " "
       << (start_->phase() == GlobalStart::Phase::kTracking ? "tracking"
                                                            : slam::localisationStateName(start_->status().state));
+  if (lost_) o << "; lost " << s.lost << (lost_->lost() ? " (now)" : "");
   if (filter_)
     o << "; landmarks " << filter_->bestParticle().map.size() << " candidates " << filter_->bestCandidateCount();
   if (backend_) {

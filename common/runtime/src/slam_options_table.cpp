@@ -179,6 +179,8 @@ const std::vector<ConfigSection>& processSections() {
       section<slam::GlobalLocalisationOptions>(
           "localisation", slam::options::globalLocalisationFields,
           [](const O& o) -> const auto& { return o.localisation; }),
+      section<slam::LostOptions>(
+          "lost", slam::options::lostFields, [](const O& o) -> const auto& { return o.lost; }),
       section<O>("features", featureFields, whole),
       section<O>("output", outputFields, whole),
       section<O>("map", mapFields, whole, true),

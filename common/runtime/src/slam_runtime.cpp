@@ -45,14 +45,15 @@ ReplayPosition CheckpointKeeper::resume(SlamDriver& driver, InputClock& clock) {
 }
 
 void CheckpointKeeper::afterInput(const SlamDriver& driver, const InputClock& clock, const ReplayPosition& pos) {
-  if (enabled() && schedule_.due(driver.lastStepUtime())) write(driver, clock, pos);
+  if (enabled() && !driver.relocalising() && schedule_.due(driver.lastStepUtime())) write(driver, clock, pos);
 }
 
 bool CheckpointKeeper::writeNow(const SlamDriver& driver, const InputClock& clock, const ReplayPosition& pos) {
   if (!enabled()) return true;
-  if (driver.filterToSave(nullptr) == nullptr) {
+  if (driver.filterToSave(nullptr) == nullptr || driver.relocalising()) {
     std::cerr << tag_
-              << "checkpoint not written: no frame was processed (or, start_pose.source unknown, not localised yet)"
+              << "checkpoint not written: no frame was processed (or, start_pose.source unknown, not localised yet; "
+                 "or lost, not localised again yet)"
               << std::endl;
     return true;
   }

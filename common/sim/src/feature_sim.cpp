@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <string>
 
 #include "omnislam/core/camera/bearing_jacobians.h"
 #include "omnislam/core/camera/mounting.h"
@@ -117,14 +118,25 @@ SimRun simulateFeatures(const World& world, uint64_t odometry_seed, uint64_t det
   std::mt19937_64 rng(detector_seed);
   ImageClock clock(world.start_utime, world.image_rate_hz, world.truth_rate_hz);
   SimRun run;
+  // After a kidnap the odometry feels the drive's motion from where it was: K * drive(t), with
+  // K = drive(at) * drive(to)^-1 continuous at the kidnap.
+  Pose2 felt;
+  if (options.kidnap) {
+    const FeatureSimOptions::Kidnap& k = *options.kidnap;
+    if (!(k.at_s >= 0.0 && k.at_s <= traj.duration_s() && k.to_s >= 0.0 && k.to_s <= traj.duration_s()))
+      throw std::invalid_argument("feature simulation: a kidnap's times must be within the drive's [0, " +
+                                  std::to_string(traj.duration_s()) + "] s");
+    felt = traj.at(k.at_s).pose.compose(traj.at(k.to_s).pose.inverse());
+  }
   const double dt = 1.0 / world.truth_rate_hz;
   const int64_t n_steps = static_cast<int64_t>(std::floor(traj.duration_s() / dt + 1e-9));
   for (int64_t k = 0; k <= n_steps; ++k) {  // as omnislam-sim: t = k dt, utime rounded
     SimTruthStep s;
     s.t_s = k * dt;
-    const TrajectorySample ts = traj.at(s.t_s);
+    const bool carried = options.kidnap && s.t_s >= options.kidnap->at_s;
+    const TrajectorySample ts = traj.at(carried ? s.t_s - options.kidnap->at_s + options.kidnap->to_s : s.t_s);
     s.truth = ts.pose;
-    s.odometry = odo.step(ts.pose);
+    s.odometry = odo.step(carried ? felt.compose(ts.pose) : ts.pose);  // the motion, not the jump
     if (k > 0) {  // as omnislam-odometry: from the previous odometry pose
       const Pose2 d = run.steps.back().odometry.between(s.odometry);
       s.v_mps = d.x_m / dt;

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "omnislam/core/slam/fastslam.h"
+#include "omnislam/core/slam/landmark_codec.h"
 
 namespace omnislam::slam {
 
@@ -54,29 +55,6 @@ LandmarkKind getKind(ByteReader& r) {
   const std::uint8_t k = r.u8("landmark kind");
   if (k > 1) throw StateFormatError("landmark kind " + std::to_string(k) + " is not 0 (point) or 1 (vertical line)");
   return static_cast<LandmarkKind>(k);
-}
-
-void putLandmark(ByteWriter& w, const Landmark& l) {
-  w.u64(l.id);
-  putMatrix(w, l.p_LinW_m);
-  putMatrix(w, l.cov_LinW_m2);
-  w.i32(l.counter);
-  w.u8(static_cast<std::uint8_t>(l.type));
-  w.u8(static_cast<std::uint8_t>(l.kind));
-  putDescriptor(w, l.descriptor);
-}
-Landmark getLandmark(ByteReader& r) {
-  Landmark l;
-  l.id = r.u64("landmark.id");
-  getMatrix(r, l.p_LinW_m, "landmark.p_LinW_m");
-  getMatrix(r, l.cov_LinW_m2, "landmark.cov_LinW_m2");
-  l.counter = r.i32("landmark.counter");
-  const std::uint8_t type = r.u8("landmark.type");
-  if (type != 1 && type != 2) throw StateFormatError("landmark type " + std::to_string(type) + " is not 1 or 2");
-  l.type = static_cast<LandmarkType>(type);
-  l.kind = getKind(r);
-  l.descriptor = getDescriptor(r);
-  return l;
 }
 
 template <class Dyn>
@@ -271,6 +249,29 @@ std::vector<Particle> readParticles(ByteReader& r, double cell, std::size_t M) {
 }
 
 }  // namespace
+
+void putLandmark(ByteWriter& w, const Landmark& l) {
+  w.u64(l.id);
+  putMatrix(w, l.p_LinW_m);
+  putMatrix(w, l.cov_LinW_m2);
+  w.i32(l.counter);
+  w.u8(static_cast<std::uint8_t>(l.type));
+  w.u8(static_cast<std::uint8_t>(l.kind));
+  putDescriptor(w, l.descriptor);
+}
+Landmark getLandmark(ByteReader& r) {
+  Landmark l;
+  l.id = r.u64("landmark.id");
+  getMatrix(r, l.p_LinW_m, "landmark.p_LinW_m");
+  getMatrix(r, l.cov_LinW_m2, "landmark.cov_LinW_m2");
+  l.counter = r.i32("landmark.counter");
+  const std::uint8_t type = r.u8("landmark.type");
+  if (type != 1 && type != 2) throw StateFormatError("landmark type " + std::to_string(type) + " is not 1 or 2");
+  l.type = static_cast<LandmarkType>(type);
+  l.kind = getKind(r);
+  l.descriptor = getDescriptor(r);
+  return l;
+}
 
 void FastSlam::saveState(ByteWriter& w) const {
   w.u32(kSectionTag);

@@ -276,11 +276,14 @@ double poissonUpperTail(int k, double lambda) {
 
 }  // namespace
 
-bool GlobalLocaliser::countsConsistent(int matched, int expected, int unexplained) const {
-  const double alpha = 1.0 - opt_.consistency_probability;
-  const double p_d = perception_.detection_probability;
+bool countsExplained(int matched, int expected, int unexplained, double p_d, const GlobalLocalisationOptions& o) {
+  const double alpha = 1.0 - o.consistency_probability;
   if (p_d >= 1.0 ? matched < expected : binomialCdf(std::min(matched, expected), expected, p_d) < alpha) return false;
-  return poissonUpperTail(unexplained, opt_.clutter_per_frame) >= alpha;
+  return poissonUpperTail(unexplained, o.clutter_per_frame) >= alpha;
+}
+
+bool GlobalLocaliser::countsConsistent(int matched, int expected, int unexplained) const {
+  return countsExplained(matched, expected, unexplained, perception_.detection_probability, opt_);
 }
 
 bool GlobalLocaliser::consistent(const Fit& f) const {

@@ -256,4 +256,19 @@ const std::vector<Field<HealthOptions>>& healthFields() {
   return t;
 }
 
+const std::vector<Field<LostOptions>>& lostFields() {
+  using L = LostOptions;
+  // One row per key: not reformatted. Reasons: lost_monitor.h and global-localisation.md, "Lost and found".
+  // clang-format off
+  static const std::vector<Field<L>> t{
+      enumeration<L>(
+          "policy", "policy", lostPolicyNames(), [](const L& o) { return static_cast<int>(o.policy); },
+          [](L& o, int i) { o.policy = static_cast<LostPolicy>(i); },
+          "with a loaded map, when the robot is lost (diverged, or the frames' counts unexplained: a kidnap): keep_tracking (the filter goes on) or relocalise (the filter stops, the map is kept as it was, global localisation runs again)"),
+      integer<L>("unexplained_frames", &L::unexplained_frames, "unexplained_frames", 1, 1e5, "consecutive frames whose counts the filter's pose does not explain (localisation.consistency_probability) that make the robot lost"),
+  };
+  // clang-format on
+  return t;
+}
+
 }  // namespace omnislam::slam::options

@@ -18,9 +18,10 @@
 namespace omnislam::runtime {
 
 /// Magic and version of the checkpoint file (envelope: omnislam/core/byte_codec.h). Version 2 (issue
-/// 56): the driver's SLAM_LOCALISATION seq and localisation counters; version 1 files are refused.
+/// 56): the driver's SLAM_LOCALISATION seq and localisation counters; version 3 (issue 56, lost and
+/// found): the lost monitor and its counter; older files are refused.
 inline constexpr StateMagic kCheckpointMagic{'O', 'S', 'L', 'M', 'C', 'K', 'P', 'T'};
-inline constexpr std::uint32_t kCheckpointVersion = 2;
+inline constexpr std::uint32_t kCheckpointVersion = 3;
 
 /// Where a replay was when its checkpoint was written: the input events read so far and the last
 /// one's channel and log timestamp (to recognise the same log). events < 0: written live.

@@ -2,7 +2,8 @@
 // to the core's global localiser (omnislam/core/slam/global_localisation.h) with the odometry between
 // them until it reports one pose; that fix (pose and covariance of R in W) starts the filter, and the
 // run tracks from there. The state machine of that phase, in plain C++ (no bus): SlamDriver runs it,
-// tests/runtime/test_global_start.cpp drives it alone. Frames: W the map frame, O the odometry frame.
+// tests/runtime/test_global_start.cpp drives it alone. It runs again when the tracking robot is lost
+// (lost.policy relocalise; lost_monitor.h). Frames: W the map frame, O the odometry frame.
 #pragma once
 
 #include <Eigen/Core>
@@ -45,7 +46,11 @@ class GlobalStart {
   /// Back to localising from nothing (a new localiser): a restart of the inputs changed the odometry
   /// frame, or the filter is to start again from an unknown pose.
   void restart();
-  /// Tracking without a fix: a checkpoint restored a running filter.
+  /// The same in another map (lost in SLAM with a loaded map: the map as it was before the robot was
+  /// lost, with the lamps this run added). Throws std::invalid_argument for a map without points.
+  void restart(std::vector<slam::Landmark> map);
+  /// Tracking without a fix: a checkpoint restored a running filter, or the filter starts at the
+  /// configured start (start_pose.source fixed or odometry, with lost.policy relocalise).
   void resumeTracking() { phase_ = Phase::kTracking; }
   /// Frames given to localisers since construction, fixes made.
   int64_t frames() const { return frames_; }

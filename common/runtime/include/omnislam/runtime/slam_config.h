@@ -12,6 +12,7 @@
 #include "omnislam/core/slam/fastslam.h"
 #include "omnislam/core/slam/global_localisation.h"
 #include "omnislam/core/slam/health_monitor.h"
+#include "omnislam/core/slam/lost_monitor.h"
 #include "omnislam/runtime/pairing.h"
 #include "omnislam/smoothing/back_end_options.h"
 
@@ -70,6 +71,9 @@ struct SlamProcessOptions {
   /// The global localiser of start_source kUnknown (keys `localisation.*`; its table is the core's,
   /// options_table.h globalLocalisationFields()).
   slam::GlobalLocalisationOptions localisation;
+  /// With a loaded map: what happens when the robot is lost (diverged, or carried elsewhere), and
+  /// when it is (keys `lost.*`; lost_monitor.h, docs/design/global-localisation.md "Lost and found").
+  slam::LostOptions lost;
   bool use_ceiling_lights = true;
   bool use_vertical_lines = true;
   /// Floor on the standard deviation of each measured angle [rad]: the variances of a feature's

@@ -59,7 +59,9 @@ struct DriverResult {
   std::vector<FrameOutput> outputs;
   /// SLAM_LOCALISATION of every frame given to the global localiser (start_pose.source unknown),
   /// in frame order: before the fix no frame has a FrameOutput (no SLAM_POSE); the frame of the fix
-  /// has its localised state here, and the outputs start with the next frame.
+  /// has its localised state here, and the outputs start with the next frame. With lost.policy
+  /// relocalise, the frame at which the tracking robot is lost has only its STATE_LOST here (no
+  /// FrameOutput), and the frames after it go to the global localiser again until its fix.
   std::vector<slam_localisation_t> localisation;
   std::vector<std::string> dropped;  ///< OMNI_FEATURES frames dropped by rule, one line each
   std::vector<std::string> notes;    ///< restarts and held messages (accepted, but worth a line)
@@ -85,6 +87,7 @@ struct DriverStats {
   int64_t health_fallback = 0;            ///< steps whose SLAM_POSE was the odometry fallback
   int64_t frames_localising = 0;          ///< frames given to the global localiser (start_pose.source unknown)
   int64_t localisation_fixes = 0;         ///< filters started at a fix of the global localiser
+  int64_t lost = 0;  ///< times the tracking robot was lost and global localisation ran again (lost.policy relocalise)
 };
 
 /// Converts one feature to a filter measurement; nothing for a kind that is off in `options` or a
@@ -119,6 +122,9 @@ class SlamDriver {
   std::string summary() const;
   /// The filter of the current epoch (nothing before the first processed frame).
   const slam::FastSlam* filter() const { return filter_.get(); }
+  /// Lost (lost.policy relocalise) and not localised again yet: no checkpoint is written then (the
+  /// localiser's hypotheses are not in one), as before the first fix of start_pose.source unknown.
+  bool relocalising() const { return lost_ && lost_->lost(); }
   /// utime of the last step (frame or odometry-only), 0 before the first.
   int64_t lastStepUtime() const { return last_step_utime_; }
   /// The filter whose map is to be saved at exit: the current epoch's, or, when no frame has been
@@ -146,6 +152,17 @@ class SlamDriver {
   bool localising() const;
   /// One frame given to the global localiser; at its fix the filter starts there.
   void localise(const Frame& frame, const Pose2& odom_O, DriverResult& r);
+  /// Lost and found (lost.policy relocalise): the lost monitor's verdict on a filter step whose
+  /// outputs are `out`; true when the robot is lost (the filter is then stopped, see lose()).
+  bool lostAt(const Frame& frame, const slam::StepResult& sr, const FrameOutput& out, DriverResult& r);
+  /// Stops the filter (its map as kept at the last explained frame), publishes STATE_LOST for the
+  /// frame and runs the global localiser again in that map.
+  void lose(const Frame& frame, const std::string& reason, DriverResult& r);
+  /// The map a filter starts from: the loaded one, or, in SLAM with a loaded map after the robot was
+  /// lost, the map kept by the lost monitor.
+  const std::vector<slam::Landmark>& startMap() const;
+  /// After loadState: the phase of start_ from the restored filter and lost monitor.
+  void restoreStart();
   /// The odometry plausibility check (options.plausibility); nothing when plausible.
   std::optional<std::string> checkOdometry(const odometry_t& msg);
   /// The outputs of the filter's estimate; moved by the odometry increment *u when given.
@@ -188,6 +205,8 @@ class SlamDriver {
   /// The localising phase of start_pose.source unknown (none for fixed and odometry).
   std::unique_ptr<GlobalStart> start_;
   int64_t localisation_seq_ = 0;
+  /// Lost and found with a loaded map and lost.policy relocalise (with start_ for its localiser).
+  std::optional<slam::LostMonitor> lost_;
   void startBackEnd(const Pose2& start_W, const Eigen::Matrix3d& start_cov);
   mutable DriverStats stats_;
 };

@@ -42,6 +42,13 @@ struct FeatureSimOptions {
   double clutter_published_fraction = 52.0 / 102.0;
   /// Points on the rim of a lamp's disc projected to find its image (area and truncation).
   int rim_points = 16;
+  /// A kidnap (issue 56, item 3: lost and found): at at_s the robot is carried to where the drive is
+  /// at to_s and drives on from there (the truth at t >= at_s is the drive's at t - at_s + to_s); the
+  /// odometry goes on from where it was with the same motion, so it never sees the jump.
+  struct Kidnap {
+    double at_s = 0.0, to_s = 0.0;  ///< times of the drive [s], each within [0, its duration]
+  };
+  std::optional<Kidnap> kidnap;  ///< none: the drive as the world file says
 };
 
 /// One published feature, with its truth.

@@ -132,6 +132,11 @@ struct LocalisationStatus {
   bool capped = false;  ///< max_hypotheses was reached in this frame
 };
 
+/// The count test of a pose against a frame (step 3): false when P(matched <= m | Binomial(expected,
+/// p_d)) or P(unexplained >= u | Poisson(o.clutter_per_frame)) is below 1 - o.consistency_probability
+/// (with p_d = 1: any miss fails). Also the lost test of a tracking filter (lost_monitor.h).
+bool countsExplained(int matched, int expected, int unexplained, double p_d, const GlobalLocalisationOptions& o);
+
 /// The horizontal position in R [m] of a point at height h_W_m seen at (azimuth, elevation) from the
 /// optical centre p_CinR_m; nothing when the bearing does not reach that height (it points away from
 /// it or is horizontal) or the horizontal range from the optical centre exceeds max_range_m.

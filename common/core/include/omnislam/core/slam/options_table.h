@@ -12,6 +12,7 @@
 #include "omnislam/core/slam/fastslam_options.h"
 #include "omnislam/core/slam/global_localisation.h"
 #include "omnislam/core/slam/health_monitor.h"
+#include "omnislam/core/slam/lost_monitor.h"
 
 namespace omnislam::slam::options {
 
@@ -33,6 +34,7 @@ const std::vector<Field<KeyframeOptions>>& keyframeFields();      ///< keys `fil
 const std::vector<Field<HealthOptions>>& healthFields();          ///< keys `health.*` (health_monitor.h)
 /// keys `localisation.*` (global_localisation.h; the table is in global_localisation_table.cpp)
 const std::vector<Field<GlobalLocalisationOptions>>& globalLocalisationFields();
+const std::vector<Field<LostOptions>>& lostFields();  ///< keys `lost.*` (lost_monitor.h)
 
 /// Names of the enum fields (index = the enum's value).
 const std::vector<std::string>& associationNames();   ///< "hungarian", "ml"

@@ -78,7 +78,9 @@ TEST(slam_ParallelStep, AnyOrderAndWorkersGiveTheSameBits) {
       ASSERT_EQ(a.landmark_of_measurement, b.landmark_of_measurement) << "variant " << variant << " step " << k;
       ASSERT_EQ(a.best_particle, b.best_particle) << "variant " << variant << " step " << k;
       born += a.num_initialised;
-      if (k % 40 == 0) ASSERT_EQ(stateOf(seq), stateOf(par)) << "variant " << variant << " step " << k;
+      if (k % 40 == 0) {
+        ASSERT_EQ(stateOf(seq), stateOf(par)) << "variant " << variant << " step " << k;
+      }
     }
     EXPECT_EQ(stateOf(seq), stateOf(par)) << "variant " << variant;
     // Per step: the drafts, the commits, the release of the particles replaced.

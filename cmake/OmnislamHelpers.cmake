@@ -21,11 +21,7 @@ function(omnislam_add_gtest name)
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 120)
   endif()
-  # A timeout only catches a hang. The sanitizers make everything about 3x slower, and a sanitized
-  # unit test that takes 47 s alone ran past 120 s on a loaded machine: give such builds 3x.
-  if(OMNISLAM_SANITIZE)
-    math(EXPR T_TIMEOUT "${T_TIMEOUT} * 3")
-  endif()
+  math(EXPR T_TIMEOUT "${T_TIMEOUT} * ${OMNISLAM_TIMEOUT_FACTOR}")
   if(T_WHOLE)
     # One CTest entry for the whole executable: its suite-level set-up (e.g. launching the
     # processes once) is shared by all of its tests.

@@ -22,37 +22,13 @@
 #include "omnislam/map_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/slam_localisation_t.hpp"
+#include "hall_map.h"
 #include "proc_util.h"
 
 using namespace omnislam;
 namespace t = omnislam::testing;
 
 namespace {
-
-/// The sports hall's lights and the 17th that breaks its symmetry.
-std::vector<Eigen::Vector3d> hallLights() {
-  std::vector<Eigen::Vector3d> l;
-  for (double x : {4.5, 13.5, 22.5, 31.5})
-    for (double y : {-5.5, -1.0, 3.5, 8.0}) l.emplace_back(x, y, 6.5);
-  l.emplace_back(9.0, -5.5, 6.5);
-  return l;
-}
-
-/// The truth with N(0, 3 cm) on each coordinate, as a saved map (version 2, map_file.h).
-std::string mapText(const std::vector<Eigen::Vector3d>& lights) {
-  std::mt19937_64 rng(56);
-  std::normal_distribution<double> n(0.0, 0.03);
-  std::ostringstream o;
-  o.precision(17);
-  o << "format: omnislam-map\nversion: 2\nutime: 0\nnum_landmarks: " << lights.size() << "\nlandmarks:\n";
-  for (std::size_t i = 0; i < lights.size(); ++i) {
-    const double x = lights[i].x() + n(rng), y = lights[i].y() + n(rng), z = lights[i].z() + n(rng);
-    o << "  - {id: " << i + 1 << ", kind: point3d, type: 1, counter: 10, position_m: [" << x << ", " << y << ", " << z
-      << "], covariance_m2: [0.0009, 0, 0, 0, 0.0009, 0, 0, 0, 0.0009]}\n";
-  }
-  o << "end: omnislam-map\n";
-  return o.str();
-}
 
 void writeText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
 
@@ -78,7 +54,7 @@ Outcome replayKidnap(const t::TempDir& dir, double at_s, double to_s, int seed) 
   const std::string world = dir.file("world.yaml"), map = dir.file("map.yaml"), log = dir.file("in.lcm"),
                     out = dir.file("out.lcm");
   writeText(world, worldText());
-  writeText(map, mapText(hallLights()));
+  writeText(map, t::noisyMapText(t::hallLights(true)));
   Outcome o;
   auto r = t::run({t::binPath("omnislam-gen-world"), "--world", world, "--seed", std::to_string(seed), "--out-log", log,
                    "--kidnap-at-s", std::to_string(at_s), "--kidnap-to-s", std::to_string(to_s)},

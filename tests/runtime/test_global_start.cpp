@@ -18,28 +18,6 @@ using namespace omnislam::testing;
 
 namespace {
 
-/// The sports hall's 16 lights, plus (with `extra`) a 17th at (9, -5.5): the hall without it is the
-/// same after a half turn about its centre and can never be localised (global-localisation.md).
-std::vector<Eigen::Vector3d> hallWorld(bool extra) {
-  std::vector<Eigen::Vector3d> l = slam::scenarios::hallLights();
-  if (extra) l.emplace_back(9.0, -5.5, 6.5);
-  return l;
-}
-
-/// A saved map of those lights: exact positions, 5 cm standard deviation.
-std::vector<slam::Landmark> mapOf(const std::vector<Eigen::Vector3d>& lights) {
-  std::vector<slam::Landmark> map;
-  for (std::size_t i = 0; i < lights.size(); ++i) {
-    slam::Landmark l;
-    l.id = i + 1;
-    l.p_LinW_m = lights[i];
-    l.cov_LinW_m2 = Eigen::Matrix3d::Identity() * 0.05 * 0.05;
-    l.counter = 10;
-    map.push_back(l);
-  }
-  return map;
-}
-
 /// The odometry frame O is not the map frame: the robot's pose in O is kWinO * T_WtoR (the odometry
 /// starts elsewhere and heads elsewhere).
 const Pose2 kWinO{-3.0, 7.0, 1.0};
@@ -79,9 +57,9 @@ double headingErrorDeg(double a_rad, double b_rad) { return std::abs(wrapAngle(a
 }  // namespace
 
 TEST(GlobalStart, LocalisesOnceThenTracksAndRestartsFromNothing) {
-  const auto lights = hallWorld(true);
+  const auto lights = hallLightsPlus17th(true);
   const SlamProcessOptions o = unknownStart();
-  GlobalStart g(o.localisation, o.filter, mapOf(lights));
+  GlobalStart g(o.localisation, o.filter, exactMapOf(lights));
   EXPECT_EQ(g.phase(), GlobalStart::Phase::kLocalising);
   std::optional<GlobalStart::Fix> fix;
   int64_t frame = 0, fix_frame = -1;
@@ -110,12 +88,12 @@ TEST(GlobalStart, LocalisesOnceThenTracksAndRestartsFromNothing) {
 
 TEST(GlobalStart, RefusesAMapWithoutLightsAndInvalidOptions) {
   const SlamProcessOptions o = unknownStart();
-  std::vector<slam::Landmark> lines = mapOf(hallWorld(false));
+  std::vector<slam::Landmark> lines = exactMapOf(hallLightsPlus17th(false));
   for (auto& l : lines) l.kind = slam::LandmarkKind::kVerticalLine;
   EXPECT_THROW(GlobalStart(o.localisation, o.filter, lines), std::invalid_argument);
   slam::GlobalLocalisationOptions bad = o.localisation;
   bad.min_matched = bad.max_seed_bearings + 1;
-  EXPECT_THROW(GlobalStart(bad, o.filter, mapOf(hallWorld(false))), std::invalid_argument);
+  EXPECT_THROW(GlobalStart(bad, o.filter, exactMapOf(hallLightsPlus17th(false))), std::invalid_argument);
 }
 
 TEST(GlobalStart, MessageCarriesTheStatusAndValidates) {
@@ -155,8 +133,8 @@ TEST(GlobalStart, MessageCarriesTheStatusAndValidates) {
 // In the asymmetric hall: every frame before the fix has a SLAM_LOCALISATION and no pose; the fix
 // is near the truth; from the next frame the filter tracks in the map frame, near the truth.
 TEST(SlamDriverUnknownStart, NoPoseBeforeTheFixThenTracksInTheMapFrame) {
-  const auto lights = hallWorld(true);
-  SlamDriver d(unknownStart(), mapOf(lights));
+  const auto lights = hallLightsPlus17th(true);
+  SlamDriver d(unknownStart(), exactMapOf(lights));
   const DriveRun run = drive(d, 25, lights);
   ASSERT_FALSE(run.localisation.empty());
   const slam_localisation_t& last = run.localisation.back();
@@ -188,8 +166,8 @@ TEST(SlamDriverUnknownStart, NoPoseBeforeTheFixThenTracksInTheMapFrame) {
 
 // The sports hall as it is (16 lights, half-turn symmetric): never localised, so never a pose.
 TEST(SlamDriverUnknownStart, SymmetricHallIsNeverLocalisedAndPublishesNoPose) {
-  const auto lights = hallWorld(false);
-  SlamDriver d(unknownStart(), mapOf(lights));
+  const auto lights = hallLightsPlus17th(false);
+  SlamDriver d(unknownStart(), exactMapOf(lights));
   const DriveRun run = drive(d, 40, lights);
   EXPECT_TRUE(run.outputs.empty());
   ASSERT_EQ(run.localisation.size(), 40u);
@@ -203,8 +181,8 @@ TEST(SlamDriverUnknownStart, SymmetricHallIsNeverLocalisedAndPublishesNoPose) {
 }
 
 TEST(SlamDriverUnknownStart, SameInputsGiveIdenticalBytes) {
-  const auto lights = hallWorld(true);
-  SlamDriver a(unknownStart(), mapOf(lights)), b(unknownStart(), mapOf(lights));
+  const auto lights = hallLightsPlus17th(true);
+  SlamDriver a(unknownStart(), exactMapOf(lights)), b(unknownStart(), exactMapOf(lights));
   const DriveRun ra = drive(a, 12, lights), rb = drive(b, 12, lights);
   ASSERT_EQ(ra.localisation.size(), rb.localisation.size());
   for (std::size_t k = 0; k < ra.localisation.size(); ++k)

@@ -21,27 +21,6 @@ using namespace omnislam::testing;
 
 namespace {
 
-/// The sports hall's 16 lights and a 17th at (9, -5.5) that breaks its half-turn symmetry.
-std::vector<Eigen::Vector3d> hallWithLamp() {
-  std::vector<Eigen::Vector3d> l = slam::scenarios::hallLights();
-  l.emplace_back(9.0, -5.5, 6.5);
-  return l;
-}
-
-/// A saved map of those lights: exact positions, 5 cm standard deviation.
-std::vector<slam::Landmark> mapOf(const std::vector<Eigen::Vector3d>& lights) {
-  std::vector<slam::Landmark> map;
-  for (std::size_t i = 0; i < lights.size(); ++i) {
-    slam::Landmark l;
-    l.id = i + 1;
-    l.p_LinW_m = lights[i];
-    l.cov_LinW_m2 = Eigen::Matrix3d::Identity() * 0.05 * 0.05;
-    l.counter = 10;
-    map.push_back(l);
-  }
-  return map;
-}
-
 std::vector<std::uint8_t> bytesOf(const std::vector<slam::Landmark>& map) {
   ByteWriter w;
   for (const slam::Landmark& l : map) slam::putLandmark(w, l);
@@ -152,13 +131,13 @@ void expectLostAndFound(const DriveRun& run, const Kidnap& k) {
 
 // Localisation only (the map fixed), carried 5 m and turned a quarter at 15 s.
 TEST(LostAndFound, KidnappedInLocalisationModeIsLostThenFoundInTheSameMap) {
-  const auto lights = hallWithLamp();
+  const auto lights = hallLightsPlus17th(true);
   Kidnap k;
   k.at_s = 15.0;
-  SlamDriver d(localiseFrom(slam::LostPolicy::kRelocalise), mapOf(lights));
+  SlamDriver d(localiseFrom(slam::LostPolicy::kRelocalise), exactMapOf(lights));
   const DriveRun run = drive(d, 45, k, lights);
   expectLostAndFound(run, k);
-  EXPECT_EQ(*run.map_before_kidnap, bytesOf(mapOf(lights))) << "the loaded map, fixed";
+  EXPECT_EQ(*run.map_before_kidnap, bytesOf(exactMapOf(lights))) << "the loaded map, fixed";
   EXPECT_EQ(d.stats().lost, 1);
   EXPECT_EQ(d.stats().health_diverged, 0) << "the count test, not the health monitor, saw the kidnap";
   EXPECT_EQ(d.stats().localisation_fixes, 1);
@@ -171,10 +150,10 @@ TEST(LostAndFound, KidnappedInLocalisationModeIsLostThenFoundInTheSameMap) {
 // SLAM with a loaded map (the map grows): the frames between the kidnap and the verdict do not stay
 // in the map; the new filter starts from the map as it was before the kidnap.
 TEST(LostAndFound, KidnappedInSlamWithALoadedMapKeepsTheMapOfBeforeTheKidnap) {
-  const auto lights = hallWithLamp();
+  const auto lights = hallLightsPlus17th(true);
   Kidnap k;
   k.at_s = 15.0;
-  SlamDriver d(localiseFrom(slam::LostPolicy::kRelocalise, false), mapOf(lights));
+  SlamDriver d(localiseFrom(slam::LostPolicy::kRelocalise, false), exactMapOf(lights));
   const DriveRun run = drive(d, 45, k, lights);
   expectLostAndFound(run, k);
   EXPECT_EQ(d.stats().lost, 1);
@@ -183,10 +162,10 @@ TEST(LostAndFound, KidnappedInSlamWithALoadedMapKeepsTheMapOfBeforeTheKidnap) {
 // Nothing changes unless the robot is lost: the same drive without a kidnap gives the same bytes
 // with relocalise as with keep_tracking, and no SLAM_LOCALISATION.
 TEST(LostAndFound, WithoutAKidnapTheOutputsAreThoseOfKeepTracking) {
-  const auto lights = hallWithLamp();
+  const auto lights = hallLightsPlus17th(true);
   for (bool localisation_only : {true, false}) {
-    SlamDriver a(localiseFrom(slam::LostPolicy::kRelocalise, localisation_only), mapOf(lights));
-    SlamDriver b(localiseFrom(slam::LostPolicy::kKeepTracking, localisation_only), mapOf(lights));
+    SlamDriver a(localiseFrom(slam::LostPolicy::kRelocalise, localisation_only), exactMapOf(lights));
+    SlamDriver b(localiseFrom(slam::LostPolicy::kKeepTracking, localisation_only), exactMapOf(lights));
     const DriveRun ra = drive(a, 40, Kidnap{}, lights), rb = drive(b, 40, Kidnap{}, lights);
     EXPECT_TRUE(ra.localisation.empty());
     EXPECT_EQ(a.stats().lost, 0);
@@ -203,11 +182,11 @@ TEST(LostAndFound, WithoutAKidnapTheOutputsAreThoseOfKeepTracking) {
 
 // keep_tracking (the default): the kidnapped filter goes on; no SLAM_LOCALISATION at all.
 TEST(LostAndFound, KeepTrackingNeverReportsLost) {
-  const auto lights = hallWithLamp();
+  const auto lights = hallLightsPlus17th(true);
   Kidnap k;
   k.at_s = 15.0;
   EXPECT_EQ(SlamProcessOptions{}.lost.policy, slam::LostPolicy::kKeepTracking);
-  SlamDriver d(localiseFrom(slam::LostPolicy::kKeepTracking), mapOf(lights));
+  SlamDriver d(localiseFrom(slam::LostPolicy::kKeepTracking), exactMapOf(lights));
   const DriveRun run = drive(d, 30, k, lights);
   EXPECT_TRUE(run.localisation.empty());
   EXPECT_EQ(run.outputs.size(), 30u);
@@ -240,12 +219,12 @@ void append(const DriverResult& r, std::vector<std::vector<uint8_t>>& out) {
 // exactly the outputs of the run that was not interrupted (SLAM with a loaded map: the kept map is
 // in the checkpoint). While lost none is written (the localiser's hypotheses are not in one).
 TEST(LostAndFound, CheckpointsResumeBitForBitAroundTheKidnap) {
-  const auto lights = hallWithLamp();
+  const auto lights = hallLightsPlus17th(true);
   Kidnap k;
   k.at_s = 15.0;
   const auto msgs = kidnapStream(30, k, lights);
   const SlamProcessOptions opt = localiseFrom(slam::LostPolicy::kRelocalise, false);
-  SlamDriver ref(opt, mapOf(lights));
+  SlamDriver ref(opt, exactMapOf(lights));
   std::vector<std::vector<uint8_t>> ref_out;
   std::vector<std::size_t> outputs_before;
   for (const InputMessage& m : msgs) {
@@ -260,7 +239,7 @@ TEST(LostAndFound, CheckpointsResumeBitForBitAroundTheKidnap) {
            !(std::holds_alternative<features_t>(msgs[cut]) && std::get<features_t>(msgs[cut]).seq == frame))
       ++cut;
     ++cut;  // after that frame
-    SlamDriver before(opt, mapOf(lights));
+    SlamDriver before(opt, exactMapOf(lights));
     InputClock clock(opt.pairing.restart_jump_us);
     for (std::size_t i = 0; i < cut; ++i) {
       feedDriver(before, msgs[i]);
@@ -270,7 +249,7 @@ TEST(LostAndFound, CheckpointsResumeBitForBitAroundTheKidnap) {
       }
     }
     const auto file = encodeCheckpoint(opt, before, clock, ReplayPosition{});
-    SlamDriver after(opt, mapOf(lights));
+    SlamDriver after(opt, exactMapOf(lights));
     InputClock clock2(opt.pairing.restart_jump_us);
     decodeCheckpoint(file, opt, after, clock2);
     EXPECT_EQ(after.summary(), before.summary());
@@ -284,11 +263,11 @@ TEST(LostAndFound, CheckpointsResumeBitForBitAroundTheKidnap) {
 }
 
 TEST(LostAndFound, SameInputsGiveIdenticalBytes) {
-  const auto lights = hallWithLamp();
+  const auto lights = hallLightsPlus17th(true);
   Kidnap k;
   k.at_s = 15.0;
-  SlamDriver a(localiseFrom(slam::LostPolicy::kRelocalise), mapOf(lights));
-  SlamDriver b(localiseFrom(slam::LostPolicy::kRelocalise), mapOf(lights));
+  SlamDriver a(localiseFrom(slam::LostPolicy::kRelocalise), exactMapOf(lights));
+  SlamDriver b(localiseFrom(slam::LostPolicy::kRelocalise), exactMapOf(lights));
   const DriveRun ra = drive(a, 40, k, lights), rb = drive(b, 40, k, lights);
   ASSERT_EQ(ra.localisation.size(), rb.localisation.size());
   for (std::size_t i = 0; i < ra.localisation.size(); ++i)
@@ -300,7 +279,7 @@ TEST(LostAndFound, SameInputsGiveIdenticalBytes) {
 
 // A map without lights cannot be localised in again: refused at start, naming the policy.
 TEST(LostAndFound, RelocaliseNeedsLightsInTheMap) {
-  std::vector<slam::Landmark> lines = mapOf(hallWithLamp());
+  std::vector<slam::Landmark> lines = exactMapOf(hallLightsPlus17th(true));
   for (auto& l : lines) l.kind = slam::LandmarkKind::kVerticalLine;
   try {
     SlamDriver d(localiseFrom(slam::LostPolicy::kRelocalise), lines);

@@ -308,14 +308,19 @@ def quantile(v, q):
     return v[min(len(v) - 1, int(q * (len(v) - 1) + 0.5))] if v else float("nan")
 
 
+def groups(results):
+    """(map kind, family, its results) for each map kind x family, and x "all" families."""
+    for kind in sorted({r["map"] for r in results}):
+        for fam in sorted({r["family"] for r in results}) + ["all"]:
+            yield kind, fam, [r for r in results if r["map"] == kind and fam in ("all", r["family"])]
+
+
 def table(results):
     lines = ["| map | family | worlds | localised <= 5 m, 0.3 m / 2 deg | wrong poses reported localised | "
              "never localised | travel to first fix: median / p90 / max [m] | fix error: median / max [m] | "
              "SLAM_POSE error after fix, max [m] |",
              "|---|---|---|---|---|---|---|---|---|"]
-    for kind, fam in [(k, f) for k in sorted({r["map"] for r in results})
-                      for f in sorted({r["family"] for r in results}) + ["all"]]:
-        rs = [r for r in results if r["map"] == kind and fam in ("all", r["family"])]
+    for kind, fam, rs in groups(results):
         fix_err = [r["fix_error_m"] for r in rs if r["fix"]]
         travel = [r["travel_to_fix_m"] for r in rs if r["fix"]]
         post = [r["slam_pose_max_error_m"] for r in rs if r["slam_pose_max_error_m"] is not None]
@@ -332,9 +337,7 @@ def kidnap_table(results):
              "lost before it | wrong poses reported localised | map unchanged | travel to lost: median / max [m] | "
              "travel to the new fix: median / p90 / max [m] | SLAM_POSE error after it, max [m] |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for kind, fam in [(k, f) for k in sorted({r["map"] for r in results})
-                      for f in sorted({r["family"] for r in results}) + ["all"]]:
-        rs = [r for r in results if r["map"] == kind and fam in ("all", r["family"])]
+    for kind, fam, rs in groups(results):
         to_lost = [r["travel_to_lost_m"] for r in rs if r["lost"]]
         to_fix = [r["travel_to_fix_m"] for r in rs if r["fix"]]
         post = [r["slam_pose_max_error_m"] for r in rs if r["slam_pose_max_error_m"] is not None]

@@ -1,9 +1,12 @@
 // omnislam-viewer: shows what the SLAM process is doing (docs/user/viewer.md). Subscribes SLAM_POSE,
-// SLAM_MAP, SLAM_PARTICLES, SLAM_ASSOCIATIONS, GROUND_TRUTH_POSE, GROUND_TRUTH_MAP, OMNI_IMAGE and
-// OMNI_FEATURES (each optional) and draws vision::renderSlamView:
+// SLAM_MAP, SLAM_PARTICLES, SLAM_ASSOCIATIONS, SLAM_LOCALISATION, GROUND_TRUTH_POSE, GROUND_TRUTH_MAP,
+// OMNI_IMAGE and OMNI_FEATURES (each optional) and draws vision::renderSlamView; --map FILE draws a
+// saved map until the first SLAM_MAP (the global localiser's hypotheses are drawn over it):
 //   live window  (default) an OpenCV window redrawn a few times a second; q or Esc quits;
 //   headless     --headless --out-dir DIR [--every N]: no display; writes DIR/frame_<step>.png
-//                every N SLAM steps and DIR/final.png at the end (SIGINT/SIGTERM);
+//                every N SLAM steps, DIR/localisation_<n>.png every N SLAM_LOCALISATION messages
+//                (while the global localiser searches there are no steps), and DIR/final.png at
+//                the end (SIGINT/SIGTERM);
 //   from a log   --headless --log FILE.lcm --out-dir DIR: reads the log at full speed, same output.
 // A SLAM step is one SLAM_POSE and the map, particles and associations published after it; it is
 // drawn when the next step starts (or at the end), so that every part of it is in the picture.
@@ -27,6 +30,7 @@
 #include "omnislam/lcmio/node.h"
 #include "omnislam/lcmio/signals.h"
 #include "omnislam/lcmio/validate.h"
+#include "omnislam/runtime/map_file.h"
 #include "viewer_state.h"
 
 using namespace omnislam;
@@ -35,7 +39,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct Settings {
-  std::string url, name = "viewer", out_dir, log;
+  std::string url, name = "viewer", out_dir, log, map;
   bool headless = false;
   int every = 0;
   double fps = 10.0;
@@ -81,6 +85,16 @@ class Viewer {
       png_.write(name, render());
     }
   }
+  /// After a SLAM_LOCALISATION is applied (a frame of the global localiser: no SLAM step is drawn
+  /// while it searches): every N of them, localisation_<count>.png.
+  void afterLocalisation() {
+    ++localisations_;
+    if (png_.enabled() && s_.every > 0 && localisations_ % s_.every == 0) {
+      char name[48];
+      std::snprintf(name, sizeof name, "localisation_%06lld.png", static_cast<long long>(localisations_));
+      png_.write(name, render());
+    }
+  }
   void writeFinal() {
     if (png_.enabled()) png_.write("final.png", render());
   }
@@ -91,7 +105,27 @@ class Viewer {
   std::string title_;
   PngWriter png_;
   viewer::ViewerState state_;
+  int64_t localisations_ = 0;
 };
+
+/// The saved map of --map as view landmarks (loadMap refuses a bad file, naming why).
+std::vector<vision::ViewLandmark> savedMapLandmarks(const std::string& path) {
+  std::vector<vision::ViewLandmark> out;
+  for (const slam::Landmark& l : runtime::loadMap(path).landmarks) {
+    vision::ViewLandmark v;
+    v.id = static_cast<int64_t>(l.id);
+    v.p_m = l.p_LinW_m;
+    v.cov_xy_m2 = l.cov_LinW_m2.topLeftCorner<2, 2>();
+    v.type = l.type == slam::LandmarkType::kTypeI ? 1 : 2;
+    v.kind = l.kind == slam::LandmarkKind::kVerticalLine ? 2 : 1;
+    out.push_back(v);
+  }
+  return out;
+}
+
+void loadSavedMap(const Settings& s, viewer::ViewerState& st) {
+  if (!s.map.empty()) st.setSavedMap(savedMapLandmarks(s.map), fs::path(s.map).filename().string());
+}
 
 // ---- live (window or headless) ---------------------------------------------------------------
 
@@ -120,6 +154,15 @@ void subscribeLive(lcmio::Node& node, Viewer& v, PngFailures& failures) {
   node.subscribe<map_t>(channels::kSlamMap, [&](const map_t& m) { st.onSlamMap(m); });
   node.subscribe<particles_t>(channels::kSlamParticles, [&](const particles_t& m) { st.onParticles(m); });
   node.subscribe<associations_t>(channels::kSlamAssociations, [&](const associations_t& m) { st.onAssociations(m); });
+  node.subscribe<slam_localisation_t>(channels::kSlamLocalisation, [&](const slam_localisation_t& m) {
+    st.onLocalisation(m);
+    try {
+      v.afterLocalisation();
+    } catch (const std::exception& e) {
+      if (failures.count++ == 0) failures.first = e.what();
+      node.error(e.what());
+    }
+  });
   node.subscribe<pose_t>(
       channels::kGroundTruthPose, [&](const pose_t& m) { st.onTruthPose(m); }, truth_opt);
   node.subscribe<map_t>(channels::kGroundTruthMap, [&](const map_t& m) { st.onTruthMap(m); });
@@ -159,6 +202,7 @@ void loopLive(lcmio::Node& node, const Settings& s, Viewer& v, const std::string
 int runLive(const Settings& s) {
   lcmio::Node node(s.name, app::lcmUrl(s.url));
   Viewer v(s, "omnislam live" + (s.url.empty() ? std::string() : "  " + s.url));
+  loadSavedMap(s, v.state());
   PngFailures failures;
   subscribeLive(node, v, failures);
   node.setState(process_status_t::STATE_RUNNING);
@@ -229,6 +273,7 @@ class LogDispatcher {
 int runLog(const Settings& s) {
   Viewer v(s, "omnislam  " + fs::path(s.log).filename().string());
   auto& st = v.state();
+  loadSavedMap(s, st);
   LogDispatcher d;
   d.on<pose_t>(channels::kSlamPose, [&](const pose_t& m) {
     v.beforePose(m);
@@ -237,6 +282,10 @@ int runLog(const Settings& s) {
   d.on<map_t>(channels::kSlamMap, [&](const map_t& m) { st.onSlamMap(m); });
   d.on<particles_t>(channels::kSlamParticles, [&](const particles_t& m) { st.onParticles(m); });
   d.on<associations_t>(channels::kSlamAssociations, [&](const associations_t& m) { st.onAssociations(m); });
+  d.on<slam_localisation_t>(channels::kSlamLocalisation, [&](const slam_localisation_t& m) {
+    st.onLocalisation(m);
+    v.afterLocalisation();
+  });
   d.on<pose_t>(channels::kGroundTruthPose, [&](const pose_t& m) { st.onTruthPose(m); });
   d.on<map_t>(channels::kGroundTruthMap, [&](const map_t& m) { st.onTruthMap(m); });
   d.on<image_t>(channels::kOmniImage, [&](const image_t& m) {
@@ -285,9 +334,12 @@ int main(int argc, char** argv) {
   cli.add_option("--name", s.name, "process name in PROCESS_STATUS");
   cli.add_flag("--headless", s.headless, "no window: write PNG files into --out-dir");
   cli.add_option("--out-dir", s.out_dir, "folder for frame_<step>.png and final.png (created if missing)");
-  cli.add_option("--every", s.every, "write the view every N SLAM steps (0: only final.png)")
+  cli.add_option("--every", s.every,
+                 "write the view every N SLAM steps and every N SLAM_LOCALISATION messages (0: only final.png)")
       ->check(CLI::Range(0, 1000000));
   cli.add_option("--log", s.log, "read this LCM log at full speed instead of the bus (needs --headless)")
+      ->check(CLI::ExistingFile);
+  cli.add_option("--map", s.map, "a saved map (omnislam-slam --save-map) drawn until the first SLAM_MAP")
       ->check(CLI::ExistingFile);
   cli.add_option("--fps", s.fps, "window redraws per second")->check(omnislam::app::FiniteRange(0.5, 60.0));
   cli.add_option("--map-width", s.view.map_width_px, "map panel width, pixels")->check(CLI::Range(300, 4000));

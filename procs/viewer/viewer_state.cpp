@@ -56,6 +56,18 @@ void ViewerState::onTruthPose(const pose_t& m) {
 
 void ViewerState::onTruthMap(const map_t& m) { truth_map_ = m; }
 
+void ViewerState::onLocalisation(const slam_localisation_t& m) {
+  if (first_utime_ < 0) first_utime_ = m.utime;
+  localisation_ = m;
+}
+
+void ViewerState::setSavedMap(std::vector<vision::ViewLandmark> landmarks, std::string name) {
+  saved_map_ = std::move(landmarks);
+  saved_map_name_ = std::move(name);
+}
+
+bool ViewerState::localising() const { return localisation_ && (!pose_ || localisation_->utime > pose_->utime); }
+
 bool ViewerState::onImage(const image_t& m, std::string* why) {
   auto img = lcmio::decodeImage(m, why);
   if (!img) return false;
@@ -108,8 +120,15 @@ double ViewerState::relativeS(int64_t utime) const {
   return (static_cast<double>(utime) - t0) * 1e-6;
 }
 
+const pose_t* ViewerState::truthNear(int64_t utime) const {
+  const pose_t* best = nullptr;
+  for (const auto& t : truth_recent_)
+    if (!best || std::llabs(t.utime - utime) < std::llabs(best->utime - utime)) best = &t;
+  return best;
+}
+
 // Trajectories and poses: the true pose at the estimate's time (the nearest held), so that both
-// arrows match.
+// arrows match; while localising, at the localiser's latest frame.
 void ViewerState::addPoses(vision::SlamViewData& d) const {
   d.estimate_track = est_track_.points();
   d.truth_track = truth_track_.points();
@@ -117,17 +136,17 @@ void ViewerState::addPoses(vision::SlamViewData& d) const {
     d.pose = toPose2(*pose_);
     d.pose_cov_xy_m2 << pose_->covariance[0][0], pose_->covariance[0][1], pose_->covariance[1][0],
         pose_->covariance[1][1];
-    const pose_t* best = nullptr;
-    for (const auto& t : truth_recent_)
-      if (!best || std::llabs(t.utime - pose_->utime) < std::llabs(best->utime - pose_->utime)) best = &t;
-    if (best) d.true_pose = toPose2(*best);
-  } else if (truth_now_) {
-    d.true_pose = toPose2(*truth_now_);
   }
+  const pose_t* truth = nullptr;
+  if (localising()) truth = truthNear(localisation_->utime);
+  else if (pose_) truth = truthNear(pose_->utime);
+  if (!truth && truth_now_) truth = &*truth_now_;
+  if (truth) d.true_pose = toPose2(*truth);
 }
 
 // Maps and particles.
 void ViewerState::addMaps(vision::SlamViewData& d) const {
+  if (!map_) d.landmarks = saved_map_;
   if (map_) {
     for (const auto& l : map_->landmarks) {
       vision::ViewLandmark v;
@@ -176,6 +195,7 @@ void ViewerState::addStatusLines(vision::SlamViewData& d) const {
   std::string l3 = "landmarks " + std::to_string(d.landmarks.size()) + " (type I " + std::to_string(type1) +
                    ", type II " + std::to_string(type2) + ")";
   if (map_) l3 += ", candidates " + std::to_string(map_->num_candidates);
+  else if (!saved_map_.empty()) l3 += ", the saved map " + saved_map_name_;
   if (truth_map_) l3 += ", true " + std::to_string(d.true_landmarks.size());
   d.info.push_back(l3);
 }
@@ -215,12 +235,35 @@ void ViewerState::addFrame(vision::SlamViewData& d) const {
   }
 }
 
+// The global localiser: its state in a status line (whenever it has spoken), its hypotheses while it
+// is localising.
+void ViewerState::addLocalisation(vision::SlamViewData& d) const {
+  if (!localisation_) return;
+  const slam_localisation_t& m = *localisation_;
+  static const char* const kStates[] = {"SEARCHING", "AMBIGUOUS", "LOCALISED", "LOST"};
+  const bool known = m.state >= 0 && m.state <= 3;
+  std::string line = std::string("localisation: ") + (known ? kStates[m.state] : "?") + " at t " +
+                     fmt("%.1f s", relativeS(m.utime)) + ", " + std::to_string(m.num_hypotheses) + " hypotheses (" +
+                     std::to_string(m.num_tracked) + " tracked), " + std::to_string(m.num_frames) + " frames";
+  if (m.num_reported > 1) line += ", 2nd best " + fmt("%.1f nats", m.relative_log_likelihood[1]);
+  d.info.push_back(line);
+  if (!localising()) return;
+  for (int32_t k = 0; k < m.num_reported; ++k) {
+    vision::ViewHypothesis h;
+    h.pose = {m.x_m[k], m.y_m[k], m.theta_rad[k]};
+    h.cov_xy_m2 << m.covariance[k][0], m.covariance[k][1], m.covariance[k][3], m.covariance[k][4];
+    h.relative_log_likelihood = m.relative_log_likelihood[k];
+    d.hypotheses.push_back(h);
+  }
+}
+
 vision::SlamViewData ViewerState::viewData(const std::string& title) const {
   vision::SlamViewData d;
   d.title = title;
   addPoses(d);
   addMaps(d);
   addStatusLines(d);
+  addLocalisation(d);
   addFrame(d);
   return d;
 }

@@ -21,6 +21,7 @@
 #include "omnislam/map_t.hpp"
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
+#include "omnislam/slam_localisation_t.hpp"
 #include "omnislam/vision/slam_view.h"
 
 namespace omnislam::viewer {
@@ -41,6 +42,9 @@ class ViewerState {
   void onAssociations(const associations_t& m);
   void onTruthPose(const pose_t& m);
   void onTruthMap(const map_t& m);
+  void onLocalisation(const slam_localisation_t& m);
+  /// The map the SLAM process was given (omnislam-viewer --map), drawn while no SLAM_MAP has come.
+  void setSavedMap(std::vector<vision::ViewLandmark> landmarks, std::string name);
   /// Returns false (and sets why) when the image cannot be decoded.
   bool onImage(const image_t& m, std::string* why = nullptr);
   void onFeatures(const features_t& m);
@@ -65,10 +69,13 @@ class ViewerState {
   };
   const associations_t* findAssociations(const Frame& f) const;
   const Image* findImage(int64_t utime) const;
+  const pose_t* truthNear(int64_t utime) const;  ///< the held true pose nearest to utime, if any
   // Parts of viewData.
   void addPoses(vision::SlamViewData& d) const;
   void addMaps(vision::SlamViewData& d) const;
   void addStatusLines(vision::SlamViewData& d) const;
+  void addLocalisation(vision::SlamViewData& d) const;
+  bool localising() const;  ///< the latest SLAM_LOCALISATION is newer than the latest SLAM_POSE
   void addFrame(vision::SlamViewData& d) const;
   double relativeS(int64_t utime) const;  ///< seconds since the first message seen
 
@@ -78,6 +85,9 @@ class ViewerState {
   std::optional<pose_t> pose_, truth_now_;
   std::optional<map_t> map_, truth_map_;
   std::optional<particles_t> particles_;
+  std::optional<slam_localisation_t> localisation_;
+  std::vector<vision::ViewLandmark> saved_map_;
+  std::string saved_map_name_;
   vision::TrackBuffer est_track_, truth_track_;
   std::deque<pose_t> truth_recent_;
   std::deque<Image> images_;

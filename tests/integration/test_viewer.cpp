@@ -4,7 +4,9 @@
 // size with the landmarks, particles and associated features drawn. Live: the viewer on a private
 // URL draws what is published, counts garbage on SLAM_MAP in PROCESS_STATUS and keeps running,
 // and writes final.png on SIGTERM; a frame it cannot write is reported and the view goes on. Bad
-// flags stop it with exit code 2.
+// flags stop it with exit code 2. The global localiser: a log of SLAM_LOCALISATION only (two
+// hypotheses, no SLAM step) with --map gives localisation_<n>.png and a final view with the saved
+// map's lamps and the hypotheses; once a SLAM_POSE is newer, the hypotheses are gone.
 #include <gtest/gtest.h>
 
 #include <lcm/lcm-cpp.hpp>
@@ -28,6 +30,7 @@
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/process_status_t.hpp"
+#include "omnislam/slam_localisation_t.hpp"
 #include "omnislam/vision/slam_view.h"
 #include "bus_util.h"
 #include "omnislam/lcmio/log_writer.h"
@@ -209,6 +212,70 @@ TEST(Viewer, HeadlessFromALogWritesEveryNthStepAndTheFinalView) {
   EXPECT_NE(cut.output.find("the 6 bytes after its first"), std::string::npos) << cut.output;
   EXPECT_NE(cut.output.find("from byte " + std::to_string(whole)), std::string::npos) << cut.output;
   EXPECT_NE(cut.output.find("cannot be read (truncated or corrupt)"), std::string::npos) << cut.output;
+}
+
+/// The global localiser's state of frame k: ambiguous between the pose and its half-turned twin.
+slam_localisation_t localisation(int k) {
+  slam_localisation_t m{};
+  m.utime = kT0 + k * 1'000'000, m.seq = k, m.input_seq = k;
+  m.state = slam_localisation_t::STATE_AMBIGUOUS;
+  m.num_hypotheses = 2, m.num_tracked = 3, m.num_frames = k + 1, m.num_reported = 2;
+  m.x_m = {0.8 * k, 8.0 - 0.8 * k}, m.y_m = {0.0, -1.0}, m.theta_rad = {0.0, M_PI};
+  std::vector<double> c(9, 0.0);
+  c[0] = c[4] = 0.04, c[8] = 0.001;
+  m.covariance = {c, c};
+  m.relative_log_likelihood = {0.0, -1.5};
+  m.frames_explained = {k + 1, k + 1};
+  m.travel_m = {0.8 * k, 0.8 * k};
+  return m;
+}
+
+TEST(Viewer, GlobalLocalisationHypothesesOverTheSavedMap) {
+  t::TempDir dir;
+  const std::string map = dir.file("map.yaml");
+  {
+    std::ofstream f(map);
+    f << "format: omnislam-map\nversion: 2\nutime: 0\nnum_landmarks: " << kLights.size() << "\nlandmarks:\n";
+    for (size_t i = 0; i < kLights.size(); ++i)
+      f << "  - {id: " << i << ", kind: point3d, type: 1, counter: 5, position_m: [" << kLights[i].x() << ", "
+        << kLights[i].y() << ", " << kLights[i].z() << "], covariance_m2: [0.01, 0, 0, 0, 0.01, 0, 0, 0, 0.01]}\n";
+    f << "end: omnislam-map\n";
+  }
+  auto writeLog = [&](const std::string& log, bool then_a_pose) {
+    lcmio::LogWriter lf(log);
+    Step s;
+    for (int k = 0; k < 4; ++k) s.add(channels::kSlamLocalisation, localisation(k));
+    if (then_a_pose) s.add(channels::kSlamPose, pose(kT0 + 4'000'000, 0, 3.2, 0.0, 0.0, false));
+    for (const auto& [ch, data] : s.events)
+      lf.write(kT0 + (lf.events() + 1) * 1000, ch, data.data(), static_cast<int32_t>(data.size()));
+  };
+  const cv::Rect plot(60, 100, 740, 520);
+  namespace vc = vision::view_colours;
+  for (const bool then_a_pose : {false, true}) {
+    SCOPED_TRACE(then_a_pose ? "then a SLAM_POSE" : "localising");
+    const std::string log = dir.file(then_a_pose ? "b.lcm" : "a.lcm"), out = dir.file(then_a_pose ? "b" : "a");
+    writeLog(log, then_a_pose);
+    const auto r = t::run({t::binPath("omnislam-viewer"), "--headless", "--log", log, "--out-dir", out, "--every", "2",
+                           "--map", map, "--image-width", "0"},
+                          60);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::set<std::string> files;
+    for (const auto& e : fs::directory_iterator(out)) files.insert(e.path().filename().string());
+    EXPECT_EQ(files, (std::set<std::string>{"localisation_000002.png", "localisation_000004.png", "final.png"}));
+    const cv::Mat img = cv::imread(out + "/final.png", cv::IMREAD_COLOR);
+    ASSERT_FALSE(img.empty());
+    EXPECT_GT(countNear(img, plot, vc::kLandmarkType1, 10), 20) << "the saved map's lamps";
+    const int teal = countNear(img, plot, vc::kHypothesis, 30);
+    if (then_a_pose) EXPECT_EQ(teal, 0) << "no hypotheses once the filter tracks";
+    else EXPECT_GT(teal, 40) << "two hypotheses";
+    const cv::Mat early = cv::imread(out + "/localisation_000002.png", cv::IMREAD_COLOR);
+    EXPECT_GT(countNear(early, plot, vc::kHypothesis, 30), 40);
+  }
+  const auto bad = t::run({t::binPath("omnislam-viewer"), "--headless", "--log", dir.file("a.lcm"), "--out-dir",
+                           dir.file("c"), "--map", dir.file("a.lcm")},
+                          60);
+  EXPECT_NE(bad.exit_code, 0) << "a log is not a map";
+  EXPECT_NE(bad.output.find("a.lcm"), std::string::npos) << bad.output;
 }
 
 /// Keeps the latest PROCESS_STATUS of each process.

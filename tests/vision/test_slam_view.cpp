@@ -1,6 +1,7 @@
 // The SLAM view (omnislam-viewer's drawing): things are drawn at the pixels the layout predicts,
 // covariance ellipses grow with the covariance, features are marked at their image pixel in the
-// colour of their association, bad numbers do not crash, and trajectories stay bounded.
+// colour of their association, the global localiser's hypotheses are arrows at their poses, bad numbers
+// do not crash, and trajectories stay bounded.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -174,6 +175,45 @@ TEST(SlamView, ImagePanelMarksEachFeatureAtItsPixelInTheColourOfItsAssociation) 
   EXPECT_GT(green, 5);
   // Far from every feature the image is untouched.
   EXPECT_LE(colourDistance(img, px(L.imageToView(320, 240)), cv::Scalar(0, 0, 0)), 0);
+}
+
+// The global localiser's hypotheses: each an arrow in its own colour from its pose along its heading,
+// the best one thicker; a hypothesis outside the other content widens the map's extent.
+TEST(SlamView, HypothesesAreArrowsAtTheirPosesAndWidenTheExtent) {
+  SlamViewData d = fixedExtent();
+  ViewHypothesis best, twin, far;
+  best.pose = {-5, 0, 0};         // heading +x: the arrow points right
+  twin.pose = {5, 0, M_PI};       // the half-turned twin points left
+  far.pose = {30, 20, M_PI / 2};  // beyond fixedExtent()'s (10, 8)
+  twin.relative_log_likelihood = -2.0;
+  far.relative_log_likelihood = -4.0;
+  d.hypotheses = {best, twin};
+  SlamViewOptions opt;
+  opt.image_width_px = 0;
+  const SlamViewLayout L = layoutSlamView(d, opt);
+  const cv::Mat img = renderSlamView(d, opt);
+  const int half = cvRound(opt.arrow_length_px / 2);
+  const cv::Point b = px(L.map.toPixel(-5, 0)), t = px(L.map.toPixel(5, 0));
+  EXPECT_LE(colourDistance(img, b + cv::Point(half, 0), view_colours::kHypothesis), 40);
+  EXPECT_LE(colourDistance(img, b + cv::Point(-half, 0), cv::Scalar(255, 255, 255)), 30);
+  EXPECT_LE(colourDistance(img, t + cv::Point(-half, 0), view_colours::kHypothesis), 60);
+  EXPECT_LE(colourDistance(img, t + cv::Point(half, 0), cv::Scalar(255, 255, 255)), 30);
+  // The best is drawn 3 px thick, the others 1 px: count the arrow's shaft pixels across it.
+  auto thickness = [&](cv::Point shaft) {
+    int n = 0;
+    for (int dy = -4; dy <= 4; ++dy)
+      n += colourDistance(img, shaft + cv::Point(0, dy), view_colours::kHypothesis) <= 80;
+    return n;
+  };
+  EXPECT_GT(thickness(b + cv::Point(half, 0)), thickness(t + cv::Point(-half, 0)));
+
+  EXPECT_FALSE(L.plot_rect.contains(px(L.map.toPixel(30, 20))));
+  d.hypotheses.push_back(far);
+  const SlamViewLayout wider = layoutSlamView(d, opt);
+  EXPECT_TRUE(wider.plot_rect.contains(px(wider.map.toPixel(30, 20))));
+  EXPECT_LT(wider.map.scale_px_per_m, L.map.scale_px_per_m);
+  d.hypotheses.push_back({{std::numeric_limits<double>::quiet_NaN(), 0, 0}, Eigen::Matrix2d::Identity(), -9});
+  EXPECT_EQ(renderSlamView(d, opt).size(), img.size());  // a non-finite one is skipped
 }
 
 TEST(SlamView, EmptyAndNonFiniteInputsDrawWithoutCrashing) {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 
 #include "omnislam/core/angles.h"
 
@@ -111,7 +112,22 @@ void drawGrid(cv::Mat& view, const SlamViewLayout& L) {
   text(view, "y [m]", {L.map_rect.x + 6, pr.y - 6}, 0.45);
 }
 
-// Tracks, landmarks with their ellipses, poses and particles, clipped to the plot area.
+// The global localiser's hypotheses: arrows with their 2-sigma ellipses, numbered best first; the
+// best one (hypothesis 1) thicker, drawn last so that it is on top.
+void drawHypotheses(cv::Mat& plot, const std::vector<ViewHypothesis>& hs,
+                    const std::function<cv::Point2d(double, double)>& P, double scale_px_per_m, int max_axis,
+                    const SlamViewOptions& opt) {
+  for (size_t k = hs.size(); k-- > 0;) {
+    const ViewHypothesis& h = hs[k];
+    if (!finite2(h.pose.x_m, h.pose.y_m)) continue;
+    const cv::Point2d q = P(h.pose.x_m, h.pose.y_m);
+    covEllipse(plot, ipt(q), h.cov_xy_m2, scale_px_per_m, vc::kHypothesis, max_axis);
+    arrow(plot, q, h.pose.theta_rad, opt.arrow_length_px, vc::kHypothesis, k == 0 ? 3 : 1);
+    outlinedText(plot, std::to_string(k + 1), ipt(q) + cv::Point(-12, 14), 0.4, vc::kHypothesis);
+  }
+}
+
+// Tracks, landmarks with their ellipses, poses, hypotheses and particles, clipped to the plot area.
 void drawContent(cv::Mat& view, const SlamViewData& d, const SlamViewOptions& opt, const SlamViewLayout& L) {
   const cv::Rect pr = L.plot_rect;
   const MapTransform& T = L.map;
@@ -151,6 +167,7 @@ void drawContent(cv::Mat& view, const SlamViewData& d, const SlamViewOptions& op
     covEllipse(plot, ipt(q), d.pose_cov_xy_m2, s, vc::kEstimate, max_axis);
     arrow(plot, q, d.pose->theta_rad, opt.arrow_length_px, vc::kEstimate, 2);
   }
+  drawHypotheses(plot, d.hypotheses, P, s, max_axis, opt);
 
   // Particles last: a tight cloud would hide under the pose arrow.
   for (const auto& p : d.particles) {
@@ -191,6 +208,8 @@ void drawLegend(cv::Mat& view, const SlamViewLayout& L) {
     cv::arrowedLine(view, p + cv::Point(0, -3), p + cv::Point(20, -3), vc::kEstimate, 2, cv::LINE_AA, 0, 0.35);
     cv::arrowedLine(view, p + cv::Point(0, 4), p + cv::Point(20, 4), vc::kTruth, 2, cv::LINE_AA, 0, 0.35);
   });
+  item("hypotheses",
+       [&](cv::Point p) { cv::arrowedLine(view, p, p + cv::Point(20, 0), vc::kHypothesis, 2, cv::LINE_AA, 0, 0.35); });
   lx = L.map_rect.x + 10;
   const int ly2 = ly + 20;
   auto item2 = [&](const std::string& label, auto draw) {
@@ -287,6 +306,7 @@ SlamViewLayout layoutSlamView(const SlamViewData& d, const SlamViewOptions& opt)
   if (d.true_pose) grow(d.true_pose->x_m, d.true_pose->y_m);
   for (const auto& l : d.landmarks) grow(l.p_m.x(), l.p_m.y());
   for (const auto& l : d.true_landmarks) grow(l.x(), l.y());
+  for (const auto& h : d.hypotheses) grow(h.pose.x_m, h.pose.y_m);
   for (const auto& p : d.particles)
     if (!d.pose || std::hypot(p.pose.x_m - d.pose->x_m, p.pose.y_m - d.pose->y_m) <= opt.particle_extent_m)
       grow(p.pose.x_m, p.pose.y_m);

@@ -6,7 +6,9 @@
 // Map panel: estimated landmarks with their 2-sigma x-y covariance ellipse, coloured by type
 // (type I red, type II orange, paper 000 III-F), true landmarks (black circles), particles (small
 // violet dots), true trajectory (grey), estimated trajectory (blue), current estimate (blue arrow
-// with its 2-sigma x-y ellipse) and true pose (grey arrow), a metre grid with labels, a scale bar.
+// with its 2-sigma x-y ellipse) and true pose (grey arrow), the global localiser's hypotheses while it
+// searches (teal arrows with their 2-sigma x-y ellipses, numbered best first, the best one thicker),
+// a metre grid with labels, a scale bar.
 // Image panel: the image (grey or BGR) scaled to the panel; each feature a circle at its (u, v)
 // pixel, green with the landmark id when associated, orange when it went to the candidates
 // (associations_t NOT_ASSOCIATED), grey when not used (NOT_USED), cyan when no association is
@@ -39,6 +41,13 @@ struct ViewParticle {
   double weight = 0.0;
 };
 
+/// One hypothesis of the global localiser (SLAM_LOCALISATION): the pose of R in W.
+struct ViewHypothesis {
+  Pose2 pose;
+  Eigen::Matrix2d cov_xy_m2 = Eigen::Matrix2d::Zero();  ///< x-y block of its covariance, m^2
+  double relative_log_likelihood = 0.0;                 ///< 0 for the best, < 0 for the others
+};
+
 /// Association codes of a feature (the non-negative values are landmark ids).
 inline constexpr int64_t kAssocNotUsed = -1;        ///< = associations_t::NOT_USED
 inline constexpr int64_t kAssocNotAssociated = -2;  ///< = associations_t::NOT_ASSOCIATED
@@ -63,9 +72,10 @@ struct SlamViewData {
   std::vector<ViewLandmark> landmarks;
   std::vector<Eigen::Vector3d> true_landmarks;
   std::vector<ViewParticle> particles;
-  cv::Mat image;                      ///< CV_8UC1 or CV_8UC3; empty when there is none
-  std::string image_caption;          ///< line under the image (time, counts)
-  std::vector<ViewFeature> features;  ///< features of `image`
+  std::vector<ViewHypothesis> hypotheses;  ///< the global localiser's, best first (while it searches)
+  cv::Mat image;                           ///< CV_8UC1 or CV_8UC3; empty when there is none
+  std::string image_caption;               ///< line under the image (time, counts)
+  std::vector<ViewFeature> features;       ///< features of `image`
 };
 
 struct SlamViewOptions {
@@ -119,6 +129,7 @@ inline const cv::Scalar kTrueLandmark(0, 0, 0);        // black
 inline const cv::Scalar kEstimate(200, 90, 20);        // blue
 inline const cv::Scalar kTruth(150, 150, 150);         // grey
 inline const cv::Scalar kParticle(200, 60, 200);       // violet
+inline const cv::Scalar kHypothesis(140, 140, 0);      // teal
 inline const cv::Scalar kFeatAssociated(40, 220, 40);  // green
 inline const cv::Scalar kFeatCandidate(0, 165, 255);   // orange
 inline const cv::Scalar kFeatNotUsed(170, 170, 170);   // grey

@@ -20,9 +20,17 @@ travel after the kidnap at 0.3 m / 2 deg, wrong poses reported as localised, SLA
 message the same landmark bytes), the largest SLAM_POSE error after the new fix. Writes
 OUT/kidnap.json.
 
+With --extend (sessions, issue 56 item 4): the first run's first half (the feature log cut at half the
+drive's time) is mapped and saved; the second run (new noise, the whole drive) starts with
+`start_pose.source: unknown` in that map and extends it (SLAM with the loaded map, not --localise) and
+saves it. Scored against the world's lamps (each landmark's distance to the nearest true lamp): the
+fix as above, the half map's landmarks before and after (refined: the same ids), the landmarks the
+second session added, and the map of one session over the whole drive (the first run's) beside it.
+Writes OUT/extend.json.
+
   python3 scripts/evaluate-relocalisation.py [--families halls,irregular] [--worlds 10] [--first-seed 1]
                                              [--window-s 150] [--maps slam,truth] [--jobs 2] [--out DIR]
-                                             [--kidnap]
+                                             [--kidnap | --extend]
 
 Needs omnislam-gen-world, omnislam-slam and omnislam-eval (scripts/build.sh, or OMNISLAM_BUILD_DIR). Deterministic:
 the same arguments give the same figures (the cut time comes from a generator seeded by the world's
@@ -253,9 +261,58 @@ def kidnap_world(family, seed, a, out, base, info, perception, mapped):
     return results
 
 
+def load_map(path):
+    """id -> (x, y, z) of a saved map (docs/user/slam-process.md, "Saved maps")."""
+    import yaml
+    with open(path) as f:
+        doc = yaml.safe_load(f)
+    return {L["id"]: tuple(L["position_m"]) for L in doc.get("landmarks") or []}
+
+
+def lamp_errors(landmarks, world_yaml):
+    """id -> distance [m] from each landmark to the nearest true lamp of the world."""
+    import yaml
+    with open(world_yaml) as f:
+        lamps = [(L["x_m"], L["y_m"], L["z_m"]) for L in yaml.safe_load(f)["lights"]["list"]]
+    return {i: min(math.dist(p, q) for q in lamps) for i, p in landmarks.items()}
+
+
+def extend_world(family, seed, a, base, info, perception, mapped):
+    """Sessions: the first half of the first run mapped and saved, the second run extending it."""
+    slam = os.path.join(BIN, "omnislam-slam")
+    stamps = [t for t, ch, _ in events(base + ".map-run.lcm") if ch == b"OMNI_FEATURES"]
+    cut_log(base + ".map-run.lcm", base + ".half.lcm", 0, stamps[0] + (stamps[-1] - stamps[0]) // 2)
+    run([slam, "--replay", base + ".half.lcm", "--config", CONFIG, "--seed", str(seed), "--no-progress",
+         "--set", f"start_pose.x_m={info['start_x_m']!r}", "--set", f"start_pose.y_m={info['start_y_m']!r}",
+         "--set", f"start_pose.theta_deg={info['start_theta_deg']!r}", *perception,
+         "--out", base + ".half-out.lcm", "--save-map", base + ".half-map.yaml"], base + ".half-slam.txt")
+    run([slam, "--replay", base + ".run2.lcm", "--config", CONFIG, "--seed", str(seed), "--no-progress",
+         "--set", "start_pose.source=unknown", *perception, "--load-map", base + ".half-map.yaml",
+         "--out", base + ".ext-out.lcm", "--save-map", base + ".ext-map.yaml"], base + ".ext-slam.txt")
+    r = score(base + ".ext-out.lcm")
+    world = base + ".world.yaml"
+    # Never localised (a regular grid): no filter, so no map is saved; the half map stands for it.
+    ext_path = base + ".ext-map.yaml" if os.path.exists(base + ".ext-map.yaml") else base + ".half-map.yaml"
+    half, ext, whole = (load_map(p) for p in (base + ".half-map.yaml", ext_path, base + ".slam-map.yaml"))
+    e_half, e_ext, e_whole = (lamp_errors(m, world) for m in (half, ext, whole))
+    old = [i for i in half if i in ext]
+    new = [i for i in ext if i not in half]
+    mean = lambda v: sum(v) / len(v) if v else None  # noqa: E731
+    r.update(family=family, seed=seed, lamps=info["lamps"], half_landmarks=len(half), ext_landmarks=len(ext),
+             whole_landmarks=len(whole), old_kept=len(old), added=len(new),
+             half_mean_err_m=mean(list(e_half.values())), old_after_mean_err_m=mean([e_ext[i] for i in old]),
+             old_before_mean_err_m=mean([e_half[i] for i in old]), added_mean_err_m=mean([e_ext[i] for i in new]),
+             ext_mean_err_m=mean(list(e_ext.values())), whole_mean_err_m=mean(list(e_whole.values())),
+             old_refined=sum(e_ext[i] < e_half[i] for i in old), **mapped)
+    print(f"evaluate-relocalisation: extend {family} {seed}: fix {r['fix']} (wrong {r['wrong']}); half map "
+          f"{len(half)} lamps {r['half_mean_err_m']}, extended {len(ext)} ({len(new)} added) {r['ext_mean_err_m']}, "
+          f"one whole session {len(whole)} {r['whole_mean_err_m']}", file=sys.stderr)
+    return [r]
+
+
 def one_world(family, seed, a, out):
     base = os.path.join(out, f"{family}-{seed}")
-    result_path = base + (".kidnap.json" if a.kidnap else ".json")
+    result_path = base + (".kidnap.json" if a.kidnap else ".extend.json" if a.extend else ".json")
     if os.path.exists(result_path):
         with open(result_path) as f:
             return json.load(f)
@@ -267,9 +324,11 @@ def one_world(family, seed, a, out):
                   "--set", f"filter.perception.min_elevation_deg={info['min_elevation_deg']!r}"]
     mapped = map_run(base, seed, info, perception)
     truth_map(base + ".world.yaml", base + ".truth-map.yaml", seed)
-    if a.kidnap:
-        results = kidnap_world(family, seed, a, out, base, info, perception, mapped)
-        for suffix in (".map-run.lcm", ".map-out.lcm", ".run2.lcm", ".kidnap.lcm", ".kid-slam.lcm", ".kid-truth.lcm"):
+    if a.kidnap or a.extend:
+        results = (kidnap_world(family, seed, a, out, base, info, perception, mapped) if a.kidnap
+                   else extend_world(family, seed, a, base, info, perception, mapped))
+        for suffix in (".map-run.lcm", ".map-out.lcm", ".run2.lcm", ".kidnap.lcm", ".kid-slam.lcm", ".kid-truth.lcm",
+                       ".half.lcm", ".half-out.lcm", ".ext-out.lcm"):
             if not a.keep_logs and os.path.exists(base + suffix):
                 os.remove(base + suffix)
         with open(result_path, "w") as f:
@@ -351,6 +410,33 @@ def kidnap_table(results):
     return "\n".join(lines)
 
 
+def extend_table(results):
+    def fmt(v):
+        return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.3f}"
+
+    def med(rs, key):
+        return quantile([r[key] for r in rs if r[key] is not None], 0.5) if rs else None
+
+    lines = ["| family | worlds | localised in the half map (wrong) | landmarks: half / extended (added) / one whole "
+             "session, medians | half map's landmarks: error before / after, median of means [m]; refined | "
+             "added landmarks' error, median of means [m] | whole map's error: extended / one whole session, "
+             "median of means [m] | extended no worse than one whole session |",
+             "|---|---|---|---|---|---|---|---|"]
+    for fam in sorted({r["family"] for r in results}) + ["all"]:
+        rs = [r for r in results if fam in ("all", r["family"])]
+        fixed = [r for r in rs if r["fix"]]
+        no_worse = sum(1 for r in fixed if r["ext_mean_err_m"] is not None and r["whole_mean_err_m"] is not None
+                       and r["ext_mean_err_m"] <= r["whole_mean_err_m"])
+        lines.append(f"| {fam} | {len(rs)} | {len(fixed)} ({sum(r['wrong'] > 0 for r in rs)}) | "
+                     f"{fmt(med(fixed, 'half_landmarks'))} / {fmt(med(fixed, 'ext_landmarks'))} "
+                     f"({fmt(med(fixed, 'added'))}) / {fmt(med(fixed, 'whole_landmarks'))} | "
+                     f"{fmt(med(fixed, 'old_before_mean_err_m'))} / {fmt(med(fixed, 'old_after_mean_err_m'))}; "
+                     f"{sum(r['old_refined'] for r in fixed)} of {sum(r['old_kept'] for r in fixed)} | "
+                     f"{fmt(med(fixed, 'added_mean_err_m'))} | {fmt(med(fixed, 'ext_mean_err_m'))} / "
+                     f"{fmt(med(fixed, 'whole_mean_err_m'))} | {no_worse} / {len(fixed)} |")
+    return "\n".join(lines)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--families", default="halls,irregular")
@@ -365,7 +451,11 @@ def main():
     ap.add_argument("--keep-logs", action="store_true")
     ap.add_argument("--kidnap", action="store_true",
                     help="lost and found: the second run starts at the known start and is kidnapped once")
+    ap.add_argument("--extend", action="store_true",
+                    help="sessions: the second run starts unknown in the first half's map and extends it")
     a = ap.parse_args()
+    if a.kidnap and a.extend:
+        ap.error("--kidnap and --extend are two evaluations: give one")
     if a.worlds < 1 or a.jobs < 1 or a.first_seed < 1 or a.window_s <= 0:
         ap.error("--worlds, --jobs, --first-seed and --window-s must be positive")
     if not set(a.maps.split(",")) <= {"slam", "truth"}:
@@ -386,9 +476,10 @@ def main():
                 failed.append(f"{f} {s}: {e}")
     for line in failed:
         print("evaluate-relocalisation: failed: " + line, file=sys.stderr)
-    with open(os.path.join(out, "kidnap.json" if a.kidnap else "relocalisation.json"), "w") as f:
+    name = "kidnap.json" if a.kidnap else "extend.json" if a.extend else "relocalisation.json"
+    with open(os.path.join(out, name), "w") as f:
         json.dump({"results": results, "failed": failed}, f, indent=1)
-    print(kidnap_table(results) if a.kidnap else table(results))
+    print(kidnap_table(results) if a.kidnap else extend_table(results) if a.extend else table(results))
     print(f"\nfiles in {out}; {len(failed)} runs failed", file=sys.stderr)
     return 0 if not failed else 1
 

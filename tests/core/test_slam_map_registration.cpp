@@ -191,8 +191,11 @@ TEST(MapRegistration, DegenerateInputsAreRefusedWithAReason) {
   bad[5].cov_LinW_m2(1, 1) = nan;
   EXPECT_EQ(registerMaps(full, bad, o).decision, RegistrationDecision::kInvalidInput);
   bad = full;
-  bad[5].cov_LinW_m2.setZero();
-  EXPECT_NE(registerMaps(full, bad, o).reason.find("not positive definite"), std::string::npos);
+  bad[5].cov_LinW_m2.setZero();  // positive definite only with the extra horizontal variance
+  EXPECT_EQ(registerMaps(full, bad, o).decision, RegistrationDecision::kAccepted);
+  MapRegistrationOptions no_extra;
+  no_extra.extra_sigma_m = 0.0;
+  EXPECT_NE(registerMaps(full, bad, no_extra).reason.find("not positive definite"), std::string::npos);
   // Three lamps in a row, and every lamp at one point: refused, not a crash.
   const std::vector<Landmark> row{lamp(1, {0, 0, 5}, 0.05), lamp(2, {4, 0, 5}, 0.05), lamp(3, {8, 0, 5}, 0.05)};
   EXPECT_NE(registerMaps(row, row, o).decision, RegistrationDecision::kAccepted);

@@ -327,7 +327,8 @@ RegisteredTransform Registrar::score(const Pose2& T, const Eigen::Matrix3d& P) c
 }
 
 RegisteredTransform Registrar::refine(const Candidate& c) const {
-  RegisteredTransform r = score(c.T_AB, c.cov);
+  RegisteredTransform r = score(c.T_AB, c.cov), best;
+  bool refitted = false;  // the seed's own covariance (two lamps) is never the answer once a fit exists
   for (int it = 0; it < 10 && r.inliers.size() >= 2; ++it) {
     std::vector<Eigen::Vector2d> a, b;
     std::vector<Eigen::Matrix2d> S;
@@ -342,12 +343,13 @@ RegisteredTransform Registrar::refine(const Candidate& c) const {
     Eigen::Matrix3d P;
     if (!fitTransform(a, b, S, T, P)) break;
     RegisteredTransform next = score(T, P);
-    if (next.count_log_likelihood < r.count_log_likelihood) break;
     const bool same = next.inliers == r.inliers;
+    if (!refitted || next.count_log_likelihood > best.count_log_likelihood) best = next;
+    refitted = true;
     r = std::move(next);
     if (same) break;
   }
-  return r;
+  return refitted ? best : r;
 }
 
 std::vector<RegisteredTransform> Registrar::refineBest(std::vector<Candidate> cands) const {

@@ -19,7 +19,7 @@ const std::vector<Field<MapRegistrationOptions>>& mapRegistrationFields() {
       real<M>("height_tolerance_m", &M::height_tolerance_m, "height_tolerance_m", "m", 0, 100, kC, "two lamps are at the same height within this plus the gate on their height variances"),
       integer<M>("neighbours", &M::neighbours, "neighbours", 2, 64, "each lamp of B paired with this many nearest lamps (looked up in A's pair table)"),
       real<M>("max_pair_distance_m", &M::max_pair_distance_m, "max_pair_distance_m", "m", 0, 1e4, kLo, "A's pair table holds pairs up to this far apart"),
-      real<M>("match_probability", &M::match_probability, "match_probability", "", 0, 1, kLo, "probability that a lamp inside both maps' area is in both and matched (what a match or a miss is worth)"),
+      real<M>("match_probability", &M::match_probability, "match_probability", "", 0, 1, kLo, "probability that a lamp inside both maps' area is in both and matched (what a match or a miss is worth); < 1"),
       real<M>("chance_probability", &M::chance_probability, "chance_probability", "", 0, 0.5, kLo, "refused as another building unless the inliers are less likely than this by chance (Poisson tail, Bonferroni)"),
       real<M>("ambiguity_likelihood_ratio", &M::ambiguity_likelihood_ratio, "ambiguity_likelihood_ratio", "", 1, 1e300, kLo, "a distinct transform within this count likelihood ratio of the best: ambiguous"),
       integer<M>("min_inliers", &M::min_inliers, "min_inliers", 3, 1e6, "fewest lamps a transform must match (two make it, one checks)"),

@@ -52,7 +52,10 @@ int mergeFiles(const std::string& path_A, const std::string& path_B, const std::
   if (reg.decision != slam::RegistrationDecision::kInvalidInput &&
       reg.decision != slam::RegistrationDecision::kNoOverlap)
     printTransform("registration", reg.best);
-  std::printf("decision: %s\n", slam::registrationDecisionName(reg.decision));
+  if (!reg.second.inliers.empty()) printTransform("best other transform", reg.second);
+  std::printf("decision: %s (count log-likelihood ratio %.1f, other %.1f; chance P %.3g)\n",
+              slam::registrationDecisionName(reg.decision), reg.best.count_log_likelihood,
+              reg.second.count_log_likelihood, reg.chance_tail);
   if (reg.decision != slam::RegistrationDecision::kAccepted) {
     std::cerr << "omnislam-merge-maps: refused: " << reg.reason << std::endl;
     return kRefused;

@@ -169,6 +169,41 @@ TEST(MapRegistration, GridWithTwoMissingLampsIsRegistered) {
   EXPECT_EQ(r.best.inliers.size(), world.size());
 }
 
+/// An nx x ny grid of lamps sx_m x sy_m apart at 5.15 m without the holes.
+std::vector<Eigen::Vector3d> gridXY(int nx, int ny, double sx_m, double sy_m,
+                                    const std::vector<std::pair<int, int>>& holes) {
+  std::vector<Eigen::Vector3d> out;
+  for (const Eigen::Vector3d& p : grid(nx, ny, 1.0, holes)) out.emplace_back(sx_m * p.x(), sy_m * p.y(), 5.15);
+  return out;
+}
+
+TEST(MapRegistration, TwoLatticesOfNearlyOneSpacingAreNotMerged) {
+  // Two halls of different worlds (generated halls 23 and 25 were merged before the self test): grids
+  // 7.22 m x 6.87 m and 7.07 m x 7.64 m, turned a quarter to each other, line up in a patch, which
+  // independent chance landings would never give. Six headings of B's frame: none merged, and the
+  // self test (a map matches as many lamps with itself at another place) refuses some.
+  int by_self_test = 0;
+  for (int k = 1; k <= 6; ++k) {
+    std::mt19937_64 rng(static_cast<std::uint64_t>(k));
+    const std::vector<Landmark> A =
+        sessionMap(gridXY(6, 5, 7.22, 6.87, {{1, 1}, {4, 3}, {2, 4}}), -1.0, 100.0, Pose2{}, 0.05, rng);
+    const std::vector<Landmark> B = sessionMap(gridXY(5, 6, 7.07, 7.64, {{0, 1}, {3, 2}}), -1.0, 100.0,
+                                               Pose2{-20.0, 13.0, wrapAngle(2.5 + 0.3 * k)}, 0.05, rng);
+    const MapRegistration r = registerMaps(A, B, MapRegistrationOptions{});
+    EXPECT_NE(r.decision, RegistrationDecision::kAccepted) << k << ": " << r.reason;
+    by_self_test += r.reason.find("a lattice") != std::string::npos;
+  }
+  EXPECT_GE(by_self_test, 1);
+  // The same hall twice is still merged: its own lattice shifted or turned matches fewer lamps.
+  std::mt19937_64 rng(12);
+  const std::vector<Eigen::Vector3d> hall = grid(6, 5, 7.22, {{1, 1}, {2, 3}, {4, 0}});  // no half-turn symmetry
+  const MapRegistration same =
+      registerMaps(sessionMap(hall, -1.0, 100.0, Pose2{}, 0.05, rng),
+                   sessionMap(hall, -1.0, 100.0, Pose2{-20.0, 13.0, 2.5}, 0.05, rng), MapRegistrationOptions{});
+  EXPECT_EQ(same.decision, RegistrationDecision::kAccepted) << same.reason;
+  EXPECT_GT(static_cast<int>(same.best.inliers.size()), same.self_matches);
+}
+
 TEST(MapRegistration, DegenerateInputsAreRefusedWithAReason) {
   std::mt19937_64 rng(9);
   const std::vector<Eigen::Vector3d> world = randomWorld(rng, 40.0, 40.0);

@@ -129,6 +129,9 @@ class Registrar {
  public:
   Registrar(const MapRegistrationOptions& o, PointLamps A, PointLamps B);
   MapRegistration run();
+  /// For a registrar of a map with itself: the most lamps a transform other than the identity matches
+  /// (a lattice's shift or turn: what the map's regularity explains at a wrong place).
+  int selfMatches();
 
  private:
   bool sameHeight(int a, int b) const;
@@ -427,6 +430,26 @@ MapRegistration Registrar::run() {
   return r;
 }
 
+int Registrar::selfMatches() {
+  int most = 0;
+  for (const RegisteredTransform& t : refineBest(seeds()))
+    if (distinct(t.T_AB, t.cov, Pose2{}, Eigen::Matrix3d::Zero(), gate3_))
+      most = std::max(most, static_cast<int>(t.inliers.size()));
+  return most;
+}
+
+/// An accepted registration is ambiguous when it matches no more lamps than either map matches with
+/// itself at a transform other than the identity: a lattice lines its lamps up at a wrong place
+/// together, which the chance model (independent landings) does not see.
+void selfTest(const MapRegistrationOptions& o, const PointLamps& A, const PointLamps& B, MapRegistration& r) {
+  r.self_matches = std::max(Registrar(o, A, A).selfMatches(), Registrar(o, B, B).selfMatches());
+  const int m = static_cast<int>(r.best.inliers.size());
+  if (m > r.self_matches) return;
+  r.decision = RegistrationDecision::kAmbiguous;
+  r.reason = "ambiguous: " + std::to_string(m) + " lamps matched, no more than a map matches with itself at " +
+             "another place (" + std::to_string(r.self_matches) + ": a lattice)";
+}
+
 }  // namespace
 
 MapRegistration registerMaps(const std::vector<Landmark>& map_A, const std::vector<Landmark>& map_B,
@@ -443,7 +466,9 @@ MapRegistration registerMaps(const std::vector<Landmark>& map_A, const std::vect
     r.reason = "invalid input: " + why;
     return r;
   }
-  return Registrar(options, std::move(A), std::move(B)).run();
+  MapRegistration r = Registrar(options, A, B).run();
+  if (r.decision == RegistrationDecision::kAccepted) selfTest(options, A, B, r);
+  return r;
 }
 
 }  // namespace omnislam::slam

@@ -27,6 +27,10 @@
 //     bound for the best of many), is not below chance_probability; refused as ambiguous when a distinct transform has
 //     L within log(ambiguity_likelihood_ratio) of the best (a regular grid's symmetry); refused as no overlap when no
 //     transform has min_inliers inliers; refused as invalid input for fewer than 3 lamps in a map or a non-finite lamp.
+//  5. Self test: a transform that passed is still ambiguous when it matches no more lamps than either
+//     map matches with itself at a transform other than the identity (each map registered onto
+//     itself): a lattice lines up many lamps at once at a wrong place, which the Poisson model of
+//     independent chance landings does not see (two halls whose grids have nearly one spacing).
 #pragma once
 
 #include <Eigen/Core>
@@ -117,6 +121,9 @@ struct MapRegistration {
   int transforms_scored = 0;  ///< those a third lamp confirmed, scored on every lamp
   /// Distinct transforms within log(ambiguity_likelihood_ratio) of the best (1 when accepted).
   int num_explaining = 0;
+  /// The most lamps either map matches with itself at a transform other than the identity (its
+  /// regularity); computed when the other tests passed (0 otherwise).
+  int self_matches = 0;
 };
 
 /// Registers map B onto map A (point landmarks; other kinds ignored). Indices of `inliers` are into

@@ -69,7 +69,8 @@ TEST(MapMerge, LampInMapBErrorJacobiansMatchNumerical) {
     for (int i = 0; i < 3; ++i) {  // central differences
       Eigen::Vector3d d = Eigen::Vector3d::Zero();
       d(i) = h;
-      const Pose2 Tp{T.x_m + d.x(), T.y_m + d.y(), T.theta_rad + d.z()}, Tm{T.x_m - d.x(), T.y_m - d.y(), T.theta_rad - d.z()};
+      const Pose2 Tp{T.x_m + d.x(), T.y_m + d.y(), T.theta_rad + d.z()},
+          Tm{T.x_m - d.x(), T.y_m - d.y(), T.theta_rad - d.z()};
       EXPECT_LT(((lampInMapBError(Tp, p, b) - lampInMapBError(Tm, p, b)) / (2 * h) - J_T.col(i)).norm(), 1e-7);
       EXPECT_LT(((lampInMapBError(T, p + d, b) - lampInMapBError(T, p - d, b)) / (2 * h) - J_p.col(i)).norm(), 1e-7);
     }
@@ -128,7 +129,7 @@ TEST(MapMerge, JointSolveTransformMatchesTheRegistrations) {
 
 TEST(MapMerge, IdsAreUniqueAndTheUnmatchedLampsOfBothMapsAreKept) {
   TwoSessions s = twoSessions(9, 30, 0.05);
-  s.A.resize(20);                          // A: lamps 0-19
+  s.A.resize(20);                            // A: lamps 0-19
   s.B.erase(s.B.begin(), s.B.begin() + 10);  // B: lamps 10-29
   slam::RegisteredTransform r;
   r.T_AB = s.T_AB, r.cov = 1e-6 * Eigen::Matrix3d::Identity();

@@ -10,9 +10,10 @@
 // every lamp of A (fused ones at the solve's p, their id A's, their counters summed), then B's
 // unmatched landmarks moved by T_AB with new ids above A's largest. Covariances: of a fused lamp, its
 // marginal from the solve (T_AB's uncertainty included); an unmatched lamp keeps its own (one of B
-// moved: R Sigma_b R^T plus T_AB's through the Jacobian (the correlations between lamps through T_AB are not kept: a
-// saved map holds marginals)). With FixedTransform, T_AB is held at the given value: a fused lamp is the
-// information-weighted mean of a and T_AB(b) and its covariance the inverse of the information sum.
+// moved: R Sigma_b R^T plus T_AB's through the Jacobian; the correlations between lamps through T_AB
+// are not kept, a saved map holds marginals). With FixedTransform, T_AB is held at the given value: a
+// fused lamp is the information-weighted mean of a and T_AB(b), its covariance the inverse of the
+// information sum.
 #pragma once
 
 #include <ceres/sized_cost_function.h>

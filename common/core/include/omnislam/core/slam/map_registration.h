@@ -24,9 +24,10 @@
 //  4. Decision: refused as chance (another building) when P(Poisson(lambda) >= m - 2), lambda =
 //     sum of p_b over the winner's lamps inside A's area and m its inliers (two are its seed's by
 //     construction), times the number of transforms tried (formed from matching pairs: a Bonferroni
-//     bound for the best of many), is not below chance_probability; refused as ambiguous when a distinct transform has
-//     L within log(ambiguity_likelihood_ratio) of the best (a regular grid's symmetry); refused as no overlap when no
-//     transform has min_inliers inliers; refused as invalid input for fewer than 3 lamps in a map or a non-finite lamp.
+//     bound for the best of many), is not below chance_probability; refused as ambiguous when a
+//     distinct transform has L within log(ambiguity_likelihood_ratio) of the best (a regular grid's
+//     symmetry); refused as no overlap when no transform has min_inliers inliers; refused as invalid
+//     input for fewer than 3 lamps in a map or a non-finite lamp.
 //  5. Self test: a transform that passed is still ambiguous when it matches no more lamps than either
 //     map matches with itself at a transform other than the identity (each map registered onto
 //     itself): a lattice lines up many lamps at once at a wrong place, which the Poisson model of

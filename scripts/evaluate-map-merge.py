@@ -11,7 +11,7 @@ frame is unknown to the merge. omnislam-merge-maps A B' --out M merges them. Sco
 world's true lamps: the landmark errors of A, of B (B' moved back by the true M^-1) and of the merged
 map (one-to-one assignment within a 2 m gate, 3D distances, as omnislam-eval's mapErrors: the most
 pairs, then the least summed distance), the registration's error (the joint solve's T_AB against
-M^-1), and the refused merges. Then pairs of maps of different worlds (A of one world, B' of another,
+M^-1: the mean distance between B's lamps moved by each, and the heading), and the refused merges. Then pairs of maps of different worlds (A of one world, B' of another,
 within and across the families), all of which must be refused.
 
   python3 scripts/evaluate-map-merge.py [--families halls,irregular] [--worlds 10] [--first-seed 1]
@@ -82,6 +82,11 @@ def inverse(pose):
     x, y, th = pose
     c, s = math.cos(th), math.sin(th)
     return (-c * x - s * y, s * x - c * y, -th)
+
+
+def apply(T, p):
+    c, s = math.cos(T[2]), math.sin(T[2])
+    return (T[0] + c * p[0] - s * p[1], T[1] + s * p[0] + c * p[1])
 
 
 def wrap(a):
@@ -260,10 +265,10 @@ def one_world(family, seed, a, out):
         r[tag], r[tag + "_errors"] = summary(errors, spurious), errors
         errors, spurious = map_errors(aligned(est, truth), truth)
         r[tag + "_aligned"], r[tag + "_aligned_errors"] = summary(errors, spurious), errors
-    if T is not None:
-        Ti = inverse(M)
-        r["T_error_m"] = math.hypot(T[0] - Ti[0], T[1] - Ti[1])
-        r["T_error_deg"] = abs(math.degrees(wrap(T[2] - Ti[2])))
+    if T is not None:  # T_AB against M^-1: where it puts B's lamps (not its origin, far from them)
+        moved = positions(load_map(base + ".b-moved.yaml"))
+        r["T_error_m"] = sum(math.dist(apply(T, p), apply(inverse(M), p)) for p in moved) / max(len(moved), 1)
+        r["T_error_deg"] = abs(math.degrees(wrap(T[2] + M[2])))
     print(f"evaluate-map-merge: {family} {seed}: {decision}; mean error A {r['A']['mean_m']}, B {r['B']['mean_m']}, "
           f"merged {r.get('merged', {}).get('mean_m')}; T error {r.get('T_error_m')} m {r.get('T_error_deg')} deg"
           + ("" if decision == "accepted" else f" ({reason})"), file=sys.stderr)
@@ -324,7 +329,7 @@ def table(results, kind=""):
     rigid fit to the truth (its shape)."""
     lines = ["| family | worlds | merged | refused (reasons) | map | lamps' error mean / median / p90 [m] | "
              "worlds' mean error, median [m] | matched / spurious lamps | merged's mean <= the better session's | "
-             "T_AB error, worlds whose maps are of the world: n: median / max [m], [deg] |",
+             "T_AB error (at B's lamps; heading), worlds whose maps are of the world: n: median / max [m], [deg] |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for fam in sorted({r["family"] for r in results}) + ["all"]:
         rs = [r for r in results if fam in ("all", r["family"])]

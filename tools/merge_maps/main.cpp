@@ -15,6 +15,7 @@
 #include "omnislam/core/slam/options_table.h"
 #include "omnislam/lcmio/app.h"
 #include "omnislam/lcmio/cli.h"
+#include "omnislam/lcmio/log_writer.h"
 #include "omnislam/runtime/map_file.h"
 #include "omnislam/smoothing/map_merge.h"
 
@@ -45,6 +46,7 @@ int mergeFiles(const std::string& path_A, const std::string& path_B, const std::
                const slam::MapRegistrationOptions& o) {
   const std::string bad = o.validate();
   if (!bad.empty()) throw std::invalid_argument("--" + bad.substr(0, bad.find(' ')) + ": " + bad);
+  if (!out.empty()) lcmio::requireWritableFile(out, "--out");  // before the work, not after it
   const runtime::SavedMap A = runtime::loadMap(path_A), B = runtime::loadMap(path_B);
   std::printf("A: %s, %zu landmarks; B: %s, %zu landmarks\n", path_A.c_str(), A.landmarks.size(), path_B.c_str(),
               B.landmarks.size());
@@ -53,9 +55,11 @@ int mergeFiles(const std::string& path_A, const std::string& path_B, const std::
       reg.decision != slam::RegistrationDecision::kNoOverlap)
     printTransform("registration", reg.best);
   if (!reg.second.inliers.empty()) printTransform("best other transform", reg.second);
-  std::printf("decision: %s (count log-likelihood ratio %.1f, other %.1f; chance P %.3g)\n",
-              slam::registrationDecisionName(reg.decision), reg.best.count_log_likelihood,
-              reg.second.count_log_likelihood, reg.chance_tail);
+  if (reg.best.inliers.empty()) std::printf("decision: %s\n", slam::registrationDecisionName(reg.decision));
+  else
+    std::printf("decision: %s (count log-likelihood ratio %.1f, other %.1f; chance P %.3g; self matches %d)\n",
+                slam::registrationDecisionName(reg.decision), reg.best.count_log_likelihood,
+                reg.second.count_log_likelihood, reg.chance_tail, reg.self_matches);
   if (reg.decision != slam::RegistrationDecision::kAccepted) {
     std::cerr << "omnislam-merge-maps: refused: " << reg.reason << std::endl;
     return kRefused;

@@ -54,6 +54,7 @@ TABLE_BLOCKS = {
     "docs/user/slam-process.md": ("process", "filter"),
     "docs/design/detectors.md": ("lights", "lines"),
     "docs/user/world-file.md": ("world_camera", "world_camera_scaramuzza"),
+    "docs/design/global-localisation.md": ("merge",),
 }
 
 

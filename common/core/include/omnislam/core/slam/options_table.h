@@ -13,6 +13,7 @@
 #include "omnislam/core/slam/global_localisation.h"
 #include "omnislam/core/slam/health_monitor.h"
 #include "omnislam/core/slam/lost_monitor.h"
+#include "omnislam/core/slam/map_registration.h"
 
 namespace omnislam::slam::options {
 
@@ -35,6 +36,8 @@ const std::vector<Field<HealthOptions>>& healthFields();          ///< keys `hea
 /// keys `localisation.*` (global_localisation.h; the table is in global_localisation_table.cpp)
 const std::vector<Field<GlobalLocalisationOptions>>& globalLocalisationFields();
 const std::vector<Field<LostOptions>>& lostFields();  ///< keys `lost.*` (lost_monitor.h)
+/// omnislam-merge-maps' flags (map_registration.h; the table is in map_registration_table.cpp)
+const std::vector<Field<MapRegistrationOptions>>& mapRegistrationFields();
 
 /// Names of the enum fields (index = the enum's value).
 const std::vector<std::string>& associationNames();   ///< "hungarian", "ml"

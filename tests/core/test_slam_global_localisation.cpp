@@ -3,6 +3,7 @@
 // missing lamp is seen), a map of another building, noise, misses and clutter, determinism.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -322,6 +323,99 @@ TEST(slam_GlobalLocalisation, SportsHallWithANoisyMapIsStillNeverLocalised) {
     }
     EXPECT_GT(ambiguous, static_cast<int>(frames.size()) * 9 / 10) << "map draw " << seed;
   }
+}
+
+// Generated world halls 28 (docs/design/global-localisation.md, Kidnap): a 5.66 m x 7.54 m grid of lamps
+// at 5.55 m with 14 missing and 4 extra, seen by a camera 1.8 m up whose perceptual range (17.36 m in
+// 3D) is shorter than the localiser's max_range_m (20 m). The seeds' count test expected every lamp
+// within 20 m (21 at this start, 12 inside the range): the true pose, which explains every bearing,
+// was refused in every frame, and a pose 4 grid spacings off (16 lamps within 20 m) was localised
+// instead, at frame 7 of the log.
+std::vector<Eigen::Vector3d> halls28Lamps() {
+  const double xy[][2] = {{3.18, 4.35},   {3.18, 11.89},    {3.18, 26.97},    {3.18, 34.51},   {3.18, 42.05},
+                          {8.84, 11.89},  {8.84, 19.43},    {8.84, 26.97},    {8.84, 34.51},   {8.84, 42.05},
+                          {14.5, 4.35},   {14.5, 11.89},    {14.5, 19.43},    {14.5, 26.97},   {14.5, 34.51},
+                          {14.5, 42.05},  {20.16, 11.89},   {20.16, 19.43},   {20.16, 42.05},  {25.82, 4.35},
+                          {25.82, 11.89}, {25.82, 19.43},   {25.82, 26.97},   {25.82, 34.51},  {31.48, 11.89},
+                          {31.48, 26.97}, {31.48, 34.51},   {31.48, 42.05},   {37.14, 4.35},   {37.14, 11.89},
+                          {37.14, 19.43}, {37.14, 26.97},   {37.14, 34.51},   {37.14, 42.05},  {42.8, 11.89},
+                          {42.8, 26.97},  {42.8, 34.51},    {42.8, 42.05},    {48.46, 4.35},   {48.46, 19.43},
+                          {48.46, 42.05}, {54.12, 4.35},    {54.12, 11.89},   {54.12, 19.43},  {54.12, 34.51},
+                          {54.12, 42.05}, {34.761, 26.753}, {49.608, 44.583}, {32.007, 1.073}, {40.394, 25.834}};
+  std::vector<Eigen::Vector3d> l;
+  for (const auto& p : xy) l.emplace_back(p[0], p[1], 5.55);
+  return l;
+}
+
+TEST(slam_GlobalLocalisation, PerceptualRangeShorterThanMaxRangeStillSeedsTheTruth) {
+  const std::vector<Eigen::Vector3d> lamps = halls28Lamps();
+  const Eigen::Vector3d cam(0.0, 0.0, 1.8);
+  PerceptionOptions p;
+  p.max_range_m = 17.36, p.min_elevation_rad = deg2rad(-5.0), p.detection_probability = 0.9;
+  p.default_p_CinR_m = cam;
+  std::mt19937_64 rng(28);
+  std::normal_distribution<double> n(0.0, kSigma_rad);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  GlobalLocaliser loc(GlobalLocalisationOptions{}, MotionNoiseOptions{}, p, asMap(lamps, 0.03));
+  Pose2 truth{33.6, 9.4, deg2rad(154.0)}, odom{}, odom_prev{};
+  int first_fix = -1, first_near = -1;
+  for (int k = 0; k < 20; ++k) {  // 20 frames of 0.25 m: 5 m
+    std::vector<BearingMeasurement> z;
+    for (const Eigen::Vector3d& l : lamps) {
+      const double draw = u(rng), na = n(rng), ne = n(rng);
+      if ((l - cameraCentreInWorld(truth, cam)).norm() > p.max_range_m || draw > 0.9) continue;
+      const auto b = predictBearing(l, truth, cam);
+      BearingMeasurement m;
+      m.azimuth_rad = wrapAngle(b->x() + na), m.elevation_rad = b->y() + ne, m.p_CinR_m = cam;
+      m.cov_rad2 = Eigen::Matrix2d::Identity() * kSigma_rad * kSigma_rad;
+      z.push_back(m);
+    }
+    const LocalisationStatus& st = loc.step(odom_prev, odom, z);
+    for (const PoseHypothesis& h : loc.hypotheses())
+      if (first_near < 0 && positionError_m(h.pose_W, truth) < 0.3 && headingError_deg(h.pose_W, truth) < 2.0)
+        first_near = k;
+    if (st.state == LocalisationState::kLocalised) {
+      if (first_fix < 0) first_fix = k;
+      EXPECT_LT(positionError_m(st.best.at(0).pose_W, truth), 0.3) << "frame " << k;
+      EXPECT_LT(headingError_deg(st.best.at(0).pose_W, truth), 2.0) << "frame " << k;
+    }
+    const Pose2 step{0.25, 0.0, deg2rad(2.0)};
+    truth = truth.compose(step), odom_prev = odom, odom = odom.compose(step);
+  }
+  EXPECT_EQ(first_near, 0) << "the true pose is a hypothesis from the first frame on";
+  EXPECT_GE(first_fix, 0) << "never localised";
+}
+
+// A hypothesis is confirmed by the frames after its birth, not by those it was run back through: in
+// the first 6 frames only the two highest lamps are seen (no seed: fewer than min_matched bearings),
+// then every lamp in range. The pose seeded in frame 6 explains the earlier frames run backwards, yet
+// it is localised no earlier than min_frames frames and min_travel_m from its birth.
+TEST(slam_GlobalLocalisation, ConfirmedOnlyByFramesAfterItsBirth) {
+  const std::vector<Eigen::Vector3d> lamps = irregularLamps(90, 40.0, 40.0, 11);
+  Sensor s;
+  const GlobalLocalisationOptions o = optionsFor(s);
+  GlobalLocaliser loc(o, MotionNoiseOptions{}, perceptionFor(s), asMap(lamps));
+  std::mt19937_64 rng(5);
+  Pose2 truth{20.0, 20.0, 0.5}, odom{}, odom_prev{};
+  constexpr int kBirth = 6;
+  const double step_m = 0.3;
+  int first_fix = -1;
+  for (int k = 0; k < 20; ++k) {
+    std::vector<BearingMeasurement> z = observe(lamps, truth, s, rng);
+    std::sort(z.begin(), z.end(), [](const auto& a, const auto& b) { return a.elevation_rad > b.elevation_rad; });
+    if (k < kBirth && z.size() > 2) z.resize(2);
+    const LocalisationStatus& st = loc.step(odom_prev, odom, z);
+    if (st.state == LocalisationState::kLocalised && first_fix < 0) {
+      first_fix = k;
+      EXPECT_LT(positionError_m(st.best.at(0).pose_W, truth), 0.3);
+      EXPECT_GE(st.best.at(0).frames_explained, o.min_frames);
+      EXPECT_GE(st.best.at(0).travel_m, o.min_travel_m);
+    }
+    const Pose2 u{step_m, 0.0, deg2rad(3.0)};
+    truth = truth.compose(u), odom_prev = odom, odom = odom.compose(u);
+  }
+  ASSERT_GE(first_fix, 0) << "never localised";
+  EXPECT_GE(first_fix, kBirth + std::max(o.min_frames - 1, static_cast<int>(std::ceil(o.min_travel_m / step_m))));
 }
 
 TEST(slam_GlobalLocalisation, MapOfAnotherBuildingIsNeverLocalised) {

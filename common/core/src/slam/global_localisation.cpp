@@ -179,8 +179,10 @@ bool GlobalLocaliser::runBackwards(PoseHypothesis& h) const {
     h.frame_llr.insert(h.frame_llr.begin(), f.llr);
     h.frame_count_llr.insert(h.frame_count_llr.begin(), f.count_llr);
     sum += f.llr, csum += f.count_llr;
-    h.travel_m += std::hypot(u.x_m, u.y_m);
-    if (f.matched > 0) ++h.frames_explained;
+    // Its L and C sum these frames, but frames_explained and travel_m count from its birth forward:
+    // a pose fitted to this frame and run back through the window follows that window's odometry
+    // by construction, so those frames rank it and cannot confirm it (issue 56, halls 28: a seed 22.6 m
+    // off, born in frame 7, was confirmed by the six frames before it in that same frame).
     if (best && best->frame_llr.size() > back) {
       best_sum += best->frame_llr[best->frame_llr.size() - 1 - back];
       best_csum += best->frame_count_llr[best->frame_count_llr.size() - 1 - back];

@@ -80,6 +80,11 @@ std::vector<GlobalLocaliser::Predicted> GlobalLocaliser::predictVisible(const Po
   return out;
 }
 
+int GlobalLocaliser::expectedInside(const Pose2& pose_W, const std::vector<BearingMeasurement>& z) const {
+  const std::vector<Predicted> lamps = predictVisible(pose_W, cameraOffset(z, perception_));
+  return static_cast<int>(std::count_if(lamps.begin(), lamps.end(), [](const Predicted& p) { return p.inner; }));
+}
+
 std::vector<int> GlobalLocaliser::assign(const std::vector<Predicted>& lamps, const Eigen::Matrix3d& P,
                                          const std::vector<BearingMeasurement>& z, double* llr, double* count_llr,
                                          int* matched) const {

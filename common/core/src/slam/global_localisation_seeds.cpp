@@ -129,10 +129,13 @@ bool GlobalLocaliser::plausibleSeed(const Seed& s, const std::vector<BearingMeas
     landed += hit ? 1 : 0;
     if (in_range - landed >= max_unexplained_) return false;  // already more than clutter explains
   }
-  scratch.clear();
-  const Eigen::Vector3d c = z.empty() ? perception_.default_p_CinR_m : z.front().p_CinR_m;
-  index_.lampsNear(cameraCentreInWorld(s.pose_W, c).head<2>(), opt_.max_range_m, scratch);
-  return landed >= opt_.min_matched && countsConsistent(landed, static_cast<int>(scratch.size()), in_range - landed);
+  // The lamps expected are those the fit would expect (inside the perceptual range as well as
+  // max_range_m), counted with the margin inside both so that a seed pose off by up to the margin
+  // never expects more than its fit does. Counting every lamp within max_range_m refused the true
+  // pose whenever the perceptual range was the shorter one (issue 56, halls 28: 21 lamps within
+  // 20 m, 12 inside the 17.4 m range, all 12 seen: P(<= 12 | Binomial(21, 0.9)) = 1e-4).
+  if (landed < opt_.min_matched) return false;
+  return countsConsistent(landed, expectedInside(s.pose_W, z), in_range - landed);
 }
 
 }  // namespace omnislam::slam

@@ -34,7 +34,8 @@
 // and it keeps the state ambiguous.
 // States: searching (no hypothesis, or a single one not yet confirmed), ambiguous (more than one within
 // log(ambiguity_likelihood_ratio) of the best, in L or in C: how many and the best few), localised
-// (exactly one, with >= min_frames frames explained and >= min_travel_m driven), lost (frames with
+// (exactly one, with >= min_frames frames explained and >= min_travel_m driven since its birth: not
+// the frames it was run back through), lost (frames with
 // enough bearings and no hypothesis explains them).
 #pragma once
 
@@ -116,9 +117,10 @@ struct PoseHypothesis {
   double count_log_likelihood = 0.0;
   std::vector<double> frame_count_llr;  ///< c of the frames of the window, oldest first
   double evidence = 0.0;                ///< e: recent evidence (see the file header)
-  int frames_explained = 0;             ///< frames with >= 1 matched bearing (with those it was run back through)
-  double travel_m = 0.0;                ///< odometry travel over those frames
-  int matched_last = 0;                 ///< bearings matched in the last frame
+  /// Frames with >= 1 matched bearing from its birth frame on (not those it was run back through).
+  int frames_explained = 0;
+  double travel_m = 0.0;  ///< odometry travel since its birth frame
+  int matched_last = 0;   ///< bearings matched in the last frame
 };
 
 struct LocalisationStatus {
@@ -270,6 +272,9 @@ class GlobalLocaliser {
   /// A cheap test of a seed before its fit: every bearing placed at the map's heights from the seed
   /// pose, the ones landing on a lamp counted and tested with countsConsistent() (landings are not
   /// one to one, so this never refuses what the fit would keep on the counts).
+  /// The lamps a pose expects to see (inside the perceptual range and max_range_m, and the
+  /// association margin inside both: never more than the fit of a pose within the margin expects).
+  int expectedInside(const Pose2& pose_W, const std::vector<BearingMeasurement>& z) const;
   bool plausibleSeed(const Seed& s, const std::vector<BearingMeasurement>& z, const FramePoints& pts,
                      std::vector<int>& scratch) const;
   void pruneAndSort();

@@ -2,6 +2,8 @@
 // envelope and the resume rules; see checkpoint.h and docs/user/slam-process.md.
 #include "omnislam/runtime/checkpoint.h"
 
+#include "omnislam/core/limits.h"
+
 #include <algorithm>
 #include <sstream>
 #include <stdexcept>
@@ -49,9 +51,18 @@ void putFrame(ByteWriter& w, const Frame& f) {
   for (int32_t i : f.feature_index) w.i32(i);
 }
 
+// A utime the state took from a message: within what lcmio::validate accepts, [0, 2^62] us, so that
+// a corrupted checkpoint cannot overflow the arithmetic done on it (a buffer's horizon, a gap).
+int64_t messageUtime(ByteReader& r, const char* what) {
+  const int64_t t = r.i64(what);
+  if (t < 0 || t > kMaxUtime)
+    throw StateFormatError(std::string(what) + " " + std::to_string(t) + " is outside [0, 2^62] us");
+  return t;
+}
+
 Frame getFrame(ByteReader& r) {
   Frame f;
-  f.utime = r.i64("frame.utime");
+  f.utime = messageUtime(r, "frame.utime");
   f.seq = r.i64("frame.seq");
   f.num_features = r.i32("frame.num_features");
   f.z.resize(r.count("frame measurements", kMaxItems, 99));
@@ -198,7 +209,7 @@ void Pairer::loadState(ByteReader& r) {
   odom_.clear();
   const std::size_t n = r.count("odometry samples", kMaxItems, 32);
   for (std::size_t i = 0; i < n; ++i) {
-    const int64_t t = r.i64("odometry sample utime");
+    const int64_t t = messageUtime(r, "odometry sample utime");
     if (!odom_.add(t, getPose(r, "odometry sample pose")))
       throw StateFormatError("odometry samples not in increasing utime order");
   }
@@ -208,14 +219,14 @@ void Pairer::loadState(ByteReader& r) {
   held_.resize(r.count("held messages", kMaxItems, 69));
   for (Input& in : held_) {
     in.is_frame = r.boolean("held.is_frame");
-    in.utime = r.i64("held.utime");
+    in.utime = messageUtime(r, "held.utime");
     in.pose_O = getPose(r, "held.pose_O");
     in.frame = getFrame(r);
   }
   held_ahead_ = r.boolean("held_ahead");
   T_OfromIn_ = getPose(r, "T_OfromIn");
   have_last_odom_ = r.boolean("have_last_odom");
-  last_odom_utime_ = r.i64("last_odom_utime");
+  last_odom_utime_ = messageUtime(r, "last_odom_utime");
   last_odom_in_ = getPose(r, "last_odom_in");
   for (StreamState* s : {&odom_state_, &frame_state_}) {
     const bool have_last = r.boolean("stream.have_last");
@@ -225,7 +236,7 @@ void Pairer::loadState(ByteReader& r) {
   const bool have_epoch_newest = r.boolean("have_epoch_newest");
   restoreOrder(epoch_, have_epoch_newest, r.i64("epoch_newest_utime"));
   have_newest_frame_ = r.boolean("have_newest_frame");
-  newest_frame_utime_ = r.i64("newest_frame_utime");
+  newest_frame_utime_ = messageUtime(r, "newest_frame_utime");
   getCounts(r, pairingCounters(stats_), "pairing counters");
 }
 
@@ -258,7 +269,7 @@ void SlamDriver::loadState(ByteReader& r) {
   std::unique_ptr<slam::FastSlam> filters[2];
   for (auto& f : filters)
     if (r.boolean("filter present")) f = std::make_unique<slam::FastSlam>(slam::FastSlam::loadState(opt_.filter, r));
-  const int64_t ended_step_utime = r.i64("ended_step_utime");
+  const int64_t ended_step_utime = messageUtime(r, "ended_step_utime");
   const Pose2 odom_prev = getPose(r, "odom_prev_O");
   int64_t v[9];
   for (int64_t& x : v) x = r.i64("driver counters");

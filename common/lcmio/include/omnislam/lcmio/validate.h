@@ -22,10 +22,8 @@
 
 namespace omnislam::lcmio {
 
-/// The largest utime accepted (2^62 us, some 146 000 years after 1970). Anything later is a
-/// corrupted field, and the bound leaves every receiver room to add a duration to a utime
-/// without overflowing int64 (a restart window, a buffer length).
-inline constexpr int64_t kMaxUtime = int64_t{1} << 62;
+/// The largest utime accepted (omnislam/core/limits.h: 2^62 us).
+inline constexpr int64_t kMaxUtime = omnislam::kMaxUtime;
 
 /// Limits on what a process accepts (a message beyond them is refused, not truncated).
 struct Limits {

@@ -29,9 +29,11 @@ import random
 import subprocess
 import sys
 import tempfile
-from concurrent.futures import ThreadPoolExecutor
 
 import yaml
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from world_jobs import run_worlds  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(os.environ.get("OMNISLAM_BUILD_DIR", os.path.join(ROOT, "build")), "bin")
@@ -368,16 +370,7 @@ def main():
     out = a.out or tempfile.mkdtemp(prefix="omnislam-merge.")
     os.makedirs(out, exist_ok=True)
     worlds = [(f, s) for f in a.families.split(",") for s in range(a.first_seed, a.first_seed + a.worlds)]
-    results, failed = [], []
-    with ThreadPoolExecutor(max_workers=a.jobs) as pool:
-        futures = {pool.submit(one_world, f, s, a, out): (f, s) for f, s in worlds}
-        for fut, (f, s) in futures.items():
-            try:
-                results.append(fut.result())
-            except RuntimeError as e:
-                failed.append(f"{f} {s}: {e}")
-    for line in failed:
-        print("evaluate-map-merge: failed: " + line, file=sys.stderr)
+    results, failed = run_worlds(lambda f, s: one_world(f, s, a, out), worlds, a.jobs, "evaluate-map-merge")
     done = [(r["family"], r["seed"]) for r in results]
     others = other_world_merges(a, out, other_world_pairs(done, a.pairs_per_world))
     with open(os.path.join(out, "map-merge.json"), "w") as f:

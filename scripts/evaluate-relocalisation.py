@@ -45,10 +45,10 @@ import struct
 import subprocess
 import sys
 import tempfile
-from concurrent.futures import ThreadPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from lcm_log_filter import HEADER, SYNC, events  # noqa: E402
+from world_jobs import run_worlds  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(os.environ.get("OMNISLAM_BUILD_DIR", os.path.join(ROOT, "build")), "bin")
@@ -465,17 +465,9 @@ def main():
             ap.error(f"{BIN}/{t} missing: run scripts/build.sh first")
     out = a.out or tempfile.mkdtemp(prefix="omnislam-reloc.")
     os.makedirs(out, exist_ok=True)
-    jobs = [(f, s) for f in a.families.split(",") for s in range(a.first_seed, a.first_seed + a.worlds)]
-    results, failed = [], []
-    with ThreadPoolExecutor(max_workers=a.jobs) as pool:
-        futures = {pool.submit(one_world, f, s, a, out): (f, s) for f, s in jobs}
-        for fut, (f, s) in futures.items():
-            try:
-                results.extend(fut.result())
-            except RuntimeError as e:
-                failed.append(f"{f} {s}: {e}")
-    for line in failed:
-        print("evaluate-relocalisation: failed: " + line, file=sys.stderr)
+    worlds = [(f, s) for f in a.families.split(",") for s in range(a.first_seed, a.first_seed + a.worlds)]
+    per_world, failed = run_worlds(lambda f, s: one_world(f, s, a, out), worlds, a.jobs, "evaluate-relocalisation")
+    results = [r for rs in per_world for r in rs]
     name = "kidnap.json" if a.kidnap else "extend.json" if a.extend else "relocalisation.json"
     with open(os.path.join(out, name), "w") as f:
         json.dump({"results": results, "failed": failed}, f, indent=1)

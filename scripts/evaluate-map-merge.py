@@ -33,22 +33,13 @@ import tempfile
 import yaml
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from world_jobs import run_worlds  # noqa: E402
+from world_jobs import quantile, run, run_worlds, truth_lamps  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(os.environ.get("OMNISLAM_BUILD_DIR", os.path.join(ROOT, "build")), "bin")
 CONFIG = os.path.join(ROOT, "config", "slam", "sports_hall.yaml")
 GATE_M = 2.0  # omnislam-eval's default landmark gate
 FORBIDDEN = 1e12
-
-
-def run(argv, log):
-    with open(log, "w") as f:
-        r = subprocess.run(argv, stdout=f, stderr=subprocess.STDOUT)
-    if r.returncode != 0:
-        with open(log) as f:
-            tail = f.read()[-600:]
-        raise RuntimeError(f"{os.path.basename(argv[0])} exited {r.returncode}: {tail}")
 
 
 def load_map(path):
@@ -179,19 +170,9 @@ def map_errors(est, truth, with_pairs=False):
     return errors, len(est) - len(errors)
 
 
-def quantile(v, q):
-    v = sorted(v)
-    return v[min(len(v) - 1, int(q * (len(v) - 1) + 0.5))] if v else float("nan")
-
-
 def summary(errors, spurious):
     return {"mean_m": sum(errors) / len(errors) if errors else None, "median_m": quantile(errors, 0.5) if errors else None,
             "p90_m": quantile(errors, 0.9) if errors else None, "matched": len(errors), "spurious": spurious}
-
-
-def truth_lamps(world_yaml):
-    with open(world_yaml) as f:
-        return [(L["x_m"], L["y_m"], L["z_m"]) for L in yaml.safe_load(f)["lights"]["list"]]
 
 
 def positions(m):

@@ -48,7 +48,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from lcm_log_filter import HEADER, SYNC, events  # noqa: E402
-from world_jobs import run_worlds  # noqa: E402
+from world_jobs import quantile, run, run_worlds, truth_lamps  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(os.environ.get("OMNISLAM_BUILD_DIR", os.path.join(ROOT, "build")), "bin")
@@ -78,15 +78,6 @@ def localisation_of(data):
         th = struct.unpack_from(">d", data, p + 16 * nr)[0]
         best = (x, y, th)
     return utime, state, nh, best
-
-
-def run(argv, log):
-    with open(log, "w") as f:
-        r = subprocess.run(argv, stdout=f, stderr=subprocess.STDOUT)
-    if r.returncode != 0:
-        with open(log) as f:
-            tail = f.read()[-600:]
-        raise RuntimeError(f"{os.path.basename(argv[0])} exited {r.returncode}: {tail}")
 
 
 def cut_log(src, dst, start_us, end_us):
@@ -271,9 +262,7 @@ def load_map(path):
 
 def lamp_errors(landmarks, world_yaml):
     """id -> distance [m] from each landmark to the nearest true lamp of the world."""
-    import yaml
-    with open(world_yaml) as f:
-        lamps = [(L["x_m"], L["y_m"], L["z_m"]) for L in yaml.safe_load(f)["lights"]["list"]]
+    lamps = truth_lamps(world_yaml)
     return {i: min(math.dist(p, q) for q in lamps) for i, p in landmarks.items()}
 
 
@@ -360,11 +349,6 @@ def one_world(family, seed, a, out):
     with open(result_path, "w") as f:
         json.dump(results, f, indent=1)
     return results
-
-
-def quantile(v, q):
-    v = sorted(v)
-    return v[min(len(v) - 1, int(q * (len(v) - 1) + 0.5))] if v else float("nan")
 
 
 def groups(results):

@@ -1,13 +1,39 @@
-"""Runs one evaluation function per generated world on a pool of threads (the scripts that evaluate
-world families: evaluate-relocalisation.py, evaluate-map-merge.py).
+"""What the scripts that evaluate families of generated worlds share (evaluate-relocalisation.py,
+evaluate-map-merge.py).
 
 run_worlds(fn, worlds, jobs, tag) calls fn(family, seed) for each (family, seed) of worlds, at most
 jobs at a time, and returns (results, failed): the return values in the order of worlds, and one
 line "family seed: reason" per world whose function raised (printed on stderr with the tag), so that
 one world that fails is reported and the others still count.
+run(argv, log) runs a program with its output in the file log; a non-zero exit raises RuntimeError
+with the log's tail. quantile(v, q) is the nearest-rank quantile (nan when v is empty).
+truth_lamps(world_yaml) lists the (x, y, z) of a world file's lights.
 """
+import os
+import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
+
+import yaml
+
+
+def run(argv, log):
+    with open(log, "w") as f:
+        r = subprocess.run(argv, stdout=f, stderr=subprocess.STDOUT)
+    if r.returncode != 0:
+        with open(log) as f:
+            tail = f.read()[-600:]
+        raise RuntimeError(f"{os.path.basename(argv[0])} exited {r.returncode}: {tail}")
+
+
+def quantile(v, q):
+    v = sorted(v)
+    return v[min(len(v) - 1, int(q * (len(v) - 1) + 0.5))] if v else float("nan")
+
+
+def truth_lamps(world_yaml):
+    with open(world_yaml) as f:
+        return [(L["x_m"], L["y_m"], L["z_m"]) for L in yaml.safe_load(f)["lights"]["list"]]
 
 
 def run_worlds(fn, worlds, jobs, tag):

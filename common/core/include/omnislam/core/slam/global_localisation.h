@@ -215,7 +215,8 @@ class GlobalLocaliser {
   /// A pose's fit to one frame (step 3 of the file header). With `prior` (a tracked hypothesis) the
   /// pose and cov are the prediction: bearings gated at them, then Gauss-Newton with the prior (an
   /// iterated EKF update); without (a seed), cov only gates the first assignment and the pose comes
-  /// from this frame's bearings alone. Public for tests.
+  /// from this frame's bearings alone, assigned and fitted again while the matches grow
+  /// (kMaxSeedFitRounds). Public for tests.
   struct Fit {
     Pose2 pose_W;
     Eigen::Matrix3d cov = Eigen::Matrix3d::Identity();
@@ -229,6 +230,8 @@ class GlobalLocaliser {
     bool ok = false;   ///< false: the covariance could not be formed (too few matches)
   };
   Fit fit(const Pose2& pose_W, const Eigen::Matrix3d& cov, bool prior, const std::vector<BearingMeasurement>& z) const;
+  /// A seed's fit re-assigns and refits until its matched count stops growing, at most this often.
+  static constexpr int kMaxSeedFitRounds = 6;
 
  private:
   struct Predicted;

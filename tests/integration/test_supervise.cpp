@@ -51,7 +51,9 @@ const char* const kSampleChannels[] = {channels::kOmniImage,
                                        channels::kSlamParticles,
                                        channels::kSlamAssociations,
                                        channels::kSlamHealth,
-                                       channels::kGroundTruthFeatureLabels};
+                                       channels::kGroundTruthFeatureLabels,
+                                       channels::kSlamTrajectory,
+                                       channels::kSlamLocalisation};
 
 /// The " CHANNEL N" pairs of a logstat gap line's loss list.
 std::map<std::string, long> lostPerChannel(const std::string& list) {

@@ -21,6 +21,8 @@
 #include "omnislam/particles_t.hpp"
 #include "omnislam/pose_t.hpp"
 #include "omnislam/slam_health_t.hpp"
+#include "omnislam/slam_localisation_t.hpp"
+#include "omnislam/slam_trajectory_t.hpp"
 
 using namespace omnislam;
 
@@ -82,6 +84,24 @@ void publishSlamDetails(lcmio::Node& node, int64_t k, int64_t utime) {
   node.publish(channels::kGroundTruthFeatureLabels, lb);
 }
 
+/// The back end's and the global localiser's of round k: SLAM_TRAJECTORY, SLAM_LOCALISATION.
+void publishBackEndAndLocalisation(lcmio::Node& node, int64_t k, int64_t utime) {
+  slam_trajectory_t tr{};
+  tr.utime = utime, tr.seq = k, tr.input_seq = k, tr.solved_at_utime = utime, tr.ok = true;
+  tr.num_landmarks = 1, tr.num_bearings = 4, tr.iterations = 3, tr.final_cost = 0.5;
+  tr.num_keyframes = 2, tr.keyframe_utime = {utime - 1'000'000, utime};
+  tr.x_m = {0.1 * k - 0.1, 0.1 * k}, tr.y_m = {0.0, 0.0}, tr.theta_rad = {0.0, 0.0};
+  node.publish(channels::kSlamTrajectory, tr);
+  slam_localisation_t loc{};
+  loc.utime = utime, loc.seq = k, loc.input_seq = k, loc.state = slam_localisation_t::STATE_AMBIGUOUS;
+  loc.num_hypotheses = 2, loc.num_tracked = 2, loc.num_frames = static_cast<int32_t>(k + 1), loc.num_reported = 2;
+  loc.x_m = {0.1 * k, 9.0 - 0.1 * k}, loc.y_m = {0.0, 4.5}, loc.theta_rad = {0.0, 3.14159};
+  const std::vector<double> cov{0.01, 0, 0, 0, 0.01, 0, 0, 0, 0.001};
+  loc.covariance = {cov, cov}, loc.relative_log_likelihood = {0.0, -0.5};
+  loc.frames_explained = {static_cast<int32_t>(k + 1), static_cast<int32_t>(k + 1)}, loc.travel_m = {0.1 * k, 0.1 * k};
+  node.publish(channels::kSlamLocalisation, loc);
+}
+
 /// Publishes a round every period_s until duration_s has passed or a stop is requested; the rounds.
 int64_t publishRounds(lcmio::Node& node, double period_s, double duration_s) {
   const auto t_end = std::chrono::steady_clock::now() + std::chrono::duration<double>(duration_s);
@@ -91,6 +111,7 @@ int64_t publishRounds(lcmio::Node& node, double period_s, double duration_s) {
     publishSensors(node, k, utime);
     publishPosesAndMaps(node, k, utime);
     publishSlamDetails(node, k, utime);
+    publishBackEndAndLocalisation(node, k, utime);
     node.publishStatus();
     // Never past the end: --duration 1 --period 20 ran for 20 s.
     const double left_s = std::chrono::duration<double>(t_end - std::chrono::steady_clock::now()).count();

@@ -331,6 +331,32 @@ TEST(slam_GlobalLocalisation, SportsHallWithANoisyMapIsStillNeverLocalised) {
 // within 20 m (21 at this start, 12 inside the range): the true pose, which explains every bearing,
 // was refused in every frame, and a pose 4 grid spacings off (16 lamps within 20 m) was localised
 // instead, at frame 7 of the log.
+// A test's random stream: its engine and the distributions it draws from (kept across frames, so that
+// the draws are those of one sequence).
+struct Draws {
+  std::mt19937_64& rng;
+  std::uniform_real_distribution<double>& u;  // [0, 1)
+  std::normal_distribution<double>& n;        // N(0, kSigma_rad)
+};
+
+// The bearings of the lamps within range_m (3-D) of the camera `cam` at `truth`, each detected with
+// p_detect, with n's noise on each angle; three draws per lamp, detected or not.
+std::vector<BearingMeasurement> observeWithin3d(const std::vector<Eigen::Vector3d>& lamps, const Pose2& truth,
+                                                const Eigen::Vector3d& cam, double range_m, double p_detect, Draws d) {
+  std::vector<BearingMeasurement> z;
+  const Eigen::Vector3d c = cameraCentreInWorld(truth, cam);
+  for (const Eigen::Vector3d& l : lamps) {
+    const double draw = d.u(d.rng), na = d.n(d.rng), ne = d.n(d.rng);
+    if ((l - c).norm() > range_m || draw > p_detect) continue;
+    const auto b = predictBearing(l, truth, cam);
+    BearingMeasurement m;
+    m.azimuth_rad = wrapAngle(b->x() + na), m.elevation_rad = b->y() + ne, m.p_CinR_m = cam;
+    m.cov_rad2 = Eigen::Matrix2d::Identity() * kSigma_rad * kSigma_rad;
+    z.push_back(m);
+  }
+  return z;
+}
+
 std::vector<Eigen::Vector3d> halls28Lamps() {
   const double xy[][2] = {{3.18, 4.35},   {3.18, 11.89},    {3.18, 26.97},    {3.18, 34.51},   {3.18, 42.05},
                           {8.84, 11.89},  {8.84, 19.43},    {8.84, 26.97},    {8.84, 34.51},   {8.84, 42.05},
@@ -360,17 +386,8 @@ TEST(slam_GlobalLocalisation, PerceptualRangeShorterThanMaxRangeStillSeedsTheTru
   Pose2 truth{33.6, 9.4, deg2rad(154.0)}, odom{}, odom_prev{};
   int first_fix = -1, first_near = -1;
   for (int k = 0; k < 20; ++k) {  // 20 frames of 0.25 m: 5 m
-    std::vector<BearingMeasurement> z;
-    for (const Eigen::Vector3d& l : lamps) {
-      const double draw = u(rng), na = n(rng), ne = n(rng);
-      if ((l - cameraCentreInWorld(truth, cam)).norm() > p.max_range_m || draw > 0.9) continue;
-      const auto b = predictBearing(l, truth, cam);
-      BearingMeasurement m;
-      m.azimuth_rad = wrapAngle(b->x() + na), m.elevation_rad = b->y() + ne, m.p_CinR_m = cam;
-      m.cov_rad2 = Eigen::Matrix2d::Identity() * kSigma_rad * kSigma_rad;
-      z.push_back(m);
-    }
-    const LocalisationStatus& st = loc.step(odom_prev, odom, z);
+    const LocalisationStatus& st =
+        loc.step(odom_prev, odom, observeWithin3d(lamps, truth, cam, p.max_range_m, 0.9, Draws{rng, u, n}));
     for (const PoseHypothesis& h : loc.hypotheses())
       if (first_near < 0 && positionError_m(h.pose_W, truth) < 0.3 && headingError_deg(h.pose_W, truth) < 2.0)
         first_near = k;
@@ -405,18 +422,8 @@ TEST(slam_GlobalLocalisation, LampsAtManyHeightsAreLocalisedFromTheFirstFrames) 
   Pose2 truth{26.0, 28.0, deg2rad(35.0)}, odom{}, odom_prev{};
   int first_fix = -1;
   for (int k = 0; k < 20; ++k) {  // 20 frames of 0.25 m: 5 m
-    std::vector<BearingMeasurement> z;
-    const Eigen::Vector3d c = cameraCentreInWorld(truth, cam);
-    for (const Eigen::Vector3d& l : lamps) {
-      const double draw = u(gen), na = n(gen), ne = n(gen);
-      if ((l - c).norm() > p.max_range_m || draw > 0.9) continue;
-      const auto b = predictBearing(l, truth, cam);
-      BearingMeasurement m;
-      m.azimuth_rad = wrapAngle(b->x() + na), m.elevation_rad = b->y() + ne, m.p_CinR_m = cam;
-      m.cov_rad2 = Eigen::Matrix2d::Identity() * kSigma_rad * kSigma_rad;
-      z.push_back(m);
-    }
-    const LocalisationStatus& st = loc.step(odom_prev, odom, z);
+    const LocalisationStatus& st =
+        loc.step(odom_prev, odom, observeWithin3d(lamps, truth, cam, p.max_range_m, 0.9, Draws{gen, u, n}));
     EXPECT_NE(st.state, LocalisationState::kLost) << "frame " << k;
     if (st.state == LocalisationState::kLocalised) {
       if (first_fix < 0) first_fix = k;

@@ -28,7 +28,6 @@ import argparse
 import json
 import math
 import os
-import random
 import struct
 import subprocess
 import sys
@@ -36,6 +35,7 @@ import tempfile
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts"))
 from lcm_log_filter import events  # noqa: E402
+from world_jobs import cut_start  # noqa: E402
 
 FINGERPRINT = 8
 
@@ -50,9 +50,7 @@ def labels_of(data):
 def cut_window(run2, seed, family, window_s):
     """True poses and per-frame detected lamps of the evaluation's cut (its start formula)."""
     stamps = [t for t, ch, _ in events(run2) if ch == b"OMNI_FEATURES"]
-    rng = random.Random(seed * 7919 + len(family))
-    latest = max(stamps[0], stamps[-1] - int(window_s * 1e6))
-    start = stamps[0] + int(rng.random() * (latest - stamps[0]))
+    start = cut_start(stamps, family, seed, window_s)
     end = start + int(window_s * 1e6)
     poses, frames = {}, []
     for t, ch, data in events(run2):

@@ -48,7 +48,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from lcm_log_filter import HEADER, SYNC, events  # noqa: E402
-from world_jobs import quantile, run, run_worlds, truth_lamps  # noqa: E402
+from world_jobs import cut_start, quantile, run, run_worlds, truth_lamps  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(os.environ.get("OMNISLAM_BUILD_DIR", os.path.join(ROOT, "build")), "bin")
@@ -325,9 +325,7 @@ def one_world(family, seed, a, out):
         return results
     # The second run cut to start at a random time: a random place and heading on the drive.
     stamps = [t for t, ch, _ in events(base + ".run2.lcm") if ch == b"OMNI_FEATURES"]
-    rng = random.Random(seed * 7919 + len(family))
-    latest = max(stamps[0], stamps[-1] - int(a.window_s * 1e6))
-    start = stamps[0] + int(rng.random() * (latest - stamps[0]))
+    start = cut_start(stamps, family, seed, a.window_s)
     cut_log(base + ".run2.lcm", base + ".cut.lcm", start, start + int(a.window_s * 1e6))
     results = []
     for kind in a.maps.split(","):

@@ -8,8 +8,12 @@ one world that fails is reported and the others still count.
 run(argv, log) runs a program with its output in the file log; a non-zero exit raises RuntimeError
 with the log's tail. quantile(v, q) is the nearest-rank quantile (nan when v is empty).
 truth_lamps(world_yaml) lists the (x, y, z) of a world file's lights.
+cut_start(stamps, family, seed, window_s) is the utime at which evaluate-relocalisation.py cuts a
+world's second run (a random frame time of the drive, window_s before its end at the latest, from a
+generator seeded by the world), which research/relocalisation_oracle.py cuts again.
 """
 import os
+import random
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -48,3 +52,10 @@ def run_worlds(fn, worlds, jobs, tag):
     for line in failed:
         print(f"{tag}: failed: {line}", file=sys.stderr)
     return results, failed
+
+
+def cut_start(stamps, family, seed, window_s):
+    """The second run's cut: a frame time (utime) drawn from the world's seed; stamps: its frame utimes."""
+    rng = random.Random(seed * 7919 + len(family))
+    latest = max(stamps[0], stamps[-1] - int(window_s * 1e6))
+    return stamps[0] + int(rng.random() * (latest - stamps[0]))
